@@ -1,0 +1,1 @@
+"""Subcommands added by later modules register here (kept out of cli.py's core)."""

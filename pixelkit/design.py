@@ -1,0 +1,155 @@
+"""Design files: the parameters of one chip revision, validated on load.
+
+A design is a TOML file (``designs/dual_pixel_revA.toml``). Every dimensional
+value carries a unit; the loaded :class:`Design` holds SI floats and its
+technology. Sections: ``[primary]``, ``[secondary]`` (subpixel geometry, array,
+timing), ``[pixel]`` (swing, SF bias, device sizes), ``[afe]``, ``[experiment]``
+(the thesis's simulation experiment), and for sizing ``[optics]``, ``[scene]``,
+``[sizing]``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+from .errors import ConfigError
+from .physics.conversion import rectangle
+from .schema import ident, integer, load, num, qty, read_toml, table, text
+from .tech import Technology, load_technology
+
+
+@dataclass(frozen=True)
+class Subpixel:
+    pd_width: float = qty("m", gt=0)
+    pd_height: float = qty("m", gt=0)
+    pitch: float = qty("m", gt=0)
+    rows: int = integer(ge=1, le=100000)
+    cols: int = integer(ge=1, le=100000)
+    t_int: float = qty("s", gt=0, le=10.0)
+    f_read: float = qty("Hz", gt=0, le=1e9)
+    mask_opening: float | None = qty("m2", None, gt=0, doc="metal-mask opening; absent = unmasked")
+
+    @property
+    def area(self) -> float:
+        return rectangle(self.pd_width, self.pd_height)[0]
+
+    @property
+    def perimeter(self) -> float:
+        return rectangle(self.pd_width, self.pd_height)[1]
+
+    @property
+    def photoactive_area(self) -> float:
+        return self.area if self.mask_opening is None else self.mask_opening
+
+    def validate(self, path, source):
+        for side in ("pd_width", "pd_height"):
+            if getattr(self, side) > self.pitch:
+                raise ConfigError(source, f"{path}.{side}", getattr(self, side),
+                                  f"a size no larger than the pitch ({self.pitch * 1e6:g} um)")
+        if self.mask_opening is not None and self.mask_opening > self.area:
+            raise ConfigError(source, f"{path}.mask_opening", self.mask_opening,
+                              f"an opening no larger than the PD area ({self.area * 1e12:g} um2)")
+
+
+@dataclass(frozen=True)
+class Devices:
+    """Transistor sizes of the 5T pixel and its column (W, L in m)."""
+    ec_w: float = qty("m", 0.6e-6, gt=0)
+    ec_l: float = qty("m", 0.5e-6, gt=0)
+    tg_w: float = qty("m", 0.6e-6, gt=0)
+    tg_l: float = qty("m", 0.5e-6, gt=0)
+    rst_w: float = qty("m", 0.6e-6, gt=0)
+    rst_l: float = qty("m", 0.5e-6, gt=0)
+    sf_w: float = qty("m", 1.0e-6, gt=0)
+    sf_l: float = qty("m", 0.5e-6, gt=0)
+    rs_w: float = qty("m", 0.6e-6, gt=0)
+    rs_l: float = qty("m", 0.5e-6, gt=0)
+    sw_w: float = qty("m", 1.0e-6, gt=0, doc="S1X/S2X column sampling switches")
+    sw_l: float = qty("m", 0.35e-6, gt=0)
+    load_w: float = qty("m", 1.0e-6, gt=0, doc="column current-source load")
+    load_l: float = qty("m", 2.0e-6, gt=0)
+
+
+@dataclass(frozen=True)
+class Pixel:
+    swing: float = qty("V", gt=0, doc="pixel swing (table 3.2: 1.5 V)")
+    sf_bias: float = qty("A", gt=0, le=1e-3, doc="column current-source load of the SF")
+    column_cap: float = qty("F", 200e-15, ge=0, doc="column-line parasitic capacitance")
+    devices: Devices = table(Devices, default=Devices)
+
+
+@dataclass(frozen=True)
+class Afe:
+    c11: float = qty("F", gt=0, doc="input capacitor")
+    c12: float = qty("F", gt=0, doc="offset-storage capacitor")
+    c13: float = qty("F", gt=0, doc="feedback capacitor")
+    vref: float = qty("V", gt=0)
+    opamp: str = text("macro", choices=("macro", "ota"))
+    gain: float = num(1000.0, gt=1, doc="macromodel DC gain (e.g. '60 dB')")
+    gbw: float = qty("Hz", 50e6, gt=0, doc="macromodel gain-bandwidth")
+    nonoverlap: float = qty("s", 20e-9, gt=0, doc="non-overlap of the two clock phases")
+    f_clk: float = qty("Hz", 500e3, gt=0, doc="double-sampling rate (one signal + one reset per period)")
+
+
+@dataclass(frozen=True)
+class Experiment:
+    """The thesis's same-window simulation experiment (fig. A.1 - A.3)."""
+    t_window: float = qty("s", 16e-6, gt=0, le=1e-3, doc="exposure window of the experiment")
+    mid_fraction: float = num(0.5, gt=0, lt=1, doc="primary target: fraction of swing")
+    low_fraction: float = num(0.05, gt=0, lt=1, doc="secondary target: fraction of swing")
+
+
+@dataclass(frozen=True)
+class Design:
+    name: str = ident()
+    revision: str = text()
+    technology: str = text(doc="a built-in technology name or a path to a .toml file")
+    primary: Subpixel = table(Subpixel)
+    secondary: Subpixel = table(Subpixel)
+    pixel: Pixel = table(Pixel)
+    afe: Afe = table(Afe)
+    corner: str = ident("", doc="model corner; empty = the technology's default")
+    temperature: float = qty("K", 300.15, gt=0, lt=500)
+    secondary_per_pixel: int = integer(3, ge=1, le=16)
+    experiment: Experiment = table(Experiment, default=Experiment)
+    tech: Technology = field(default=None, metadata=dict(kind="skip"))
+    source: str = field(default="", metadata=dict(kind="skip"))
+    raw: dict = field(default=None, metadata=dict(kind="skip"), repr=False, compare=False)
+
+    def validate(self, path, source):
+        if self.pixel.swing >= 5.0:
+            raise ConfigError(source, "pixel.swing", self.pixel.swing, "a swing below 5 V")
+        n = self.secondary_per_pixel
+        if abs(n * self.secondary.pitch - self.primary.pitch) > 1e-9:
+            raise ConfigError(source, "secondary.pitch", self.secondary.pitch,
+                              f"primary.pitch / secondary_per_pixel = {self.primary.pitch / n * 1e6:g} um "
+                              "(subpixels are integrated side by side)")
+
+    @property
+    def corner_name(self) -> str:
+        return self.corner or self.tech.models.default_corner
+
+    def with_changes(self, **changes) -> "Design":
+        """A copy with top-level fields replaced (nested: pass new dataclasses)."""
+        return replace(self, **changes)
+
+
+def load_design(path: str | Path) -> Design:
+    """Load and validate a design file, with its technology."""
+    path = Path(path)
+    raw = read_toml(path, "design")
+    design = load(Design, raw, "", str(path))
+    tech = load_technology(design.technology, relative_to=path.parent)
+    if tech.supply <= design.pixel.swing:
+        raise ConfigError(str(path), "pixel.swing", design.pixel.swing,
+                          f"a swing below the supply ({tech.supply:g} V)")
+    if design.corner and design.corner not in tech.models.corners:
+        raise ConfigError(str(path), "corner", design.corner,
+                          f"one of {', '.join(sorted(tech.models.corners))}")
+    rules = tech.rules
+    for sub in ("primary", "secondary"):
+        s = getattr(design, sub)
+        if min(s.pd_width, s.pd_height) < rules.min_pd_side - 1e-12:
+            raise ConfigError(str(path), f"{sub}.pd_width", min(s.pd_width, s.pd_height),
+                              f"a PD side >= min_pd_side ({rules.min_pd_side * 1e6:g} um) of {tech.name}")
+    return replace(design, tech=tech, source=str(path), raw=raw)

@@ -1,0 +1,1 @@
+"""Analytic pixel models: C(V), conversion gain, photocurrent, discharge, dark current, noise."""

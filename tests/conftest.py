@@ -1,0 +1,26 @@
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+REF = ROOT / "designs" / "dual_pixel_revA.toml"
+
+
+@pytest.fixture(scope="session")
+def ref_design():
+    from pixelkit.design import load_design
+    return load_design(REF)
+
+
+def run_cli(*args, cwd=None, timeout=600):
+    """Run ``python -m pixelkit ARGS``; return (exit code, stdout, stderr)."""
+    p = subprocess.run([sys.executable, "-m", "pixelkit", *map(str, args)], capture_output=True,
+                       text=True, cwd=cwd or ROOT, timeout=timeout)
+    return p.returncode, p.stdout, p.stderr
+
+
+@pytest.fixture
+def cli():
+    return run_cli
