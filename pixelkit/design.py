@@ -75,6 +75,8 @@ class Pixel:
     swing: float = qty("V", gt=0, doc="pixel swing (table 3.2: 1.5 V)")
     sf_bias: float = qty("A", gt=0, le=1e-3, doc="column current-source load of the SF")
     column_cap: float = qty("F", 200e-15, ge=0, doc="column-line parasitic capacitance")
+    v_pd_reset: float = qty("V", 2.0, gt=0, doc="EC drain: PD reset level (hard reset below VDD - Vth)")
+    v_fd_reset: float = qty("V", 2.0, gt=0, doc="RST drain: FD reset level")
     devices: Devices = table(Devices, default=Devices)
 
 
@@ -140,6 +142,10 @@ def load_design(path: str | Path) -> Design:
     raw = read_toml(path, "design")
     design = load(Design, raw, "", str(path))
     tech = load_technology(design.technology, relative_to=path.parent)
+    for f in ("v_pd_reset", "v_fd_reset"):
+        if getattr(design.pixel, f) > tech.supply:
+            raise ConfigError(str(path), f"pixel.{f}", getattr(design.pixel, f),
+                              f"a level no higher than the supply ({tech.supply:g} V)")
     if tech.supply <= design.pixel.swing:
         raise ConfigError(str(path), "pixel.swing", design.pixel.swing,
                           f"a swing below the supply ({tech.supply:g} V)")

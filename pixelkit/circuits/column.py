@@ -1,0 +1,32 @@
+"""Column circuitry: current-source loads of the source followers, and S1X/S2X samplers.
+
+The load is an NMOS mirror of one bias current (the SF bias, ~400 nA in the
+thesis); each column line carries its parasitic capacitance. S1X and S2X are
+transmission gates from the column to the AFE input, closed by the S1 (signal)
+and S2 (reset) pulses of double sampling.
+"""
+from __future__ import annotations
+
+from ..spice.netlist import Element
+from .devices import mosfet, tgate
+
+
+def bias(design) -> tuple:
+    """The load bias: an ideal reference current into a diode-connected NMOS (node nbias)."""
+    dev = design.pixel.devices
+    return (Element("Ibias", ("vdd", "nbias"), design.pixel.sf_bias),
+            mosfet("bias", "nbias", "nbias", "0", "0", dev.load_w, dev.load_l, design.tech))
+
+
+def load(design, col: str) -> tuple:
+    """Current-source load and parasitic capacitance of column line ``col``."""
+    dev = design.pixel.devices
+    return (mosfet(f"ld_{col}", col, "nbias", "0", "0", dev.load_w, dev.load_l, design.tech),
+            Element(f"C{col}", (col, "0"), design.pixel.column_cap))
+
+
+def sampler(design, col: str, out: str, s1: str = "s1", s2: str = "s2") -> tuple:
+    """S1X (signal) and S2X (reset) sampling switches from ``col`` to ``out``."""
+    dev, t = design.pixel.devices, design.tech
+    return (*tgate(f"s1_{col}", col, out, s1, f"{s1}b", dev.sw_w, dev.sw_l, t),
+            *tgate(f"s2_{col}", col, out, s2, f"{s2}b", dev.sw_w, dev.sw_l, t))

@@ -1,0 +1,38 @@
+"""Device elements built from a technology: MOSFETs (with AD/AS/PD/PS), photodiodes, switches."""
+from __future__ import annotations
+
+from ..spice.netlist import Element, Model
+from .geometry import diffusion
+
+
+def mosfet(name: str, d: str, g: str, s: str, b: str, w: float, l: float, tech, kind: str = "n") -> Element:
+    """A MOSFET of the technology, with its source/drain junction geometry."""
+    mos = tech.mos
+    a, p = diffusion(w, mos.diff_ext)
+    prefix = "X" if mos.kind == "subckt" else "M"
+    model = mos.nmos if kind == "n" else mos.pmos
+    return Element(f"{prefix}{name}", (d, g, s, b), model,
+                   (("w", w), ("l", l), ("ad", a), ("as", a), ("pd", p), ("ps", p)))
+
+
+def tgate(name: str, a: str, b: str, clk: str, clkb: str, w: float, l: float, tech, vdd: str = "vdd"):
+    """A CMOS transmission gate: NMOS driven by ``clk``, PMOS by ``clkb``."""
+    return (mosfet(f"{name}n", a, clk, b, "0", w, l, tech, "n"),
+            mosfet(f"{name}p", a, clkb, b, vdd, 2 * w, l, tech, "p"))
+
+
+def photodiode(name: str, node: str, area: float, perimeter: float, tech) -> Element:
+    """The PD junction (anode = substrate) with its area and perimeter."""
+    return Element(f"D{name}", ("0", node), tech.photodiode.spice_model,
+                   (("area", area), ("pj", perimeter)))
+
+
+def photodiode_model(tech) -> tuple:
+    """The kit's own diode card for technologies whose PD junction it calibrates."""
+    pd = tech.photodiode
+    if not pd.builtin_model:
+        return ()
+    return (Model(pd.spice_model, "d", (
+        ("level", 1), ("is", pd.dark_area), ("jsw", pd.dark_perimeter), ("n", 1.0),
+        ("cjo", pd.cj), ("m", pd.mj), ("vj", pd.pb), ("cjp", pd.cjsw), ("mjsw", pd.mjsw),
+        ("php", pd.pbsw), ("tnom", pd.t_ref - 273.15))),)

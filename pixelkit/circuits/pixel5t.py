@@ -1,0 +1,39 @@
+"""The 5T global-shutter pixel (thesis fig. 3.2) as a subcircuit.
+
+Ports: ``vdd`` (SF drain), ``vpdr`` (EC drain: the PD reset level, which the
+thesis made adjustable from outside), ``vrst`` (RST drain: the FD reset level),
+``ec``, ``tg``, ``rst``, ``rs`` (gates), ``col`` (column line). Parameter ``iph``:
+the photocurrent (A) of the PD.
+
+    EC:  vpdr -> pd   resets the photodiode (exposure starts when EC opens)
+    TG:  pd -> fd     transfers (shares) the charge to the storage node FD
+    RST: vrst -> fd   resets FD
+
+With gates at the supply, reset levels below VDD - Vth(body) make both resets
+*hard* (the switch stays in its linear region): no soft-reset lag, and the TG
+conducts as soon as it opens, so even a small signal is shared onto FD.
+    SF:  vdd, gate fd, source sfo
+    RS:  sfo -> col   row select
+"""
+from __future__ import annotations
+
+from ..spice.netlist import Element, Param, Subckt
+from .devices import mosfet, photodiode
+
+PORTS = ("vdd", "vpdr", "vrst", "ec", "tg", "rst", "rs", "col")
+
+
+def pixel5t(design, which: str) -> Subckt:
+    """The 5T subpixel of ``which`` ("primary" or "secondary") of ``design``."""
+    sub = getattr(design, which)
+    dev = design.pixel.devices
+    t = design.tech
+    return Subckt(f"pix5t_{which}", PORTS, (
+        photodiode("pd", "pd", sub.area, sub.perimeter, t),
+        Element("Iph", ("pd", "0"), Param("iph")),
+        mosfet("ec", "vpdr", "ec", "pd", "0", dev.ec_w, dev.ec_l, t),
+        mosfet("tg", "fd", "tg", "pd", "0", dev.tg_w, dev.tg_l, t),
+        mosfet("rst", "vrst", "rst", "fd", "0", dev.rst_w, dev.rst_l, t),
+        mosfet("sf", "vdd", "fd", "sfo", "0", dev.sf_w, dev.sf_l, t),
+        mosfet("rs", "sfo", "rs", "col", "0", dev.rs_w, dev.rs_l, t),
+    ), (("iph", 0.0),))

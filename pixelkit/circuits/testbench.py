@@ -1,0 +1,125 @@
+"""Testbenches: circuits + supplies + control waveforms + analysis, as netlists.
+
+- ``dual_pixel_bench``: one integrated pixel read through its column loads with
+  the global-shutter sequence (optionally through S1X/S2X into the SC AFEs).
+- ``afe_bench``: the SC AFE driven with (Vsig, Vrst) pairs, one pair per cycle.
+- ``pd_pair_bench``: two bare photodiodes discharged from one bias (fig. A.1).
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+
+from ..spice.netlist import Element, Netlist, Pwl, Tran
+from . import column
+from .afe import sc_afe
+from .devices import photodiode, photodiode_model
+from .dual_pixel import dual_pixel
+from .opamp import opamp
+from .timing import GsTiming, waveform
+
+
+def _deck(design, title, elements, subckts=(), analysis=None, ic=(), saves=()):
+    t = design.tech
+    return Netlist(title=title, elements=tuple(elements), analysis=analysis, subckts=tuple(subckts),
+                   models=photodiode_model(t), includes=t.models.includes(design.corner or None),
+                   ic=tuple(ic), temperature_C=design.temperature - 273.15, saves=tuple(saves))
+
+
+def timings(design, t_exp: float, rows: int = 1) -> dict:
+    """Per-array GS timing: same exposure, each array's own row time."""
+    return {"primary": GsTiming(t_exp, 1.0 / design.primary.f_read, rows),
+            "secondary": GsTiming(t_exp, 1.0 / design.secondary.f_read, rows)}
+
+
+def supplies(design) -> tuple:
+    px = design.pixel
+    return (Element("Vdd", ("vdd", "0"), design.tech.supply), Element("Vpdr", ("vpdr", "0"), px.v_pd_reset),
+            Element("Vrstd", ("vrst", "0"), px.v_fd_reset))
+
+
+def controls(design, tm: dict, rows: int, row_lines: bool) -> list:
+    """Control sources of both arrays. ``row_lines``: per-row RS/RST names (arrays)."""
+    vdd, out = design.tech.supply, []
+    for arr, s in (("primary", "p"), ("secondary", "s")):
+        t = tm[arr]
+        out.append(Element(f"Vec_{s}", (f"ec_{s}", "0"), waveform(t.ec(), vdd, t.edge)))
+        out.append(Element(f"Vtg_{s}", (f"tg_{s}", "0"), waveform(t.tg(), vdd, t.edge)))
+        for r in range(rows):
+            sfx = f"_{r}" if row_lines else ""
+            out.append(Element(f"Vrst_{s}{sfx}", (f"rst_{s}{sfx}", "0"), waveform(t.rst(r), vdd, t.edge)))
+            out.append(Element(f"Vrs_{s}{sfx}", (f"rs_{s}{sfx}", "0"), waveform(t.rs(r), vdd, t.edge)))
+    return out
+
+
+def sample_clocks(design, t: GsTiming, prefix: str, rows: int) -> list:
+    """S1/S2 and the AFE phases p1/p2 (with complements) of one array."""
+    vdd, e, out = design.tech.supply, t.edge, []
+    no = design.afe.nonoverlap
+    p1 = [(a, b - no) for a, b in t.s1(rows)]
+    p2 = [(a + no, b) for a, b in t.s2(rows)]
+    for name, iv in (("s1", t.s1(rows)), ("s2", t.s2(rows)), ("p1", p1), ("p2", p2)):
+        out.append(Element(f"V{name}_{prefix}", (f"{name}_{prefix}", "0"), waveform(iv, vdd, e)))
+        out.append(Element(f"V{name}b_{prefix}", (f"{name}_{prefix}b", "0"), waveform(iv, vdd, e, invert=True)))
+    return out
+
+
+def dual_pixel_bench(design, iph_p: float, iph_s, t_exp: float | None = None, with_afe: bool = False,
+                     title: str = "dual_pixel_bench") -> Netlist:
+    """One integrated pixel, its column loads, the GS sequence; ``iph_s`` per secondary."""
+    n = design.secondary_per_pixel
+    iph_s = tuple(iph_s) if isinstance(iph_s, (tuple, list)) else (iph_s,) * n
+    t_exp = design.experiment.t_window if t_exp is None else t_exp
+    tm = timings(design, t_exp)
+    cols = ["col_p", *(f"col_s{k}" for k in range(n))]
+    params = (("iph_p", iph_p), *((f"iph_s{k}", i) for k, i in enumerate(iph_s)))
+    el = [*supplies(design), *controls(design, tm, 1, row_lines=False), *column.bias(design),
+          Element("X1", ("vdd", "vpdr", "vrst", "ec_p", "tg_p", "rst_p", "rs_p", "col_p", "ec_s", "tg_s", "rst_s",
+                         "rs_s", *cols[1:]), "dualpix", params)]
+    for c in cols:
+        el += column.load(design, c)
+    subckts = list(dual_pixel(design))
+    if with_afe:
+        el.append(Element("Vref", ("vref", "0"), design.afe.vref))
+        for arr, s in (("primary", "p"), ("secondary", "s")):
+            el += sample_clocks(design, tm[arr], s, 1)
+        for c in cols:
+            s = "p" if c == "col_p" else "s"
+            el += column.sampler(design, c, f"in_{c}", f"s1_{s}", f"s2_{s}")
+            el.append(Element(f"Xafe_{c}", (f"in_{c}", f"out_{c}", "vref", f"p1_{s}", f"p1_{s}b",
+                                            f"p2_{s}", f"p2_{s}b", "vdd"), "scafe"))
+        subckts += [opamp(design), sc_afe(design)]
+    stop = max(t.t_stop for t in tm.values())
+    return _deck(design, title, el, subckts, Tran(5e-9, stop, 0.0, 20e-9))
+
+
+def afe_bench(design, pairs, t_cycle: float | None = None, vos: float = 0.0,
+              title: str = "afe_bench") -> Netlist:
+    """The SC AFE fed (Vsig, Vrst) pairs: Vsig during p1, Vrst during p2 of each cycle."""
+    t_cycle = t_cycle or 1.0 / design.afe.f_clk
+    t = GsTiming(t_exp=0.0, t_row=t_cycle, rows=len(pairs), t_reset=0.0, t_tg=0.0, t_gap=0.0, t_pre=0.0)
+    vdd, e = design.tech.supply, t.edge
+    pts = [(0.0, pairs[0][0])]
+    for r, (vsig, vrst) in enumerate(pairs):
+        t0 = t.row(r)
+        pts += [(t0 + 0.02 * t_cycle, vsig), (t0 + 0.5 * t_cycle, vsig), (t0 + 0.5 * t_cycle + e, vrst),
+                (t0 + 0.98 * t_cycle, vrst)]
+    clean = [pts[0]] + [p for a, p in zip(pts, pts[1:]) if p[0] > a[0]]
+    el = [Element("Vdd", ("vdd", "0"), vdd), Element("Vref", ("vref", "0"), design.afe.vref),
+          Element("Vin", ("in", "0"), Pwl(tuple(clean))), *sample_clocks(design, t, "a", len(pairs)),
+          Element("Xafe", ("in", "out", "vref", "p1_a", "p1_ab", "p2_a", "p2_ab", "vdd"), "scafe")]
+    op = opamp(design)
+    if vos:
+        if design.afe.opamp != "macro":
+            raise ValueError("an input offset can be set on the macromodel only")
+        op = replace(op, params=(("vos", vos),))
+    return _deck(design, title, el, (op, sc_afe(design)), Tran(5e-9, t.t_stop, 0.0, 20e-9))
+
+
+def pd_pair_bench(design, i_primary: float, i_secondary: float, t_stop: float, v0: float,
+                  title: str = "pd_pair_bench") -> Netlist:
+    """Both bare PDs (fig. A.1) discharged from ``v0`` by constant currents."""
+    t, p, s = design.tech, design.primary, design.secondary
+    el = (photodiode("p", "pdp", p.area, p.perimeter, t), Element("Ip", ("pdp", "0"), i_primary),
+          photodiode("s", "pds", s.area, s.perimeter, t), Element("Is", ("pds", "0"), i_secondary))
+    return _deck(design, title, el, (), Tran(t_stop / 500, t_stop, 0.0, t_stop / 500, uic=True),
+                 ic=(("pdp", v0), ("pds", v0)))

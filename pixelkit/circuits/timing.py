@@ -1,0 +1,98 @@
+"""The global-shutter sequence as control waveforms (PWL), and its sample instants.
+
+    0 .. t_reset            EC on (PD reset), RST on (FD reset)
+    t_reset                 EC opens: exposure starts (all pixels)
+    t_tx - t_tg - t_gap     RST opens (FD released before the transfer)
+    t_tx - t_tg .. t_tx     TG on: global transfer; exposure ends when TG opens
+    t_read + r t_row        row r: RS on; S1 samples the signal; RST pulses (FD
+                            reset); S2 samples the reset level (non-correlated
+                            double sampling, thesis fig. 3.3); RS off
+
+Each array has its own row time 1/f_read (defaults 500 kHz primary, 1 MHz
+secondary). Edges take ``edge`` seconds; levels are 0 and the supply.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ..spice.netlist import Pwl
+
+
+@dataclass(frozen=True)
+class GsTiming:
+    t_exp: float
+    t_row: float
+    rows: int = 1
+    t_reset: float = 1e-6
+    t_tg: float = 0.5e-6
+    t_gap: float = 0.3e-6
+    edge: float = 10e-9
+    t_pre: float = 0.3e-6  # from end of transfer to the first row
+
+    @property
+    def t_tx(self) -> float:
+        """TG opens: the end of exposure."""
+        return self.t_reset + self.t_exp
+
+    @property
+    def t_read(self) -> float:
+        return self.t_tx + self.t_pre
+
+    def row(self, r: int) -> float:
+        return self.t_read + r * self.t_row
+
+    def s1_window(self, r: int):
+        t0 = self.row(r)
+        return t0 + 0.1 * self.t_row, t0 + 0.4 * self.t_row
+
+    def rst_window(self, r: int):
+        t0 = self.row(r)
+        return t0 + 0.45 * self.t_row, t0 + 0.55 * self.t_row
+
+    def s2_window(self, r: int):
+        t0 = self.row(r)
+        return t0 + 0.6 * self.t_row, t0 + 0.9 * self.t_row
+
+    def t_signal(self, r: int) -> float:
+        """Instant the signal level is taken (end of S1)."""
+        return self.s1_window(r)[1]
+
+    def t_reset_level(self, r: int) -> float:
+        """Instant the reset level is taken (end of S2)."""
+        return self.s2_window(r)[1]
+
+    @property
+    def t_stop(self) -> float:
+        return self.row(self.rows) + 0.05 * self.t_row
+
+    # waveforms -------------------------------------------------------------
+    def ec(self):
+        return [(0.0, self.t_reset)]
+
+    def tg(self):
+        return [(self.t_tx - self.t_tg, self.t_tx)]
+
+    def rst(self, r: int):
+        return [(0.0, self.t_tx - self.t_tg - self.t_gap), self.rst_window(r)]
+
+    def rs(self, r: int):
+        t0 = self.row(r)
+        return [(t0 + 0.02 * self.t_row, t0 + 0.98 * self.t_row)]
+
+    def s1(self, rows=None):
+        return [self.s1_window(r) for r in range(self.rows if rows is None else rows)]
+
+    def s2(self, rows=None):
+        return [self.s2_window(r) for r in range(self.rows if rows is None else rows)]
+
+
+def waveform(intervals, high: float, edge: float, invert: bool = False) -> Pwl:
+    """PWL that is ``high`` inside each (on, off) interval and 0 outside (or the reverse)."""
+    lo, hi = (high, 0.0) if invert else (0.0, high)
+    ivs = sorted(intervals)
+    pts = [(0.0, hi if ivs and ivs[0][0] <= 0 else lo)]
+    for on, off in ivs:
+        if on > 0:
+            pts += [(on, lo), (on + edge, hi)]
+        pts += [(off, hi), (off + edge, lo)]
+    return Pwl(tuple(pts))

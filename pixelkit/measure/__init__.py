@@ -1,0 +1,1 @@
+"""Pure functions from simulation results to figures."""

@@ -1,0 +1,142 @@
+"""Run netlists: options, cache, backends, retries and parallel workers.
+
+``simulate(netlist)`` runs one deck, ``simulate_many(netlists, jobs=N)`` runs many
+over the machine's cores (threads driving ngspice processes for the batch
+backend; spawned worker processes, each with one shared ngspice, for the shared
+backend). Both return :class:`Result` objects in input order.
+
+Retry policy: a run that fails (no convergence, timestep too small, truncated
+time axis) is re-run once with the looser options of ``options.RETRIES``; the
+result then says so in ``meta["retried"]``. A run that still fails raises
+:class:`SimulationError` naming the deck, the analysis and ngspice's message.
+"""
+from __future__ import annotations
+
+import atexit
+import multiprocessing as mp
+import os
+from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
+from dataclasses import replace
+
+import numpy as np
+
+from ..errors import SimulationError
+from . import cache as cache_mod
+from .batch import ngspice_version, run_batch
+from .netlist import Netlist
+from .options import DEFAULTS, RETRIES, failure_lines, merged
+from .result import Result, vector_key
+
+BACKENDS = ("batch", "shared")
+_POOL = None
+
+
+def _pool(jobs: int) -> ProcessPoolExecutor:
+    global _POOL
+    if _POOL is None or _POOL._max_workers != jobs:
+        if _POOL is not None:
+            _POOL.shutdown(wait=True)
+        _POOL = ProcessPoolExecutor(max_workers=jobs, mp_context=mp.get_context("spawn"),
+                                    max_tasks_per_child=200)
+    return _POOL
+
+
+@atexit.register
+def _close_pool():
+    if _POOL is not None:
+        _POOL.shutdown(wait=False, cancel_futures=True)
+
+
+def _shared_worker(text: str):
+    from .shared import run_shared
+    return run_shared(text)
+
+
+def default_jobs() -> int:
+    return max(1, min(os.cpu_count() or 1, 8))
+
+
+def _prepare(net: Netlist, options) -> Netlist:
+    opts = merged(DEFAULTS, net.options)
+    if options:
+        opts = merged(opts, options)
+    return replace(net, options=opts)
+
+
+def _to_result(net: Netlist, plots, lines, wall, backend) -> Result | None:
+    """A Result if the run produced the analysis completely, else None."""
+    if not plots:
+        return None
+    data = plots[-1]["data"]
+    vectors = {vector_key(k): np.asarray(v) for k, v in data.items()}
+    time = vectors.pop("time", np.zeros(0))
+    if net.analysis.kind == "tran":
+        if time.size < 2 or time[-1] < net.analysis.stop * (1 - 1e-6):
+            return None
+    meta = {"backend": backend, "title": net.title, "analysis": net.analysis.kind,
+            "options": dict(net.options), "ngspice_version": ngspice_version(),
+            "wall_s": wall, "cached": False}
+    return Result(np.real(time).astype(float), vectors, meta)
+
+
+def _message(lines) -> str:
+    bad = failure_lines(lines)
+    if not bad:
+        bad = [ln.strip() for ln in lines if ln.strip()][-3:]
+    return "; ".join(dict.fromkeys(bad))[:800] or "no output"
+
+
+def simulate_many(netlists, backend: str = "batch", jobs: int | None = None, options=None,
+                  use_cache: bool = True) -> list[Result]:
+    """Run every netlist (in parallel), each through the cache and the retry policy."""
+    if backend not in BACKENDS:
+        raise SimulationError("-", "-", f"unknown backend {backend!r}; allowed: {', '.join(BACKENDS)}")
+    jobs = jobs or default_jobs()
+    nets = [_prepare(n, options) for n in netlists]
+    results: list[Result | None] = [None] * len(nets)
+    keys = []
+    version = ngspice_version()
+    for i, n in enumerate(nets):
+        k = cache_mod.key(n.text(), tuple(inc.file for inc in n.includes), version, backend)
+        keys.append(k)
+        if use_cache:
+            results[i] = cache_mod.load(k)
+    todo = [i for i, r in enumerate(results) if r is None]
+    attempts = [nets[i] for i in todo]
+    failures: dict[int, str] = {}
+    for round_, loosen in enumerate((None, *RETRIES)):
+        if not todo:
+            break
+        decks = [(n if loosen is None else replace(n, options=merged(n.options, loosen))) for n in attempts]
+        outs = _run(decks, backend, jobs)
+        still, still_nets = [], []
+        for i, deck, (plots, lines, wall) in zip(todo, decks, outs):
+            res = _to_result(deck, plots, lines, wall, backend)
+            if res is None:
+                failures[i] = _message(lines)
+                if round_ == len(RETRIES):
+                    raise SimulationError(deck.title, deck.analysis.text(), _message(lines))
+                still.append(i)
+                still_nets.append(nets[i])
+                continue
+            if loosen is not None:
+                res.meta["retried"] = {"reason": failures.get(i, "failed"), "options": dict(loosen)}
+            if use_cache:
+                cache_mod.save(keys[i], res)
+            results[i] = res
+        todo, attempts = still, still_nets
+    return results
+
+
+def _run(decks, backend, jobs):
+    texts = [d.text() for d in decks]
+    if backend == "batch":
+        if jobs == 1 or len(texts) == 1:
+            return [run_batch(t) for t in texts]
+        with ThreadPoolExecutor(max_workers=jobs) as ex:
+            return list(ex.map(run_batch, texts))
+    return list(_pool(jobs).map(_shared_worker, texts))
+
+
+def simulate(netlist: Netlist, backend: str = "batch", options=None, use_cache: bool = True) -> Result:
+    return simulate_many([netlist], backend=backend, jobs=1, options=options, use_cache=use_cache)[0]

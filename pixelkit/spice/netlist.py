@@ -1,0 +1,235 @@
+"""Netlists as data, and the one writer that turns them into ngspice text.
+
+Everything that reaches a deck goes through the constructors here, which
+validate it: names and nodes are identifiers, values are finite numbers or
+references to subcircuit parameters, file paths are quoted and free of line
+breaks. A string that would start a new line (``.control``, ``shell``...) cannot
+pass, so no design parameter can inject commands into ngspice.
+"""
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass, field
+
+from ..errors import ConfigError
+
+_NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,63}$")
+_NODE = re.compile(r"^[A-Za-z0-9_]{1,64}$")
+_PATH_BAD = re.compile(r'["\n\r;]')
+_SAVE = re.compile(r"^(?:[vi]\()?[A-Za-z0-9_.#]{1,128}\)?$")
+
+
+def _save(name: str) -> str:
+    """A vector to save: ``node`` (saved as its voltage), ``v(x1.fd)`` or ``i(vdd)``."""
+    if not isinstance(name, str) or not _SAVE.match(name):
+        raise ConfigError("netlist", "save", name, "a node name, v(node) or i(source)")
+    return name if "(" in name else f"v({name})"
+
+
+def check_name(value, what: str = "name") -> str:
+    if not isinstance(value, str) or not _NAME.match(value):
+        raise ConfigError("netlist", what, value,
+                          "a SPICE name: a letter, then letters, digits or '_' (at most 64)")
+    return value
+
+
+def check_node(value, what: str = "node") -> str:
+    if not isinstance(value, str) or not _NODE.match(value):
+        raise ConfigError("netlist", what, value, "a node name of letters, digits or '_'")
+    return value
+
+
+@dataclass(frozen=True)
+class Param:
+    """A reference to a subcircuit parameter, written ``{name}``."""
+    name: str
+
+    def __post_init__(self):
+        check_name(self.name, "parameter reference")
+
+
+def fmt(value, what: str = "value") -> str:
+    """A number (or parameter reference) as SPICE text; refuses anything else."""
+    if isinstance(value, Param):
+        return "{" + value.name + "}"
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ConfigError("netlist", what, value, "a number")
+    if not math.isfinite(value):
+        raise ConfigError("netlist", what, value, "a finite number")
+    return f"{float(value):.12g}"
+
+
+@dataclass(frozen=True)
+class Pulse:
+    v1: float
+    v2: float
+    delay: float
+    rise: float
+    fall: float
+    width: float
+    period: float
+
+    def text(self) -> str:
+        vals = (self.v1, self.v2, self.delay, self.rise, self.fall, self.width, self.period)
+        return "PULSE(" + " ".join(fmt(v, "pulse") for v in vals) + ")"
+
+
+@dataclass(frozen=True)
+class Pwl:
+    points: tuple  # ((t, v), ...)
+
+    def text(self) -> str:
+        times = [t for t, _ in self.points]
+        if any(b <= a for a, b in zip(times, times[1:])):
+            raise ConfigError("netlist", "pwl", times, "strictly increasing times")
+        return "PWL(" + " ".join(f"{fmt(t, 'pwl')} {fmt(v, 'pwl')}" for t, v in self.points) + ")"
+
+
+@dataclass(frozen=True)
+class Element:
+    """One device line: ``name nodes... [value|model] [key=value ...]``."""
+    name: str
+    nodes: tuple
+    value: object = None          # number, Param, Pulse, Pwl, or model/subckt name (str)
+    params: tuple = ()            # ((key, number|Param), ...)
+
+    def __post_init__(self):
+        check_name(self.name, "element name")
+        for n in self.nodes:
+            check_node(n, f"node of {self.name}")
+        if isinstance(self.value, str):
+            check_name(self.value, f"model of {self.name}")
+        for k, _v in self.params:
+            check_name(k, f"parameter of {self.name}")
+
+    def text(self) -> str:
+        parts = [self.name, *self.nodes]
+        v = self.value
+        if isinstance(v, (Pulse, Pwl)):
+            parts.append(v.text())
+        elif isinstance(v, str):
+            parts.append(v)
+        elif v is not None:
+            parts.append(fmt(v, self.name))
+        parts += [f"{k}={fmt(x, f'{self.name}.{k}')}" for k, x in self.params]
+        return " ".join(parts)
+
+
+@dataclass(frozen=True)
+class Model:
+    """A ``.model name type (k=v ...)`` card written by the kit."""
+    name: str
+    kind: str
+    params: tuple
+
+    def __post_init__(self):
+        check_name(self.name, "model name")
+        check_name(self.kind, "model type")
+
+    def text(self) -> str:
+        body = " ".join(f"{check_name(k, 'model parameter')}={fmt(v, k)}" for k, v in self.params)
+        return f".model {self.name} {self.kind} ({body})"
+
+
+@dataclass(frozen=True)
+class Subckt:
+    name: str
+    ports: tuple
+    elements: tuple
+    params: tuple = ()  # ((name, default), ...)
+
+    def __post_init__(self):
+        check_name(self.name, "subcircuit name")
+        for p in self.ports:
+            check_node(p, f"port of {self.name}")
+
+    def text(self) -> str:
+        head = f".subckt {self.name} " + " ".join(self.ports)
+        if self.params:
+            head += " " + " ".join(f"{check_name(k)}={fmt(v, k)}" for k, v in self.params)
+        return "\n".join([head, *(e.text() for e in self.elements), f".ends {self.name}"])
+
+
+@dataclass(frozen=True)
+class Tran:
+    step: float
+    stop: float
+    start: float = 0.0
+    max_step: float | None = None
+    uic: bool = False
+
+    def text(self) -> str:
+        s = f".tran {fmt(self.step)} {fmt(self.stop)} {fmt(self.start)}"
+        if self.max_step is not None:
+            s += f" {fmt(self.max_step)}"
+        return s + (" uic" if self.uic else "")
+
+    @property
+    def kind(self) -> str:
+        return "tran"
+
+
+@dataclass(frozen=True)
+class Op:
+    def text(self) -> str:
+        return ".op"
+
+    @property
+    def kind(self) -> str:
+        return "op"
+
+
+_OPTION_WORD = re.compile(r"^[a-z]{1,16}$")
+
+
+@dataclass(frozen=True)
+class Netlist:
+    """A complete deck: title, includes, models, subcircuits, elements, options, analysis."""
+    title: str
+    elements: tuple
+    analysis: object
+    subckts: tuple = ()
+    models: tuple = ()
+    includes: tuple = ()          # Include objects of the technology (quoted paths)
+    options: tuple = ()           # ((key, number|word), ...)
+    ic: tuple = ()                # ((node, volts), ...)
+    temperature_C: float = 27.0
+    saves: tuple = ()             # node names to save; empty = everything
+    meta: dict = field(default_factory=dict, compare=False)
+
+    def __post_init__(self):
+        check_name(self.title, "deck title")
+        names = [e.name.lower() for e in self.elements]
+        dup = {n for n in names if names.count(n) > 1}
+        if dup:
+            raise ConfigError("netlist", "element name", sorted(dup)[0], "unique element names")
+
+    def text(self) -> str:
+        out = [f"* {self.title}: generated by pixelkit"]
+        for inc in self.includes:
+            if _PATH_BAD.search(str(inc.file)):
+                raise ConfigError("netlist", "include", str(inc.file), "a path without quotes, ';' or line breaks")
+            out.append(inc.line())
+        out += [m.text() for m in self.models]
+        out += [s.text() for s in self.subckts]
+        out += [e.text() for e in self.elements]
+        opts = []
+        for k, v in self.options:
+            check_name(k, "option")
+            if isinstance(v, str):
+                if not _OPTION_WORD.match(v):
+                    raise ConfigError("netlist", f"option {k}", v, "a lower-case word")
+                opts.append(f"{k}={v}")
+            else:
+                opts.append(f"{k}={fmt(v, k)}")
+        if opts:
+            out.append(".options " + " ".join(opts))
+        out.append(f".temp {fmt(self.temperature_C, 'temperature')}")
+        if self.ic:
+            out.append(".ic " + " ".join(f"v({check_node(n)})={fmt(v, 'ic')}" for n, v in self.ic))
+        if self.saves:
+            out.append(".save " + " ".join(_save(n) for n in self.saves))
+        out.append(self.analysis.text())
+        out.append(".end")
+        return "\n".join(out) + "\n"
