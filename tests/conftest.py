@@ -24,3 +24,16 @@ def run_cli(*args, cwd=None, timeout=600):
 @pytest.fixture
 def cli():
     return run_cli
+
+
+# Simulation results are cached per test session only (real runs every session).
+import os  # noqa: E402
+import tempfile  # noqa: E402
+
+os.environ.setdefault("PIXELKIT_CACHE", tempfile.mkdtemp(prefix="pixelkit-test-cache-"))
+
+
+@pytest.fixture(scope="session")
+def experiment(ref_design):
+    from pixelkit.experiments.thesis import run_experiment
+    return run_experiment(ref_design)

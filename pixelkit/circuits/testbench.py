@@ -12,6 +12,7 @@ from dataclasses import replace
 from ..spice.netlist import Element, Netlist, Pwl, Tran
 from . import column
 from .afe import sc_afe
+from .array import array_ports, pixel_array
 from .devices import photodiode, photodiode_model
 from .dual_pixel import dual_pixel
 from .opamp import opamp
@@ -55,8 +56,10 @@ def sample_clocks(design, t: GsTiming, prefix: str, rows: int) -> list:
     """S1/S2 and the AFE phases p1/p2 (with complements) of one array."""
     vdd, e, out = design.tech.supply, t.edge, []
     no = design.afe.nonoverlap
+    # p1 opens ``no`` before S1X (its injection is then signal independent);
+    # p2 closes ``no`` before S2X, so the loop is closed before the input moves.
     p1 = [(a, b - no) for a, b in t.s1(rows)]
-    p2 = [(a + no, b) for a, b in t.s2(rows)]
+    p2 = [(a - no, b) for a, b in t.s2(rows)]
     for name, iv in (("s1", t.s1(rows)), ("s2", t.s2(rows)), ("p1", p1), ("p2", p2)):
         out.append(Element(f"V{name}_{prefix}", (f"{name}_{prefix}", "0"), waveform(iv, vdd, e)))
         out.append(Element(f"V{name}b_{prefix}", (f"{name}_{prefix}b", "0"), waveform(iv, vdd, e, invert=True)))
@@ -92,6 +95,25 @@ def dual_pixel_bench(design, iph_p: float, iph_s, t_exp: float | None = None, wi
     return _deck(design, title, el, subckts, Tran(5e-9, stop, 0.0, 20e-9))
 
 
+def array_bench(design, rows: int, cols: int, iph_p, iph_s, t_exp: float | None = None,
+                title: str = "array_bench") -> Netlist:
+    """An array read row by row; ``iph_p[r][c]`` and ``iph_s[r][j]`` are the photocurrents."""
+    n = design.secondary_per_pixel
+    t_exp = design.experiment.t_window if t_exp is None else t_exp
+    tm = timings(design, t_exp, rows)
+    params = [(f"iph_p_{r}_{c}", float(iph_p[r][c])) for r in range(rows) for c in range(cols)]
+    params += [(f"iph_s_{r}_{j}", float(iph_s[r][j])) for r in range(rows) for j in range(n * cols)]
+    el = [*supplies(design), *controls(design, tm, rows, row_lines=True), *column.bias(design),
+          Element("Xarr", array_ports(design, rows, cols), f"pixarray_{rows}x{cols}", tuple(params))]
+    for c in range(cols):
+        el += column.load(design, f"col_p_{c}")
+    for j in range(n * cols):
+        el += column.load(design, f"col_s_{j}")
+    subckts = (*dual_pixel(design), pixel_array(design, rows, cols))
+    stop = max(t.t_stop for t in tm.values())
+    return _deck(design, title, el, subckts, Tran(5e-9, stop, 0.0, 20e-9))
+
+
 def afe_bench(design, pairs, t_cycle: float | None = None, vos: float = 0.0,
               title: str = "afe_bench") -> Netlist:
     """The SC AFE fed (Vsig, Vrst) pairs: Vsig during p1, Vrst during p2 of each cycle."""
@@ -101,8 +123,8 @@ def afe_bench(design, pairs, t_cycle: float | None = None, vos: float = 0.0,
     pts = [(0.0, pairs[0][0])]
     for r, (vsig, vrst) in enumerate(pairs):
         t0 = t.row(r)
-        pts += [(t0 + 0.02 * t_cycle, vsig), (t0 + 0.5 * t_cycle, vsig), (t0 + 0.5 * t_cycle + e, vrst),
-                (t0 + 0.98 * t_cycle, vrst)]
+        step = t.s2_window(r)[0]  # the input moves when S2X would connect it, loop closed
+        pts += [(t0 + 0.02 * t_cycle, vsig), (step, vsig), (step + 2 * e, vrst), (t0 + 0.98 * t_cycle, vrst)]
     clean = [pts[0]] + [p for a, p in zip(pts, pts[1:]) if p[0] > a[0]]
     el = [Element("Vdd", ("vdd", "0"), vdd), Element("Vref", ("vref", "0"), design.afe.vref),
           Element("Vin", ("in", "0"), Pwl(tuple(clean))), *sample_clocks(design, t, "a", len(pairs)),

@@ -21,7 +21,7 @@ RETRIES = (
      ("itl4", 100)),
 )
 
-FAILURE_MARKERS = ("timestep too small", "simulation(s) aborted", "doanalyses", "singular matrix",
+FAILURE_MARKERS = ("can't find model", "error on line", "timestep too small", "simulation(s) aborted", "doanalyses", "singular matrix",
                    "no convergence", "error:", "could not find", "unknown model", "fatal",
                    "unknown subckt", "gmin stepping failed", "source stepping failed")
 
@@ -35,8 +35,11 @@ def merged(base, override) -> tuple:
 def failure_lines(lines) -> list[str]:
     """The lines of ngspice output that say a run failed (case-insensitive markers)."""
     out = []
-    for line in lines:
+    lines = list(lines)
+    for k, line in enumerate(lines):
         low = line.lower()
-        if any(m in low for m in FAILURE_MARKERS) and "warning" not in low[:10]:
+        if any(m in low for m in FAILURE_MARKERS):
             out.append(line.strip())
+            if low.rstrip().endswith((":", "from line")) and k + 1 < len(lines):
+                out.append(lines[k + 1].strip())  # the offending deck line
     return out

@@ -1,0 +1,57 @@
+"""One registry of generators; each emits its netlist text at the reference design's values.
+
+``netlists/<name>.cir`` holds the golden copy of each; ``pixelkit netlists --write``
+regenerates them and ``tests/test_golden.py`` compares every generator with its
+file. Model-library paths are machine specific, so golden text writes the
+model folder as ``@MODELS``.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+from ..spice.netlist import Netlist, Op
+from .afe import sc_afe
+from .array import pixel_array
+from .devices import photodiode_model
+from .dual_pixel import dual_pixel
+from .opamp import opamp_macro, opamp_ota
+from .pixel5t import pixel5t
+from .testbench import afe_bench, array_bench, dual_pixel_bench, pd_pair_bench
+
+
+def _cells(design, title, subckts) -> Netlist:
+    t = design.tech
+    return Netlist(title=title, elements=(), analysis=Op(), subckts=tuple(subckts),
+                   models=photodiode_model(t), includes=t.models.includes(design.corner or None))
+
+
+def _afe_pairs():
+    return [(1.9 - dv, 1.9) for dv in (0.0, 0.4, 0.8, 1.2)]
+
+
+GENERATORS = {
+    "pixel5t_primary": lambda d: _cells(d, "pixel5t_primary", [pixel5t(d, "primary")]),
+    "pixel5t_secondary": lambda d: _cells(d, "pixel5t_secondary", [pixel5t(d, "secondary")]),
+    "dual_pixel": lambda d: _cells(d, "dual_pixel", dual_pixel(d)),
+    "opamp_macro": lambda d: _cells(d, "opamp_macro", [opamp_macro(d.afe.gain, d.afe.gbw)]),
+    "opamp_ota": lambda d: _cells(d, "opamp_ota", [opamp_ota(d.tech)]),
+    "sc_afe": lambda d: _cells(d, "sc_afe", [sc_afe(d)]),
+    "array_2x2": lambda d: _cells(d, "array_2x2", [*dual_pixel(d), pixel_array(d, 2, 2)]),
+    "bench_dual_pixel": lambda d: dual_pixel_bench(d, 1.4e-9, 52e-12),
+    "bench_dual_pixel_afe": lambda d: dual_pixel_bench(d, 1.4e-9, 52e-12, with_afe=True),
+    "bench_array_2x2": lambda d: array_bench(d, 2, 2, [[2e-10, 4e-10], [6e-10, 8e-10]],
+                                             [[1e-11 * (j + 1) for j in range(6)],
+                                              [1e-11 * (j + 7) for j in range(6)]]),
+    "bench_afe": lambda d: afe_bench(d, _afe_pairs()),
+    "bench_pd_pair": lambda d: pd_pair_bench(d, 1e-9, 1e-9 / 3.6, 20e-6, 2.5),
+}
+
+
+def golden_text(name: str, design) -> str:
+    net = GENERATORS[name](design)
+    return net.text().replace(str(design.tech.models.folder), "@MODELS")
+
+
+def write_all(design, folder: Path) -> list[Path]:
+    from ..fileio import write_atomic
+    return [write_atomic(folder / f"{n}.cir", golden_text(n, design)) for n in GENERATORS]

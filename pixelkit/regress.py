@@ -1,0 +1,72 @@
+"""Regression of a design's measured figures against a stored baseline.
+
+A baseline is a JSON file ``{"design": ..., "figures": {name: {"value", "tol_rel", "tol_abs"}}}``.
+A figure has changed when |new - old| > max(tol_rel |old|, tol_abs).
+"""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from .errors import ConfigError
+from .fileio import write_atomic
+
+#: figure name -> (relative tolerance, absolute tolerance in the figure's SI unit)
+TOLERANCES = {
+    "primary.i_mid_A": (0.01, 1e-12),
+    "secondary.i_5pct_A": (0.01, 0.2e-12),
+    "primary.swing_V": (0.005, 1e-3),
+    "secondary.swing_V": (0.005, 1e-3),
+    "primary.dark_signal_V": (0.0, 2e-3),
+    "secondary.dark_signal_V": (0.0, 2e-3),
+    "ratio": (0.01, 0.0),
+    "model_vs_spice.max_err_frac": (0.0, 0.01),
+    "fig_a1.max_diff_frac": (0.0, 0.005),
+}
+
+
+def figures(result: dict) -> dict:
+    out = {}
+    for name in TOLERANCES:
+        node = result
+        for part in name.split("."):
+            node = node[part]
+        out[name] = float(node)
+    return out
+
+
+def make_baseline(design_name: str, result: dict) -> dict:
+    return {"design": design_name,
+            "figures": {k: {"value": v, "tol_rel": TOLERANCES[k][0], "tol_abs": TOLERANCES[k][1]}
+                        for k, v in figures(result).items()}}
+
+
+def load_baseline(path: Path) -> dict:
+    try:
+        data = json.loads(Path(path).read_text())
+        figs = data["figures"]
+        assert all({"value", "tol_rel", "tol_abs"} <= set(f) for f in figs.values())
+    except FileNotFoundError:
+        raise ConfigError(str(path), "baseline", str(path), "an existing baseline (create it with --update)") from None
+    except (ValueError, KeyError, AssertionError, TypeError):
+        raise ConfigError(str(path), "baseline", "(unreadable)", "a baseline JSON written by 'pixelkit regress --update'") from None
+    return data
+
+
+def compare(baseline: dict, result: dict) -> list[dict]:
+    """Every figure with old, new, change and whether it is beyond tolerance."""
+    new = figures(result)
+    rows = []
+    for name, ref in baseline["figures"].items():
+        if name not in new:
+            rows.append({"figure": name, "old": ref["value"], "new": None, "changed": True})
+            continue
+        old, val = ref["value"], new[name]
+        tol = max(ref["tol_rel"] * abs(old), ref["tol_abs"])
+        rows.append({"figure": name, "old": old, "new": val, "delta": val - old, "tolerance": tol,
+                     "changed": abs(val - old) > tol})
+    return rows
+
+
+def save_baseline(path: Path, baseline: dict) -> None:
+    write_atomic(path, json.dumps(baseline, indent=1) + "\n")

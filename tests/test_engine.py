@@ -1,0 +1,67 @@
+import numpy as np
+import pytest
+
+from pixelkit.errors import ConfigError, SimulationError
+from pixelkit.spice import Element, Netlist, Tran, simulate, simulate_many
+from pixelkit.spice.netlist import Model, Subckt
+
+
+def _rc(title="rc", r=1e3, extra=()):
+    return Netlist(title, (Element("V1", ("a", "0"), 1.0), Element("R1", ("a", "b"), r),
+                           Element("C1", ("b", "0"), 1e-9), *extra), Tran(1e-8, 5e-6, 0, 1e-8, uic=True))
+
+
+def test_rc_charges_as_exp():
+    r = simulate(_rc(), use_cache=False)
+    assert r.at("b", 1e-6) == pytest.approx(1 - np.exp(-1), abs=2e-3)
+    assert r.meta["ngspice_version"] and r.meta["wall_s"] > 0 and r.meta["options"]["gmin"] == 1e-15
+
+
+def test_cache_returns_the_same_result():
+    net = _rc("cached_rc", r=2e3)
+    a = simulate(net)
+    b = simulate(net)
+    assert b.meta["cached"] and np.array_equal(a["b"], b["b"])
+
+
+def test_parallel_equals_serial():
+    nets = [_rc(f"par{k}", r=1e3 * (k + 1)) for k in range(4)]
+    par = simulate_many(nets, jobs=2, use_cache=False)
+    ser = [simulate(n, use_cache=False) for n in nets]
+    for a, b in zip(par, ser):
+        assert np.array_equal(a["b"], b["b"])
+
+
+def test_failure_names_deck_analysis_and_ngspice_message():
+    bad = _rc("broken_deck", extra=(Element("D1", ("b", "0"), "nosuchmodel"),))
+    with pytest.raises(SimulationError) as e:
+        simulate(bad, use_cache=False)
+    msg = str(e.value)
+    assert "broken_deck" in msg and ".tran" in msg and "nosuchmodel" in msg.lower()
+
+
+@pytest.mark.parametrize("make", [
+    lambda: Element("R1\n.control", ("a", "b"), 1.0),
+    lambda: Element("X1", ("a", "b"), "sub\nshell rm -rf /"),
+    lambda: Element("R1", ("a;b", "0"), 1.0),
+    lambda: Element("R1", ("a", "0"), "1k\n.endc"),
+    lambda: Model("pd\n.control", "d", ()),
+    lambda: Subckt("s", ("a b",), ()),
+    lambda: Netlist("t", (), Tran(1e-9, 1e-6), options=(("method", "gear\n.control\nshell id\n.endc"),)).text(),
+    lambda: Netlist("t", (), Tran(1e-9, 1e-6), options=(("method\nshell", 1.0),)).text(),
+    lambda: Element("R1", ("a", "0"), float("nan")).text(),
+])
+def test_nothing_injects_spice(make):
+    with pytest.raises(ConfigError):
+        make()
+
+
+def test_design_strings_cannot_reach_a_deck(tmp_path, cli):
+    """A technology whose model name tries a .control block is refused before any deck."""
+    from conftest import REF, ROOT
+    tech = (ROOT / "pixelkit/tech/builtin/c35_thesis.toml").read_text().replace(
+        'spice_model = "pd_c35"', 'spice_model = "pd\\n.control\\nshell touch /tmp/pwned\\n.endc"')
+    (tmp_path / "t.toml").write_text(tech)
+    (tmp_path / "d.toml").write_text(REF.read_text().replace('"c35_thesis"', f'"{tmp_path / "t.toml"}"'))
+    code, out, err = cli("simulate", tmp_path / "d.toml", "--json")
+    assert code == 2 and "photodiode.spice_model" in err and "Traceback" not in err
