@@ -65,3 +65,14 @@ def test_design_strings_cannot_reach_a_deck(tmp_path, cli):
     (tmp_path / "d.toml").write_text(REF.read_text().replace('"c35_thesis"', f'"{tmp_path / "t.toml"}"'))
     code, out, err = cli("simulate", tmp_path / "d.toml", "--json")
     assert code == 2 and "photodiode.spice_model" in err and "Traceback" not in err
+
+
+def test_slope_and_settling_of_an_rc():
+    from pixelkit.measure.pixel import discharge_slope, settling_time
+    r = simulate(_rc("rc_measure"))
+    tau = 1e3 * 1e-9
+    # slope at the start is 1/RC (V/s), averaged over the first 2 % of tau
+    assert discharge_slope(r, "v(b)", 0.0, 0.02 * tau) == pytest.approx(1 / tau * (1 - 0.01), rel=0.02)
+    # settling within 1 % of the final value: tau ln(100) (final taken at 5 tau, 0.7 % short of 1 V)
+    t = settling_time(r.time, r["v(b)"], 0.0, 5e-6, 0.01)
+    assert t == pytest.approx(tau * np.log(1 / (0.01 + np.exp(-5))), rel=0.03)
