@@ -1,4 +1,4 @@
-"""Subcommands beyond the core ones: netlists, regress, array."""
+"""Subcommands beyond the core ones: netlists, regress, array, size."""
 from __future__ import annotations
 
 import sys
@@ -92,3 +92,18 @@ def array_cmd(design, rows, cols, out, as_json):
     emit(data, as_json, lambda x: "\n".join([f"plot: {x['plot']}"] + [
         f"row {r}: primary {[round(v * 1e3, 1) for v in x['primary_signal_V'][r]]} mV, "
         f"secondary {[round(v * 1e3, 1) for v in x['secondary_signal_V'][r]]} mV" for r in range(x["rows"])]))
+
+
+@main.command()
+@design_arg
+@click.option("--out", type=click.Path(dir_okay=False), default=None,
+              help="sized design file (default: DESIGN_sized.toml beside DESIGN)")
+@click.option("--sensitivity", "with_sens", is_flag=True,
+              help="also re-size at +-10 % C_j, +-20 % SF bias, each corner, +-10 K")
+@json_opt
+def size(design, out, with_sens, as_json):
+    """Size the secondary mask opening and the integration times (5 % / mid-scale criterion)."""
+    from .design import load_design
+    from .optimize.flow import size_design
+    from .report.text import size_text
+    emit(size_design(load_design(design), out, with_sens), as_json, size_text)

@@ -102,6 +102,44 @@ class Experiment:
 
 
 @dataclass(frozen=True)
+class Optics:
+    focal_length: float = qty("m", gt=0, le=1.0)
+    f_number: float = num(gt=0.5, le=64)
+    transmission: float = num(0.9, gt=0, le=1)
+
+
+@dataclass(frozen=True)
+class Scene:
+    """Measurement geometry (thesis fig. 2.3) and light levels for sizing."""
+    distance: float = qty("m", gt=0, doc="distance from the camera to the lane")
+    speed_min: float = qty("m/s", gt=0)
+    speed_max: float = qty("m/s", gt=0)
+    background: float = qty("lx", gt=0, doc="scene illuminance at which the primary sits at mid-scale")
+    headlight: float = qty("W/m2", gt=0, doc="headlight irradiance at the sensor (the spot's image)")
+    reflectance: float = num(0.2, gt=0, le=1)
+    spectrum_temperature: float = qty("K", 2856.0, gt=1000, doc="black-body colour temperature of the light")
+    max_temperature: float = qty("K", 358.15, gt=0, lt=500, doc="maximum die temperature")
+
+    def validate(self, path, source):
+        if self.speed_max < self.speed_min:
+            raise ConfigError(source, f"{path}.speed_max", self.speed_max, f"a speed >= speed_min")
+
+
+@dataclass(frozen=True)
+class Sizing:
+    t_ratio: float = num(0.0, ge=0, doc="fixed t_secondary / t_primary; 0 = free")
+    level: str = text("spice", choices=("analytic", "spice"))
+    objective: str = text("trace", choices=("trace", "margin"), doc="trace: longest trace; margin: centre the bounds")
+    min_trace_px: float = num(5.0, gt=0, doc="shortest usable trace at speed_min (speed accuracy)")
+    fov_fraction: float = num(0.8, gt=0, le=1, doc="longest trace at speed_max, as a fraction of the width")
+    max_motion_px: float = num(1.0, gt=0, doc="primary image motion limit at speed_max")
+    dark_fraction: float = num(0.05, gt=0, lt=1, doc="dark signal over t_secondary at max temperature")
+    headlight_max: float = num(0.9, gt=0, le=1, doc="headlight signal below this fraction of swing")
+    headlight_snr: float = num(10.0, gt=0, doc="headlight signal over the secondary's noise floor")
+    margin: float = num(0.05, ge=0, lt=0.5, doc="relative margin required on every inequality")
+
+
+@dataclass(frozen=True)
 class Design:
     name: str = ident()
     revision: str = text()
@@ -114,6 +152,9 @@ class Design:
     temperature: float = qty("K", 300.15, gt=0, lt=500)
     secondary_per_pixel: int = integer(3, ge=1, le=16)
     experiment: Experiment = table(Experiment, default=Experiment)
+    optics: Optics | None = table(Optics, None)
+    scene: Scene | None = table(Scene, None)
+    sizing: Sizing = table(Sizing, default=Sizing)
     tech: Technology = field(default=None, metadata=dict(kind="skip"))
     source: str = field(default="", metadata=dict(kind="skip"))
     raw: dict = field(default=None, metadata=dict(kind="skip"), repr=False, compare=False)

@@ -39,3 +39,24 @@ def simulate_text(r: dict) -> str:
              f"  analytic model vs SPICE over 10-90 % of swing: worst {m['max_err_frac'] * 100:.2f} %",
              f"  {r['n_runs']} SPICE runs ({r['n_cached']} from cache) in {r['wall_s']:.1f} s"]
     return "\n".join(lines)
+
+
+def size_text(r: dict) -> str:
+    a, s, v = r["levels"]["analytic"], r["levels"]["spice"], r["verify"]
+    lines = [f"Sizing ({r['level']} level chosen); sized design: {r['sized_design']}",
+             _row("", "analytic", "SPICE curves"),
+             _row("C_M", f"{a['c_m']:.1f}", f"{s['c_m']:.1f}"),
+             _row("mask opening (um2)", f"{a['mask_open_m2'] * 1e12:.3f}", f"{s['mask_open_m2'] * 1e12:.3f}"),
+             _row("t_int primary (us)", f"{a['t_int_primary_s'] * 1e6:.1f}", f"{s['t_int_primary_s'] * 1e6:.1f}"),
+             _row("t_int secondary (us)", f"{a['t_int_secondary_s'] * 1e6:.1f}",
+                  f"{s['t_int_secondary_s'] * 1e6:.1f}"),
+             _row("trace at speed_min (px)", f"{a['trace_px_at_speed_min']:.1f}", f"{s['trace_px_at_speed_min']:.1f}"),
+             _row("primary motion (px)", f"{a['motion_px_primary']:.2f}", f"{s['motion_px_primary']:.2f}"),
+             f"  verify in SPICE: primary at {v['primary_frac'] * 100:.1f} % of swing, "
+             f"secondary at {v['secondary_frac'] * 100:.1f} %",
+             f"  analytic solve {r['solve_time_s'] * 1e3:.1f} ms",
+             f"  why the levels differ: {r['why_levels_differ']}"]
+    for row in r.get("sensitivity", []):
+        lines.append(f"  {row['variant']:<22} C_M {row['c_m']:6.1f} ({row['c_m_change_frac'] * 100:+5.1f} %)  "
+                     f"t_p {row['t_int_primary_s'] * 1e6:7.1f} us ({row['t_primary_change_frac'] * 100:+5.1f} %)")
+    return "\n".join(lines)

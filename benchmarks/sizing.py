@@ -1,0 +1,43 @@
+"""Sizing speed: the analytic casadi solve against one SPICE run of the pixel, same process.
+
+    python benchmarks/sizing.py [repeats]
+"""
+from __future__ import annotations
+
+import statistics
+import sys
+import tempfile
+import os
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from pixelkit.circuits.testbench import dual_pixel_bench  # noqa: E402
+from pixelkit.design import load_design  # noqa: E402
+from pixelkit.optimize.levels import analytic_curves  # noqa: E402
+from pixelkit.optimize.sizing import solve  # noqa: E402
+from pixelkit.spice import simulate  # noqa: E402
+
+
+def main(repeats: int = 20):
+    os.environ["PIXELKIT_CACHE"] = tempfile.mkdtemp(prefix="pk-bench-")
+    d = load_design(Path(__file__).resolve().parents[1] / "designs" / "dual_pixel_revA.toml")
+    t0 = time.perf_counter()
+    simulate(dual_pixel_bench(d, 1e-9, 4e-11), use_cache=False)
+    spice = time.perf_counter() - t0
+    walls, solves = [], []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        r = solve(d, analytic_curves(d))
+        walls.append(time.perf_counter() - t0)
+        solves.append(r["solve_time_s"])
+    w, s = statistics.median(walls), statistics.median(solves)
+    print(f"one SPICE run of the dual-pixel bench (baseline): {spice * 1e3:8.1f} ms")
+    print(f"analytic sizing, curves + casadi/IPOPT (median of {repeats}): {w * 1e3:8.1f} ms  "
+          f"{w / spice:5.2f} x baseline")
+    print(f"  of which the IPOPT solve:                     {s * 1e3:8.1f} ms  {s / spice:5.2f} x baseline")
+
+
+if __name__ == "__main__":
+    main(int(sys.argv[1]) if len(sys.argv) > 1 else 20)

@@ -1,0 +1,93 @@
+"""The ``pixelkit size`` flow: both levels, SPICE verification, sized design file, sensitivity."""
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+
+from ..circuits.testbench import dual_pixel_bench, timings
+from ..experiments.thesis import run_experiment
+from ..fileio import write_atomic
+from ..measure.pixel import double_sampled
+from ..schema import to_toml
+from ..spice import simulate
+from .levels import analytic_curves, spice_curves
+from .sizing import light, solve
+
+WHY = ("The analytic level sees only the PD node (PD junction + EC/TG diffusions) and takes the "
+       "signal as its voltage drop over the design swing; the SPICE level reads the double-sampled "
+       "column signal, where FD charge sharing, the SF gain and the measured column swing make the "
+       "secondary's 5 % point cost relatively less charge than the primary's mid-scale point, so "
+       "it needs a larger opening (smaller C_M).")
+
+
+def verify(design, sized: dict, experiment: dict) -> dict:
+    """Re-simulate the sized design at the background light (equivalent charge in the window)."""
+    lt = light(design)
+    t_w = experiment["t_window_s"]
+    i_p = lt.j_bg * design.primary.area * sized["t_int_primary_s"] / t_w
+    i_s = lt.j_bg * sized["mask_open_m2"] * sized["t_int_secondary_s"] / t_w
+    r = simulate(dual_pixel_bench(design, i_p, i_s, title="size_verify"))
+    tm = timings(design, t_w)
+    fp = (double_sampled(r, "col_p", tm["primary"]) - experiment["primary"]["dark_signal_V"]) \
+        / experiment["primary"]["swing_V"]
+    fs = (double_sampled(r, "col_s0", tm["secondary"]) - experiment["secondary"]["dark_signal_V"]) \
+        / experiment["secondary"]["swing_V"]
+    return {"primary_frac": fp, "secondary_frac": fs, "i_primary_equiv_A": i_p, "i_secondary_equiv_A": i_s,
+            "window_s": t_w}
+
+
+def sized_design_text(design, sized: dict) -> str:
+    raw = {k: (dict(v) if isinstance(v, dict) else v) for k, v in design.raw.items()}
+    raw["name"] = f"{design.name}_sized"
+    raw["secondary"]["mask_opening"] = f"{sized['mask_open_m2'] * 1e12:.4f} um2"
+    raw["primary"]["t_int"] = f"{sized['t_int_primary_s'] * 1e6:.2f} us"
+    raw["secondary"]["t_int"] = f"{sized['t_int_secondary_s'] * 1e6:.2f} us"
+    head = (f"# Sized by pixelkit size from {design.source} ({sized['level']} level):\n"
+            f"# C_M = {sized['c_m']:.2f}, opening {sized['mask_open_m2'] * 1e12:.4f} um2\n")
+    return head + to_toml(raw)
+
+
+def variants(design):
+    """(label, design) pairs of the sensitivity table."""
+    pd = design.tech.photodiode
+    out = []
+    for k in (0.9, 1.1):
+        tech = replace(design.tech, photodiode=replace(pd, cj=pd.cj * k, cjsw=pd.cjsw * k))
+        out.append((f"C_j x{k:g}", replace(design, tech=tech)))
+    for k in (0.8, 1.2):
+        out.append((f"SF bias x{k:g}", replace(design, pixel=replace(design.pixel, sf_bias=design.pixel.sf_bias * k))))
+    for c in sorted(design.tech.models.corners):
+        out.append((f"corner {c}", replace(design, corner=c)))
+    for dt in (-10.0, 10.0):
+        sc = replace(design.scene, max_temperature=design.scene.max_temperature + dt)
+        out.append((f"temperature {dt:+g} K", replace(design, temperature=design.temperature + dt, scene=sc)))
+    return out
+
+
+def sensitivity(design, nominal: dict, backend="batch") -> list[dict]:
+    rows = []
+    for label, d in variants(design):
+        s = solve(d, spice_curves(d, run_experiment(d, backend=backend)))
+        rows.append({"variant": label, "c_m": s["c_m"], "mask_open_m2": s["mask_open_m2"],
+                     "t_int_primary_s": s["t_int_primary_s"], "t_int_secondary_s": s["t_int_secondary_s"],
+                     "c_m_change_frac": s["c_m"] / nominal["c_m"] - 1,
+                     "t_primary_change_frac": s["t_int_primary_s"] / nominal["t_int_primary_s"] - 1})
+    return rows
+
+
+def size_design(design, out: Path | None = None, with_sensitivity: bool = False, backend="batch") -> dict:
+    exp = run_experiment(design, backend=backend)
+    analytic = solve(design, analytic_curves(design))
+    spice = solve(design, spice_curves(design, exp))
+    chosen = spice if design.sizing.level == "spice" else analytic
+    out = Path(out) if out else Path(design.source).with_name(f"{Path(design.source).stem}_sized.toml")
+    write_atomic(out, sized_design_text(design, chosen))
+    result = {k: chosen[k] for k in ("c_m", "mask_open_m2", "t_int_primary_s", "t_int_secondary_s",
+                                     "trace_px_at_speed_min", "motion_px_primary", "dark_frac_secondary",
+                                     "headlight_frac")}
+    result.update(level=chosen["level"], solve_time_s=analytic["solve_time_s"],
+                  verify=verify(design, chosen, exp), levels={"analytic": analytic, "spice": spice},
+                  why_levels_differ=WHY, sized_design=str(out))
+    if with_sensitivity:
+        result["sensitivity"] = sensitivity(design, spice, backend)
+    return result

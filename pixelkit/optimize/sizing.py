@@ -1,0 +1,169 @@
+"""Size the secondary mask opening and both integration times (thesis fig. 3.7) with casadi.
+
+Decision variables (log-scaled): the opening A_open, t_primary, t_secondary.
+With j = R_eff E the photocurrent density (A/m^2) of the background light at the
+sensor and of the headlight spot:
+
+    criterion   f_p(j_bg A_p t_p) = mid,   f_s(j_bg A_open t_s) = low   (5 % / mid-scale)
+    motion      v_max t_p f / (Z pitch_p)            <= max_motion_px
+    trace       v_min t_s f / (Z pitch_s)            >= min_trace_px
+    fov         v_max t_s f / Z                      <= fov_fraction * width_s
+    dark        I_dark,s(T_max) t_s                  <= dark_fraction * Q_full,s
+    headlight   j_head A_open t_s                    <= Q(headlight_max),  >= snr * Q_noise
+    opening     min_opening_side^2 <= A_open <= A_pd
+    ratio       t_s = t_ratio t_p                    (when the design fixes it)
+
+every inequality tightened by ``sizing.margin``. Objective ``trace``: the longest
+secondary integration (longest trace, best speed accuracy); ``margin``: the
+largest common relative slack. Before IPOPT runs, the bounds each constraint puts
+on t_s are intersected in closed form, so an infeasible requirement is reported
+with the names of the constraints in conflict.
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from ..constants import K_B, Q
+from ..errors import ConfigError, InfeasibleError
+from ..physics.dark import dark_current
+from ..physics.photo import Spectrum, lux_to_irradiance, responsivity
+from .levels import Curves
+
+
+@dataclass(frozen=True)
+class Light:
+    j_bg: float      # A/m^2 at the sensor, background
+    j_head: float    # A/m^2, headlight spot
+
+
+def light(design) -> Light:
+    sc, op = design.scene, design.optics
+    spec = Spectrum.blackbody(sc.spectrum_temperature)
+    r_eff = spec.mean(lambda wl: responsivity(wl, design.tech.qe(wl)))
+    e_img_lux = sc.reflectance * op.transmission * sc.background / (4 * op.f_number ** 2)
+    return Light(r_eff * lux_to_irradiance(e_img_lux, spec), r_eff * sc.headlight)
+
+
+def _require(design):
+    for sec in ("optics", "scene"):
+        if getattr(design, sec) is None:
+            raise ConfigError(design.source, sec, None, f"a [{sec}] table to size the design")
+
+
+def _bounds(design, curves: Curves, lt: Light):
+    """Closed-form bounds on t_p and t_s: {name: (kind, value)} with kind 'lo'/'hi'."""
+    d, sc, op, sz = design, design.scene, design.optics, design.sizing
+    m = sz.margin
+    z, f = sc.distance, op.focal_length
+    q_mid = curves.charge_at("primary", d.experiment.mid_fraction)
+    q_low = curves.charge_at("secondary", d.experiment.low_fraction)
+    t_p = q_mid / (lt.j_bg * d.primary.area)                  # fixed by the criterion
+    i_dark = dark_current(d.secondary.area, d.secondary.perimeter, sc.max_temperature, d.tech.photodiode)
+    min_open = d.tech.rules.min_opening_side ** 2
+    ts = {
+        "trace": ("lo", sz.min_trace_px * (1 + m) * z * d.secondary.pitch / (sc.speed_min * f)),
+        "fov": ("hi", sz.fov_fraction * (1 - m) * d.secondary.cols * d.secondary.pitch * z / (sc.speed_max * f)),
+        "dark": ("hi", sz.dark_fraction * (1 - m) * curves.q_full_secondary / i_dark),
+        "opening_max": ("lo", q_low / (lt.j_bg * d.secondary.area)),
+        "opening_min": ("hi", q_low / (lt.j_bg * min_open * (1 + m))),
+    }
+    tp = {"motion": ("hi", sz.max_motion_px * (1 - m) * z * d.primary.pitch / (sc.speed_max * f)),
+          "criterion": ("eq", t_p)}
+    q_head = lt.j_head * q_low / lt.j_bg                       # A_open t_s is fixed by the criterion
+    c_s = float(d.tech.photodiode.cj * d.secondary.area + d.tech.photodiode.cjsw * d.secondary.perimeter)
+    q_noise = math.sqrt(K_B * sc.max_temperature * c_s) + math.sqrt(q_head * Q)
+    q_head_max = curves.charge_at("secondary", sz.headlight_max)
+    checks = {"headlight_max": q_head <= q_head_max * (1 - m),
+              "headlight_snr": q_head >= sz.headlight_snr * q_noise * (1 + m)}
+    return ts, tp, checks, dict(q_mid=q_mid, q_low=q_low, q_head=q_head, q_head_max=q_head_max,
+                                q_noise=q_noise, i_dark=i_dark, min_open=min_open)
+
+
+def _feasibility(design, ts, tp, checks):
+    """Collect every conflict the closed-form bounds show; raise once naming them all."""
+    conflicts, reasons = [], []
+    bad = [name for name, ok in checks.items() if not ok]
+    if bad:
+        conflicts += bad
+        reasons.append("the headlight cannot be shown clearly at this background level")
+    if tp["criterion"][1] > tp["motion"][1]:
+        conflicts.append("motion")
+        reasons.append("the primary cannot reach mid-scale within its motion limit")
+    lo = {k: v for k, (kind, v) in ts.items() if kind == "lo"}
+    hi = {k: v for k, (kind, v) in ts.items() if kind == "hi"}
+    ratio = design.sizing.t_ratio
+    if ratio > 0:
+        fixed = ratio * tp["criterion"][1]
+        broken = [k for k, v in lo.items() if fixed < v] + [k for k, v in hi.items() if fixed > v]
+        if broken:
+            conflicts += broken + ["t_ratio"]
+            reasons.append(f"t_secondary = {ratio:g} x t_primary = {fixed * 1e3:.3g} ms breaks {', '.join(broken)}")
+    for a, va in lo.items():
+        for b, vb in hi.items():
+            if va > vb:
+                conflicts += [a, b]
+                reasons.append(f"{a} needs t_secondary >= {va * 1e3:.3g} ms, {b} allows <= {vb * 1e3:.3g} ms")
+    if conflicts:
+        raise InfeasibleError("; ".join(reasons), list(dict.fromkeys(conflicts + ["criterion (5 % / mid-scale)"])))
+
+
+def solve(design, curves: Curves) -> dict:
+    """Solve the sizing problem at one model level; returns the sized values and checks."""
+    _require(design)
+    lt = light(design)
+    ts, tp, checks, q = _bounds(design, curves, lt)
+    _feasibility(design, ts, tp, checks)
+    sz, d = design.sizing, design
+    t0 = time.perf_counter()
+    fp = ca.interpolant("fp", "linear", [curves.q_primary], np.maximum.accumulate(curves.f_primary))
+    fs = ca.interpolant("fs", "linear", [curves.q_secondary], np.maximum.accumulate(curves.f_secondary))
+    opti = ca.Opti()
+    la, ltp, lts = opti.variable(), opti.variable(), opti.variable()
+    a_open, t_p, t_s = ca.exp(la), ca.exp(ltp), ca.exp(lts)
+    opti.subject_to(fp(lt.j_bg * d.primary.area * t_p) == d.experiment.mid_fraction)
+    opti.subject_to(fs(lt.j_bg * a_open * t_s) == d.experiment.low_fraction)
+    slack = opti.variable()
+    for name, (kind, v) in ts.items():
+        if name.startswith("opening"):
+            continue
+        expr = lts - math.log(v) if kind == "lo" else math.log(v) - lts
+        opti.subject_to(expr >= (slack if sz.objective == "margin" else 0))
+    opti.subject_to(math.log(tp["motion"][1]) - ltp >= 0)
+    opti.subject_to(la >= math.log(q["min_open"] * (1 + sz.margin)))
+    opti.subject_to(la <= math.log(d.secondary.area))
+    if sz.t_ratio > 0:
+        opti.subject_to(lts - ltp == math.log(sz.t_ratio))
+    opti.minimize(-slack if sz.objective == "margin" else -lts)
+    t_guess = tp["criterion"][1]
+    opti.set_initial(ltp, math.log(t_guess))
+    opti.set_initial(lts, math.log(t_guess * (sz.t_ratio or 10)))
+    opti.set_initial(la, math.log(q["q_low"] / (lt.j_bg * t_guess * (sz.t_ratio or 10))))
+    opti.set_initial(slack, 0.0)
+    opti.solver("ipopt", {"print_time": False}, {"print_level": 0, "sb": "yes", "tol": 1e-10})
+    try:
+        sol = opti.solve()
+    except RuntimeError as exc:
+        raise InfeasibleError(f"IPOPT found no solution ({exc})", list(ts) + ["motion", "criterion"]) from None
+    solve_time = time.perf_counter() - t0
+    a, tpv, tsv = (float(np.exp(sol.value(x))) for x in (la, ltp, lts))
+    f, z = design.optics.focal_length, design.scene.distance
+    return {
+        "level": curves.level,
+        "c_m": d.secondary.area / a,
+        "mask_open_m2": a,
+        "t_int_primary_s": tpv,
+        "t_int_secondary_s": tsv,
+        "t_ratio": tsv / tpv,
+        "trace_px_at_speed_min": design.scene.speed_min * tsv * f / (z * d.secondary.pitch),
+        "trace_px_at_speed_max": design.scene.speed_max * tsv * f / (z * d.secondary.pitch),
+        "motion_px_primary": design.scene.speed_max * tpv * f / (z * d.primary.pitch),
+        "dark_frac_secondary": q["i_dark"] * tsv / curves.q_full_secondary,
+        "headlight_frac": float(fs(q["q_head"])),
+        "j_background_A_per_m2": lt.j_bg,
+        "solve_time_s": solve_time,
+    }
