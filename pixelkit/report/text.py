@@ -6,20 +6,28 @@ def _row(label, *cells):
     return f"  {label:<34}" + "".join(f"{c:>14}" for c in cells)
 
 
+def _pairs(a: dict, b: dict, specs) -> list[str]:
+    """Rows of two columns: ``specs`` = (label, key, scale, format) for each row."""
+    return [_row(label, f"{a[k] * sc:{fm}}", f"{b[k] * sc:{fm}}") for label, k, sc, fm in specs]
+
+
+_MODEL_ROWS = (("PD area (um2)", "area_m2", 1e12, ".2f"), ("PD perimeter (um)", "perimeter_m", 1e6, ".2f"),
+               ("photoactive area (um2)", "photoactive_area_m2", 1e12, ".3f"),
+               ("C_jdep (fF)", "c_jdep_F", 1e15, ".2f"), ("PD node incl. EC/TG (fF)", "c_node_F", 1e15, ".2f"),
+               ("conversion gain (uV/e-)", "cg_V_per_e", 1e6, ".2f"),
+               ("full well, swing x C (ke-)", "fwc_e", 1e-3, ".1f"),
+               ("full well with C(V) (ke-)", "fwc_cv_e", 1e-3, ".1f"),
+               ("dark current (fA)", "dark_current_A", 1e15, ".3f"))
+_SIZE_ROWS = (("C_M", "c_m", 1.0, ".1f"), ("mask opening (um2)", "mask_open_m2", 1e12, ".3f"),
+              ("t_int primary (us)", "t_int_primary_s", 1e6, ".1f"),
+              ("t_int secondary (us)", "t_int_secondary_s", 1e6, ".1f"),
+              ("trace at speed_min (px)", "trace_px_at_speed_min", 1.0, ".1f"),
+              ("primary motion (px)", "motion_px_primary", 1.0, ".2f"))
+
+
 def model_text(t: dict) -> str:
-    p, s = t["primary"], t["secondary"]
     lines = [f"Analytic models: {t['design']} ({t['technology']}, C_jdep at V_R = {t['reset_bias_V']:g} V)",
-             _row("", "primary", "secondary"),
-             _row("PD area (um2)", f"{p['area_m2'] * 1e12:.2f}", f"{s['area_m2'] * 1e12:.2f}"),
-             _row("PD perimeter (um)", f"{p['perimeter_m'] * 1e6:.2f}", f"{s['perimeter_m'] * 1e6:.2f}"),
-             _row("photoactive area (um2)", f"{p['photoactive_area_m2'] * 1e12:.3f}",
-                  f"{s['photoactive_area_m2'] * 1e12:.3f}"),
-             _row("C_jdep (fF)", f"{p['c_jdep_F'] * 1e15:.2f}", f"{s['c_jdep_F'] * 1e15:.2f}"),
-             _row("PD node incl. EC/TG (fF)", f"{p['c_node_F'] * 1e15:.2f}", f"{s['c_node_F'] * 1e15:.2f}"),
-             _row("conversion gain (uV/e-)", f"{p['cg_V_per_e'] * 1e6:.2f}", f"{s['cg_V_per_e'] * 1e6:.2f}"),
-             _row("full well, swing x C (ke-)", f"{p['fwc_e'] / 1e3:.1f}", f"{s['fwc_e'] / 1e3:.1f}"),
-             _row("full well with C(V) (ke-)", f"{p['fwc_cv_e'] / 1e3:.1f}", f"{s['fwc_cv_e'] / 1e3:.1f}"),
-             _row("dark current (fA)", f"{p['dark_current_A'] * 1e15:.3f}", f"{s['dark_current_A'] * 1e15:.3f}"),
+             _row("", "primary", "secondary"), *_pairs(t["primary"], t["secondary"], _MODEL_ROWS),
              f"  C_A = A1/A2 = {t['c_a']:.3f}   C_C = C_jdep1/C_jdep2 = {t['c_c']:.3f}   "
              f"photoactive ratio = {t['photoactive_ratio']:.1f}"]
     return "\n".join(lines)
@@ -44,14 +52,7 @@ def simulate_text(r: dict) -> str:
 def size_text(r: dict) -> str:
     a, s, v = r["levels"]["analytic"], r["levels"]["spice"], r["verify"]
     lines = [f"Sizing ({r['level']} level chosen); sized design: {r['sized_design']}",
-             _row("", "analytic", "SPICE curves"),
-             _row("C_M", f"{a['c_m']:.1f}", f"{s['c_m']:.1f}"),
-             _row("mask opening (um2)", f"{a['mask_open_m2'] * 1e12:.3f}", f"{s['mask_open_m2'] * 1e12:.3f}"),
-             _row("t_int primary (us)", f"{a['t_int_primary_s'] * 1e6:.1f}", f"{s['t_int_primary_s'] * 1e6:.1f}"),
-             _row("t_int secondary (us)", f"{a['t_int_secondary_s'] * 1e6:.1f}",
-                  f"{s['t_int_secondary_s'] * 1e6:.1f}"),
-             _row("trace at speed_min (px)", f"{a['trace_px_at_speed_min']:.1f}", f"{s['trace_px_at_speed_min']:.1f}"),
-             _row("primary motion (px)", f"{a['motion_px_primary']:.2f}", f"{s['motion_px_primary']:.2f}"),
+             _row("", "analytic", "SPICE curves"), *_pairs(a, s, _SIZE_ROWS),
              f"  verify in SPICE: primary at {v['primary_frac'] * 100:.1f} % of swing, "
              f"secondary at {v['secondary_frac'] * 100:.1f} %",
              f"  analytic solve {r['solve_time_s'] * 1e3:.1f} ms",
