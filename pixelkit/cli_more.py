@@ -1,4 +1,4 @@
-"""Subcommands beyond the core ones: netlists, regress, array, size."""
+"""Subcommands beyond the core ones: netlists, regress, array, size, layout."""
 from __future__ import annotations
 
 import sys
@@ -107,3 +107,21 @@ def size(design, out, with_sens, as_json):
     from .optimize.flow import size_design
     from .report.text import size_text
     emit(size_design(load_design(design), out, with_sens), as_json, size_text)
+
+
+@main.command()
+@design_arg
+@click.option("--out-dir", type=click.Path(file_okay=False), default="layouts", show_default=True)
+@click.option("--rows", type=click.IntRange(1, 1000), default=2, show_default=True)
+@click.option("--cols", type=click.IntRange(1, 1000), default=2, show_default=True)
+@json_opt
+def layout(design, out_dir, rows, cols, as_json):
+    """Write the GDS (dual pixel + array), extract PD area/perimeter/photoactive area, draw 2D and 3D views."""
+    from .design import load_design
+    from .layout.flow import layout_design
+    r = layout_design(load_design(design), Path(out_dir), rows, cols)
+    emit(r, as_json, lambda x: "\n".join([
+        f"GDS: {x['gds']} (cells {', '.join(x['cells'])})", f"pictures: {x['png']}, {x['png_3d']}",
+        *(f"  {w}: PD {x[w]['pd_area_m2'] * 1e12:.3f} um2, perimeter {x[w]['pd_perimeter_m'] * 1e6:.2f} um, "
+          f"photoactive {x[w]['photoactive_area_m2'] * 1e12:.4f} um2" for w in ("primary", "secondary")),
+        f"  C_A = {x['c_a']:.4f}"]))

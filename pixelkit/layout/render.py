@@ -1,0 +1,77 @@
+"""Pictures of a layout: a 2D plot (matplotlib) and a 3D view of the layer stack (pyvista, off-screen)."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from ..fileio import atomic_target, commit  # noqa: E402
+
+# layer name -> (colour, z bottom um, z top um) of a schematic cross-section
+STACK = {"pd": ("#4c72b0", -1.0, 0.0), "active": ("#55a868", 0.0, 0.05), "poly": ("#c44e52", 0.05, 0.3),
+         "contact": ("#8c8c8c", 0.3, 0.9), "metal1": ("#dd8452", 0.9, 1.4), "shield": ("#937860", 4.0, 4.6)}
+
+
+def _by_layer(cell, tech):
+    polys = cell.get_polygons()
+    out = {}
+    for name in STACK:
+        l_ = getattr(tech.layers, name)
+        out[name] = [p.points for p in polys if (p.layer, p.datatype) == (l_.layer, l_.datatype)]
+    return out
+
+
+def plot_2d(cell, tech, path: Path, title: str) -> Path:
+    fig, ax = plt.subplots(figsize=(6, 7))
+    for name, pts_list in _by_layer(cell, tech).items():
+        colour = STACK[name][0]
+        alpha = 0.35 if name == "shield" else 0.7
+        for k, pts in enumerate(pts_list):
+            ax.fill(pts[:, 0], pts[:, 1], color=colour, alpha=alpha, lw=0.3,
+                    label=name if k == 0 else None)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (um)")
+    ax.set_ylabel("y (um)")
+    ax.set_title(title)
+    ax.legend(fontsize=7, loc="upper right")
+    path, tmp = atomic_target(path)
+    fig.savefig(tmp, dpi=110, format="png")
+    plt.close(fig)
+    return commit(path, tmp)
+
+
+def _rectangles(points):
+    """Exact rectangle decomposition of a Manhattan polygon: slice into horizontal bands."""
+    import gdstk
+    poly = gdstk.Polygon(points)
+    ys = np.unique(np.round(points[:, 1], 6))
+    xmin, xmax = points[:, 0].min(), points[:, 0].max()
+    out = []
+    for y0, y1 in zip(ys, ys[1:]):
+        for piece in gdstk.boolean(poly, gdstk.rectangle((xmin, y0), (xmax, y1)), "and"):
+            (a, b), (c, d) = piece.bounding_box()
+            out.append((a, b, c, d))
+    return out
+
+
+def view_3d(cell, tech, path: Path) -> Path:
+    import pyvista as pv
+    pv.OFF_SCREEN = True
+    plotter = pv.Plotter(off_screen=True, window_size=(900, 700))
+    for name, pts_list in _by_layer(cell, tech).items():
+        colour, z0, z1 = STACK[name]
+        boxes = [pv.Box(bounds=(x0, x1, y0, y1, z0, z1)) for pts in pts_list for x0, y0, x1, y1 in _rectangles(pts)]
+        if boxes:
+            plotter.add_mesh(pv.merge(boxes), color=colour, opacity=0.45 if name == "shield" else 1.0)
+    plotter.enable_parallel_projection()
+    plotter.view_vector((0.45, -1.0, 1.1))
+    plotter.reset_camera()
+    plotter.add_text("PD | active | poly | contact | metal1 | shield", font_size=9)
+    path, tmp = atomic_target(path)
+    plotter.screenshot(str(tmp))
+    plotter.close()
+    return commit(path, tmp)
