@@ -28,24 +28,33 @@ class Subpixel:
     t_int: float = qty("s", gt=0, le=10.0)
     f_read: float = qty("Hz", gt=0, le=1e9)
     mask_opening: float | None = qty("m2", None, gt=0, doc="metal-mask opening; absent = unmasked")
+    extracted: dict | None = field(default=None, metadata=dict(kind="skip"), compare=False)
 
     @property
     def area(self) -> float:
+        """PD junction area: extracted from the layout when the design points at one, else drawn."""
+        if self.extracted:
+            return self.extracted["pd_area_m2"]
         return rectangle(self.pd_width, self.pd_height)[0]
 
     @property
     def perimeter(self) -> float:
+        if self.extracted:
+            return self.extracted["pd_perimeter_m"]
         return rectangle(self.pd_width, self.pd_height)[1]
 
     @property
     def photoactive_area(self) -> float:
+        if self.extracted:
+            return self.extracted["photoactive_area_m2"]
         return self.area if self.mask_opening is None else self.mask_opening
 
     def validate(self, path, source):
         for side in ("pd_width", "pd_height"):
             if getattr(self, side) > self.pitch:
                 raise ConfigError(source, f"{path}.{side}", getattr(self, side),
-                                  f"a size no larger than the pitch ({self.pitch * 1e6:g} um)")
+                                  f"a PD no larger than its {self.pitch * 1e6:g} um cell "
+                                  "(layout rule pd_to_cell_edge)")
         if self.mask_opening is not None and self.mask_opening > self.area:
             raise ConfigError(source, f"{path}.mask_opening", self.mask_opening,
                               f"an opening no larger than the PD area ({self.area * 1e12:g} um2)")
@@ -140,6 +149,11 @@ class Sizing:
 
 
 @dataclass(frozen=True)
+class LayoutRef:
+    gds: str = text(doc="GDS file (relative to the design file) whose extracted geometry the models use")
+
+
+@dataclass(frozen=True)
 class Design:
     name: str = ident()
     revision: str = text()
@@ -155,6 +169,7 @@ class Design:
     optics: Optics | None = table(Optics, None)
     scene: Scene | None = table(Scene, None)
     sizing: Sizing = table(Sizing, default=Sizing)
+    layout: LayoutRef | None = table(LayoutRef, None)
     tech: Technology = field(default=None, metadata=dict(kind="skip"))
     source: str = field(default="", metadata=dict(kind="skip"))
     raw: dict = field(default=None, metadata=dict(kind="skip"), repr=False, compare=False)
@@ -199,4 +214,15 @@ def load_design(path: str | Path) -> Design:
         if min(s.pd_width, s.pd_height) < rules.min_pd_side - 1e-12:
             raise ConfigError(str(path), f"{sub}.pd_width", min(s.pd_width, s.pd_height),
                               f"a PD side >= min_pd_side ({rules.min_pd_side * 1e6:g} um) of {tech.name}")
-    return replace(design, tech=tech, source=str(path), raw=raw)
+    design = replace(design, tech=tech, source=str(path), raw=raw)
+    if design.layout is not None:
+        design = with_layout(design, path.parent / design.layout.gds)
+    return design
+
+
+def with_layout(design: Design, gds: Path) -> Design:
+    """The design with PD areas, perimeters and photoactive areas extracted from ``gds``."""
+    from .layout.extract import extract
+    ex = extract(gds, design.tech)
+    return replace(design, primary=replace(design.primary, extracted=ex["primary"]),
+                   secondary=replace(design.secondary, extracted=ex["secondary"]))

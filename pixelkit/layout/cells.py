@@ -24,6 +24,7 @@ import gdstk
 from .rules import RuleError, check
 
 UM = 1e6  # metres -> um
+EPS = 1e-6  # um: tolerance of fit checks against rounding
 
 
 def _layer(tech, name):
@@ -71,7 +72,7 @@ def _place_devices(cell, design, pd_box, pitch, grid, name):
     placed = 0
     for w, l_ in sizes:   # right strip, gates horizontal, stacked upwards
         h = l_ + 2 * ext
-        if x0 + w + 0.2 > pitch - edge or y + h > pitch - edge:
+        if x0 + w + 0.2 > pitch - edge + EPS or y + h > pitch - edge + EPS:
             break
         _transistor(cell, x0, y, w, l_, ext, tech, grid, False)
         y += h + gap
@@ -79,7 +80,7 @@ def _place_devices(cell, design, pd_box, pitch, grid, name):
     x, y0 = edge, pd_box[3] + gap + 0.2
     for w, l_ in sizes[placed:]:  # top strip, gates vertical, left to right
         length = l_ + 2 * ext
-        if y0 + w + 0.2 > pitch - edge or x + length > pd_box[2]:
+        if y0 + w + 0.2 > pitch - edge + EPS or x + length > pd_box[2] + EPS:
             raise RuleError("transistors_fit", f"{name} cell", f"the five transistors do not fit beside "
                             f"the {pd_box[2] - pd_box[0]:.2f} x {pd_box[3] - pd_box[1]:.2f} um PD in a "
                             f"{pitch:g} um cell")
