@@ -117,16 +117,20 @@ def build_nominal(design, backend: str = "batch") -> Nominal:
     return nom
 
 
-def features(table) -> dict:
-    """The row quantities the models use, as arrays."""
-    n = len(table)
+def features(table, nom: Nominal, design) -> dict:
+    """The row quantities the models use, as arrays (with the nominal signal of each row)."""
     prev = table.columns.get("i_ph_prev_A")
     i = table.num("i_ph_A")
-    return {"arr": np.array([ARRAYS.index(a) for a in table.columns["array"]]),
-            "row": table.num("row"), "col": table.num("col"), "i": i,
-            "t_int": table.num("t_int_s"), "t_wait": table.num("t_wait_s"), "T": table.num("temp_C"),
-            "afe": np.array([p == "afe" for p in table.columns["probe"]]),
-            "i_prev": i.copy() if prev is None else np.where(np.isfinite(prev), prev, i), "n": n}
+    X = {"arr": np.array([ARRAYS.index(a) for a in table.columns["array"]]),
+         "row": table.num("row"), "col": table.num("col"), "i": i,
+         "t_int": table.num("t_int_s"), "t_wait": table.num("t_wait_s"), "T": table.num("temp_C"),
+         "afe": np.array([p == "afe" for p in table.columns["probe"]]),
+         "i_prev": i.copy() if prev is None else np.where(np.isfinite(prev), prev, i),
+         "perimeter_ratio": design.secondary.perimeter / design.primary.perimeter,
+         "c_m": design.secondary.area / design.secondary.photoactive_area}
+    q = i * X["t_int"] + nom.dark_q(X["arr"], X["T"], X["t_int"])
+    X["signal"] = nom.vrst_of(X["arr"]) - nom.vsig_of(X["arr"], q)
+    return X
 
 
 def predict(nom: Nominal, X: dict, terms: dict | None = None) -> np.ndarray:
