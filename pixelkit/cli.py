@@ -84,7 +84,8 @@ def run(design, backend):
 
 def _register_optional():
     """Subcommands that live in their own modules (each adds itself to ``main``)."""
-    from . import cli_more  # noqa: F401  (registers netlists, regress)
+    from . import cli_more  # noqa: F401  (registers netlists, regress, array, size, layout)
+    from .gap import cli as gap_cli  # noqa: F401  (registers gap)
 
 
 def entry():
