@@ -15,17 +15,14 @@ import tempfile
 import time
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-from pixelkit.circuits.testbench import dual_pixel_bench  # noqa: E402
-from pixelkit.design import load_design  # noqa: E402
-from pixelkit.spice import simulate_many  # noqa: E402
-from pixelkit.spice.engine import _prepare  # noqa: E402
+from common import reference_design
+from pixelkit.circuits.testbench import dual_pixel_bench
+from pixelkit.spice import simulate_many
+from pixelkit.spice.engine import _prepare
 
 
 def main(n: int = 16):
-    os.environ["PIXELKIT_CACHE"] = tempfile.mkdtemp(prefix="pk-bench-")
-    d = load_design(Path(__file__).resolve().parents[1] / "designs" / "dual_pixel_revA.toml")
+    d = reference_design()
     nets = [dual_pixel_bench(d, 1e-10 * (k + 1), 5e-12 * (k + 1), title=f"bench{k}") for k in range(n)]
     with tempfile.TemporaryDirectory() as tmp:
         Path(tmp, ".spiceinit").write_text("set num_threads=1\n")

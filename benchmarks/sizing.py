@@ -6,23 +6,17 @@ from __future__ import annotations
 
 import statistics
 import sys
-import tempfile
-import os
 import time
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-from pixelkit.circuits.testbench import dual_pixel_bench  # noqa: E402
-from pixelkit.design import load_design  # noqa: E402
-from pixelkit.optimize.levels import analytic_curves  # noqa: E402
-from pixelkit.optimize.sizing import solve  # noqa: E402
-from pixelkit.spice import simulate  # noqa: E402
+from common import reference_design
+from pixelkit.circuits.testbench import dual_pixel_bench
+from pixelkit.optimize.levels import analytic_curves
+from pixelkit.optimize.sizing import solve
+from pixelkit.spice import simulate
 
 
 def main(repeats: int = 20):
-    os.environ["PIXELKIT_CACHE"] = tempfile.mkdtemp(prefix="pk-bench-")
-    d = load_design(Path(__file__).resolve().parents[1] / "designs" / "dual_pixel_revA.toml")
+    d = reference_design()
     t0 = time.perf_counter()
     simulate(dual_pixel_bench(d, 1e-9, 4e-11), use_cache=False)
     spice = time.perf_counter() - t0

@@ -58,8 +58,11 @@ def campaign(design, nom, rng, n=ROWS_PER_CASE) -> Table:
     return Table(cols, "selftest")
 
 
-def measure(design, nom, table: Table, effect: str | None, rng) -> tuple[np.ndarray, dict]:
-    """Virtual measured values of ``table`` with ``effect`` (or none) added; returns (v, truth)."""
+def measure(design, nom, table: Table, effect: str | None, rng, params=None) -> tuple[np.ndarray, dict]:
+    """Virtual measured values of ``table`` with ``effect`` (or none) added; returns (v, truth).
+
+    ``params`` fixes the effect's parameters instead of drawing them from ``RANGES``.
+    """
     X = features(table, nom, design)
     truth = {"effect": effect or "none"}
     if effect is None:
@@ -74,7 +77,7 @@ def measure(design, nom, table: Table, effect: str | None, rng) -> tuple[np.ndar
         v = predict(nom, X) + ov - gv * X["signal"] * np.where(X["afe"], -nom.gain_afe, 1.0)
         truth["params"] = {"offset_rms_V": s_o, "gain_rms": s_g}
     else:
-        p = np.array(RANGES[effect](rng))
+        p = np.array(RANGES[effect](rng) if params is None else params)
         v = predict(nom, X, EFFECTS[effect][1](X, p))
         truth["params"] = dict(zip([q.name for q in EFFECTS[effect][0]], p.tolist()))
     gain, offset = 1 + rng.uniform(-0.02, 0.02), rng.uniform(-0.02, 0.02)

@@ -47,12 +47,15 @@ def breakdown(X, resid) -> list[dict]:
         rows.append({"factor": "column", "level": f"{len(groups)} columns (ANOVA)", "n": int(sum(map(len, groups))),
                      "mean_V": float(np.std([g.mean() for g in groups])), "std_V": float(np.std(resid)),
                      "p": float(p), "significant": bool(p < P_SIGNIFICANT)})
+    stages = (("all rows", np.ones_like(X["afe"], bool)), ("pixel probe", ~X["afe"]), ("afe probe", X["afe"]))
     for var in ("signal", "t_int", "t_wait", "T", "i", "row"):
-        x = X[var]
-        if np.ptp(x) > 0:
-            r, p = stats.pearsonr(x, resid)
-            rows.append({"factor": f"trend vs {var}", "level": f"r = {r:+.2f}", "n": int(x.size),
-                         "mean_V": float(np.polyfit(x, resid, 1)[0] * np.ptp(x)), "std_V": float(np.std(resid)),
+        for stage, m in stages:
+            x, r_ = X[var][m], resid[m]
+            if x.size < 5 or np.ptp(x) == 0:
+                continue
+            r, p = stats.pearsonr(x, r_)
+            rows.append({"factor": f"trend vs {var}", "level": f"{stage}: r = {r:+.2f}", "n": int(x.size),
+                         "mean_V": float(np.polyfit(x, r_, 1)[0] * np.ptp(x)), "std_V": float(np.std(r_)),
                          "p": float(p), "significant": bool(p < P_SIGNIFICANT)})
     rows.sort(key=lambda r: (not r["significant"], -abs(r["mean_V"])))
     return rows

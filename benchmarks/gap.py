@@ -1,0 +1,41 @@
+"""Gap diagnosis speed: a 2000-row dataset, all candidates, against one SPICE experiment run.
+
+    python benchmarks/gap.py [rows]
+"""
+from __future__ import annotations
+
+import sys
+import time
+
+import numpy as np
+
+from common import reference_design
+from pixelkit.experiments.thesis import run_experiment
+from pixelkit.gap import selftest
+from pixelkit.gap.diagnose import diagnose
+from pixelkit.gap.nominal import build_nominal
+
+
+def main(rows: int = 2000):
+    d = reference_design()
+    t0 = time.perf_counter()
+    run_experiment(d)
+    base = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    nom = build_nominal(d)
+    t_nom = time.perf_counter() - t0
+    rng = np.random.default_rng(7)
+    table = selftest.campaign(d, nom, rng, n=rows)
+    table.columns["v_V"], truth = selftest.measure(d, nom, table, "gse", rng)
+    t0 = time.perf_counter()
+    r = diagnose(d, table, nom)
+    t_diag = time.perf_counter() - t0
+    print(f"baseline: one SPICE experiment run (16 decks)        {base:7.2f} s")
+    print(f"nominal surrogate (17 full-chain decks, uncached)    {t_nom:7.2f} s  {t_nom / base:5.2f} x baseline")
+    print(f"diagnosis of {rows} rows, {len(r['ranking'])} models incl. none  {t_diag:7.2f} s  "
+          f"{t_diag / base:5.2f} x baseline")
+    print(f"total {t_nom + t_diag:.1f} s (limit 60 s); found {r['best']} (truth {truth['effect']})")
+
+
+if __name__ == "__main__":
+    main(int(sys.argv[1]) if len(sys.argv) > 1 else 2000)
