@@ -13,7 +13,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from .errors import ConfigError
-from .physics.conversion import rectangle
+from .physics.conversion import photoactive_area, rectangle
 from .schema import ident, integer, load, num, qty, read_toml, table, text
 from .tech import Technology, load_technology
 
@@ -47,7 +47,7 @@ class Subpixel:
     def photoactive_area(self) -> float:
         if self.extracted:
             return self.extracted["photoactive_area_m2"]
-        return self.area if self.mask_opening is None else self.mask_opening
+        return photoactive_area(self.pd_width, self.pd_height, self.mask_opening)
 
     def validate(self, path, source):
         for side in ("pd_width", "pd_height"):
@@ -186,10 +186,6 @@ class Design:
     @property
     def corner_name(self) -> str:
         return self.corner or self.tech.models.default_corner
-
-    def with_changes(self, **changes) -> "Design":
-        """A copy with top-level fields replaced (nested: pass new dataclasses)."""
-        return replace(self, **changes)
 
 
 def load_design(path: str | Path) -> Design:
