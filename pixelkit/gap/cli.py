@@ -46,18 +46,13 @@ def diagnose(design_path, measured, out_dir, seed, as_json):
     """Where the data leave the simulation, which effect explains it, how far the gap shrinks."""
     from ..design import load_design
     from .data import read_table
-    from .diagnose import diagnose as run
-    from .nominal import build_nominal, features
+    from .diagnose import analyse
+    from .nominal import build_nominal
     d = load_design(design_path)
     table = read_table(measured, d, measured=True)
-    nom = build_nominal(d)
-    r = run(d, table, nom, seed=seed)
+    r, X, resid = analyse(d, table, build_nominal(d), seed=seed)
     if out_dir:
-        from .fit import evaluate, fit
         from .report import write_section
-        X = features(table, nom, d)
-        y = table.num("v_V")
-        resid = y - evaluate("none", nom, X, fit("none", nom, X, y))
         r["html"] = str(write_section(r, d.name, X, resid, Path(out_dir)))
     emit(r, as_json, _text)
 

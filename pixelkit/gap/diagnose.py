@@ -29,6 +29,11 @@ def _rms(x):
 
 
 def diagnose(design, table, nom, seed: int = 0, candidates=NAMES) -> dict:
+    return analyse(design, table, nom, seed, candidates)[0]
+
+
+def analyse(design, table, nom, seed: int = 0, candidates=NAMES):
+    """(result, row features, residual of every row against the calibrated nominal model)."""
     X = features(table, nom, design)
     y = table.num("v_V")
     train, test = split(len(y), seed)
@@ -37,26 +42,25 @@ def diagnose(design, table, nom, seed: int = 0, candidates=NAMES) -> dict:
     fits = {"none": fit("none", nom, Xtr, y[train])}
     for name in candidates:
         fits[name] = fit(name, nom, Xtr, y[train], cols)
-    ranking = []
+    ranking, preds = [], {}
     for name, fr in fits.items():
-        pred = evaluate(name, nom, Xte, fr, cols)
-        fr["heldout_rms_V"] = _rms(pred - y[test])
+        preds[name] = evaluate(name, nom, Xte, fr, cols)
+        fr["heldout_rms_V"] = _rms(preds[name] - y[test])
         ranking.append({"effect": name, "heldout_rms_V": fr["heldout_rms_V"], "bic": fr["bic"],
                         "train_rms_V": float(np.sqrt(fr["rss"] / fr["n"])), "n_params": fr["k"] - 2,
                         "params": _params(name, fr), "setup_gain": float(fr["theta"][1]),
                         "setup_offset_V": float(fr["theta"][0])})
     ranking.sort(key=lambda r: r["bic"])
     none = fits["none"]
-    top = ranking[0]["effect"] if ranking[0]["effect"] != "none" else (ranking[1]["effect"] if len(ranking) > 1 else "none")
+    top = next((r["effect"] for r in ranking if r["effect"] != "none"), "none")
     cand = fits[top]
     clear = (none["bic"] - cand["bic"] > BIC_MARGIN
              and cand["heldout_rms_V"] <= (1 - HELDOUT_GAIN) * none["heldout_rms_V"])
     best = top if clear else "none"
     before, after = none["heldout_rms_V"], fits[best]["heldout_rms_V"]
     resid_none = y - evaluate("none", nom, X, none)
-    pred_best = evaluate(best, nom, Xte, fits[best], cols)
-    pred_none = evaluate("none", nom, Xte, none)
-    return {
+    pred_best, pred_none = preds[best], preds["none"]
+    result = {
         "n_rows": int(len(y)), "n_train": int(train.sum()), "n_heldout": int(test.sum()),
         "gap_before_rms_V": before, "gap_after_rms_V": after,
         "gap_before_max_V": float(np.max(np.abs(pred_none - y[test]))),
@@ -68,6 +72,7 @@ def diagnose(design, table, nom, seed: int = 0, candidates=NAMES) -> dict:
         "where": breakdown(X, resid_none),
         "surrogate_error": nom.error,
     }
+    return result, X, resid_none
 
 
 def _params(name, fr):

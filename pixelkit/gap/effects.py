@@ -59,6 +59,14 @@ def _crosstalk(X, p):      # light under the mask of the secondary: fraction of 
     return {"dq": p[0] * X["i"] * X["c_m"] * X["t_int"] * (X["arr"] == 1)}
 
 
+def column_shift(X, gain_afe, offset, gain):
+    """Column circuitry: per-row ``offset`` (V) and relative ``gain`` error of the sampled signal.
+
+    The pixel probe falls by gain x signal; the AFE output (inverting, gain_afe) rises by it.
+    """
+    return offset - gain * X["signal"] * np.where(X["afe"], -gain_afe, 1.0)
+
+
 def _lag(X, p):            # image lag: a fraction of the previous frame's charge stays
     return {"dq": p[0] * X["i_prev"] * X["t_int"]}
 

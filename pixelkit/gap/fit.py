@@ -17,7 +17,7 @@ import math
 import numpy as np
 from scipy.optimize import least_squares
 
-from .effects import EFFECTS
+from .effects import EFFECTS, column_shift
 from .nominal import predict
 
 BIC_MARGIN = 10.0
@@ -40,13 +40,10 @@ def model_fn(name, nom, X, cols=None):
         idx = np.searchsorted(cols, keys)
         specs = [("offset", -0.5, 0.5, 1e-3)] * len(cols) + [("gain", -0.5, 0.5, 1e-3)] * len(cols)
         base = predict(nom, X)
-        signal = X["signal"]
 
         def f(theta):
             o, g = theta[2:2 + len(cols)], theta[2 + len(cols):]
-            # column circuitry shifts and scales the sampled signal on both probes
-            v = base + o[idx] - g[idx] * signal * np.where(X["afe"], -nom.gain_afe, 1.0)
-            return theta[0] + theta[1] * v
+            return theta[0] + theta[1] * (base + column_shift(X, nom.gain_afe, o[idx], g[idx]))
     else:
         params, fn = EFFECTS[name]
         specs = [(p.name, p.lo, p.hi, p.scale) for p in params]

@@ -15,7 +15,7 @@ import numpy as np
 
 from .data import Table
 from .diagnose import diagnose
-from .effects import EFFECTS, NAMES
+from .effects import EFFECTS, NAMES, column_shift
 from .nominal import ARRAYS, features, predict
 
 NOISE_V = 0.5e-3
@@ -74,7 +74,7 @@ def measure(design, nom, table: Table, effect: str | None, rng, params=None) -> 
         o = dict(zip(uk, rng.normal(0, s_o, uk.size)))
         g = dict(zip(uk, rng.normal(0, s_g, uk.size)))
         ov, gv = np.array([o[k] for k in keys]), np.array([g[k] for k in keys])
-        v = predict(nom, X) + ov - gv * X["signal"] * np.where(X["afe"], -nom.gain_afe, 1.0)
+        v = predict(nom, X) + column_shift(X, nom.gain_afe, ov, gv)
         truth["params"] = {"offset_rms_V": s_o, "gain_rms": s_g}
     else:
         p = np.array(RANGES[effect](rng) if params is None else params)

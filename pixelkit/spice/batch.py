@@ -32,7 +32,10 @@ def ngspice_version() -> str:
 
 
 def run_batch(deck_text: str, timeout: float = 600.0) -> tuple[list[dict], list[str], float]:
-    """Run one deck; return (plots, output lines, wall seconds). Raises on a missing raw file."""
+    """Run one deck; return (plots, output lines, wall seconds). No raw file: no plots.
+
+    Whether the run succeeded is decided by the caller from the plots (engine._to_result).
+    """
     ngspice_version()
     with tempfile.TemporaryDirectory(prefix="pixelkit-") as tmp:
         tmp = Path(tmp)
@@ -50,5 +53,4 @@ def run_batch(deck_text: str, timeout: float = 600.0) -> tuple[list[dict], list[
         plots = read_raw(raw) if raw.exists() and raw.stat().st_size > 0 else []
         if p.returncode != 0:
             lines.append(f"ngspice exited with status {p.returncode}")
-            plots = [] if not plots else plots
         return plots, lines, wall

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from ..fileio import write_atomic
-from ..tech.modellib import _fingerprint
+from ..tech.modellib import files_fingerprint
 from .result import Result
 
 
@@ -26,7 +26,7 @@ def cache_dir() -> Path:
 
 def key(deck_text: str, include_files: tuple, version: str, backend: str) -> str:
     h = hashlib.sha256()
-    for part in (deck_text, _fingerprint(tuple(sorted(str(f) for f in include_files))) if include_files else "",
+    for part in (deck_text, files_fingerprint(tuple(sorted(str(f) for f in include_files))) if include_files else "",
                  version, backend):
         h.update(part.encode())
         h.update(b"\0")

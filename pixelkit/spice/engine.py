@@ -102,14 +102,14 @@ def simulate_many(netlists, backend: str = "batch", jobs: int | None = None, opt
         if use_cache:
             results[i] = cache_mod.load(k)
     todo = [i for i, r in enumerate(results) if r is None]
-    attempts = [nets[i] for i in todo]
     failures: dict[int, str] = {}
     for round_, loosen in enumerate((None, *RETRIES)):
         if not todo:
             break
-        decks = [(n if loosen is None else replace(n, options=merged(n.options, loosen))) for n in attempts]
+        decks = [nets[i] if loosen is None else replace(nets[i], options=merged(nets[i].options, loosen))
+                 for i in todo]
         outs = _run(decks, backend, jobs)
-        still, still_nets = [], []
+        still = []
         for i, deck, (plots, lines, wall) in zip(todo, decks, outs):
             res = _to_result(deck, plots, lines, wall, backend)
             if res is None:
@@ -117,14 +117,13 @@ def simulate_many(netlists, backend: str = "batch", jobs: int | None = None, opt
                 if round_ == len(RETRIES):
                     raise SimulationError(deck.title, deck.analysis.text(), _message(lines))
                 still.append(i)
-                still_nets.append(nets[i])
                 continue
             if loosen is not None:
                 res.meta["retried"] = {"reason": failures.get(i, "failed"), "options": dict(loosen)}
             if use_cache:
                 cache_mod.save(keys[i], res)
             results[i] = res
-        todo, attempts = still, still_nets
+        todo = still
     return results
 
 

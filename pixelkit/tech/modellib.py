@@ -40,13 +40,9 @@ class ModelLibrary:
             raise ConfigError("", "corner", corner, f"one of {', '.join(sorted(self.corners))}")
         return self.corners[corner]
 
-    def fingerprint(self) -> str:
-        files = sorted({inc.file for incs in self.corners.values() for inc in incs})
-        return _fingerprint(tuple(str(f) for f in files))
-
 
 @lru_cache(maxsize=16)
-def _fingerprint(files: tuple[str, ...]) -> str:
+def files_fingerprint(files: tuple[str, ...]) -> str:
     h = hashlib.sha256()
     for f in files:
         h.update(f.encode())
