@@ -1,0 +1,158 @@
+"""Sections of the design report (``pixelkit report``): one module and one template block each.
+
+How to add a section
+====================
+
+1. Write one module ``pixelkit/report/sections/<key>.py`` exposing::
+
+       TITLE = "Noise"                       # the heading in the report
+
+       def build(ctx: Context) -> Section:    # compute, draw, return
+           r = my_capability(ctx.design, quick=ctx.quick, backend=ctx.backend, jobs=ctx.jobs)
+           fig = ctx.figure("noise_spectrum.png")          # a path beside the HTML
+           my_plot(r, fig)                                 # write the picture there
+           return Section(
+               TITLE,
+               text=["One paragraph: what was simulated, against what independent path."],
+               tables=[Table("noise_budget", "Noise budget (e- rms)",
+                             ["source", "primary", "secondary"],
+                             [["kTC", 31.2, 16.4], ["SF", 8.0, 8.0]])],
+               figures=[Figure(fig.name, "Output-referred noise spectrum")],
+               checked=[Checked("noise.read_e", 35.1, "e-", tol_rel=0.02, tol_abs=0.5)],
+               data={"spectrum_V2_per_Hz": r.psd.tolist()})
+
+   - ``ctx.design``: the frozen Design; ``ctx.quick``: the light test profile (fewer points,
+     no long sweeps; every table and figure must still appear); ``ctx.backend`` / ``ctx.jobs``:
+     pass them to ``simulate_many``; ``ctx.progress(stage, done, total)``: tell the terminal
+     where you are; ``ctx.shared(name, fn)``: a result other sections reuse, computed once
+     (``ctx.experiment()`` is the thesis experiment, ``ctx.measured`` the ``--measured`` CSV
+     or None).
+   - Every ``Table`` is written as ``<name>.csv`` beside the HTML and every ``data`` dict as
+     ``<key>.json``: the data behind each figure and table. Table cells are numbers or text.
+   - Every ``Checked`` figure goes to ``summary.json`` under its ``name`` (unique over the
+     report: prefix it with your key). The revision diff (``--baseline``) compares it against
+     the baseline's value with the tolerance stated here: it has moved when
+     ``|new - old| > max(tol_rel * |old|, tol_abs)``, and then the command exits non-zero.
+     Tables are diffed cell by cell too (reported, not failing).
+   - When your capability cannot run for this design, return
+     ``Section.unavailable(TITLE, "why, in one sentence")``: the report says so plainly.
+   - Raise PixelkitError for user errors; any other exception is shown in the section as
+     "failed: ..." and the rest of the report still builds (and the command exits non-zero).
+
+2. Optionally add one template block ``pixelkit/report/templates/sections/<key>.html.j2``.
+   It receives ``s`` (your Section) and ``f`` (number formatting: ``f(x)`` -> 4 significant
+   digits); ``{% include "sections/_generic.html.j2" %}`` renders the default (text, tables,
+   figures in order). Without a file the generic block is used.
+
+3. If ``<key>`` is already in ``REGISTRY`` below (a planned section), you are done: the
+   report switches from "not yet available" to your section. Otherwise add one
+   ``(key, title, owner)`` entry in ``REGISTRY`` where it belongs in the reading order.
+
+Section outputs are cached (key: the pixelkit source tree, the design's content, the
+options), so a re-run with nothing changed rebuilds nothing.
+"""
+from __future__ import annotations
+
+import importlib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable
+
+#: Reading order of the report: (module key, title, who provides it).
+#: A planned section whose module does not exist yet says "not yet available".
+REGISTRY: list[tuple[str, str, str]] = [
+    ("summary", "Design summary (thesis table 3.2)", "report"),
+    ("schematics", "Schematics of the generated circuits", "report"),
+    ("model_vs_spice", "Analytic model vs SPICE (fig. A.1 - A.3)", "report"),
+    ("sizing", "Sizing: mask opening and integration times", "report"),
+    ("afe", "AFE transfer and its error", "report"),
+    ("array", "2 x 2 array readout (fig. 3.13)", "report"),
+    ("layout", "Layout", "report"),
+    ("noise", "Noise", "issue 11 (noise / virtual camera)"),
+    ("camera", "Virtual camera: EMVA 1288 figures", "issue 11 (noise / virtual camera)"),
+    ("frame", "Frame-level models", "issue 15 (frame-level models)"),
+    ("families", "Other pixel families: WDR and ratio pixels", "issue 16 (pixel families)"),
+    ("variation", "Sweeps, corners and Monte Carlo", "issue 14 (sweeps / corners / Monte Carlo)"),
+    ("gap", "Sim-to-real diagnosis (--measured)", "report"),
+    ("reproducibility", "Reproducibility", "report"),
+]
+
+
+@dataclass
+class Table:
+    name: str                 # file stem of the CSV, unique in the report
+    caption: str
+    columns: list[str]        # with units, e.g. "C_jdep (fF)"
+    rows: list[list[Any]]
+
+
+@dataclass
+class Figure:
+    file: str                 # file name beside the HTML (from ctx.figure(...).name)
+    caption: str
+
+
+@dataclass
+class Checked:
+    name: str                 # unique over the report, "<section key>.<figure>"
+    value: float              # in ``unit`` (SI unless the unit says otherwise)
+    unit: str
+    tol_rel: float = 0.0
+    tol_abs: float = 0.0
+    note: str = ""
+
+
+@dataclass
+class Section:
+    title: str
+    text: list[str] = field(default_factory=list)
+    tables: list[Table] = field(default_factory=list)
+    figures: list[Figure] = field(default_factory=list)
+    checked: list[Checked] = field(default_factory=list)
+    data: dict = field(default_factory=dict)
+    available: bool = True
+    why: str = ""             # why not available (or why it failed)
+    failed: bool = False
+    key: str = ""             # filled in by the builder
+
+    @classmethod
+    def unavailable(cls, title: str, why: str) -> "Section":
+        return cls(title, available=False, why=why)
+
+
+@dataclass
+class Context:
+    design: Any
+    out_dir: Path
+    quick: bool = False
+    backend: str = "batch"
+    jobs: int | None = None
+    measured: Path | None = None
+    progress: Callable[..., None] = lambda stage, done=None, total=None: None
+    _memo: dict = field(default_factory=dict)
+
+    def figure(self, name: str) -> Path:
+        """Where to write a picture called ``name`` (beside the HTML)."""
+        return self.out_dir / name
+
+    def shared(self, name: str, fn: Callable[[], Any]) -> Any:
+        """Compute ``fn()`` once per report and hand the same object to every section."""
+        if name not in self._memo:
+            self._memo[name] = fn()
+        return self._memo[name]
+
+    def experiment(self) -> dict:
+        """The thesis experiment (fig. A.1 - A.3) of the design."""
+        from ...experiments.thesis import run_experiment
+        return self.shared("experiment", lambda: run_experiment(self.design, backend=self.backend,
+                                                                jobs=self.jobs))
+
+
+def load_section(key: str):
+    """The module of section ``key``, or None when it has not been written yet."""
+    try:
+        return importlib.import_module(f"{__name__}.{key}")
+    except ModuleNotFoundError as exc:
+        if exc.name == f"{__name__}.{key}":
+            return None
+        raise
