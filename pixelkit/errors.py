@@ -1,9 +1,31 @@
-"""Errors a user can act on. The CLI prints them as one line and exits non-zero."""
+"""Errors a user can act on, and the exit status of each kind.
+
+The CLI prints them as one line (or one JSON object with ``--json``) and exits
+with the class's ``exit_status``:
+
+====  ==========================================================
+0     success
+1     a regression / comparison found a difference (:class:`RegressionFound`)
+2     user error: a bad design file, option or data file (:class:`PixelkitError`,
+      :class:`ConfigError`, :class:`InfeasibleError`, click usage errors)
+3     internal fault of the kit (any other exception: a bug, please report it)
+4     a simulation failed (:class:`SimulationError`: ngspice did not converge)
+130   interrupted (Ctrl-C)
+====  ==========================================================
+"""
 from __future__ import annotations
+
+EXIT_OK, EXIT_REGRESSION, EXIT_USER, EXIT_INTERNAL, EXIT_SIMULATION, EXIT_INTERRUPTED = 0, 1, 2, 3, 4, 130
 
 
 class PixelkitError(Exception):
     """A user-facing failure: the message says what is wrong and what is allowed."""
+
+    exit_status = EXIT_USER
+
+    def details(self) -> dict:
+        """Structured fields of the error for ``--json`` (besides the message)."""
+        return {}
 
 
 class ConfigError(PixelkitError):
@@ -14,6 +36,10 @@ class ConfigError(PixelkitError):
         where = f"{source}: " if source else ""
         shown = "(missing)" if value is _MISSING else repr(value)
         super().__init__(f"{where}{field} = {shown}: expected {allowed}")
+
+    def details(self) -> dict:
+        shown = None if self.value is _MISSING else self.value
+        return {"source": self.source, "field": self.field, "value": shown, "allowed": self.allowed}
 
 
 class _Missing:
@@ -26,11 +52,38 @@ MISSING = _MISSING
 
 
 class SimulationError(PixelkitError):
-    """ngspice failed: names the deck, the analysis and ngspice's own message."""
+    """ngspice failed: names the deck, the analysis and ngspice's own message.
 
-    def __init__(self, deck: str, analysis: str, message: str):
+    When the engine kept the failed deck, ``folder`` holds ``deck.cir`` and
+    ``ngspice.log``; ``what`` says the bench and operating point in the user's
+    terms, ``tried`` the option sets that were run, ``hints`` what to change.
+    """
+
+    exit_status = EXIT_SIMULATION
+
+    def __init__(self, deck: str, analysis: str, message: str, *, what: str = "", folder=None,
+                 tried=(), hints=()):
         self.deck, self.analysis, self.message = deck, analysis, message
-        super().__init__(f"simulation of '{deck}' ({analysis}) failed: {message}")
+        self.what, self.folder, self.tried, self.hints = what, folder, list(tried), list(hints)
+        text = f"simulation of {what or repr(deck)} ({analysis}) failed: {message}"
+        if self.tried:
+            text += f"; tried {len(self.tried)} option set(s): " + " | ".join(self.tried)
+        if folder:
+            text += f"; deck and ngspice log kept in {folder}"
+        if self.hints:
+            text += "; you can: " + "; ".join(self.hints)
+        super().__init__(text)
+
+    def details(self) -> dict:
+        return {"deck": self.deck, "what": self.what, "analysis": self.analysis, "message": self.message,
+                "folder": None if self.folder is None else str(self.folder), "tried": self.tried,
+                "hints": self.hints}
+
+
+class RegressionFound(PixelkitError):
+    """A comparison with a baseline or golden copy found differences (exit status 1)."""
+
+    exit_status = EXIT_REGRESSION
 
 
 class InfeasibleError(PixelkitError):

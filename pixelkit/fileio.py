@@ -38,3 +38,8 @@ def atomic_target(path: str | os.PathLike) -> tuple[Path, Path]:
 def commit(path: Path, tmp: Path) -> Path:
     os.replace(tmp, path)
     return path
+
+
+def reports_root() -> Path:
+    """Where outputs go when no ``--out`` is given: ``$PIXELKIT_REPORTS``, default ``./reports``."""
+    return Path(os.environ.get("PIXELKIT_REPORTS", "reports"))

@@ -49,7 +49,7 @@ def _dataset(ref_design, nominal, tmp_path, effect, seed=3, params=None):
 def test_predict_writes_the_nominal_column(tmp_path, ref_design, nominal, cli):
     from pixelkit.gap.nominal import features, predict
     cond, _, table = _dataset(ref_design, nominal, tmp_path, None)
-    code, out, err = cli("gap", "predict", "--design", REF, "--conditions", cond, "--out", tmp_path / "p.csv")
+    code, out, err = cli("gap", "predict", REF, "--conditions", cond, "--out", tmp_path / "p.csv")
     assert code == 0, err
     rows = list(csv.DictReader(open(tmp_path / "p.csv")))
     assert len(rows) == len(table)
@@ -61,7 +61,7 @@ def test_predict_writes_the_nominal_column(tmp_path, ref_design, nominal, cli):
 
 def test_diagnose_json_and_html(tmp_path, ref_design, nominal, cli):
     _, meas, _ = _dataset(ref_design, nominal, tmp_path, "coupling", seed=11, params=[5e7])
-    code, out, err = cli("gap", "diagnose", "--design", REF, "--measured", meas, "--json", "--out", tmp_path / "rep")
+    code, out, err = cli("gap", "diagnose", REF, "--measured", meas, "--json", "--out", tmp_path / "rep")
     assert code == 0, err
     r = json.loads(out)
     for key in ("gap_before_rms_V", "gap_after_rms_V", "shrink_frac", "best", "ranking", "where"):
@@ -96,7 +96,7 @@ def _rewrite(src: Path, dst: Path, fn):
 def test_malformed_data_reported_by_row_and_column(tmp_path, ref_design, nominal, cli, mutate, needles):
     _, meas, _ = _dataset(ref_design, nominal, tmp_path, None)
     bad = _rewrite(meas, tmp_path / "bad.csv", mutate)
-    code, out, err = cli("gap", "diagnose", "--design", REF, "--measured", bad, "--json")
+    code, out, err = cli("gap", "diagnose", REF, "--measured", bad, "--json")
     assert code == 2 and out == "" and "Traceback" not in err
     for n in needles:
         assert n in err, (n, err)

@@ -100,7 +100,7 @@ def test_models_and_netlists_use_the_extracted_geometry(tmp_path, ref_design):
 
 
 def test_layout_cli_json(tmp_path, cli):
-    code, out, err = cli("layout", REF, "--json", "--out-dir", tmp_path)
+    code, out, err = cli("layout", REF, "--json", "--out", tmp_path)
     assert code == 0, err
     r = json.loads(out)
     assert Path(r["gds"]).exists() and r["c_a"] == pytest.approx(8.18, rel=0.01)
@@ -113,7 +113,7 @@ def test_layout_cli_json(tmp_path, cli):
 def test_layout_cli_rule_error_is_one_line(tmp_path, cli):
     bad = tmp_path / "d.toml"
     bad.write_text(re.sub(r'^mask_opening = "0.64 um2"', 'mask_opening = "0.1 um2"', REF.read_text(), flags=re.M))
-    code, out, err = cli("layout", bad, "--out-dir", tmp_path)
+    code, out, err = cli("layout", bad, "--out", tmp_path)
     assert code == 2 and "min_opening_side" in err and "SECONDARY" in err and "Traceback" not in err
     assert not list(tmp_path.glob("*.gds"))
 
@@ -121,5 +121,5 @@ def test_layout_cli_rule_error_is_one_line(tmp_path, cli):
 def test_pd_larger_than_its_cell_is_refused_with_the_rule(tmp_path, cli):
     bad = tmp_path / "d.toml"
     bad.write_text(re.sub(r'^pd_width = "5 um"', 'pd_width = "9 um"', REF.read_text(), flags=re.M))
-    code, out, err = cli("layout", bad, "--out-dir", tmp_path)
+    code, out, err = cli("layout", bad, "--out", tmp_path)
     assert code == 2 and "pd_to_cell_edge" in err and "secondary.pd_width" in err and "Traceback" not in err

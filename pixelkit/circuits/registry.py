@@ -47,6 +47,21 @@ GENERATORS = {
 }
 
 
+def bench_netlist(design, name: str, i_primary: float | None = None, i_secondary: float | None = None,
+                  with_afe: bool | None = None) -> Netlist:
+    """The registry's netlist ``name``; the dual-pixel benches take other photocurrents (A)."""
+    from ..errors import ConfigError
+    if name not in GENERATORS:
+        raise ConfigError("", "bench", name, f"one of {', '.join(GENERATORS)}")
+    if (i_primary, i_secondary, with_afe) == (None, None, None):
+        return GENERATORS[name](design)
+    if name not in ("bench_dual_pixel", "bench_dual_pixel_afe"):
+        raise ConfigError("", "bench", name, "bench_dual_pixel or bench_dual_pixel_afe to set photocurrents")
+    afe = name.endswith("_afe") if with_afe is None else with_afe
+    return dual_pixel_bench(design, 1.4e-9 if i_primary is None else i_primary,
+                            52e-12 if i_secondary is None else i_secondary, with_afe=afe)
+
+
 def golden_text(name: str, design) -> str:
     net = GENERATORS[name](design)
     return net.text().replace(str(design.tech.models.folder), "@MODELS")

@@ -1,8 +1,52 @@
-"""The ``pixelkit`` command: the group, shared options, output and the entry point.
+"""The ``pixelkit`` command: the group, the shared options, output and the entry point.
 
-Every subcommand that produces figures takes ``--json`` and then prints one
-JSON object on stdout. Errors a user can fix print one line on stderr and exit
-with status 2; a regression that found changes exits with status 1.
+The convention every command follows (README, "Command line and Python API"):
+
+- the design file is the first positional argument (``design_arg``); commands
+  that work on a design load it with :func:`load` (it prints the design's
+  working-range warnings on stderr and adds them to the JSON output);
+- ``--json`` (``json_opt``) on every command: the result is one JSON object on
+  stdout, progress bars are silenced, and an error is one JSON object on stdout
+  ``{"error", "field", "value", "allowed", "exit_status", ...}``;
+- one output option, ``--out`` (``out_opt``): a file or a folder, depending on
+  the command. Without it, outputs go under ``reports/<design>/`` of the current
+  folder (``$PIXELKIT_REPORTS`` replaces ``reports``), see :func:`output_path`;
+  never beside the design file;
+- ``--jobs`` / ``--backend`` (``spice_opts``) on every command that runs SPICE,
+  and ``--waveforms FILE`` (``waveforms_opt``; ``.csv``, or ngspice raw when the
+  name ends in ``.raw``) on those that can hand back a waveform;
+- exit statuses (``pixelkit.errors``): 0 ok, 1 regression / difference found,
+  2 user error, 3 internal fault, 4 simulation failed, 130 interrupted. Raise
+  :class:`~pixelkit.errors.RegressionFound` (or call ``sys.exit(1)`` after
+  emitting) for a difference, ``ConfigError``/``PixelkitError`` for bad input;
+  never ``sys.exit(2)`` by hand;
+- anything that runs longer than a couple of seconds shows a bar from
+  :mod:`pixelkit.progress`.
+
+How to add a command group ``foo``:
+
+1. create ``pixelkit/cli/foo.py``::
+
+       import click
+       from .common import design_arg, emit, json_opt, load, main, out_opt, output_path, spice_opts
+
+       @main.command()
+       @design_arg
+       @out_opt("where the foo table goes (default reports/<design>/foo.csv)")
+       @spice_opts
+       @json_opt
+       def foo(design, out, backend, jobs, as_json):
+           \"\"\"One line that says what foo does (shown by ``pixelkit -h``).\"\"\"
+           from ..foo import run_foo          # heavy imports inside the command
+           d = load(design)
+           path = output_path(out, d, "foo.csv")
+           r = run_foo(d, path, backend=backend, jobs=jobs)   # the API does the work
+           emit(r, as_json, lambda x: f"wrote {x['path']}")
+
+   (use ``@main.group()`` for a group with subcommands, as ``gap.py`` does);
+2. append ``"foo"`` to ``COMMAND_MODULES`` in ``pixelkit/cli/__init__.py``;
+3. add the command to the README's Commands table and a test that runs it with
+   ``--json`` (``tests/test_cli_conventions.py`` checks every command has it).
 """
 from __future__ import annotations
 
@@ -10,15 +54,21 @@ import json
 import os
 import sys
 import traceback
+from pathlib import Path
 
 import click
 
-from ..errors import PixelkitError
+from ..errors import EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_USER, PixelkitError
+
+#: Warnings raised while this command ran (working range, ...); ``emit`` adds them to JSON.
+WARNINGS: list[str] = []
 
 
 def emit(data: dict, as_json: bool, render) -> None:
     """Print ``data`` as one JSON object, or as the human-readable text of ``render``."""
     if as_json:
+        if WARNINGS and isinstance(data, dict) and "warnings" not in data:
+            data = {**data, "warnings": list(WARNINGS)}
         click.echo(json.dumps(data, indent=1, default=_jsonable))
     else:
         click.echo(render(data))
@@ -33,38 +83,114 @@ def _jsonable(x):
     return str(x)
 
 
+def warn(message: str) -> None:
+    """A warning for the user: one line on stderr, and in the JSON output."""
+    WARNINGS.append(message)
+    click.echo(f"pixelkit: warning: {message}", err=True)
+
+
+def _quiet(ctx, param, value):
+    if value:
+        from ..progress import set_quiet
+        set_quiet(True)
+    return value
+
+
 design_arg = click.argument("design", type=click.Path(dir_okay=False))
-json_opt = click.option("--json", "as_json", is_flag=True, help="print one JSON object")
+json_opt = click.option("--json", "as_json", is_flag=True, callback=_quiet,
+                        help="print one JSON object (errors too); no progress bars")
+
+
+def out_opt(help_text: str, folder: bool = False):
+    """The one output option, ``--out`` (a file, or a folder with ``folder=True``)."""
+    kind = click.Path(file_okay=False) if folder else click.Path(dir_okay=False)
+    return click.option("--out", type=kind, default=None, help=help_text)
+
+
+def _jobs(ctx, param, value):
+    if value:  # the process-wide default of every SPICE run of this command (spice.engine.default_jobs)
+        os.environ["PIXELKIT_JOBS"] = str(value)
+    return value
+
+
+def spice_opts(f):
+    """``--backend`` and ``--jobs``, for every command that runs SPICE."""
+    f = click.option("--jobs", type=click.IntRange(1, 64), default=None, callback=_jobs,
+                     help="parallel ngspice workers (default: $PIXELKIT_JOBS, else the cores, at most 8)")(f)
+    return click.option("--backend", type=click.Choice(["batch", "shared"]), default="batch",
+                        show_default=True, help="ngspice as a process per deck, or the shared library")(f)
+
+
+waveforms_opt = click.option("--waveforms", type=click.Path(dir_okay=False), default=None,
+                             help="write the simulated waveforms: CSV (time_s, v(node)_V, ...) "
+                                  "or ngspice raw when the name ends in .raw")
+
+
+def output_path(out, design, default_name: str) -> Path:
+    """``--out`` if given, else ``reports/<design name>/<default_name>``."""
+    if out:
+        return Path(out)
+    name = design if isinstance(design, str) else design.name
+    from ..fileio import reports_root
+    return reports_root() / name / default_name
+
+
+def load(design_path: str):
+    """Load a design for a command: warnings on stderr, failed decks kept under its reports folder."""
+    from ..api import load_design
+    from ..fileio import reports_root
+    from ..spice.failures import set_root
+    d = load_design(design_path, warn=warn)
+    set_root(reports_root() / d.name / "failed")
+    return d
 
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(package_name="pixelkit")
 def main():
-    """pixelkit: circuit-level CMOS image-sensor pixel and readout design kit."""
+    """pixelkit: circuit-level CMOS image-sensor pixel and readout design kit.
+
+    Exit status: 0 ok, 1 difference found, 2 user error, 3 internal fault,
+    4 simulation failed, 130 interrupted. Outputs: --out, else reports/<design>/.
+    """
 
 
-def entry():
-    """Console entry point: one-line errors, no tracebacks for user mistakes."""
+def _fail(as_json: bool, status: int, message: str, details: dict | None = None) -> None:
+    if as_json:
+        obj = {"error": message, "field": None, "value": None, "allowed": None, **(details or {}),
+               "exit_status": status}
+        click.echo(json.dumps(obj, indent=1, default=_jsonable))
+    else:
+        click.echo(f"pixelkit: error: {message}", err=True)
+    sys.exit(status)
+
+
+def entry(argv=None):
+    """Console entry point: one-line (or JSON) errors with distinct exit statuses, no tracebacks."""
     from . import register_all
     register_all()
+    args = list(sys.argv[1:] if argv is None else argv)
+    as_json = "--json" in args
     try:
-        main(standalone_mode=False)
+        main(args=args, standalone_mode=False)
     except click.exceptions.Exit as exc:
         sys.exit(exc.exit_code)
-    except click.ClickException as exc:
-        exc.show()
-        sys.exit(2)
     except click.exceptions.Abort:
-        click.echo("aborted", err=True)
-        sys.exit(130)
+        _fail(as_json, EXIT_INTERRUPTED, "interrupted")
+    except click.ClickException as exc:
+        details = {}
+        if isinstance(exc, click.BadParameter) and exc.param is not None:
+            details = {"field": exc.param.opts[0] if exc.param.opts else exc.param.name}
+        if as_json:
+            _fail(as_json, EXIT_USER, exc.format_message(), details)
+        exc.show()
+        sys.exit(EXIT_USER)
     except PixelkitError as exc:
-        click.echo(f"pixelkit: error: {exc}", err=True)
-        sys.exit(2)
+        _fail(as_json, exc.exit_status, str(exc), exc.details())
     except KeyboardInterrupt:
-        sys.exit(130)
+        _fail(as_json, EXIT_INTERRUPTED, "interrupted")
     except Exception as exc:  # an internal fault: say so plainly
         if os.environ.get("PIXELKIT_DEBUG"):
             traceback.print_exc()
-        click.echo(f"pixelkit: internal error ({type(exc).__name__}: {exc}); "
-                   "set PIXELKIT_DEBUG=1 for the traceback and please report it", err=True)
-        sys.exit(3)
+        _fail(as_json, EXIT_INTERNAL, f"internal error ({type(exc).__name__}: {exc}); "
+              "set PIXELKIT_DEBUG=1 for the traceback and please report it")

@@ -6,9 +6,7 @@ from pathlib import Path
 import click
 import numpy as np
 
-from .common import emit, json_opt, main
-
-design_opt = click.option("--design", "design_path", type=click.Path(dir_okay=False), required=True)
+from .common import design_arg, emit, json_opt, load, main, out_opt, output_path
 
 
 @main.group()
@@ -17,40 +15,46 @@ def gap():
 
 
 @gap.command()
-@design_opt
+@design_arg
 @click.option("--conditions", type=click.Path(dir_okay=False), required=True)
-@click.option("--out", type=click.Path(dir_okay=False), required=True)
-def predict(design_path, conditions, out):
+@out_opt("predicted table (default: reports/<design>/predicted.csv)")
+@json_opt
+def predict(design, conditions, out, as_json):
     """Write the nominal prediction of every row of a conditions file (column v_nominal_V)."""
-    from ..design import load_design
     from ..gap.data import read_table, write_table
     from ..gap.nominal import build_nominal, features
     from ..gap.nominal import predict as nominal_predict
-    d = load_design(design_path)
+    from ..progress import step
+    d = load(design)
+    out = output_path(out, d, "predicted.csv")
     table = read_table(conditions, d, measured=False)
-    nom = build_nominal(d)
+    with step("building the SPICE-calibrated surrogate (first run only)"):
+        nom = build_nominal(d)
     v = nominal_predict(nom, features(table, nom, d))
     write_table(table, out, {"v_nominal_V": v})
-    click.echo(f"wrote {out} ({len(table)} rows; surrogate error vs SPICE: pixel "
-               f"{nom.error['pixel_max_V'] * 1e3:.2f} mV, AFE {nom.error['afe_max_V'] * 1e3:.2f} mV at worst)",
-               err=True)
+    emit({"out": str(out), "rows": len(table), "surrogate_error_V": nom.error}, as_json,
+         lambda x: f"wrote {x['out']} ({x['rows']} rows; surrogate error vs SPICE: pixel "
+                   f"{nom.error['pixel_max_V'] * 1e3:.2f} mV, AFE {nom.error['afe_max_V'] * 1e3:.2f} mV at worst)")
 
 
 @gap.command()
-@design_opt
+@design_arg
 @click.option("--measured", type=click.Path(dir_okay=False), required=True)
-@click.option("--out", "out_dir", type=click.Path(file_okay=False), default=None, help="write an HTML section here")
+@out_opt("write an HTML section in this folder", folder=True)
 @click.option("--seed", type=int, default=0, show_default=True, help="train / held-out split")
 @json_opt
-def diagnose(design_path, measured, out_dir, seed, as_json):
+def diagnose(design, measured, out, seed, as_json):
     """Where the data leave the simulation, which effect explains it, how far the gap shrinks."""
-    from ..design import load_design
     from ..gap.data import read_table
     from ..gap.diagnose import analyse
     from ..gap.nominal import build_nominal
-    d = load_design(design_path)
+    from ..progress import step
+    out_dir = out
+    d = load(design)
     table = read_table(measured, d, measured=True)
-    r, X, resid = analyse(d, table, build_nominal(d), seed=seed)
+    with step("building the SPICE-calibrated surrogate (first run only)"):
+        nom = build_nominal(d)
+    r, X, resid = analyse(d, table, nom, seed=seed)
     if out_dir:
         from ..gap.report import write_section
         r["html"] = str(write_section(r, d.name, X, resid, Path(out_dir)))
@@ -69,19 +73,20 @@ def _text(r):
 
 
 @gap.command()
-@click.option("--design", "design_path", type=click.Path(dir_okay=False), default="designs/dual_pixel_revA.toml",
-              show_default=True)
+@click.argument("design", type=click.Path(dir_okay=False), required=False, default="designs/dual_pixel_revA.toml")
 @click.option("--per-effect", type=click.IntRange(1, 1000), default=10, show_default=True)
 @click.option("--clean", type=click.IntRange(0, 10000), default=20, show_default=True)
 @click.option("--seed", type=int, default=1, show_default=True)
 @json_opt
-def selftest(design_path, per_effect, clean, seed, as_json):
-    """Blind diagnosis of virtual measurements, each with one withheld effect."""
-    from ..design import load_design
+def selftest(design, per_effect, clean, seed, as_json):
+    """Blind diagnosis of virtual measurements, each with one withheld effect (DESIGN: the reference)."""
     from ..gap.nominal import build_nominal
     from ..gap.selftest import run
-    d = load_design(design_path)
-    r = run(d, build_nominal(d), per_effect, clean, seed)
+    from ..progress import step
+    d = load(design)
+    with step("building the SPICE-calibrated surrogate (first run only)"):
+        nom = build_nominal(d)
+    r = run(d, nom, per_effect, clean, seed)
     emit(r, as_json, lambda x: "\n".join([
         f"{x['n_cases']} blind cases: top-1 {x['top1_accuracy'] * 100:.1f} %, median shrink "
         f"{x['median_shrink'] * 100:.1f} %, none on effect-free sets {x['none_on_clean'] * 100:.1f} %",

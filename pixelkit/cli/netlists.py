@@ -1,4 +1,4 @@
-"""``pixelkit netlists | regress``: golden netlists and regression against a baseline."""
+"""``pixelkit netlist | netlists | regress``: runnable decks, golden netlists, regression."""
 from __future__ import annotations
 
 import sys
@@ -6,47 +6,66 @@ from pathlib import Path
 
 import click
 
-from .common import design_arg, emit, json_opt, main
+from ..errors import EXIT_REGRESSION
+from .common import design_arg, emit, json_opt, load, main, out_opt, output_path, spice_opts
+
+REFERENCE = "designs/dual_pixel_revA.toml"
 
 
 @main.command()
+@design_arg
+@click.option("--bench", "bench_name", default="bench_dual_pixel", show_default=True,
+              help="registry name (pixelkit netlists lists them)")
+@out_opt("deck file (default: reports/<design>/<bench>.cir)")
+@click.option("--models", "models_mode", type=click.Choice(["absolute", "variable"]), default="absolute",
+              show_default=True, help="absolute model paths, or one .param-free line "
+                                      "'.include models.inc' written beside the deck that points at them")
+@json_opt
+def netlist(design, bench_name, out, models_mode, as_json):
+    """Write a deck that runs as it is in `ngspice -b`: the kit's options, models, stimulus."""
+    from ..api import export_deck
+    d = load(design)
+    path = export_deck(d, bench_name, output_path(out, d, f"{bench_name}.cir"), models=models_mode)
+    emit({"design": d.name, "bench": bench_name, "deck": str(path), "run_with": f"ngspice -b {path}"},
+         as_json, lambda x: f"wrote {x['deck']} (run: {x['run_with']})")
+
+
+@main.command()
+@click.argument("design", type=click.Path(dir_okay=False), required=False, default=REFERENCE)
 @click.option("--write", is_flag=True, help="regenerate the golden netlists in --out")
-@click.option("--out", type=click.Path(file_okay=False), default="netlists", show_default=True)
-@click.option("--design", "design_path", type=click.Path(dir_okay=False),
-              default="designs/dual_pixel_revA.toml", show_default=True)
-def netlists(write, out, design_path):
-    """List the generators, or regenerate their golden netlists."""
+@out_opt("folder of the golden netlists (default: netlists)", folder=True)
+@json_opt
+def netlists(design, write, out, as_json):
+    """List the generators, or regenerate their golden netlists (DESIGN: the reference design)."""
     from ..circuits.registry import GENERATORS, write_all
-    from ..design import load_design
     if write:
-        for p in write_all(load_design(design_path), Path(out)):
-            click.echo(f"wrote {p}")
+        paths = [str(p) for p in write_all(load(design), Path(out or "netlists"))]
+        emit({"written": paths}, as_json, lambda x: "\n".join(f"wrote {p}" for p in x["written"]))
     else:
-        click.echo("\n".join(GENERATORS))
+        emit({"generators": list(GENERATORS)}, as_json, lambda x: "\n".join(x["generators"]))
 
 
 @main.command()
 @design_arg
 @click.option("--baseline", type=click.Path(dir_okay=False), required=True, help="baseline JSON file")
 @click.option("--update", is_flag=True, help="measure and store the baseline instead of comparing")
-@click.option("--backend", type=click.Choice(["batch", "shared"]), default="batch", show_default=True)
+@spice_opts
 @json_opt
-def regress(design, baseline, update, backend, as_json):
+def regress(design, baseline, update, backend, jobs, as_json):
     """Compare a design's measured figures with a baseline; exit 1 when something changed."""
-    from ..design import load_design
-    from ..experiments.thesis import run_experiment
+    from ..api import experiment
     from ..regress import compare, load_baseline, make_baseline, save_baseline
-    d = load_design(design)
-    result = run_experiment(d, backend=backend)
+    d = load(design)
+    result = experiment(d, backend=backend, jobs=jobs)
     if update:
         save_baseline(Path(baseline), make_baseline(d.name, result))
-        click.echo(f"baseline written: {baseline}")
+        emit({"baseline": baseline, "written": True}, as_json, lambda x: f"baseline written: {x['baseline']}")
         return
     rows = compare(load_baseline(Path(baseline)), result)
     changed = [r for r in rows if r["changed"]]
     emit({"design": d.name, "baseline": baseline, "changed": changed, "figures": rows}, as_json, _regress_text)
     if changed:
-        sys.exit(1)
+        sys.exit(EXIT_REGRESSION)
 
 
 def _regress_text(data) -> str:

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import click
 
-from .common import design_arg, emit, json_opt, main
+from .common import design_arg, emit, json_opt, load, main, spice_opts, waveforms_opt
 
 
 @main.command()
@@ -11,35 +11,50 @@ from .common import design_arg, emit, json_opt, main
 @json_opt
 def models(design, as_json):
     """Analytic model table: C_jdep, conversion gain, full well, C_A, C_C."""
-    from ..design import load_design
-    from ..physics.subpixel import model_table
+    from ..api import models as model_table
     from ..report.text import model_text
-    emit(model_table(load_design(design)), as_json, model_text)
+    emit(model_table(load(design)), as_json, model_text)
+
+
+def _waveforms(d, result, path, backend):
+    """Simulate the dual-pixel bench at the experiment's operating point and write its waveforms."""
+    from ..api import bench, simulate, write_waveforms
+    net = bench(d, "bench_dual_pixel", i_primary=result["primary"]["i_mid_A"],
+                i_secondary=result["secondary"]["i_5pct_A"])
+    return str(write_waveforms(simulate(net, backend=backend), path))
 
 
 @main.command()
 @design_arg
+@spice_opts
+@waveforms_opt
 @json_opt
-@click.option("--backend", type=click.Choice(["batch", "shared"]), default="batch", show_default=True)
-@click.option("--jobs", type=click.IntRange(1, 64), default=None, help="parallel ngspice workers")
-def simulate(design, as_json, backend, jobs):
-    """The thesis's simulation experiment: i_mid, i_5pct, model vs SPICE."""
-    from ..design import load_design
-    from ..experiments.thesis import run_experiment
+def simulate(design, backend, jobs, waveforms, as_json):
+    """The thesis's simulation experiment: i_mid, i_5pct, model vs SPICE.
+
+    --waveforms writes the dual-pixel bench at (i_mid, i_5pct).
+    """
+    from ..api import experiment
     from ..report.text import simulate_text
-    emit(run_experiment(load_design(design), backend=backend, jobs=jobs), as_json, simulate_text)
+    d = load(design)
+    r = experiment(d, backend=backend, jobs=jobs)
+    if waveforms:
+        r["waveforms"] = _waveforms(d, r, waveforms, backend)
+    emit(r, as_json, lambda x: simulate_text(x) + (f"\nwaveforms: {x['waveforms']}" if waveforms else ""))
 
 
 @main.command()
 @design_arg
-@click.option("--backend", type=click.Choice(["batch", "shared"]), default="batch", show_default=True)
-def run(design, backend):
+@spice_opts
+@waveforms_opt
+@json_opt
+def run(design, backend, jobs, waveforms, as_json):
     """The main job on a design: model table and simulation summary."""
-    from ..design import load_design
-    from ..experiments.thesis import run_experiment
-    from ..physics.subpixel import model_table
+    from ..api import experiment, models as model_table
     from ..report.text import model_text, simulate_text
-    d = load_design(design)
-    click.echo(model_text(model_table(d)))
-    click.echo("")
-    click.echo(simulate_text(run_experiment(d, backend=backend)))
+    d = load(design)
+    r = {"models": model_table(d), "simulate": experiment(d, backend=backend, jobs=jobs)}
+    if waveforms:
+        r["waveforms"] = _waveforms(d, r["simulate"], waveforms, backend)
+    emit(r, as_json, lambda x: "\n".join([model_text(x["models"]), "", simulate_text(x["simulate"])]
+                                         + ([f"waveforms: {x['waveforms']}"] if waveforms else [])))

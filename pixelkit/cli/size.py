@@ -3,19 +3,20 @@ from __future__ import annotations
 
 import click
 
-from .common import design_arg, emit, json_opt, main
+from .common import design_arg, emit, json_opt, load, main, out_opt, output_path, spice_opts
 
 
 @main.command()
 @design_arg
-@click.option("--out", type=click.Path(dir_okay=False), default=None,
-              help="sized design file (default: DESIGN_sized.toml beside DESIGN)")
+@out_opt("sized design file (default: reports/<design>/<design>_sized.toml)")
 @click.option("--sensitivity", "with_sens", is_flag=True,
               help="also re-size at +-10 % C_j, +-20 % SF bias, each corner, +-10 K")
+@spice_opts
 @json_opt
-def size(design, out, with_sens, as_json):
+def size(design, out, with_sens, backend, jobs, as_json):
     """Size the secondary mask opening and the integration times (5 % / mid-scale criterion)."""
-    from ..design import load_design
     from ..optimize.flow import size_design
     from ..report.text import size_text
-    emit(size_design(load_design(design), out, with_sens), as_json, size_text)
+    d = load(design)
+    emit(size_design(d, output_path(out, d, f"{d.name}_sized.toml"), with_sens, backend=backend),
+         as_json, size_text)

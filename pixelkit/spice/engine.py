@@ -53,7 +53,9 @@ def _shared_worker(text: str):
 
 
 def default_jobs() -> int:
-    return max(1, min(os.cpu_count() or 1, 8))
+    """``$PIXELKIT_JOBS`` (set by the CLI's ``--jobs``), else the machine's cores, at most 8."""
+    env = os.environ.get("PIXELKIT_JOBS", "")
+    return int(env) if env.isdigit() and int(env) > 0 else max(1, min(os.cpu_count() or 1, 8))
 
 
 def _prepare(net: Netlist, options) -> Netlist:
@@ -103,6 +105,7 @@ def simulate_many(netlists, backend: str = "batch", jobs: int | None = None, opt
             results[i] = cache_mod.load(k)
     todo = [i for i, r in enumerate(results) if r is None]
     failures: dict[int, str] = {}
+    logs: dict[int, list] = {}  # every attempt's ngspice output, kept with a failed deck
     for round_, loosen in enumerate((None, *RETRIES)):
         if not todo:
             break
@@ -114,8 +117,9 @@ def simulate_many(netlists, backend: str = "batch", jobs: int | None = None, opt
             res = _to_result(deck, plots, lines, wall, backend)
             if res is None:
                 failures[i] = _message(lines)
+                logs.setdefault(i, []).append((_options_text(deck.options), lines))
                 if round_ == len(RETRIES):
-                    raise SimulationError(deck.title, deck.analysis.text(), _message(lines))
+                    _give_up(deck, failures[i], logs[i])
                 still.append(i)
                 continue
             if loosen is not None:
@@ -127,14 +131,30 @@ def simulate_many(netlists, backend: str = "batch", jobs: int | None = None, opt
     return results
 
 
+def _options_text(options) -> str:
+    return " ".join(f"{k}={v}" for k, v in options)
+
+
+def _give_up(deck, message, logs):
+    """Keep the deck and the logs of every attempt, then raise in the user's terms."""
+    from . import failures
+    folder = failures.keep(deck, deck.text(), logs)
+    raise SimulationError(deck.title, deck.analysis.text(), message, what=failures.describe(deck),
+                          folder=folder, tried=[label for label, _ in logs], hints=failures.hints(message))
+
+
 def _run(decks, backend, jobs):
+    from ..progress import progress
     texts = [d.text() for d in decks]
+    bar = dict(total=len(texts), desc=f"ngspice ({decks[0].title}...)") if len(texts) > 1 else None
     if backend == "batch":
         if jobs == 1 or len(texts) == 1:
-            return [run_batch(t) for t in texts]
+            return [run_batch(t) for t in (progress(texts, **bar) if bar else texts)]
         with ThreadPoolExecutor(max_workers=jobs) as ex:
-            return list(ex.map(run_batch, texts))
-    return list(_pool(jobs).map(_shared_worker, texts))
+            runs = ex.map(run_batch, texts)
+            return list(progress(runs, **bar) if bar else runs)
+    runs = _pool(jobs).map(_shared_worker, texts)
+    return list(progress(runs, **bar) if bar else runs)
 
 
 def simulate(netlist: Netlist, backend: str = "batch", options=None, use_cache: bool = True) -> Result:

@@ -1,0 +1,122 @@
+"""The documented Python API: ``import pixelkit as pk``.
+
+Every command of the command line is a thin layer over one of these functions::
+
+    import pixelkit as pk
+    d = pk.load_design("designs/dual_pixel_revA.toml")     # validated, with its technology
+    net = pk.bench(d, "bench_dual_pixel")                    # a testbench as a Netlist
+    res = pk.simulate(net)                                   # a Result: time, vectors, meta
+    sig = pk.measure(d, res)                                 # double-sampled column signals (V)
+    pk.write_waveforms(res, "out.csv", ["col_p", "x1.xp.pd"])  # CSV (or .raw)
+    pk.export_deck(d, "bench_dual_pixel", "bench.cir")       # a deck that runs in ngspice -b
+    table = pk.models(d)                                     # analytic model table
+    exp = pk.experiment(d)                                   # the thesis experiment (i_mid, i_5pct)
+    sized = pk.size(d)                                       # mask opening and integration times
+    lay = pk.layout(d, "layouts")                            # GDS, extraction, pictures
+    gap = pk.diagnose(d, "measured.csv")                     # sim-to-real gap of measured data
+
+Units are SI throughout (A, V, s, m); results are plain dicts / numpy arrays.
+"""
+from __future__ import annotations
+
+import warnings as _warnings
+from pathlib import Path
+
+
+class WorkingRangeWarning(UserWarning):
+    """A design value that loads but puts the circuit outside its working range."""
+
+
+def load_design(path, warn=None):
+    """Load and validate a design file; working-range findings go to ``warn`` (default: warnings.warn)."""
+    from .design import load_design as _load
+    from .working_range import check
+    d = _load(path)
+    for message in check(d):
+        if warn is None:
+            _warnings.warn(message, WorkingRangeWarning, stacklevel=2)
+        else:
+            warn(message)
+    return d
+
+
+def benches() -> list[str]:
+    """Names accepted by :func:`bench` (the registry's testbenches and circuits)."""
+    from .circuits.registry import GENERATORS
+    return list(GENERATORS)
+
+
+def bench(design, name: str = "bench_dual_pixel", **kw):
+    """A testbench (or circuit) of the registry as a :class:`~pixelkit.spice.Netlist`.
+
+    ``bench_dual_pixel`` accepts ``i_primary`` / ``i_secondary`` (A) and ``with_afe``.
+    """
+    from .circuits.registry import bench_netlist
+    return bench_netlist(design, name, **kw)
+
+
+def simulate(netlist, backend: str = "batch", options=None, use_cache: bool = True):
+    """Run one netlist in ngspice (cached, retried); a :class:`~pixelkit.spice.Result`."""
+    from .spice import simulate as _sim
+    return _sim(netlist, backend=backend, options=options, use_cache=use_cache)
+
+
+def simulate_many(netlists, backend: str = "batch", jobs=None, options=None, use_cache: bool = True):
+    from .spice import simulate_many as _many
+    return _many(netlists, backend=backend, jobs=jobs, options=options, use_cache=use_cache)
+
+
+def measure(design, result) -> dict:
+    """Double-sampled column signals (reset - signal level, V) of a dual-pixel bench result."""
+    from .circuits.testbench import timings
+    from .measure.pixel import double_sampled
+    tm = timings(design, design.experiment.t_window)
+    out = {"primary_V": double_sampled(result, "col_p", tm["primary"])}
+    for k in range(design.secondary_per_pixel):
+        out[f"secondary{k}_V"] = double_sampled(result, f"col_s{k}", tm["secondary"])
+    return out
+
+
+def write_waveforms(result, path, vectors=None):
+    """Write ``result``'s waveforms (all, or ``vectors``) to CSV, or ngspice raw if ``path`` ends in .raw."""
+    from .spice.waveforms import write_waveforms as _write
+    return _write(result, Path(path), vectors)
+
+
+def export_deck(design, name: str, path, models: str = "absolute", **kw) -> Path:
+    """Write a deck that runs as it is in ``ngspice -b`` (options, models, stimulus)."""
+    from .spice.export import export_deck as _export
+    return _export(bench(design, name, **kw), Path(path), models=models, design=design)
+
+
+def models(design) -> dict:
+    """The analytic model table: C_jdep, conversion gain, full well, C_A, C_C."""
+    from .physics.subpixel import model_table
+    return model_table(design)
+
+
+def experiment(design, backend: str = "batch", jobs=None) -> dict:
+    """The thesis's simulation experiment: i_mid, i_5pct, ratio, model vs SPICE."""
+    from .experiments.thesis import run_experiment
+    return run_experiment(design, backend=backend, jobs=jobs)
+
+
+def size(design, out=None, sensitivity: bool = False) -> dict:
+    """Size the secondary mask opening and the integration times; writes the sized design to ``out``."""
+    from .optimize.flow import size_design
+    return size_design(design, out, sensitivity)
+
+
+def layout(design, out_dir="layouts", rows: int = 2, cols: int = 2, pictures: bool = True) -> dict:
+    """GDS of the dual pixel and an array, extracted PD geometry, 2D/3D pictures."""
+    from .layout.flow import layout_design
+    return layout_design(design, Path(out_dir), rows, cols, pictures)
+
+
+def diagnose(design, measured, seed: int = 0) -> dict:
+    """Where measured data leave the simulation and which effect explains it (``pixelkit gap diagnose``)."""
+    from .gap.data import read_table
+    from .gap.diagnose import analyse
+    from .gap.nominal import build_nominal
+    r, _x, _resid = analyse(design, read_table(measured, design, measured=True), build_nominal(design), seed=seed)
+    return r
