@@ -61,3 +61,34 @@ def size_text(r: dict) -> str:
         lines.append(f"  {row['variant']:<22} C_M {row['c_m']:6.1f} ({row['c_m_change_frac'] * 100:+5.1f} %)  "
                      f"t_p {row['t_int_primary_s'] * 1e6:7.1f} us ({row['t_primary_change_frac'] * 100:+5.1f} %)")
     return "\n".join(lines)
+
+
+def report_text(r: dict) -> str:
+    """Where the report is, its headline figures, which sections wait, and the diff's verdict."""
+    c = r["checked"]
+    where = r["html"] or r["out"]
+    lines = [f"report: {where}",
+             f"  {r['design']} rev {r['revision']} ({r['profile']} profile): {r['spice_runs']} SPICE runs, "
+             f"{r['spice_cached']} from cache, {r['sections_from_cache']} sections from cache, {r['wall_s']} s"]
+    for name, label in (("summary.primary.cg_pd_uV_per_e", "primary CG (PD)"),
+                        ("summary.secondary.cg_pd_uV_per_e", "secondary CG (PD)"),
+                        ("model_vs_spice.primary.i_mid_A", "primary i_mid"),
+                        ("model_vs_spice.secondary.i_5pct_A", "secondary i_5pct"),
+                        ("model_vs_spice.max_err_frac", "model vs SPICE worst"),
+                        ("sizing.c_m", "C_M (sized)"), ("afe.gain_error_frac", "AFE gain error")):
+        if name in c:
+            lines.append(f"  {label:<24} {c[name]['value']:.4g} {c[name]['unit']}")
+    waiting = [k for k, v in r["sections"].items() if v != "available"]
+    if waiting:
+        lines.append("  not yet available / failed: " + ", ".join(f"{k} ({r['sections'][k]})" for k in waiting))
+    d = r.get("diff")
+    if d:
+        lines.append(f"diff against {d['baseline']}: " + ("no checked figure moved beyond tolerance" if d["passed"]
+                     else f"{len(d['moved'])} checked figure(s) moved beyond tolerance"))
+        lines += [f"  design: {x['field']}: {x['old']} -> {x['new']}" for x in d["design_changes"]]
+        for x in d["checked"]:
+            if x["status"] in ("moved", "removed"):
+                new = "removed" if x["new"] is None else f"{x['new']:.4g}"
+                lines.append(f"  FAIL {x['figure']}: {x['old']:.4g} -> {new} {x['unit']} (tolerance {x.get('tolerance', 0):.3g})")
+        lines += [f"  netlist changed: {n['netlist']}" for n in d["netlists"]]
+    return "\n".join(lines)

@@ -28,12 +28,14 @@ How to add a section
      (``ctx.experiment()`` is the thesis experiment, ``ctx.measured`` the ``--measured`` CSV
      or None).
    - Every ``Table`` is written as ``<name>.csv`` beside the HTML and every ``data`` dict as
-     ``<key>.json``: the data behind each figure and table. Table cells are numbers or text.
+     ``data_<key>.json``: the data behind each figure and table. Table cells are numbers or text.
    - Every ``Checked`` figure goes to ``summary.json`` under its ``name`` (unique over the
      report: prefix it with your key). The revision diff (``--baseline``) compares it against
      the baseline's value with the tolerance stated here: it has moved when
      ``|new - old| > max(tol_rel * |old|, tol_abs)``, and then the command exits non-zero.
      Tables are diffed cell by cell too (reported, not failing).
+   - Other files you write beside the HTML (a GDS, netlists: ``ctx.figure("netlists/x.cir")``)
+     go in ``files`` (relative paths) so the section cache keeps them too.
    - When your capability cannot run for this design, return
      ``Section.unavailable(TITLE, "why, in one sentence")``: the report says so plainly.
    - Raise PixelkitError for user errors; any other exception is shown in the section as
@@ -110,6 +112,7 @@ class Section:
     figures: list[Figure] = field(default_factory=list)
     checked: list[Checked] = field(default_factory=list)
     data: dict = field(default_factory=dict)
+    files: list[str] = field(default_factory=list)   # other files written beside the HTML (relative paths)
     available: bool = True
     why: str = ""             # why not available (or why it failed)
     failed: bool = False
@@ -132,8 +135,10 @@ class Context:
     _memo: dict = field(default_factory=dict)
 
     def figure(self, name: str) -> Path:
-        """Where to write a picture called ``name`` (beside the HTML)."""
-        return self.out_dir / name
+        """Where to write a picture (or any file) called ``name`` (beside the HTML)."""
+        path = self.out_dir / name
+        path.parent.mkdir(parents=True, exist_ok=True)
+        return path
 
     def shared(self, name: str, fn: Callable[[], Any]) -> Any:
         """Compute ``fn()`` once per report and hand the same object to every section."""

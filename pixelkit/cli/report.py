@@ -1,0 +1,45 @@
+"""``pixelkit report``: the design report of a chip revision, with the revision diff."""
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import click
+
+from .common import design_arg, emit, json_opt, main
+
+
+@main.command("report")
+@design_arg
+@click.option("--out", type=click.Path(file_okay=False), default=None,
+              help="report folder (default reports/<design>)")
+@click.option("--baseline", type=click.Path(file_okay=False), default=None,
+              help="an earlier report folder: add the revision diff; exit 1 when a checked figure moved")
+@click.option("--measured", type=click.Path(dir_okay=False), default=None,
+              help="measured data (CSV, as 'pixelkit gap diagnose' reads) for the sim-to-real section")
+@click.option("--quick", is_flag=True, help="light profile for tests: fewer sweep points, no sensitivity table")
+@click.option("--no-cache", is_flag=True, help="rebuild every section (SPICE runs still use the simulation cache)")
+@click.option("--backend", type=click.Choice(["batch", "shared"]), default="batch", show_default=True)
+@click.option("--jobs", type=click.IntRange(1, 64), default=None, help="parallel ngspice workers")
+@json_opt
+def report(design, out, baseline, measured, quick, no_cache, backend, jobs, as_json):
+    """Write the design report (HTML + CSV/JSON + summary.json); with --baseline, the revision diff."""
+    from ..design import load_design
+    from ..report.build import build_report
+    from ..report.text import report_text
+    if as_json:
+        try:
+            from ..progress import set_quiet
+            set_quiet(True)
+        except ImportError:
+            pass
+    d = load_design(design)
+    out = Path(out) if out else Path("reports") / d.name
+    r = build_report(d, out, quick=quick, backend=backend, jobs=jobs, measured=measured, baseline=baseline,
+                     use_cache=not no_cache, html=not as_json)
+    data = {"out": r["out"], "html": r["html"], "failed_sections": r["failed"], **r["summary"]}
+    if "diff" in r:
+        data["diff"] = r["diff"]
+    emit(data, as_json, report_text)
+    if r["failed"] or ("diff" in r and not r["diff"]["passed"]):
+        sys.exit(1)

@@ -1,0 +1,172 @@
+"""``pixelkit report``: build every section, write the HTML, its data and summary.json.
+
+The report is built in a temporary folder beside ``out`` and renamed into place
+when complete, so a failed or interrupted run never leaves a half-written report
+(the previous one stays until the new one is whole).
+"""
+from __future__ import annotations
+
+import csv
+import io
+import json
+import os
+import shutil
+import tempfile
+import time
+import traceback
+from pathlib import Path
+
+from ..errors import ConfigError, PixelkitError
+from . import cache
+from .diff import diff_reports, load_report
+from .html import render
+from .sections import REGISTRY, Context, Section, load_section
+from .spicecount import SpiceCounter
+
+#: Sections whose output depends on the --measured file.
+MEASURED_SECTIONS = ("gap",)
+
+
+def _planned(title: str, key: str, owner: str) -> Section:
+    return Section.unavailable(title, f"not yet available: {owner} will add pixelkit/report/sections/{key}.py "
+                                      "when that capability lands")
+
+
+def build_section(key: str, title: str, owner: str, ctx: Context, options: dict, use_cache: bool) -> tuple:
+    """(Section, 'cache' | 'built' | 'planned' | 'failed')."""
+    mod = load_section(key)
+    if mod is None:
+        return _planned(title, key, owner), "planned"
+    k = cache.section_key(key, ctx.design, options)
+    if use_cache:
+        s = cache.load(k, ctx.out_dir)
+        if s is not None:
+            return s, "cache"
+    try:
+        s = mod.build(ctx)
+    except Exception as exc:  # noqa: BLE001 - one failed section must not lose the others
+        if os.environ.get("PIXELKIT_DEBUG"):
+            traceback.print_exc()
+        kind = "" if isinstance(exc, PixelkitError) else f"{type(exc).__name__}: "
+        return Section(getattr(mod, "TITLE", title), available=False, failed=True, why=f"failed: {kind}{exc}"), "failed"
+    s.key = key
+    if use_cache:
+        cache.save(k, s, ctx.out_dir)
+    return s, "built"
+
+
+def _csv(table) -> str:
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(table.columns)
+    w.writerows(table.rows)
+    return buf.getvalue()
+
+
+def _checked(sections) -> dict:
+    out = {}
+    for s in sections:
+        for c in s.checked:
+            if c.name in out:
+                raise PixelkitError(f"report: checked figure {c.name!r} appears twice (sections "
+                                    f"{out[c.name]['section']} and {s.key})")
+            out[c.name] = {"value": float(c.value), "unit": c.unit, "tol_rel": c.tol_rel, "tol_abs": c.tol_abs,
+                           "section": s.key, "note": c.note}
+    return out
+
+
+def _write_outputs(stage: Path, design, sections, meta: dict) -> dict:
+    tables = {}
+    for s in sections:
+        for t in s.tables:
+            if t.name in tables:
+                raise PixelkitError(f"report: table name {t.name!r} used twice")
+            (stage / f"{t.name}.csv").write_text(_csv(t))
+            tables[t.name] = {"section": s.key, "caption": t.caption, "columns": t.columns, "rows": t.rows}
+        if s.data:
+            (stage / f"data_{s.key}.json").write_text(json.dumps(s.data, indent=1, default=_plain))
+    (stage / "design.json").write_text(json.dumps(design.raw, indent=1, default=_plain) + "\n")
+    summary = {"design": design.name, "revision": design.revision, **meta,
+               "sections": {s.key: ("available" if s.available else ("failed" if s.failed else "not yet available"))
+                            for s in sections},
+               "checked": _checked(sections)}
+    (stage / "summary.json").write_text(json.dumps(summary, indent=1) + "\n")
+    (stage / "tables.json").write_text(json.dumps(tables, indent=1, default=_plain) + "\n")
+    return summary
+
+
+def _plain(x):
+    import numpy as np
+    if isinstance(x, np.generic):
+        return x.item()
+    if isinstance(x, np.ndarray):
+        return x.tolist()
+    return str(x)
+
+
+def _swap_into_place(stage: Path, out: Path) -> None:
+    old = None
+    if out.exists():
+        if not (out / "summary.json").exists() and any(out.iterdir()):
+            raise ConfigError("", "--out", str(out), "a new folder or an earlier report folder (it has no summary.json)")
+        old = out.with_name(f".{out.name}.old-{os.getpid()}")
+        os.replace(out, old)
+    os.replace(stage, out)
+    if old is not None:
+        shutil.rmtree(old, ignore_errors=True)
+
+
+def build_report(design, out: Path, *, quick: bool = False, backend: str = "batch", jobs: int | None = None,
+                 measured: Path | None = None, baseline: Path | None = None, use_cache: bool = True,
+                 html: bool = True) -> dict:
+    """Build the report of ``design`` into ``out``; returns the summary (with the diff when asked)."""
+    from ..progress import progress
+    t0 = time.perf_counter()
+    out = Path(out)
+    base = load_report(Path(baseline)) if baseline else None
+    if measured is not None and not Path(measured).is_file():
+        raise ConfigError("", "--measured", str(measured), "an existing CSV file of measured rows")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    stage = Path(tempfile.mkdtemp(prefix=f".{out.name}.new-", dir=out.parent))
+    try:
+        bar = progress(total=len(REGISTRY), desc="report", unit="section")
+        counter = SpiceCounter(lambda text: bar.set_postfix_str(text, refresh=True))
+
+        def tell(stage_name, done=None, total=None):
+            bar.set_description(f"report: {stage_name}" + (f" {done}/{total}" if total else ""))
+
+        ctx = Context(design, stage, quick, backend, jobs, Path(measured) if measured else None, tell)
+        sections, how = [], {}
+        measured_hash = cache.file_hash(measured) if measured else None
+        with counter:
+            for key, title, owner in REGISTRY:
+                tell(title)
+                options = {"quick": quick, "backend": backend}
+                if key in MEASURED_SECTIONS:
+                    options["measured"] = measured_hash
+                s, how[key] = build_section(key, title, owner, ctx, options, use_cache)
+                s.key = key
+                sections.append(s)
+                bar.update(1)
+        bar.close()
+        meta = {"profile": "quick" if quick else "full", "backend": backend,
+                "spice_runs": counter.runs, "spice_cached": counter.cached,
+                "sections_from_cache": sum(v == "cache" for v in how.values()),
+                "wall_s": None}
+        summary = _write_outputs(stage, design, sections, meta)
+        result = {"summary": summary, "how": how}
+        if base is not None:
+            result["diff"] = diff_reports(base, stage)
+            (stage / "diff.json").write_text(json.dumps(result["diff"], indent=1) + "\n")
+        summary["wall_s"] = round(time.perf_counter() - t0, 2)
+        (stage / "summary.json").write_text(json.dumps(summary, indent=1) + "\n")
+        if html:
+            render(stage, design, sections, summary, result.get("diff"))
+        _swap_into_place(stage, out)
+    except BaseException:
+        shutil.rmtree(stage, ignore_errors=True)
+        raise
+    result["html"] = str(out / "index.html") if html else None
+    result["out"] = str(out)
+    result["failed"] = [k for k, v in how.items() if v == "failed"]
+    return result

@@ -1,0 +1,149 @@
+"""The revision diff: what changed between two report folders, by how much, pass/fail.
+
+- checked figures (``summary.json``): old, new, change, the tolerance the section stated
+  (|new - old| > max(tol_rel |old|, tol_abs) is a failure), figures added or removed;
+- table values (``tables.json``): every cell that differs (numbers by relative change,
+  text when it differs), rows added or removed; reported, not failing;
+- netlists (``netlists/*.cir``): every generated netlist whose text changed, with the
+  changed lines;
+- figures (pictures): every picture file whose bytes changed;
+- design parameters (``design.json``): every field that differs (this is what names the
+  changed device size).
+"""
+from __future__ import annotations
+
+import difflib
+import hashlib
+import json
+import math
+from pathlib import Path
+
+from ..errors import ConfigError
+
+PICTURES = (".png", ".svg", ".jpg")
+
+
+def load_report(folder: Path) -> dict:
+    folder = Path(folder)
+    try:
+        summary = json.loads((folder / "summary.json").read_text())
+        summary["checked"]  # noqa: B018 - must exist
+    except FileNotFoundError:
+        raise ConfigError("", "--baseline", str(folder), "a report folder written by 'pixelkit report' "
+                          "(it has no summary.json)") from None
+    except (ValueError, KeyError, TypeError):
+        raise ConfigError(str(folder / "summary.json"), "checked", "(unreadable)",
+                          "a summary.json written by 'pixelkit report'") from None
+    return {"folder": str(folder), "summary": summary,
+            "tables": _json(folder / "tables.json"), "design": _json(folder / "design.json"),
+            "netlists": {p.name: p.read_text() for p in sorted((folder / "netlists").glob("*.cir"))},
+            "pictures": {p.name: hashlib.sha256(p.read_bytes()).hexdigest()
+                         for p in sorted(folder.iterdir()) if p.suffix in PICTURES}}
+
+
+def _json(path: Path) -> dict:
+    try:
+        return json.loads(path.read_text())
+    except (OSError, ValueError):
+        return {}
+
+
+def _change(old, new) -> float | None:
+    if old == 0:
+        return None if new == 0 else math.inf
+    return (new - old) / abs(old)
+
+
+def _checked(old: dict, new: dict) -> list[dict]:
+    rows = []
+    for name in sorted(set(old) | set(new)):
+        o, n = old.get(name), new.get(name)
+        if o is None:
+            rows.append({"figure": name, "old": None, "new": n["value"], "unit": n["unit"], "status": "added"})
+            continue
+        if n is None:
+            rows.append({"figure": name, "old": o["value"], "new": None, "unit": o["unit"], "status": "removed"})
+            continue
+        tol = max(o["tol_rel"] * abs(o["value"]), o["tol_abs"])
+        delta = n["value"] - o["value"]
+        status = "moved" if abs(delta) > tol else ("changed" if delta != 0 else "same")
+        rows.append({"figure": name, "section": n["section"], "old": o["value"], "new": n["value"],
+                     "unit": n["unit"], "delta": delta, "change_frac": _change(o["value"], n["value"]),
+                     "tolerance": tol, "status": status})
+    return rows
+
+
+def _is_num(x) -> bool:
+    return isinstance(x, (int, float)) and not isinstance(x, bool)
+
+
+def _tables(old: dict, new: dict) -> list[dict]:
+    out = []
+    for name in sorted(set(old) | set(new)):
+        if name not in old or name not in new:
+            out.append({"table": name, "status": "added" if name in new else "removed"})
+            continue
+        to, tn = old[name], new[name]
+        key = to["columns"][0] if to["columns"] else ""
+        for i in range(max(len(to["rows"]), len(tn["rows"]))):
+            if i >= len(to["rows"]) or i >= len(tn["rows"]):
+                out.append({"table": name, "row": i, "status": "row added" if i >= len(to["rows"]) else "row removed"})
+                continue
+            ro, rn = to["rows"][i], tn["rows"][i]
+            for j, col in enumerate(tn["columns"]):
+                a = ro[j] if j < len(ro) else None
+                b = rn[j] if j < len(rn) else None
+                if a == b:
+                    continue
+                cell = {"table": name, "row": i, "label": str(rn[0]) if rn else "", "column": col, "old": a, "new": b,
+                        "key_column": key, "status": "changed"}
+                if _is_num(a) and _is_num(b):
+                    cell["change_frac"] = _change(a, b)
+                out.append(cell)
+    return out
+
+
+def _netlists(old: dict, new: dict) -> list[dict]:
+    out = []
+    for name in sorted(set(old) | set(new)):
+        a, b = old.get(name), new.get(name)
+        if a == b:
+            continue
+        lines = [ln for ln in difflib.unified_diff((a or "").splitlines(), (b or "").splitlines(), lineterm="", n=0)
+                 if ln[:1] in "+-" and not ln.startswith(("+++", "---"))]
+        out.append({"netlist": name, "status": "added" if a is None else "removed" if b is None else "changed",
+                    "lines": lines[:40], "n_lines": len(lines)})
+    return out
+
+
+def _flat(d, prefix=""):
+    if isinstance(d, dict):
+        out = {}
+        for k, v in d.items():
+            out.update(_flat(v, f"{prefix}{k}."))
+        return out
+    return {prefix[:-1]: d}
+
+
+def _design(old: dict, new: dict) -> list[dict]:
+    a, b = _flat(old), _flat(new)
+    return [{"field": k, "old": a.get(k), "new": b.get(k)} for k in sorted(set(a) | set(b)) if a.get(k) != b.get(k)]
+
+
+def diff_reports(base: dict, folder: Path) -> dict:
+    """Diff the report in ``folder`` against the loaded baseline report ``base``."""
+    new = load_report(folder)
+    checked = _checked(base["summary"]["checked"], new["summary"]["checked"])
+    moved = [r["figure"] for r in checked if r["status"] in ("moved", "removed")]
+    pictures = sorted(n for n in set(base["pictures"]) | set(new["pictures"])
+                      if base["pictures"].get(n) != new["pictures"].get(n))
+    notes = []
+    if base["summary"].get("profile") != new["summary"].get("profile"):
+        notes.append(f"profiles differ: baseline {base['summary'].get('profile')}, this report "
+                     f"{new['summary'].get('profile')} (sweep densities differ, so small moves are expected)")
+    return {"baseline": base["folder"], "baseline_design": base["summary"].get("design"),
+            "design_changes": _design(base["design"], new["design"]),
+            "checked": checked, "moved": moved, "passed": not moved,
+            "tables": _tables(base["tables"], new["tables"]),
+            "netlists": _netlists(base["netlists"], new["netlists"]),
+            "pictures": pictures, "notes": notes}

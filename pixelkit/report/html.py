@@ -1,0 +1,42 @@
+"""Render the report's HTML (jinja2): one page, styles inline, pictures as files beside it."""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import jinja2
+
+_ENV = jinja2.Environment(loader=jinja2.PackageLoader("pixelkit", "report/templates"),
+                          autoescape=jinja2.select_autoescape(["html", "j2"]), trim_blocks=True, lstrip_blocks=True)
+
+
+def fmt(x) -> str:
+    """Numbers to 4 significant digits (integers as they are); anything else as text."""
+    if isinstance(x, bool) or x is None:
+        return "" if x is None else str(x)
+    if isinstance(x, int):
+        return str(x)
+    if isinstance(x, float):
+        if not math.isfinite(x):
+            return str(x)
+        return f"{x:.4g}"
+    return str(x)
+
+
+def _template_for(key: str) -> str:
+    name = f"sections/{key}.html.j2"
+    try:
+        _ENV.get_template(name)
+        return name
+    except jinja2.TemplateNotFound:
+        return "sections/_generic.html.j2"
+
+
+def render(folder: Path, design, sections, summary: dict, diff: dict | None) -> Path:
+    css = (Path(__file__).parent / "templates" / "report.css").read_text()
+    blocks = [(s, _template_for(s.key)) for s in sections]
+    html = _ENV.get_template("report.html.j2").render(design=design, blocks=blocks, summary=summary, diff=diff,
+                                                      css=css, f=fmt)
+    path = Path(folder) / "index.html"
+    path.write_text(html)
+    return path
