@@ -27,12 +27,22 @@ def photodiode(name: str, node: str, area: float, perimeter: float, tech) -> Ele
                    (("area", area), ("pj", perimeter)))
 
 
-def photodiode_model(tech) -> tuple:
-    """The kit's own diode card for technologies whose PD junction it calibrates."""
+def photodiode_model(tech, temperature_K: float | None = None) -> tuple:
+    """The kit's own diode card for technologies whose PD junction it calibrates.
+
+    One dark-current law for SPICE and the analytic model: the card's saturation
+    currents are ``physics.dark.dark_scale`` (the doubling law) evaluated at the
+    deck's temperature, with TNOM at that temperature, so ngspice applies none of
+    its own IS(T) (XTI/EG) or CJ(T) scaling. A reverse-biased level-1 diode carries
+    -IS (area) - JSW (perimeter): the analytic dark current exactly.
+    """
+    from ..physics.dark import dark_scale
     pd = tech.photodiode
     if not pd.builtin_model:
         return ()
+    t = pd.t_ref if temperature_K is None else temperature_K
+    k = dark_scale(t, pd)
     return (Model(pd.spice_model, "d", (
-        ("level", 1), ("is", pd.dark_area), ("jsw", pd.dark_perimeter), ("n", 1.0),
+        ("level", 1), ("is", pd.dark_area * k), ("jsw", pd.dark_perimeter * k), ("n", 1.0),
         ("cjo", pd.cj), ("m", pd.mj), ("vj", pd.pb), ("cjp", pd.cjsw), ("mjsw", pd.mjsw),
-        ("php", pd.pbsw), ("tnom", pd.t_ref - 273.15))),)
+        ("php", pd.pbsw), ("tnom", t - 273.15))),)

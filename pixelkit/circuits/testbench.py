@@ -19,17 +19,54 @@ from .opamp import opamp
 from .timing import GsTiming, waveform
 
 
-def _deck(design, title, elements, subckts=(), analysis=None, ic=(), saves=()):
+def _deck(design, title, elements, subckts=(), analysis=None, ic=(), saves=(), options=()):
     t = design.tech
     return Netlist(title=title, elements=tuple(elements), analysis=analysis, subckts=tuple(subckts),
-                   models=photodiode_model(t), includes=t.models.includes(design.corner or None),
-                   ic=tuple(ic), temperature_C=design.temperature - 273.15, saves=tuple(saves))
+                   models=photodiode_model(t, design.temperature), includes=t.models.includes(design.corner or None),
+                   ic=tuple(ic), temperature_C=design.temperature - 273.15, saves=tuple(saves),
+                   options=tuple(options))
 
 
-def timings(design, t_exp: float, rows: int = 1) -> dict:
-    """Per-array GS timing: same exposure, each array's own row time."""
-    return {"primary": GsTiming(t_exp, 1.0 / design.primary.f_read, rows),
-            "secondary": GsTiming(t_exp, 1.0 / design.secondary.f_read, rows)}
+def timings(design, t_exp: float, rows: int = 1, t_exp_secondary: float | None = None,
+            t_store: float = 0.0, ec_hold: bool = False) -> dict:
+    """Per-array GS timing, each array with its own row time.
+
+    ``t_exp`` is the primary exposure; the secondary's is ``t_exp_secondary``
+    (default: the same window). The shorter exposure starts later (EC held) so
+    both arrays transfer together; ``t_store`` delays the first row's read.
+    """
+    t_s = t_exp if t_exp_secondary is None else t_exp_secondary
+    longest = max(t_exp, t_s)
+    common = dict(rows=rows, t_store=t_store, ec_hold=ec_hold)
+    return {"primary": GsTiming(t_exp, 1.0 / design.primary.f_read, t_hold=longest - t_exp, **common),
+            "secondary": GsTiming(t_s, 1.0 / design.secondary.f_read, t_hold=longest - t_s, **common)}
+
+
+def real_timings(design, t_store: float = 0.0, ec_hold: bool = False) -> dict:
+    """The design's own integration times (``primary.t_int``, ``secondary.t_int``)."""
+    return timings(design, design.primary.t_int, 1, design.secondary.t_int, t_store, ec_hold)
+
+
+#: Decks whose exposure is longer than this take large steps during the exposure.
+LONG_EXPOSURE = 100e-6
+#: gmin of long decks: 1e-18 S leaks 2e-18 A at 2 V, < 1 % of the smallest PD dark
+#: current at 25 degC (the default 1e-15 S would leak ~3x the dark current).
+LONG_OPTIONS = (("gmin", 1e-18),)
+
+
+def _options(tm: dict) -> tuple:
+    return LONG_OPTIONS if max(t.t_exp + t.t_store for t in tm.values()) > LONG_EXPOSURE else ()
+
+
+def _tran(tm: dict) -> Tran:
+    """Short decks: 20 ns max step (as the experiment). Long decks: the flat exposure is
+    stepped by the simulator's error control, bounded to 1/20 of the shorter row time
+    (edges are PWL breakpoints, so the switching is still resolved)."""
+    stop = max(t.t_stop for t in tm.values())
+    longest = max(t.t_exp + t.t_store for t in tm.values())
+    if longest <= LONG_EXPOSURE:
+        return Tran(5e-9, stop, 0.0, 20e-9)
+    return Tran(5e-9, stop, 0.0, min(t.t_row for t in tm.values()) / 20)
 
 
 def supplies(design) -> tuple:
@@ -67,12 +104,16 @@ def sample_clocks(design, t: GsTiming, prefix: str, rows: int) -> list:
 
 
 def dual_pixel_bench(design, iph_p: float, iph_s, t_exp: float | None = None, with_afe: bool = False,
-                     title: str = "dual_pixel_bench") -> Netlist:
-    """One integrated pixel, its column loads, the GS sequence; ``iph_s`` per secondary."""
+                     title: str = "dual_pixel_bench", tm: dict | None = None) -> Netlist:
+    """One integrated pixel, its column loads, the GS sequence; ``iph_s`` per secondary.
+
+    ``tm``: the timings (see ``timings``/``real_timings``); default both arrays exposed
+    over ``t_exp`` (the experiment's window).
+    """
     n = design.secondary_per_pixel
     iph_s = tuple(iph_s) if isinstance(iph_s, (tuple, list)) else (iph_s,) * n
     t_exp = design.experiment.t_window if t_exp is None else t_exp
-    tm = timings(design, t_exp)
+    tm = tm or timings(design, t_exp)
     cols = ["col_p", *(f"col_s{k}" for k in range(n))]
     params = (("iph_p", iph_p), *((f"iph_s{k}", i) for k, i in enumerate(iph_s)))
     el = [*supplies(design), *controls(design, tm, 1, row_lines=False), *column.bias(design),
@@ -91,8 +132,7 @@ def dual_pixel_bench(design, iph_p: float, iph_s, t_exp: float | None = None, wi
             el.append(Element(f"Xafe_{c}", (f"in_{c}", f"out_{c}", "vref", f"p1_{s}", f"p1_{s}b",
                                             f"p2_{s}", f"p2_{s}b", "vdd"), "scafe"))
         subckts += [opamp(design), sc_afe(design)]
-    stop = max(t.t_stop for t in tm.values())
-    return _deck(design, title, el, subckts, Tran(5e-9, stop, 0.0, 20e-9))
+    return _deck(design, title, el, subckts, _tran(tm), options=_options(tm))
 
 
 def array_bench(design, rows: int, cols: int, iph_p, iph_s, t_exp: float | None = None,

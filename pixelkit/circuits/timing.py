@@ -1,15 +1,24 @@
 """The global-shutter sequence as control waveforms (PWL), and its sample instants.
 
-    0 .. t_reset            EC on (PD reset), RST on (FD reset)
-    t_reset                 EC opens: exposure starts (all pixels)
+    0 .. t_reset + t_hold   EC on (PD reset), RST on (FD reset)
+    t_reset + t_hold        EC opens: exposure starts (all pixels of the array)
     t_tx - t_tg - t_gap     RST opens (FD released before the transfer)
     t_tx - t_tg .. t_tx     TG on: global transfer; exposure ends when TG opens
+    t_tx .. t_read          storage: the charge waits on FD (t_pre + t_store); with
+                            ``ec_hold`` EC closes again after the transfer and holds
+                            the PD in reset (anti-blooming), else the PD keeps
+                            integrating and can overflow
     t_read + r t_row        row r: RS on; S1 samples the signal; RST pulses (FD
                             reset); S2 samples the reset level (non-correlated
                             double sampling, thesis fig. 3.3); RS off
 
 Each array has its own row time 1/f_read (defaults 500 kHz primary, 1 MHz
 secondary). Edges take ``edge`` seconds; levels are 0 and the supply.
+
+The two arrays have their own exposure (thesis: 1 ms primary, 12 ms secondary);
+``aligned`` gives the shorter one a ``t_hold`` so both transfer at the same
+instant and are read out together. ``t_store`` adds storage time before the
+first row: the wait of row ``r`` of a frame is ``t_pre + r t_row``.
 """
 from __future__ import annotations
 
@@ -28,15 +37,27 @@ class GsTiming:
     t_gap: float = 0.3e-6
     edge: float = 10e-9
     t_pre: float = 0.3e-6  # from end of transfer to the first row
+    t_hold: float = 0.0    # EC held on after t_reset: the exposure starts later
+    t_store: float = 0.0   # extra storage on FD before the first row is read
+    ec_hold: bool = False  # EC resets the PD again during storage
+
+    @property
+    def t_start(self) -> float:
+        """EC opens: the start of exposure."""
+        return self.t_reset + self.t_hold
 
     @property
     def t_tx(self) -> float:
         """TG opens: the end of exposure."""
-        return self.t_reset + self.t_exp
+        return self.t_start + self.t_exp
 
     @property
     def t_read(self) -> float:
-        return self.t_tx + self.t_pre
+        return self.t_tx + self.t_pre + self.t_store
+
+    def t_wait(self, r: int) -> float:
+        """Time the charge of row ``r`` waits on FD from the transfer to its signal sample."""
+        return self.t_signal(r) - self.t_tx
 
     def row(self, r: int) -> float:
         return self.t_read + r * self.t_row
@@ -67,7 +88,10 @@ class GsTiming:
 
     # waveforms -------------------------------------------------------------
     def ec(self):
-        return [(0.0, self.t_reset)]
+        on = [(0.0, self.t_start)]
+        if self.ec_hold:
+            on.append((self.t_tx + self.t_gap, self.t_stop))
+        return on
 
     def tg(self):
         return [(self.t_tx - self.t_tg, self.t_tx)]
