@@ -31,7 +31,7 @@ def _variant(tmp_path, src, old, new, name="d.toml"):
 ])
 def test_bad_design(tmp_path, cli, old, new, needles):
     path = _variant(tmp_path, REF, old, new)
-    code, out, err = cli("models", path, "--json")
+    code, out, err = cli("models", path)
     assert code == 2 and out == ""
     assert "Traceback" not in err and len(err.strip().splitlines()) == 1, err
     for n in needles:
@@ -50,7 +50,7 @@ def test_bad_technology(tmp_path, cli, old, new, needles):
     if "folder" not in old:
         tech.write_text(tech.read_text().replace('folder = "@', 'folder = "@'))
     design = _variant(tmp_path, REF, r'"c35_thesis"', f'"{tech}"')
-    code, out, err = cli("models", design, "--json")
+    code, out, err = cli("models", design)
     assert code == 2 and out == "", err
     assert "Traceback" not in err and len(err.strip().splitlines()) == 1, err
     for n in needles:
@@ -65,5 +65,5 @@ def test_missing_design_file(cli):
 def test_user_technology_file_works(tmp_path, cli):
     tech = _variant(tmp_path, TECH, r'^name = "c35_thesis"', 'name = "my_c35"', "tech.toml")
     design = _variant(tmp_path, REF, r'"c35_thesis"', f'"{tech}"')
-    code, out, err = cli("models", design, "--json")
+    code, out, err = cli("models", design)
     assert code == 0, err

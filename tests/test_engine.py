@@ -63,7 +63,7 @@ def test_design_strings_cannot_reach_a_deck(tmp_path, cli):
         'spice_model = "pd_c35"', 'spice_model = "pd\\n.control\\nshell touch /tmp/pwned\\n.endc"')
     (tmp_path / "t.toml").write_text(tech)
     (tmp_path / "d.toml").write_text(REF.read_text().replace('"c35_thesis"', f'"{tmp_path / "t.toml"}"'))
-    code, out, err = cli("simulate", tmp_path / "d.toml", "--json")
+    code, out, err = cli("simulate", tmp_path / "d.toml")
     assert code == 2 and "photodiode.spice_model" in err and "Traceback" not in err
 
 

@@ -4,6 +4,16 @@ The key hashes the deck text, the bytes of every model file it includes, the
 ngspice version and the backend, so a repeated sweep point is free and a
 changed model file or simulator invalidates it. Entries are ``.npz`` files
 written atomically under ``$PIXELKIT_CACHE`` (default ``~/.cache/pixelkit``).
+
+An entry cannot lie: it stores its own key and a SHA-256 checksum over its
+names, metadata and every array's bytes. An entry that is damaged (truncated,
+flipped, empty, unreadable) or that holds another key's result (swapped,
+copied) is reported on stderr, removed and re-simulated.
+
+A run that needed the retry policy's looser options is stored under the key of
+the deck it actually ran (its own key); the strict deck's key holds only a
+redirect to it, so the next run neither repeats the failing strict run nor
+passes the loose result off as a strict one.
 """
 from __future__ import annotations
 
@@ -11,6 +21,7 @@ import hashlib
 import io
 import json
 import os
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -33,25 +44,80 @@ def key(deck_text: str, include_files: tuple, version: str, backend: str) -> str
     return h.hexdigest()
 
 
-def load(k: str) -> Result | None:
-    path = cache_dir() / k[:2] / f"{k}.npz"
+def entry_path(k: str) -> Path:
+    return cache_dir() / k[:2] / f"{k}.npz"
+
+
+def _checksum(meta_text: str, arrays: list[np.ndarray]) -> str:
+    h = hashlib.sha256(meta_text.encode())
+    for a in arrays:
+        a = np.ascontiguousarray(a)
+        h.update(f"{a.dtype.str}{a.shape}".encode())
+        h.update(a.tobytes())
+    return h.hexdigest()
+
+
+def _say(path: Path, what: str) -> None:
+    sys.stderr.write(f"pixelkit: warning: cache entry {path} {what}; re-simulating\n")
+
+
+def load(k: str, _depth: int = 0) -> Result | None:
+    """The cached result of key ``k``, or None (absent, or damaged/mismatched: said and removed)."""
+    path = entry_path(k)
     if not path.exists():
         return None
     try:
         with np.load(path, allow_pickle=False) as z:
-            meta = json.loads(str(z["__meta__"]))
-            vectors = {n: z[f"v{i}"] for i, n in enumerate(meta.pop("__names__"))}
-            time = z["__time__"]
-    except (OSError, ValueError, KeyError):
-        return None  # a damaged entry is simply re-simulated
+            meta_text = str(z["__meta__"])
+            stored_sum = str(z["__sum__"])
+            meta = json.loads(meta_text)
+            names = meta["__names__"]
+            arrays = [z["__time__"], *(z[f"v{i}"] for i in range(len(names)))]
+    except Exception as exc:  # noqa: BLE001 - any fault of the file is a damaged entry
+        _say(path, f"is damaged ({type(exc).__name__})")
+        _drop(path)
+        return None
+    if _checksum(meta_text, arrays) != stored_sum:
+        _say(path, "fails its checksum")
+        _drop(path)
+        return None
+    if meta.get("__key__") != k:
+        _say(path, "holds another key's result")
+        _drop(path)
+        return None
+    if "__redirect__" in meta:
+        target = meta["__redirect__"]
+        return load(target, _depth + 1) if _depth == 0 and isinstance(target, str) else None
+    meta = {m: v for m, v in meta.items() if m not in ("__names__", "__key__")}
     meta["cached"] = True
-    return Result(time, vectors, meta)
+    return Result(arrays[0], dict(zip(names, arrays[1:])), meta)
+
+
+def _drop(path: Path) -> None:
+    try:
+        path.unlink()
+    except OSError:
+        pass
+
+
+def _write(k: str, meta: dict, time, vectors: list) -> None:
+    meta_text = json.dumps(dict(meta, __key__=k))
+    arrays = [np.asarray(time), *(np.asarray(v) for v in vectors)]
+    buf = io.BytesIO()
+    np.savez(buf, __meta__=meta_text, __sum__=_checksum(meta_text, arrays), __time__=arrays[0],
+             **{f"v{i}": a for i, a in enumerate(arrays[1:])})
+    try:
+        write_atomic(entry_path(k), buf.getvalue())
+    except OSError as exc:  # a cache that cannot be written costs time, not results
+        sys.stderr.write(f"pixelkit: warning: cannot write the cache entry {entry_path(k)} "
+                         f"({exc.strerror or exc}); continuing without it\n")
 
 
 def save(k: str, result: Result) -> None:
     names = list(result.vectors)
-    meta = dict(result.meta, __names__=names)
-    buf = io.BytesIO()
-    np.savez(buf, __time__=result.time, __meta__=json.dumps(meta),
-             **{f"v{i}": result.vectors[n] for i, n in enumerate(names)})
-    write_atomic(cache_dir() / k[:2] / f"{k}.npz", buf.getvalue())
+    _write(k, dict(result.meta, __names__=names), result.time, [result.vectors[n] for n in names])
+
+
+def save_redirect(k: str, target: str, reason: str) -> None:
+    """Record that the strict deck of key ``k`` failed and its retried result is under ``target``."""
+    _write(k, {"__names__": [], "__redirect__": target, "reason": reason}, np.zeros(0), [])

