@@ -1,0 +1,92 @@
+"""Design file of the ratio pixel (``designs/ratio_pixel.toml``), validated on load."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+from ...errors import ConfigError
+from ...physics.conversion import rectangle
+from ...schema import ident, integer, load, num, qty, read_toml, table, text
+from ...tech import Technology, load_technology
+
+
+@dataclass(frozen=True)
+class Loop:
+    """The four identical loop NMOS (M1-M4) and the source level of the diode pair."""
+    w: float = qty("m", 4e-6, gt=0, doc="loop NMOS width (paper: 2 fingers of 2 um x 1 um)")
+    l: float = qty("m", 1e-6, gt=0, doc="loop NMOS length")
+    v_source: float = qty("V", 0.4, ge=0, le=1.5, doc="source level of M3/M4 (tail headroom)")
+    tail_w: float = qty("m", 4e-6, gt=0, doc="tail current-source NMOS (and its column mirror)")
+    tail_l: float = qty("m", 4e-6, gt=0)
+    sel_w: float = qty("m", 1e-6, gt=0, doc="row-select switches")
+    sel_l: float = qty("m", 0.5e-6, gt=0)
+
+
+@dataclass(frozen=True)
+class Photodiodes:
+    pd_width: float = qty("m", 7e-6, gt=0)
+    pd_height: float = qty("m", 7e-6, gt=0)
+    pd_model: str = ident("diode_pd2nw_03v3",
+                          doc="p+/n-well junction: its anode feeds the diode-connected M3/M4")
+
+    @property
+    def area(self) -> float:
+        return rectangle(self.pd_width, self.pd_height)[0]
+
+    @property
+    def perimeter(self) -> float:
+        return rectangle(self.pd_width, self.pd_height)[1]
+
+
+@dataclass(frozen=True)
+class Readout:
+    i_bias: float = qty("A", 20e-9, gt=0, le=10e-6, doc="loop bias (paper: ~20 nA nominal)")
+    i_bias_high: float = qty("A", 100e-9, gt=0, le=10e-6, doc="the paper's 'too high' bias (~100 nA)")
+    c_par: float = qty("F", 30e-15, gt=0, le=10e-12, doc="column parasitic capacitance (each of C_par+/-)")
+    counter_bits: int = integer(5, ge=1, le=16)
+    lsb_per_tau: float = num(1.0, ge=1.0, le=100, doc="lambda in T_LSB = lambda tau (paper: 1 is optimal)")
+    inv_wn: float = qty("m", 1e-6, gt=0)
+    inv_wp: float = qty("m", 2e-6, gt=0)
+    inv_l: float = qty("m", 0.5e-6, gt=0)
+    v_select: float = qty("V", 1.4, gt=0, le=5, doc="row-select high level: the select NMOS cascodes the loop outputs")
+    v_clamp_gate: float = qty("V", 1.6, ge=0, le=5, doc="gate of the column clamp (holds a tripped column)")
+    clamp_w: float = qty("m", 1e-6, gt=0)
+    clamp_l: float = qty("m", 0.5e-6, gt=0)
+    pre_w: float = qty("m", 2e-6, gt=0, doc="precharge PMOS")
+    pre_l: float = qty("m", 0.5e-6, gt=0)
+
+    def validate(self, path, source):
+        if self.i_bias_high <= self.i_bias:
+            raise ConfigError(source, f"{path}.i_bias_high", self.i_bias_high,
+                              f"a bias above i_bias ({self.i_bias:g} A)")
+
+
+@dataclass(frozen=True)
+class Experiment:
+    i_ref: float = qty("A", 0.5e-9, gt=0, le=1e-6, doc="photocurrent of the dimmer PD of each pair")
+    ratio_intensity: float = num(10.0, gt=1, le=1000, doc="ratio used for the intensity sweep")
+
+
+@dataclass(frozen=True)
+class RatioDesign:
+    name: str = ident()
+    revision: str = text()
+    family: str = text(choices=("ratio",))
+    technology: str = text("gf180mcu_3v3")
+    corner: str = ident("", doc="model corner; empty = the technology's default")
+    temperature: float = qty("K", 300.15, gt=0, lt=500)
+    loop: Loop = table(Loop, default=Loop)
+    photodiodes: Photodiodes = table(Photodiodes, default=Photodiodes)
+    readout: Readout = table(Readout, default=Readout)
+    experiment: Experiment = table(Experiment, default=Experiment)
+    tech: Technology = field(default=None, metadata=dict(kind="skip"))
+    source: str = field(default="", metadata=dict(kind="skip"))
+
+
+def load_ratio_design(path: str | Path) -> RatioDesign:
+    path = Path(path)
+    design = load(RatioDesign, read_toml(path, "design"), "", str(path))
+    tech = load_technology(design.technology, relative_to=path.parent)
+    if design.corner and design.corner not in tech.models.corners:
+        raise ConfigError(str(path), "corner", design.corner, f"one of {', '.join(sorted(tech.models.corners))}")
+    return replace(design, tech=tech, source=str(path))
