@@ -28,6 +28,9 @@ from ..spice import simulate_many
 
 COARSE = 9
 REFINE = 6
+#: A measured column swing below this is noise-level (a few hundred electrons on the
+#: column): i_mid, i_5pct, their ratio and everything sized from them are not computed.
+MIN_MEASURED_SWING_V = 0.01
 
 
 def _i_max(design, which: str, v_end: float = 0.5) -> float:
@@ -84,6 +87,17 @@ def fig_a1(design, backend="batch"):
             "max_diff_frac": float(diff.max() / swing)}, r
 
 
+def _check_swing(design, swing_p: float, swing_s: float) -> None:
+    from ..errors import PixelkitError
+    for which, sw in (("primary", swing_p), ("secondary", swing_s)):
+        if not np.isfinite(sw) or sw < MIN_MEASURED_SWING_V:
+            raise PixelkitError(
+                f"{design.source}: the measured {which} swing at the column is {sw:.3g} V, below "
+                f"{MIN_MEASURED_SWING_V * 1e3:g} mV: too small to mean anything, so i_mid, i_5pct and the "
+                "figures built on them are not computed (check pixel.swing, pixel.sf_bias, pixel.column_cap "
+                "and the reset levels)")
+
+
 def run_experiment(design, backend: str = "batch", jobs: int | None = None) -> dict:
     t_start = time.perf_counter()
     exp = design.experiment
@@ -94,6 +108,7 @@ def run_experiment(design, backend: str = "batch", jobs: int | None = None) -> d
     sp, ss = _signals(design, res, tm)
     dark_p, dark_s = sp[0], ss[0, 0]
     swing_p, swing_s = sp.max() - dark_p, ss[:, 0].max() - dark_s
+    _check_swing(design, float(swing_p), float(swing_s))
     tgt_p, tgt_s = dark_p + exp.mid_fraction * swing_p, dark_s + exp.low_fraction * swing_s
     # refine inside the brackets of both targets
     kp = int(np.searchsorted(np.maximum.accumulate(sp), tgt_p))
@@ -128,6 +143,8 @@ def run_experiment(design, backend: str = "batch", jobs: int | None = None) -> d
         "model_vs_spice": {"max_err_frac": max(err_p, err_s), "primary": err_p, "secondary": err_s},
         "fig_a1": a1,
         "n_runs": len(runs) + 1,
+        "retried": [dict(r.meta["retried"], deck=r.meta["title"]) for r in runs + [a1_result]
+                    if r.meta.get("retried")],
         "n_cached": n_cached,
         "wall_s": time.perf_counter() - t_start,
     }

@@ -46,6 +46,8 @@ def simulate_text(r: dict) -> str:
              f"  fig. A.1 (currents in ratio C_C): worst difference {r['fig_a1']['max_diff_frac'] * 100:.2f} % of swing",
              f"  analytic model vs SPICE over 10-90 % of swing: worst {m['max_err_frac'] * 100:.2f} %",
              f"  {r['n_runs']} SPICE runs ({r['n_cached']} from cache) in {r['wall_s']:.1f} s"]
+    for x in r.get("retried", []):
+        lines.append(f"  retried with looser tolerances: {x['deck']} ({x['reason'][:120]})")
     return "\n".join(lines)
 
 

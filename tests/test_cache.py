@@ -1,0 +1,106 @@
+"""The cache cannot lie: swapped, truncated, bit-flipped and empty entries give the right numbers.
+
+The reference is independent of the cache and of ngspice: an RC charging from a
+1 V step reaches 1 - exp(-t / RC) (the derivation), so every number that comes
+back - fresh, cached or re-simulated after damage - is checked against it.
+"""
+import numpy as np
+import pytest
+
+from pixelkit.spice import Element, Netlist, Tran, simulate
+from pixelkit.spice import cache as cache_mod
+from pixelkit.spice import engine
+from pixelkit.spice.batch import ngspice_version
+
+
+@pytest.fixture(autouse=True)
+def own_cache(tmp_path, monkeypatch):
+    monkeypatch.setenv("PIXELKIT_CACHE", str(tmp_path / "cache"))
+
+
+def _rc(r: float) -> Netlist:
+    return Netlist(f"rc{int(r)}", (Element("V1", ("a", "0"), 1.0), Element("R1", ("a", "b"), r),
+                                   Element("C1", ("b", "0"), 1e-9)), Tran(1e-8, 5e-6, 0, 1e-8, uic=True))
+
+
+def _right(result, r: float) -> bool:
+    tau = r * 1e-9
+    t = np.array([0.5, 1.0, 1.5]) * tau
+    return np.allclose(result.at("b", t), 1 - np.exp(-t / tau), atol=3e-3)
+
+
+def _entry(net: Netlist):
+    return cache_mod.entry_path(engine._key(engine._prepare(net, None), ngspice_version(), "batch"))
+
+
+def _damage_swap(a, b):
+    da, db = a.read_bytes(), b.read_bytes()
+    a.write_bytes(db)
+    b.write_bytes(da)
+
+
+def _damage_truncate(a, _b):
+    a.write_bytes(a.read_bytes()[: a.stat().st_size // 2])
+
+
+def _flip_at(frac):
+    def damage(a, _b):
+        blob = bytearray(a.read_bytes())
+        blob[int(len(blob) * frac)] ^= 0x10
+        a.write_bytes(bytes(blob))
+    return damage
+
+
+def _damage_empty(a, _b):
+    a.write_bytes(b"")
+
+
+def _damage_copy(a, b):
+    a.write_bytes(b.read_bytes())
+
+
+@pytest.mark.parametrize("damage,said", [
+    (_damage_swap, "another key"), (_damage_truncate, "damaged"), (_flip_at(0.05), ""),
+    (_flip_at(0.5), ""), (_flip_at(0.9), ""), (_damage_empty, "damaged"), (_damage_copy, "another key"),
+], ids=["swap", "truncate", "flip-head", "flip-middle", "flip-tail", "empty", "copy"])
+def test_damaged_entries_give_the_right_numbers(damage, said, capfd):
+    a_net, b_net = _rc(1e3), _rc(3e3)
+    a, b = simulate(a_net), simulate(b_net)
+    assert _right(a, 1e3) and _right(b, 3e3) and not a.meta["cached"]
+    damage(_entry(a_net), _entry(b_net))
+    capfd.readouterr()
+    a2 = simulate(a_net)
+    err = capfd.readouterr().err
+    assert _right(a2, 1e3)
+    assert not a2.meta["cached"], "a damaged entry must be re-simulated, not served"
+    assert "cache entry" in err and "re-simulating" in err and said in err
+    a3, b3 = simulate(a_net), simulate(b_net)  # the re-simulated entry was stored again
+    assert a3.meta["cached"] and _right(a3, 1e3) and _right(b3, 3e3)
+
+
+def test_an_entry_stores_its_key_and_checksum():
+    net = _rc(2e3)
+    simulate(net)
+    with np.load(_entry(net)) as z:
+        import json
+        meta = json.loads(str(z["__meta__"]))
+        assert meta["__key__"] == _entry(net).stem and len(str(z["__sum__"])) == 64
+
+
+def test_retried_run_is_cached_under_its_own_key():
+    """abstol < 0 makes the strict run fail (ngspice: timestep too small); the retry's options
+    replace it. The loose result is stored under the key of the deck that ran, the strict
+    key holds only a redirect, and the result says 'retried' fresh and from the cache."""
+    net = _rc(1e3)
+    opts = (("abstol", -1.0),)
+    r = simulate(net, options=opts)
+    assert r.meta["retried"]["options"]["abstol"] == 1e-13 and _right(r, 1e3)
+    strict = engine._prepare(net, opts)
+    strict_key = engine._key(strict, ngspice_version(), "batch")
+    loose_key = engine._key(engine._prepare(strict, r.meta["retried"]["options"]), ngspice_version(), "batch")
+    assert loose_key != strict_key and cache_mod.entry_path(loose_key).exists()
+    with np.load(cache_mod.entry_path(strict_key)) as z:
+        assert "__redirect__" in str(z["__meta__"]) and z["__time__"].size == 0
+    again = simulate(net, options=opts)
+    assert again.meta["cached"] and again.meta["retried"] and _right(again, 1e3)
+    assert not simulate(net).meta.get("retried")  # the strict deck of the same circuit is not served it
