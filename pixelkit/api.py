@@ -84,9 +84,13 @@ def write_waveforms(result, path, vectors=None):
 
 
 def export_deck(design, name: str, path, models: str = "absolute", **kw) -> Path:
-    """Write a deck that runs as it is in ``ngspice -b`` (options, models, stimulus)."""
+    """Write a deck that runs as it is in ``ngspice -b`` (options, models, stimulus).
+
+    ``models``: ``absolute`` model paths, or ``link`` (``models/<file>`` and a
+    ``models`` link written beside the deck).
+    """
     from .spice.export import export_deck as _export
-    return _export(bench(design, name, **kw), Path(path), models=models, design=design)
+    return _export(bench(design, name, **kw), Path(path), models=models)
 
 
 def models(design) -> dict:

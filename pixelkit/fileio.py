@@ -1,9 +1,27 @@
-"""Writing output files whole or not at all (temporary file, then rename)."""
+"""Writing output files whole or not at all (temporary file, then rename).
+
+Files get the mode an ordinary ``open(path, "w")`` would give (0666 minus the
+umask), not the 0600 of the temporary file they start as.
+"""
 from __future__ import annotations
 
 import os
 import tempfile
+import threading
 from pathlib import Path
+
+_UMASK_LOCK = threading.Lock()
+
+
+def _umask() -> int:
+    with _UMASK_LOCK:  # reading the umask means setting it; put it straight back
+        mask = os.umask(0o022)
+        os.umask(mask)
+    return mask
+
+
+def _honour_umask(tmp) -> None:
+    os.chmod(tmp, 0o666 & ~_umask())
 
 
 def write_atomic(path: str | os.PathLike, data: str | bytes) -> Path:
@@ -15,6 +33,7 @@ def write_atomic(path: str | os.PathLike, data: str | bytes) -> Path:
     try:
         with os.fdopen(fd, mode) as fh:
             fh.write(data)
+        _honour_umask(tmp)
         os.replace(tmp, path)
     except BaseException:
         if os.path.exists(tmp):
@@ -36,6 +55,7 @@ def atomic_target(path: str | os.PathLike) -> tuple[Path, Path]:
 
 
 def commit(path: Path, tmp: Path) -> Path:
+    _honour_umask(tmp)
     os.replace(tmp, path)
     return path
 

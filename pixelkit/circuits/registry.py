@@ -2,8 +2,10 @@
 
 ``netlists/<name>.cir`` holds the golden copy of each; ``pixelkit netlists --write``
 regenerates them and ``tests/test_golden.py`` compares every generator with its
-file. Model-library paths are machine specific, so golden text writes the
-model folder as ``@MODELS``.
+file. Golden decks run as they are (``ngspice -b netlists/bench_dual_pixel.cir``):
+they carry the kit's ``.options`` and name the model files through
+``netlists/models``, a committed relative link to the model files shipped in
+the package (see ``spice/export.py``).
 """
 from __future__ import annotations
 
@@ -63,10 +65,14 @@ def bench_netlist(design, name: str, i_primary: float | None = None, i_secondary
 
 
 def golden_text(name: str, design) -> str:
-    net = GENERATORS[name](design)
-    return net.text().replace(str(design.tech.models.folder), "@MODELS")
+    """The golden deck: runnable as it is (the kit's options, ``models/`` link, a ``.print`` line)."""
+    from ..spice.export import deck_text
+    return deck_text(GENERATORS[name](design), models="link")
 
 
 def write_all(design, folder: Path) -> list[Path]:
     from ..fileio import write_atomic
+    from ..spice.export import make_link
+    for link, target in GENERATORS["bench_dual_pixel"](design).model_links().items():
+        make_link(Path(folder) / link, Path(target))
     return [write_atomic(folder / f"{n}.cir", golden_text(n, design)) for n in GENERATORS]

@@ -159,6 +159,8 @@ def _fail(as_json: bool, status: int, message: str, details: dict | None = None)
     if as_json:
         obj = {"error": message, "field": None, "value": None, "allowed": None, **(details or {}),
                "exit_status": status}
+        if WARNINGS:
+            obj["warnings"] = list(WARNINGS)
         click.echo(json.dumps(obj, indent=1, default=_jsonable))
     else:
         click.echo(f"pixelkit: error: {message}", err=True)

@@ -6,7 +6,7 @@ from pathlib import Path
 import click
 import numpy as np
 
-from .common import design_arg, emit, json_opt, load, main, out_opt, output_path
+from .common import design_arg, emit, json_opt, load, main, out_opt, output_path, spice_opts
 
 
 @main.group()
@@ -18,8 +18,9 @@ def gap():
 @design_arg
 @click.option("--conditions", type=click.Path(dir_okay=False), required=True)
 @out_opt("predicted table (default: reports/<design>/predicted.csv)")
+@spice_opts
 @json_opt
-def predict(design, conditions, out, as_json):
+def predict(design, conditions, out, backend, jobs, as_json):
     """Write the nominal prediction of every row of a conditions file (column v_nominal_V)."""
     from ..gap.data import read_table, write_table
     from ..gap.nominal import build_nominal, features
@@ -29,7 +30,7 @@ def predict(design, conditions, out, as_json):
     out = output_path(out, d, "predicted.csv")
     table = read_table(conditions, d, measured=False)
     with step("building the SPICE-calibrated surrogate (first run only)"):
-        nom = build_nominal(d)
+        nom = build_nominal(d, backend=backend)
     v = nominal_predict(nom, features(table, nom, d))
     write_table(table, out, {"v_nominal_V": v})
     emit({"out": str(out), "rows": len(table), "surrogate_error_V": nom.error}, as_json,
@@ -42,8 +43,9 @@ def predict(design, conditions, out, as_json):
 @click.option("--measured", type=click.Path(dir_okay=False), required=True)
 @out_opt("write an HTML section in this folder", folder=True)
 @click.option("--seed", type=int, default=0, show_default=True, help="train / held-out split")
+@spice_opts
 @json_opt
-def diagnose(design, measured, out, seed, as_json):
+def diagnose(design, measured, out, seed, backend, jobs, as_json):
     """Where the data leave the simulation, which effect explains it, how far the gap shrinks."""
     from ..gap.data import read_table
     from ..gap.diagnose import analyse
@@ -53,7 +55,7 @@ def diagnose(design, measured, out, seed, as_json):
     d = load(design)
     table = read_table(measured, d, measured=True)
     with step("building the SPICE-calibrated surrogate (first run only)"):
-        nom = build_nominal(d)
+        nom = build_nominal(d, backend=backend)
     r, X, resid = analyse(d, table, nom, seed=seed)
     if out_dir:
         from ..gap.report import write_section
@@ -77,15 +79,16 @@ def _text(r):
 @click.option("--per-effect", type=click.IntRange(1, 1000), default=10, show_default=True)
 @click.option("--clean", type=click.IntRange(0, 10000), default=20, show_default=True)
 @click.option("--seed", type=int, default=1, show_default=True)
+@spice_opts
 @json_opt
-def selftest(design, per_effect, clean, seed, as_json):
+def selftest(design, per_effect, clean, seed, backend, jobs, as_json):
     """Blind diagnosis of virtual measurements, each with one withheld effect (DESIGN: the reference)."""
     from ..gap.nominal import build_nominal
     from ..gap.selftest import run
     from ..progress import step
     d = load(design)
     with step("building the SPICE-calibrated surrogate (first run only)"):
-        nom = build_nominal(d)
+        nom = build_nominal(d, backend=backend)
     r = run(d, nom, per_effect, clean, seed)
     emit(r, as_json, lambda x: "\n".join([
         f"{x['n_cases']} blind cases: top-1 {x['top1_accuracy'] * 100:.1f} %, median shrink "

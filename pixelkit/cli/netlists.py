@@ -17,9 +17,9 @@ REFERENCE = "designs/dual_pixel_revA.toml"
 @click.option("--bench", "bench_name", default="bench_dual_pixel", show_default=True,
               help="registry name (pixelkit netlists lists them)")
 @out_opt("deck file (default: reports/<design>/<bench>.cir)")
-@click.option("--models", "models_mode", type=click.Choice(["absolute", "variable"]), default="absolute",
-              show_default=True, help="absolute model paths, or one .param-free line "
-                                      "'.include models.inc' written beside the deck that points at them")
+@click.option("--models", "models_mode", type=click.Choice(["absolute", "link"]), default="absolute",
+              show_default=True, help="absolute model paths, or 'models/<file>' with a 'models' link "
+                                      "written beside the deck")
 @json_opt
 def netlist(design, bench_name, out, models_mode, as_json):
     """Write a deck that runs as it is in `ngspice -b`: the kit's options, models, stimulus."""

@@ -49,6 +49,12 @@ def _signals(design, results, tm):
 
 def sweep(design, ip, is_, backend="batch", jobs=None, tag="sweep"):
     nets = [dual_pixel_bench(design, a, b, title=f"{tag}{k}") for k, (a, b) in enumerate(zip(ip, is_))]
+    for k, (net, a, b) in enumerate(zip(nets, ip, is_)):  # the operating point in the user's terms
+        net.meta["what"] = (f"the dual-pixel bench of {design.name} at I_primary = {a * 1e9:.4g} nA, "
+                            f"I_secondary = {b * 1e12:.4g} pA ({tag} sweep, point {k + 1} of {len(nets)}; "
+                            f"pixel.v_pd_reset = {design.pixel.v_pd_reset:g} V, "
+                            f"pixel.v_fd_reset = {design.pixel.v_fd_reset:g} V, corner {design.corner_name}, "
+                            f"{design.temperature - 273.15:g} degC)")
     return simulate_many(nets, backend=backend, jobs=jobs)
 
 

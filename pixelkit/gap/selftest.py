@@ -87,8 +87,9 @@ def measure(design, nom, table: Table, effect: str | None, rng, params=None) -> 
 def run(design, nom, n_per_effect: int = 10, n_clean: int = 20, seed: int = 1) -> dict:
     rng = np.random.default_rng(seed)
     labels = [e for e in NAMES for _ in range(n_per_effect)] + [None] * n_clean
+    from ..progress import progress
     cases = []
-    for k, eff in enumerate(labels):
+    for k, eff in enumerate(progress(labels, desc="gap selftest (blind cases)", unit="case")):
         table = campaign(design, nom, rng)
         v, truth = measure(design, nom, table, eff, rng)
         table.columns["v_V"] = v

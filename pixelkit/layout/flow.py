@@ -1,6 +1,8 @@
 """The ``pixelkit layout`` flow: GDS under layouts/, extraction, 2D and 3D pictures."""
 from __future__ import annotations
 
+import filecmp
+from datetime import datetime
 from pathlib import Path
 
 from ..fileio import atomic_target, commit
@@ -8,9 +10,17 @@ from .cells import build_library
 from .extract import extract
 
 
+#: GDS headers carry a modification time; a fixed one makes equal geometry give equal bytes.
+GDS_TIMESTAMP = datetime(2000, 1, 1)
+
+
 def write_gds(lib, path: Path) -> Path:
+    """Write ``lib`` deterministically; an unchanged file is left untouched (same bytes, same mtime)."""
     path, tmp = atomic_target(path)
-    lib.write_gds(str(tmp))
+    lib.write_gds(str(tmp), timestamp=GDS_TIMESTAMP)
+    if path.is_file() and filecmp.cmp(path, tmp, shallow=False):
+        tmp.unlink()
+        return path
     return commit(path, tmp)
 
 

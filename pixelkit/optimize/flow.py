@@ -65,8 +65,9 @@ def variants(design):
 
 
 def sensitivity(design, nominal: dict, backend="batch") -> list[dict]:
+    from ..progress import progress
     rows = []
-    for label, d in variants(design):
+    for label, d in progress(list(variants(design)), desc="sensitivity (re-sizing each variant)", unit="variant"):
         s = solve(d, spice_curves(d, run_experiment(d, backend=backend)))
         rows.append({"variant": label, "c_m": s["c_m"], "mask_open_m2": s["mask_open_m2"],
                      "t_int_primary_s": s["t_int_primary_s"], "t_int_secondary_s": s["t_int_secondary_s"],

@@ -3,7 +3,8 @@
 The engine calls :func:`keep` when a deck still fails after every retry. The
 folder is ``<root>/<deck title>-<hash>/`` with ``deck.cir`` (the deck as last
 run, options included, so ``ngspice -b deck.cir`` reproduces the failure),
-``ngspice.log`` (ngspice's output of every attempt) and ``what.txt`` (which
+``ngspice.log`` (ngspice's output of every attempt), a ``models`` link to the
+model folder and ``what.txt`` (which
 bench and operating point, in the user's terms). ``root`` is
 ``reports/<design>/failed`` for the command line (``set_root``), else
 ``$PIXELKIT_REPORTS/failed`` (``reports/failed`` of the current folder).
@@ -49,10 +50,11 @@ def hints(message: str) -> list[str]:
 
 
 def keep(net, deck_text: str, logs: list[tuple[str, list[str]]]) -> Path:
-    """Write the failed deck, the log of every attempt and the description; return the folder."""
+    """Write the failed deck (runnable there: ``models`` link beside it), the logs and the description."""
+    from .export import export_deck
     tag = hashlib.sha256(deck_text.encode()).hexdigest()[:8]
     folder = root() / f"{net.title}-{tag}"
-    write_atomic(folder / "deck.cir", deck_text)
+    export_deck(net, folder / "deck.cir", models="link")
     log = []
     for label, lines in logs:
         log += [f"==== {label}", *lines, ""]
