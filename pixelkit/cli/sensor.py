@@ -1,0 +1,80 @@
+"""``pixelkit sensor speed | rolling | lowgse | car``: the frame-level models."""
+from __future__ import annotations
+
+import click
+
+from ..errors import ConfigError
+from .common import design_arg, emit, json_opt, load, main, out_opt, output_path
+
+_TEST_POINT = (("c", "6 m", "m", "lateral distance camera - line of motion"),
+               ("gamma", "44 deg", "rad", "angle of the image plane to the motion"),
+               ("t-int", "53.6 ms", "s", "secondary exposure (trace duration)"),
+               ("alpha", "7.4 deg", "rad", "angle of the trace start from the optical axis"),
+               ("beta", "5 deg", "rad", "angle the trace subtends"),
+               ("focal-length", "6 mm", "m", "focal length"),
+               ("pixel", "3.75 um", "m", "pixel pitch"),
+               ("dc", "0.15 m", "m", "uncertainty of c"))
+
+
+def _quantity(opt: str, text: str, dim: str) -> float:
+    from ..units import quantity
+    return quantity(text, dim, f"--{opt}")
+
+
+def _test_point_options(f):
+    for name, default, _dim, help_text in reversed(_TEST_POINT):
+        f = click.option(f"--{name}", default=default, show_default=True, help=help_text)(f)
+    return click.option("--pixel-error-px", type=click.FloatRange(0, 100), default=1.0, show_default=True,
+                        help="angle uncertainty in pixels (the thesis: 1)")(f)
+
+
+@main.group()
+def sensor():
+    """Frame-level models: double exposure, speed and its error budget, rolling-shutter distortion."""
+
+
+@sensor.command()
+@_test_point_options
+@json_opt
+def speed(pixel_error_px, as_json, **values):
+    """Speed from a trace (eq. 2.1 - 2.5) and its error budget (eq. 2.6 - 2.11); thesis test point by default."""
+    from ..sensor.speed import TracePoint, error_budget
+    kw = {}
+    for name, _default, dim, _h in _TEST_POINT:
+        key = name.replace("-", "_")
+        kw[key] = _quantity(name, values[key], dim)
+    try:
+        p = TracePoint(pixel_error_px=pixel_error_px, **kw)
+    except ConfigError as exc:
+        raise ConfigError("", f"--{exc.field}", exc.value, exc.allowed) from None
+    r = error_budget(p)
+    r["terms_kmh"] = {k: v * 3.6 for k, v in r["terms_ms"].items()}
+    emit(r, as_json, lambda x: (f"v = {x['v_kmh']:.2f} km/h, dv = {x['dv_kmh']:.2f} km/h "
+                                f"({100 * x['rel_err']:.2f} %); terms (km/h): "
+                                + ", ".join(f"{k} {v:.3f}" for k, v in x["terms_kmh"].items())))
+
+
+@sensor.command()
+@click.option("--h", "h", type=click.FloatRange(0.5, 2000), required=True, help="object height (rows)")
+@click.option("--window", type=click.FloatRange(0.5, 2000), required=True,
+              help="accumulation window H = n rows (T_acc / T_row)")
+@click.option("--speed", "s", type=click.FloatRange(0, 0.95, min_open=True), required=True,
+              help="object speed as a fraction of the scan speed (rows or columns per line time)")
+@click.option("--direction", type=click.Choice(["down", "up", "right"]), required=True)
+@click.option("--l", "l", type=click.FloatRange(0.5, 2000), default=8.0, show_default=True,
+              help="object width (columns)")
+@out_opt("picture of the two sensors' images and the compensated one (PNG)")
+@json_opt
+def rolling(h, window, s, direction, l, out, as_json):
+    """Rolling-shutter image of a moving rectangle vs the closed forms, and the two-sensor compensation."""
+    from ..sensor.rolling_pair import study
+    if (h + s * window) / (1 - s) > 4000 or l + s * (window + h) > 4000:
+        raise ConfigError("", "--window", window, "a window and speed whose image fits in 4000 rows")
+    r = study(h, window, s, direction, l)
+    data = r["numbers"]
+    if out:
+        from ..sensor.pictures import rolling_pair
+        data["picture"] = str(rolling_pair(r, out))
+    keys = ("model_total_rows", "image_total_rows", "model_edge_rows", "image_edge_rows",
+            "compensated_h_rows", "compensated_speed")
+    emit(data, as_json, lambda x: "\n".join(f"{k:24s} {x[k]:.3f}" for k in keys))
