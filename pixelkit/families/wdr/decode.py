@@ -1,0 +1,47 @@
+"""Decoder: from the stored voltages (signal 1 on C1, signal 2 on C2, signal 3 =
+V(int)) back to the comparator time t_c and the photocurrent.
+
+Coarse: signal2 falls linearly, so t2 = (v_high - V2) / (v_high - v_low) * 2^N T.
+Fine: in octave k ([2^k T, 2^(k+1) T]) signal1 runs from v_high to v_low when k
+is even and from v_low to v_high when k is odd (stimulus.py), so a sample V1 in
+octave k means t = 2^k T (1 + f) with f = (v_high - V1)/(v_high - v_low) for even
+k, (V1 - v_low)/(v_high - v_low) for odd k (and t = f' T in [0, T] with
+f' = (V1 - v_low)/(v_high - v_low)). Every octave gives one candidate; the one
+nearest the coarse time wins. The coded range is [T, 2^N T] (a flip before T is
+beyond I_max), and candidates of neighbouring octaves are at least 2T apart
+there, so the coarse code only has to be right within T (the read-in switches'
+gate feedthrough shifts it by ~0.8 T at the bright end: measured).
+The sample is taken t_d (the delay of the sampling pulse) after the flip:
+t_c = t_sample - t_d.
+
+A pixel whose coarse time is at or beyond the end of the frame never flipped
+(low light): its intensity comes from signal 3 over the fixed exposure.
+"""
+from __future__ import annotations
+
+from .model import delta_q
+
+
+def sample_time(v1: float, v2: float, coding) -> float:
+    """Time (since the exposure started) at which C1/C2 were sampled."""
+    span = coding.v_high - coding.v_low
+    n = 2 ** coding.steps
+    t_coarse = (coding.v_high - v2) / span * n * coding.t_unit
+    cands = []
+    for k in range(coding.steps):
+        f = (coding.v_high - v1) / span if k % 2 == 0 else (v1 - coding.v_low) / span
+        cands.append((2 ** k) * coding.t_unit * (1.0 + f))
+    return min(cands, key=lambda t: abs(t - t_coarse))
+
+
+def decode(design, v1: float, v2: float, v3: float, v_start: float, i_dark: float = 0.0) -> dict:
+    """t_c (s; None at low light), the regime and the photocurrent (A)."""
+    cd = design.coding
+    t_exp = (2 ** cd.steps) * cd.t_unit
+    t_coarse = (cd.v_high - v2) / (cd.v_high - cd.v_low) * t_exp
+    if t_coarse >= t_exp - 0.5 * cd.t_unit:
+        i = float(delta_q(design, v_start, v3)) / t_exp - i_dark
+        return {"regime": "low", "t_c_s": None, "i_A": i}
+    t_c = sample_time(v1, v2, cd) - cd.t_delay
+    i = float(delta_q(design, v_start, design.pixel.v0)) / t_c - i_dark
+    return {"regime": "high", "t_c_s": t_c, "i_A": i}

@@ -1,0 +1,101 @@
+"""Design file of the WDR pixel (``designs/wdr_pixel.toml``), validated on load."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+from ...errors import ConfigError
+from ...physics.conversion import rectangle
+from ...schema import ident, integer, load, qty, read_toml, table, text
+from ...tech import Technology, load_technology
+
+
+@dataclass(frozen=True)
+class Pixel:
+    pd_width: float = qty("m", 10e-6, gt=0)
+    pd_height: float = qty("m", 10e-6, gt=0)
+    c_int: float = qty("F", 200e-15, gt=0, le=10e-12, doc="integration capacitor")
+    v_reset: float = qty("V", 2.0, gt=0, doc="reset level of the integration node")
+    v0: float = qty("V", 1.2, gt=0, doc="exposure threshold V0 of the comparator")
+    v_ab: float = qty("V", 0.9, ge=0, doc="reset gate low level: anti-blooming clamp of the PD")
+    sw_w: float = qty("m", 0.5e-6, gt=0, doc="reset / integration switches")
+    sw_l: float = qty("m", 0.5e-6, gt=0)
+
+    @property
+    def area(self) -> float:
+        return rectangle(self.pd_width, self.pd_height)[0]
+
+    @property
+    def perimeter(self) -> float:
+        return rectangle(self.pd_width, self.pd_height)[1]
+
+    def validate(self, path, source):
+        if self.v0 >= self.v_reset:
+            raise ConfigError(source, f"{path}.v0", self.v0, f"a threshold below v_reset ({self.v_reset:g} V)")
+
+
+@dataclass(frozen=True)
+class Comparator:
+    """Transistor-level comparator: NMOS pair, PMOS mirror, NMOS tail, two inverters."""
+    i_tail: float = qty("A", 200e-9, gt=0, le=100e-6)
+    in_w: float = qty("m", 1e-6, gt=0)
+    in_l: float = qty("m", 1e-6, gt=0)
+    load_w: float = qty("m", 1e-6, gt=0)
+    load_l: float = qty("m", 1e-6, gt=0)
+    tail_w: float = qty("m", 1e-6, gt=0)
+    tail_l: float = qty("m", 2e-6, gt=0)
+
+
+@dataclass(frozen=True)
+class Coding:
+    """Time-to-voltage coding: signal1 (V-waves), signal2 (ramp), read-in switches, C1/C2."""
+    t_unit: float = qty("s", 64e-6, gt=0, le=1.0, doc="T: the shortest detectable exposure")
+    steps: int = integer(8, ge=2, le=12, doc="N: signal1 flips at T, 2T, ..., 2^N T")
+    v_low: float = qty("V", 1.0, gt=0)
+    v_high: float = qty("V", 2.0, gt=0)
+    c_store: float = qty("F", 200e-15, gt=0, le=10e-12, doc="C1 = C2")
+    sw_w: float = qty("m", 0.5e-6, gt=0, doc="PMOS read-in switches (n-well at v_high)")
+    sw_l: float = qty("m", 0.28e-6, gt=0)
+    t_delay: float = qty("s", 0.3e-6, gt=0, le=1e-3, doc="delay of the sampling pulse (R C ln 2 of its RC)")
+    delay_c: float = qty("F", 100e-15, gt=0, le=10e-12, doc="C of the delay RC; R = t_delay / (C ln 2)")
+
+    def validate(self, path, source):
+        if self.v_high <= self.v_low:
+            raise ConfigError(source, f"{path}.v_high", self.v_high, f"a level above v_low ({self.v_low:g} V)")
+
+
+@dataclass(frozen=True)
+class Noise:
+    """Noise floor of the integration node for CVDR (the simulation is noiseless)."""
+    v_read: float = qty("V", 0.5e-3, ge=0, doc="read-chain noise referred to the node (rms)")
+
+
+@dataclass(frozen=True)
+class WdrDesign:
+    name: str = ident()
+    revision: str = text()
+    family: str = text(choices=("wdr",))
+    technology: str = text("gf180mcu_3v3")
+    corner: str = ident("", doc="model corner; empty = the technology's default")
+    temperature: float = qty("K", 300.15, gt=0, lt=500)
+    pixel: Pixel = table(Pixel, default=Pixel)
+    comparator: Comparator = table(Comparator, default=Comparator)
+    coding: Coding = table(Coding, default=Coding)
+    noise: Noise = table(Noise, default=Noise)
+    tech: Technology = field(default=None, metadata=dict(kind="skip"))
+    source: str = field(default="", metadata=dict(kind="skip"))
+
+
+def load_wdr_design(path: str | Path) -> WdrDesign:
+    path = Path(path)
+    design = load(WdrDesign, read_toml(path, "design"), "", str(path))
+    tech = load_technology(design.technology, relative_to=path.parent)
+    for f in ("v_reset", "v0"):
+        if getattr(design.pixel, f) >= tech.supply:
+            raise ConfigError(str(path), f"pixel.{f}", getattr(design.pixel, f),
+                              f"a level below the supply ({tech.supply:g} V)")
+    if design.coding.v_high >= tech.supply:
+        raise ConfigError(str(path), "coding.v_high", design.coding.v_high, f"a level below the supply")
+    if design.corner and design.corner not in tech.models.corners:
+        raise ConfigError(str(path), "corner", design.corner, f"one of {', '.join(sorted(tech.models.corners))}")
+    return replace(design, tech=tech, source=str(path))
