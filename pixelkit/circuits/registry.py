@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ..families.goldens import GENERATORS as FAMILY_GENERATORS
 from ..spice.netlist import Netlist, Op
 from .afe import sc_afe
 from .array import pixel_array
@@ -47,6 +48,7 @@ GENERATORS = {
     "bench_afe": lambda d: afe_bench(d, _afe_pairs()),
     "bench_pd_pair": lambda d: pd_pair_bench(d, 1e-9, 1e-9 / 3.6, 20e-6, 2.5),
 }
+GENERATORS.update(FAMILY_GENERATORS)  # the WDR and ratio pixels (pixelkit/families)
 
 
 def bench_netlist(design, name: str, i_primary: float | None = None, i_secondary: float | None = None,

@@ -12,7 +12,11 @@ from .common import design_arg, emit, json_opt, load, main, spice_opts, waveform
 def models(design, as_json):
     """Analytic model table: C_jdep, conversion gain, full well, C_A, C_C."""
     from ..api import models as model_table
+    from ..family import DEFAULT, family_models, family_of, family_text
     from ..report.text import model_text
+    fam = family_of(design)
+    if fam != DEFAULT:  # another pixel family: its closed-form figures
+        return emit(family_models(design, fam), as_json, family_text)
     emit(model_table(load(design)), as_json, model_text)
 
 
@@ -35,7 +39,11 @@ def simulate(design, backend, jobs, waveforms, as_json):
     --waveforms writes the dual-pixel bench at (i_mid, i_5pct).
     """
     from ..api import experiment
+    from ..family import DEFAULT, family_of, family_text, run_family
     from ..report.text import simulate_text
+    fam = family_of(design)
+    if fam != DEFAULT:  # another pixel family (pixelkit/family.py): its own experiment
+        return emit(run_family(design, fam, backend=backend, jobs=jobs), as_json, family_text)
     d = load(design)
     r = experiment(d, backend=backend, jobs=jobs)
     if waveforms:

@@ -46,7 +46,7 @@ def cells(design) -> list[dict]:
     return out
 
 
-def _pairs(cs):
+def bench_pairs(cs):
     return [(cs[2 * k]["i"], cs[2 * k + 1]["i"]) for k in range(len(cs) // 2)]
 
 
@@ -113,7 +113,7 @@ def run_ratio_experiment(design, backend: str = "batch", jobs: int | None = None
     ro = design.readout
     cs = cells(design)
     biases = (ro.i_bias, ro.i_bias_high)
-    nets = [ratio_bench(design, _pairs(cs), ib, title=f"ratio_bench_{k}") for k, ib in enumerate(biases)]
+    nets = [ratio_bench(design, bench_pairs(cs), ib, title=f"ratio_bench_{k}") for k, ib in enumerate(biases)]
     results = simulate_many(nets, backend=backend, jobs=jobs)
     out = {"design": design.name, "family": "ratio", "backend": backend}
     per_bias = []

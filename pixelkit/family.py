@@ -1,0 +1,68 @@
+"""Pixel families: which one a design file describes, and its loader, experiment and models.
+
+A design file names its family with ``family = "..."``; without it the file is a
+dual-pixel design (``pixelkit.design``). The other families live in
+``pixelkit.families``; each has a loader, an experiment (``pixelkit simulate``)
+and a closed-form table (``pixelkit models``).
+"""
+from __future__ import annotations
+
+import importlib
+from pathlib import Path
+
+from .errors import ConfigError
+from .schema import read_toml
+
+DEFAULT = "dual_pixel"
+#: family -> (module of the loader, loader, module of the experiment, experiment)
+FAMILIES = {
+    "wdr": ("families.wdr.design", "load_wdr_design", "families.wdr.experiment", "run_wdr_experiment"),
+    "ratio": ("families.ratio.design", "load_ratio_design", "families.ratio.experiment", "run_ratio_experiment"),
+}
+
+
+def family_of(path) -> str:
+    """The ``family`` key of a design file (default: the dual pixel), validated."""
+    fam = read_toml(Path(path), "design").get("family", DEFAULT)
+    if fam != DEFAULT and fam not in FAMILIES:
+        raise ConfigError(str(path), "family", fam, f"one of {', '.join([DEFAULT, *FAMILIES])}")
+    return fam
+
+
+def _attr(module: str, name: str):
+    return getattr(importlib.import_module(f"{__package__}.{module}"), name)
+
+
+def load_family_design(path, family: str):
+    mod, fn, _, _ = FAMILIES[family]
+    return _attr(mod, fn)(path)
+
+
+def run_family(path, family: str, backend: str = "batch", jobs: int | None = None) -> dict:
+    """The family's experiment on the design at ``path`` (``pixelkit simulate``)."""
+    _, _, mod, fn = FAMILIES[family]
+    return _attr(mod, fn)(load_family_design(path, family), backend=backend, jobs=jobs)
+
+
+def family_models(path, family: str) -> dict:
+    """Closed-form figures of the family (``pixelkit models``)."""
+    d = load_family_design(path, family)
+    if family == "wdr":
+        from .families.wdr.model import figures
+        return {"design": d.name, "family": family, **figures(d)}
+    from .families.ratio.circuit import tau_nominal
+    from .families.ratio.law import resolution
+    ro = d.readout
+    return {"design": d.name, "family": family, "tau_nominal_s": tau_nominal(d, ro.i_bias),
+            **resolution(ro.lsb_per_tau, ro.counter_bits)}
+
+
+def family_text(result: dict) -> str:
+    """Human-readable lines: every scalar figure of a family result."""
+    lines = [f"{result.get('design', '?')} ({result.get('family', '?')} pixel)"]
+    for k, v in result.items():
+        if isinstance(v, float):
+            lines.append(f"  {k:<28} {v:.6g}")
+        elif isinstance(v, dict) and all(isinstance(x, (int, float)) for x in v.values()):
+            lines += [f"  {k}.{a:<{max(1, 27 - len(k))}} {x:.6g}" for a, x in v.items()]
+    return "\n".join(lines)
