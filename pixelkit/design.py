@@ -14,20 +14,21 @@ from pathlib import Path
 
 from .errors import ConfigError
 from .physics.conversion import photoactive_area, rectangle
-from .schema import ident, integer, load, num, qty, read_toml, table, text
+from .schema import as_written, ident, integer, load, num, qty, read_toml, table, text
 from .tech import Technology, load_technology
 
 
 @dataclass(frozen=True)
 class Subpixel:
-    pd_width: float = qty("m", gt=0)
-    pd_height: float = qty("m", gt=0)
-    pitch: float = qty("m", gt=0)
+    pd_width: float = qty("m", gt=0, plausible=(0.1e-6, 1e-3))
+    pd_height: float = qty("m", gt=0, plausible=(0.1e-6, 1e-3))
+    pitch: float = qty("m", gt=0, plausible=(0.2e-6, 2e-3))
     rows: int = integer(ge=1, le=100000)
     cols: int = integer(ge=1, le=100000)
-    t_int: float = qty("s", gt=0, le=10.0)
-    f_read: float = qty("Hz", gt=0, le=1e9)
-    mask_opening: float | None = qty("m2", None, gt=0, doc="metal-mask opening; absent = unmasked")
+    t_int: float = qty("s", gt=0, le=10.0, plausible=(1e-9, 10.0))
+    f_read: float = qty("Hz", gt=0, le=1e9, plausible=(1.0, 1e9))
+    mask_opening: float | None = qty("m2", None, gt=0, plausible=(1e-14, 1e-6),
+                                     doc="metal-mask opening; absent = unmasked")
     extracted: dict | None = field(default=None, metadata=dict(kind="skip"), compare=False)
 
     @property
@@ -49,70 +50,77 @@ class Subpixel:
             return self.extracted["photoactive_area_m2"]
         return photoactive_area(self.pd_width, self.pd_height, self.mask_opening)
 
-    def validate(self, path, source):
+    def validate(self, path, source, raw):
         for side in ("pd_width", "pd_height"):
             if getattr(self, side) > self.pitch:
-                raise ConfigError(source, f"{path}.{side}", getattr(self, side),
-                                  f"a PD no larger than its {self.pitch * 1e6:g} um cell "
+                raise ConfigError(source, f"{path}.{side}", as_written(raw, side, getattr(self, side)),
+                                  f"a PD no larger than its {as_written(raw, 'pitch', '')} cell "
                                   "(layout rule pd_to_cell_edge)")
         if self.mask_opening is not None and self.mask_opening > self.area:
-            raise ConfigError(source, f"{path}.mask_opening", self.mask_opening,
+            raise ConfigError(source, f"{path}.mask_opening", as_written(raw, "mask_opening", self.mask_opening),
                               f"an opening no larger than the PD area ({self.area * 1e12:g} um2)")
+
+
+#: Plausible transistor width / length: 0.1 um to 1 mm.
+_WL = (0.1e-6, 1e-3)
 
 
 @dataclass(frozen=True)
 class Devices:
     """Transistor sizes of the 5T pixel and its column (W, L in m)."""
-    ec_w: float = qty("m", 0.6e-6, gt=0)
-    ec_l: float = qty("m", 0.5e-6, gt=0)
-    tg_w: float = qty("m", 0.6e-6, gt=0)
-    tg_l: float = qty("m", 0.5e-6, gt=0)
-    rst_w: float = qty("m", 0.6e-6, gt=0)
-    rst_l: float = qty("m", 0.5e-6, gt=0)
-    sf_w: float = qty("m", 1.0e-6, gt=0)
-    sf_l: float = qty("m", 0.5e-6, gt=0)
-    rs_w: float = qty("m", 0.6e-6, gt=0)
-    rs_l: float = qty("m", 0.5e-6, gt=0)
-    sw_w: float = qty("m", 1.0e-6, gt=0, doc="S1X/S2X column sampling switches")
-    sw_l: float = qty("m", 0.35e-6, gt=0)
-    load_w: float = qty("m", 1.0e-6, gt=0, doc="column current-source load")
-    load_l: float = qty("m", 2.0e-6, gt=0)
+    ec_w: float = qty("m", 0.6e-6, gt=0, plausible=_WL)
+    ec_l: float = qty("m", 0.5e-6, gt=0, plausible=_WL)
+    tg_w: float = qty("m", 0.6e-6, gt=0, plausible=_WL)
+    tg_l: float = qty("m", 0.5e-6, gt=0, plausible=_WL)
+    rst_w: float = qty("m", 0.6e-6, gt=0, plausible=_WL)
+    rst_l: float = qty("m", 0.5e-6, gt=0, plausible=_WL)
+    sf_w: float = qty("m", 1.0e-6, gt=0, plausible=_WL)
+    sf_l: float = qty("m", 0.5e-6, gt=0, plausible=_WL)
+    rs_w: float = qty("m", 0.6e-6, gt=0, plausible=_WL)
+    rs_l: float = qty("m", 0.5e-6, gt=0, plausible=_WL)
+    sw_w: float = qty("m", 1.0e-6, gt=0, plausible=_WL, doc="S1X/S2X column sampling switches")
+    sw_l: float = qty("m", 0.35e-6, gt=0, plausible=_WL)
+    load_w: float = qty("m", 1.0e-6, gt=0, plausible=_WL, doc="column current-source load")
+    load_l: float = qty("m", 2.0e-6, gt=0, plausible=_WL)
 
 
 @dataclass(frozen=True)
 class Pixel:
-    swing: float = qty("V", gt=0, doc="pixel swing (table 3.2: 1.5 V)")
-    sf_bias: float = qty("A", gt=0, le=1e-3, doc="column current-source load of the SF")
-    column_cap: float = qty("F", 200e-15, ge=0, doc="column-line parasitic capacitance")
-    v_pd_reset: float = qty("V", 2.0, gt=0, doc="EC drain: PD reset level (hard reset below VDD - Vth)")
-    v_fd_reset: float = qty("V", 2.0, gt=0, doc="RST drain: FD reset level")
+    swing: float = qty("V", gt=0, plausible=(0.05, 5.0), doc="pixel swing (table 3.2: 1.5 V)")
+    sf_bias: float = qty("A", gt=0, le=1e-3, plausible=(1e-9, 1e-3), doc="column current-source load of the SF")
+    column_cap: float = qty("F", 200e-15, ge=0, plausible=(0.0, 1e-8), doc="column-line parasitic capacitance")
+    v_pd_reset: float = qty("V", 2.0, gt=0, plausible=(0.1, 40.0),
+                            doc="EC drain: PD reset level (hard reset below VDD - Vth)")
+    v_fd_reset: float = qty("V", 2.0, gt=0, plausible=(0.1, 40.0), doc="RST drain: FD reset level")
     devices: Devices = table(Devices, default=Devices)
 
 
 @dataclass(frozen=True)
 class Afe:
-    c11: float = qty("F", gt=0, doc="input capacitor")
-    c12: float = qty("F", gt=0, doc="offset-storage capacitor")
-    c13: float = qty("F", gt=0, doc="feedback capacitor")
-    vref: float = qty("V", gt=0)
+    c11: float = qty("F", gt=0, plausible=(1e-18, 1e-9), doc="input capacitor")
+    c12: float = qty("F", gt=0, plausible=(1e-18, 1e-9), doc="offset-storage capacitor")
+    c13: float = qty("F", gt=0, plausible=(1e-18, 1e-9), doc="feedback capacitor")
+    vref: float = qty("V", gt=0, plausible=(0.05, 40.0))
     opamp: str = text("macro", choices=("macro", "ota"))
-    gain: float = num(1000.0, gt=1, doc="macromodel DC gain (e.g. '60 dB')")
-    gbw: float = qty("Hz", 50e6, gt=0, doc="macromodel gain-bandwidth")
-    nonoverlap: float = qty("s", 20e-9, gt=0, doc="non-overlap of the two clock phases")
-    f_clk: float = qty("Hz", 500e3, gt=0, doc="double-sampling rate (one signal + one reset per period)")
+    gain: float = num(1000.0, gt=1, plausible=(1.0, 1e7), unit_required=True,
+                      doc="macromodel DC gain with its unit ('60 dB' or '1000 V/V')")
+    gbw: float = qty("Hz", 50e6, gt=0, plausible=(1e3, 1e11), doc="macromodel gain-bandwidth")
+    nonoverlap: float = qty("s", 20e-9, gt=0, plausible=(1e-11, 1e-3), doc="non-overlap of the two clock phases")
+    f_clk: float = qty("Hz", 500e3, gt=0, plausible=(1.0, 1e9),
+                       doc="double-sampling rate (one signal + one reset per period)")
 
 
 @dataclass(frozen=True)
 class Experiment:
     """The thesis's same-window simulation experiment (fig. A.1 - A.3)."""
-    t_window: float = qty("s", 16e-6, gt=0, le=1e-3, doc="exposure window of the experiment")
+    t_window: float = qty("s", 16e-6, gt=0, le=1e-3, plausible=(1e-8, 1e-3), doc="exposure window of the experiment")
     mid_fraction: float = num(0.5, gt=0, lt=1, doc="primary target: fraction of swing")
     low_fraction: float = num(0.05, gt=0, lt=1, doc="secondary target: fraction of swing")
 
 
 @dataclass(frozen=True)
 class Optics:
-    focal_length: float = qty("m", gt=0, le=1.0)
+    focal_length: float = qty("m", gt=0, le=1.0, plausible=(1e-4, 1.0))
     f_number: float = num(gt=0.5, le=64)
     transmission: float = num(0.9, gt=0, le=1)
 
@@ -120,31 +128,35 @@ class Optics:
 @dataclass(frozen=True)
 class Scene:
     """Measurement geometry (thesis fig. 2.3) and light levels for sizing."""
-    distance: float = qty("m", gt=0, doc="distance from the camera to the lane")
-    speed_min: float = qty("m/s", gt=0)
-    speed_max: float = qty("m/s", gt=0)
-    background: float = qty("lx", gt=0, doc="scene illuminance at which the primary sits at mid-scale")
-    headlight: float = qty("W/m2", gt=0, doc="headlight irradiance at the sensor (the spot's image)")
+    distance: float = qty("m", gt=0, plausible=(0.01, 1e5), doc="distance from the camera to the lane")
+    speed_min: float = qty("m/s", gt=0, plausible=(0.01, 1000.0))
+    speed_max: float = qty("m/s", gt=0, plausible=(0.01, 1000.0))
+    background: float = qty("lx", gt=0, plausible=(1e-6, 2e5),
+                            doc="scene illuminance at which the primary sits at mid-scale")
+    headlight: float = qty("W/m2", gt=0, plausible=(1e-9, 1e5),
+                           doc="headlight irradiance at the sensor (the spot's image)")
     reflectance: float = num(0.2, gt=0, le=1)
-    spectrum_temperature: float = qty("K", 2856.0, gt=1000, doc="black-body colour temperature of the light")
-    max_temperature: float = qty("K", 358.15, gt=0, lt=500, doc="maximum die temperature")
+    spectrum_temperature: float = qty("K", 2856.0, gt=1000, plausible=(1000.0, 20000.0),
+                                      doc="black-body colour temperature of the light")
+    max_temperature: float = qty("K", 358.15, gt=0, lt=500, plausible=(213.15, 473.15), doc="maximum die temperature")
 
-    def validate(self, path, source):
+    def validate(self, path, source, raw):
         if self.speed_max < self.speed_min:
-            raise ConfigError(source, f"{path}.speed_max", self.speed_max, f"a speed >= speed_min")
+            raise ConfigError(source, f"{path}.speed_max", as_written(raw, "speed_max", self.speed_max),
+                              f"a speed >= speed_min ({as_written(raw, 'speed_min', '')})")
 
 
 @dataclass(frozen=True)
 class Sizing:
-    t_ratio: float = num(0.0, ge=0, doc="fixed t_secondary / t_primary; 0 = free")
+    t_ratio: float = num(0.0, ge=0, plausible=(0.0, 1e6), doc="fixed t_secondary / t_primary; 0 = free")
     level: str = text("spice", choices=("analytic", "spice"))
     objective: str = text("trace", choices=("trace", "margin"), doc="trace: longest trace; margin: centre the bounds")
-    min_trace_px: float = num(5.0, gt=0, doc="shortest usable trace at speed_min (speed accuracy)")
+    min_trace_px: float = num(5.0, gt=0, plausible=(0.0, 1e5), doc="shortest usable trace at speed_min (speed accuracy)")
     fov_fraction: float = num(0.8, gt=0, le=1, doc="longest trace at speed_max, as a fraction of the width")
-    max_motion_px: float = num(1.0, gt=0, doc="primary image motion limit at speed_max")
+    max_motion_px: float = num(1.0, gt=0, plausible=(0.0, 1e5), doc="primary image motion limit at speed_max")
     dark_fraction: float = num(0.05, gt=0, lt=1, doc="dark signal over t_secondary at max temperature")
     headlight_max: float = num(0.9, gt=0, le=1, doc="headlight signal below this fraction of swing")
-    headlight_snr: float = num(10.0, gt=0, doc="headlight signal over the secondary's noise floor")
+    headlight_snr: float = num(10.0, gt=0, plausible=(0.0, 1e6), doc="headlight signal over the secondary's noise floor")
     margin: float = num(0.05, ge=0, lt=0.5, doc="relative margin required on every inequality")
 
 
@@ -163,7 +175,7 @@ class Design:
     pixel: Pixel = table(Pixel)
     afe: Afe = table(Afe)
     corner: str = ident("", doc="model corner; empty = the technology's default")
-    temperature: float = qty("K", 300.15, gt=0, lt=500)
+    temperature: float = qty("K", 300.15, gt=0, lt=500, plausible=(213.15, 473.15))
     secondary_per_pixel: int = integer(3, ge=1, le=16)
     experiment: Experiment = table(Experiment, default=Experiment)
     optics: Optics | None = table(Optics, None)
@@ -174,12 +186,13 @@ class Design:
     source: str = field(default="", metadata=dict(kind="skip"))
     raw: dict = field(default=None, metadata=dict(kind="skip"), repr=False, compare=False)
 
-    def validate(self, path, source):
+    def validate(self, path, source, raw):
         if self.pixel.swing >= 5.0:
-            raise ConfigError(source, "pixel.swing", self.pixel.swing, "a swing below 5 V")
+            raise ConfigError(source, "pixel.swing", as_written(raw, "pixel.swing", self.pixel.swing),
+                              "a swing below 5 V")
         n = self.secondary_per_pixel
         if abs(n * self.secondary.pitch - self.primary.pitch) > 1e-9:
-            raise ConfigError(source, "secondary.pitch", self.secondary.pitch,
+            raise ConfigError(source, "secondary.pitch", as_written(raw, "secondary.pitch", self.secondary.pitch),
                               f"primary.pitch / secondary_per_pixel = {self.primary.pitch / n * 1e6:g} um "
                               "(subpixels are integrated side by side)")
 
@@ -194,26 +207,34 @@ def load_design(path: str | Path) -> Design:
     raw = read_toml(path, "design")
     design = load(Design, raw, "", str(path))
     tech = load_technology(design.technology, relative_to=path.parent)
+    src = str(path)
     for f in ("v_pd_reset", "v_fd_reset"):
         if getattr(design.pixel, f) > tech.supply:
-            raise ConfigError(str(path), f"pixel.{f}", getattr(design.pixel, f),
+            raise ConfigError(src, f"pixel.{f}", as_written(raw, f"pixel.{f}", getattr(design.pixel, f)),
                               f"a level no higher than the supply ({tech.supply:g} V)")
     if tech.supply <= design.pixel.swing:
-        raise ConfigError(str(path), "pixel.swing", design.pixel.swing,
+        raise ConfigError(src, "pixel.swing", as_written(raw, "pixel.swing", design.pixel.swing),
                           f"a swing below the supply ({tech.supply:g} V)")
     if design.corner and design.corner not in tech.models.corners:
-        raise ConfigError(str(path), "corner", design.corner,
+        raise ConfigError(src, "corner", design.corner,
                           f"one of {', '.join(sorted(tech.models.corners))}")
-    rules = tech.rules
-    for sub in ("primary", "secondary"):
-        s = getattr(design, sub)
-        if min(s.pd_width, s.pd_height) < rules.min_pd_side - 1e-12:
-            raise ConfigError(str(path), f"{sub}.pd_width", min(s.pd_width, s.pd_height),
-                              f"a PD side >= min_pd_side ({rules.min_pd_side * 1e6:g} um) of {tech.name}")
     design = replace(design, tech=tech, source=str(path), raw=raw)
+    _check_layout_rules(design)
     if design.layout is not None:
         design = with_layout(design, path.parent / design.layout.gds)
     return design
+
+
+def _check_layout_rules(design: Design) -> None:
+    """The geometry and layer rules that the design file alone decides, for every command
+    (not only ``layout``): a PD too large for its cell, transistors that do not fit, an
+    opening the grid cannot draw, two layers on one GDS layer."""
+    from .layout.rules import RuleError, check_at_load
+    try:
+        check_at_load(design)
+    except RuleError as exc:
+        raise ConfigError(design.source, exc.field, as_written(design.raw, exc.field, exc.value),
+                          f"a value that keeps layout rule {exc.rule} in the {exc.place} ({exc.detail})") from None
 
 
 def with_layout(design: Design, gds: Path) -> Design:

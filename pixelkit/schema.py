@@ -3,18 +3,25 @@
 A field is declared with :func:`qty`, :func:`num`, :func:`integer`, :func:`text`,
 :func:`ident`, :func:`flag` or :func:`table`; :func:`load` walks a mapping and
 builds the dataclass, refusing a missing field, an unknown field, a wrong unit or
-a value outside its range with a :class:`ConfigError` naming the field path.
+a value outside its range with a :class:`ConfigError` naming the field path and
+echoing the value as the user wrote it.
+
+Every quantity also has a *plausibility range* (``plausible=(lo, hi)`` in SI,
+kept in the field's metadata so the design-file reference shows it): the span a
+real chip, lens or scene could have. A value outside it (``"1e-300 V"``,
+``"1e300 fF"``) is refused rather than turned into a figure no chip has.
 """
 from __future__ import annotations
 
 import dataclasses
+import inspect
 import re
 import tomllib
 from pathlib import Path
 from typing import Any
 
 from .errors import MISSING, ConfigError
-from .units import quantity
+from .units import quantity, si_text
 
 IDENT = re.compile(r"^[A-Za-z_][A-Za-z0-9_]{0,63}$")
 _NODEFAULT = dataclasses.MISSING
@@ -27,14 +34,19 @@ def _field(kind: str, default=_NODEFAULT, doc: str = "", **meta):
     return dataclasses.field(default=default, metadata=meta)
 
 
-def qty(dim: str, default=_NODEFAULT, *, gt=None, ge=None, le=None, lt=None, doc=""):
-    """A physical quantity in SI, written with a unit in the file."""
-    return _field("qty", default, doc, dim=dim, gt=gt, ge=ge, le=le, lt=lt)
+def qty(dim: str, default=_NODEFAULT, *, gt=None, ge=None, le=None, lt=None, plausible=None, doc=""):
+    """A physical quantity in SI, written with a unit in the file; ``plausible=(lo, hi)`` in SI."""
+    return _field("qty", default, doc, dim=dim, gt=gt, ge=ge, le=le, lt=lt, plausible=plausible)
 
 
-def num(default=_NODEFAULT, *, gt=None, ge=None, le=None, lt=None, doc=""):
-    """A dimensionless number (``"60 dB"`` is read as an amplitude ratio)."""
-    return _field("qty", default, doc, dim="1", gt=gt, ge=ge, le=le, lt=lt)
+def num(default=_NODEFAULT, *, gt=None, ge=None, le=None, lt=None, plausible=None, unit_required=False,
+        doc=""):
+    """A dimensionless number (``"60 dB"`` is read as an amplitude ratio).
+
+    ``unit_required``: a bare number is refused as ambiguous (a gain: ``"60 dB"`` or ``"1000 V/V"``).
+    """
+    return _field("qty", default, doc, dim="1", gt=gt, ge=ge, le=le, lt=lt, plausible=plausible,
+                  unit_required=unit_required or None)
 
 
 def integer(default=_NODEFAULT, *, ge=None, le=None, doc=""):
@@ -61,27 +73,34 @@ def table(cls, default=_NODEFAULT, doc=""):
     return _field("table", default, doc, cls=cls)
 
 
-def _check_range(x, meta, path, source):
+def _check_range(x, meta, path, source, shown):
+    """``x`` (SI) within the field's bounds and plausibility range; errors echo ``shown``."""
+    dim = meta.get("dim", "1")
     bounds = [("gt", lambda a, b: a > b, ">"), ("ge", lambda a, b: a >= b, ">="),
               ("lt", lambda a, b: a < b, "<"), ("le", lambda a, b: a <= b, "<=")]
     for key, ok, sym in bounds:
         b = meta.get(key)
         if b is not None and not ok(x, b):
-            dim = meta.get("dim", "")
-            unit = "" if dim in ("1", "", None) else f" {dim} (SI)"
-            raise ConfigError(source, path, x, f"a value {sym} {b:g}{unit}")
+            raise ConfigError(source, path, shown, f"a value {sym} {si_text(b, dim)}")
+    lo_hi = meta.get("plausible")
+    if lo_hi is not None and not lo_hi[0] <= x <= lo_hi[1]:
+        raise ConfigError(source, path, shown, f"a value from {si_text(lo_hi[0], dim)} to "
+                          f"{si_text(lo_hi[1], dim)} (the range a real chip could have)")
     return x
 
 
 def _convert(value, meta, path, source):
     kind = meta["kind"]
     if kind == "qty":
+        if meta.get("unit_required") and not (isinstance(value, str) and re.search(r"[A-Za-z/%]", value)):
+            raise ConfigError(source, path, value, "a value with its unit, like '60 dB' or '1000 V/V' "
+                              "(a bare number is ambiguous: a ratio or decibels?)")
         x = quantity(value, meta["dim"], path, source)
-        return _check_range(x, meta, path, source)
+        return _check_range(x, meta, path, source, value)
     if kind == "int":
         if isinstance(value, bool) or not isinstance(value, int):
             raise ConfigError(source, path, value, "a whole number")
-        return _check_range(value, meta, path, source)
+        return _check_range(value, meta, path, source, value)
     if kind == "str":
         if not isinstance(value, str):
             raise ConfigError(source, path, value, "a string")
@@ -123,8 +142,21 @@ def load(cls, mapping, path: str = "", source: str = ""):
     obj = cls(**values)
     check = getattr(obj, "validate", None)
     if check is not None:
-        check(path, source)
+        if len(inspect.signature(check).parameters) >= 3:
+            check(path, source, mapping)  # the raw table, to echo values as written
+        else:
+            check(path, source)
     return obj
+
+
+def as_written(raw, dotted: str, fallback):
+    """The value at ``dotted`` (``"primary.pd_width"``) of a raw TOML mapping, as the user wrote it."""
+    node = raw
+    for part in dotted.split("."):
+        if not isinstance(node, dict) or part not in node:
+            return fallback
+        node = node[part]
+    return node
 
 
 def _describe(meta) -> str:
@@ -136,17 +168,36 @@ def _describe(meta) -> str:
             "bool": "true or false", "table": "a table"}[kind]
 
 
+#: Larger files are not design or technology files (a guard against reading a disk image).
+MAX_TOML_BYTES = 4 << 20
+
+
 def read_toml(path: Path, what: str) -> dict:
-    """Read a TOML file, turning I/O and syntax errors into one clear message."""
+    """Read a TOML file (UTF-8, a byte-order mark allowed), turning every I/O, decode and
+    syntax failure into one line naming the file and what is wrong."""
+    path = Path(path)
     try:
-        with open(path, "rb") as fh:
-            return tomllib.load(fh)
+        if path.is_file() and path.stat().st_size > MAX_TOML_BYTES:
+            raise ConfigError(str(path), what, f"{path.stat().st_size} bytes",
+                              f"a TOML file of at most {MAX_TOML_BYTES >> 20} MB")
+        blob = path.read_bytes()
     except FileNotFoundError:
         raise ConfigError(str(path), what, str(path), "an existing TOML file") from None
     except IsADirectoryError:
         raise ConfigError(str(path), what, str(path), "a TOML file, not a folder") from None
+    except OSError as exc:
+        raise ConfigError(str(path), what, str(path), f"a readable file ({exc.strerror or exc})") from None
+    try:
+        text_ = blob.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise ConfigError(str(path), what, f"byte {exc.start}: {blob[exc.start:exc.start + 4]!r}",
+                          "a UTF-8 text file") from None
+    try:
+        return tomllib.loads(text_)
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(str(path), what, str(exc), "valid TOML") from None
+    except RecursionError:
+        raise ConfigError(str(path), what, "nesting too deep", "valid TOML of sensible depth") from None
 
 
 def to_toml(data: dict[str, Any]) -> str:

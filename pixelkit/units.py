@@ -122,7 +122,7 @@ def quantity(value, dimension: str, field: str, source: str = "") -> float:
         raise ConfigError(source, field, value, f"a quantity like '{example}'")
     if isinstance(value, (int, float)):
         if dimension == "1":
-            return _finite(float(value), field, source, example)
+            return _finite(float(value), field, source, example, value)
         raise ConfigError(source, field, value, f"a number with a unit, like '{example}'")
     if not isinstance(value, str):
         raise ConfigError(source, field, value, f"a quantity like '{example}'")
@@ -131,9 +131,12 @@ def quantity(value, dimension: str, field: str, source: str = "") -> float:
         raise ConfigError(source, field, value, f"a number with a unit, like '{example}'")
     number, unit = float(m.group(1)), m.group(2)
     if dimension == "K" and unit in ("degC", "°C", "C"):
-        return _finite(number + 273.15, field, source, example)
+        return _finite(number + 273.15, field, source, example, value)
     if unit == "dB" and dimension == "1":
-        return _finite(10 ** (number / 20.0), field, source, example)
+        try:
+            return _finite(10 ** (number / 20.0), field, source, example, value)
+        except OverflowError:
+            raise ConfigError(source, field, value, f"a finite value, like '{example}'") from None
     if unit == "" and dimension != "1":
         raise ConfigError(source, field, value, f"a number with a unit, like '{example}'")
     try:
@@ -144,10 +147,29 @@ def quantity(value, dimension: str, field: str, source: str = "") -> float:
     if dim != want:
         raise ConfigError(source, field, value,
                           f"a quantity in {dimension}, like '{example}' (the unit '{unit}' is not)")
-    return _finite(number * scale, field, source, example)
+    return _finite(number * scale, field, source, example, value)
 
 
-def _finite(x: float, field: str, source: str, example: str) -> float:
+def _finite(x: float, field: str, source: str, example: str, shown) -> float:
     if not math.isfinite(x):
-        raise ConfigError(source, field, x, f"a finite value, like '{example}'")
+        raise ConfigError(source, field, shown, f"a finite value, like '{example}'")
     return x
+
+
+_SI_PREFIX = [(1e9, "G"), (1e6, "M"), (1e3, "k"), (1.0, ""), (1e-3, "m"), (1e-6, "u"), (1e-9, "n"),
+              (1e-12, "p"), (1e-15, "f"), (1e-18, "a")]
+_PREFIXED = {"m": "m", "s": "s", "Hz": "Hz", "V": "V", "A": "A", "F": "F", "m2": "m2"}
+
+
+def si_text(x: float, dimension: str) -> str:
+    """``x`` (SI, of ``dimension``) as a user would write it: ``"50 mV"``, ``"10 nF"``, ``"-60 degC"``."""
+    if dimension == "K":  # below 150 K only differences occur (a doubling step): no offset
+        return f"{x - 273.15:g} degC" if x >= 150 else f"{x:g} K"
+    if dimension == "m2" and x != 0:
+        return f"{x * 1e12:g} um2"
+    if dimension in _PREFIXED and x != 0:
+        for scale, p in _SI_PREFIX:
+            if abs(x) >= scale * 0.9999999:
+                return f"{x / scale:g} {p}{_PREFIXED[dimension]}"
+        return f"{x / 1e-18:g} a{_PREFIXED[dimension]}"
+    return f"{x:g}" if dimension in ("1", "") else f"{x:g} {dimension}"

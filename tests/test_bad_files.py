@@ -47,8 +47,11 @@ def test_bad_design(tmp_path, cli, old, new, needles):
 ])
 def test_bad_technology(tmp_path, cli, old, new, needles):
     tech = _variant(tmp_path, TECH, old, new, "tech.toml")
-    if "folder" not in old:
-        tech.write_text(tech.read_text().replace('folder = "@', 'folder = "@'))
+    if "folder" not in old:  # the copy lives elsewhere: its model folder, made absolute
+        from pixelkit.tech import load_technology
+        folder = load_technology("c35_thesis").models.folder
+        tech.write_text(re.sub(r"^folder = .*$", lambda _m: f'folder = "{folder}"', tech.read_text(),
+                               count=1, flags=re.M))
     design = _variant(tmp_path, REF, r'"c35_thesis"', f'"{tech}"')
     code, out, err = cli("models", design)
     assert code == 2 and out == "", err
@@ -63,7 +66,11 @@ def test_missing_design_file(cli):
 
 
 def test_user_technology_file_works(tmp_path, cli):
+    from pixelkit.tech import load_technology
     tech = _variant(tmp_path, TECH, r'^name = "c35_thesis"', 'name = "my_c35"', "tech.toml")
+    folder = load_technology("c35_thesis").models.folder
+    tech.write_text(re.sub(r"^folder = .*$", lambda _m: f'folder = "{folder}"', tech.read_text(), count=1,
+                           flags=re.M))
     design = _variant(tmp_path, REF, r'"c35_thesis"', f'"{tech}"')
     code, out, err = cli("models", design)
     assert code == 0, err

@@ -14,22 +14,25 @@ from ..schema import flag, ident, integer, load, num, qty, read_toml, table, tex
 from .modellib import ModelLibrary, load_model_library
 
 BUILTIN_DIR = Path(__file__).parent / "builtin"
+#: Plausibility ranges shared by several fields (SI): built-in potentials, temperatures.
+_PB = (0.1, 2.0)
+_TEMP = (213.15, 473.15)  # -60 .. 200 degC
 
 
 @dataclass(frozen=True)
 class Photodiode:
     """The photodiode junction (n-well / p-substrate) and its optical response."""
-    cj: float = qty("F/m2", gt=0, doc="bottom zero-bias capacitance")
+    cj: float = qty("F/m2", gt=0, plausible=(1e-6, 0.1), doc="bottom zero-bias capacitance")
     mj: float = num(gt=0, lt=1, doc="bottom grading coefficient")
-    pb: float = qty("V", gt=0, doc="bottom built-in potential")
-    cjsw: float = qty("F/m", ge=0, doc="sidewall zero-bias capacitance")
+    pb: float = qty("V", gt=0, plausible=_PB, doc="bottom built-in potential")
+    cjsw: float = qty("F/m", ge=0, plausible=(0.0, 1e-8), doc="sidewall zero-bias capacitance")
     mjsw: float = num(gt=0, lt=1, doc="sidewall grading coefficient")
-    pbsw: float = qty("V", gt=0, doc="sidewall built-in potential")
-    reset_bias: float = qty("V", gt=0, doc="reverse bias at which the kit quotes C_jdep")
-    dark_area: float = qty("A/m2", ge=0, doc="dark current per area at t_ref")
-    dark_perimeter: float = qty("A/m", ge=0, doc="dark current per perimeter at t_ref")
-    dark_doubling: float = qty("K", gt=0, doc="temperature step that doubles dark current")
-    t_ref: float = qty("K", gt=0, doc="reference temperature of the dark current")
+    pbsw: float = qty("V", gt=0, plausible=_PB, doc="sidewall built-in potential")
+    reset_bias: float = qty("V", gt=0, plausible=(0.05, 40.0), doc="reverse bias at which the kit quotes C_jdep")
+    dark_area: float = qty("A/m2", ge=0, plausible=(0.0, 1e-2), doc="dark current per area at t_ref")
+    dark_perimeter: float = qty("A/m", ge=0, plausible=(0.0, 1e-6), doc="dark current per perimeter at t_ref")
+    dark_doubling: float = qty("K", gt=0, plausible=(1.0, 50.0), doc="temperature step that doubles dark current")
+    t_ref: float = qty("K", gt=0, plausible=_TEMP, doc="reference temperature of the dark current")
     spice_model: str = ident(doc="diode model name in netlists")
     builtin_model: bool = flag(doc="true: the kit writes the .model card from these fields")
     qe_wavelength_nm: tuple = field(default=(), metadata=dict(kind="skip"))
@@ -42,32 +45,32 @@ class Mos:
     nmos: str = ident()
     pmos: str = ident()
     kind: str = text(choices=("subckt", "model"), doc="subckt: X instances; model: M instances")
-    lmin: float = qty("m", gt=0)
-    wmin: float = qty("m", gt=0)
-    diff_ext: float = qty("m", gt=0, doc="source/drain diffusion length used for AD/AS/PD/PS")
-    cj: float = qty("F/m2", ge=0, doc="n+ diffusion bottom junction capacitance")
+    lmin: float = qty("m", gt=0, plausible=(1e-8, 1e-5))
+    wmin: float = qty("m", gt=0, plausible=(1e-8, 1e-5))
+    diff_ext: float = qty("m", gt=0, plausible=(1e-8, 1e-4), doc="source/drain diffusion length used for AD/AS/PD/PS")
+    cj: float = qty("F/m2", ge=0, plausible=(0.0, 0.1), doc="n+ diffusion bottom junction capacitance")
     mj: float = num(gt=0, lt=1)
-    pb: float = qty("V", gt=0)
-    cjsw: float = qty("F/m", ge=0)
+    pb: float = qty("V", gt=0, plausible=_PB)
+    cjsw: float = qty("F/m", ge=0, plausible=(0.0, 1e-8))
     mjsw: float = num(gt=0, lt=1)
-    pbsw: float = qty("V", gt=0)
-    cjswg: float = qty("F/m", ge=0, doc="gate-edge sidewall (BSIM4 cjswgs)")
+    pbsw: float = qty("V", gt=0, plausible=_PB)
+    cjswg: float = qty("F/m", ge=0, plausible=(0.0, 1e-8), doc="gate-edge sidewall (BSIM4 cjswgs)")
     mjswg: float = num(gt=0, lt=1)
-    pbswg: float = qty("V", gt=0)
-    cgso: float = qty("F/m", ge=0, doc="gate-source/drain overlap capacitance per width")
-    cox: float = qty("F/m2", gt=0, doc="gate oxide capacitance per area")
-    vth_n: float = qty("V", gt=0, doc="nominal NMOS threshold (estimates only)")
+    pbswg: float = qty("V", gt=0, plausible=_PB)
+    cgso: float = qty("F/m", ge=0, plausible=(0.0, 1e-8), doc="gate-source/drain overlap capacitance per width")
+    cox: float = qty("F/m2", gt=0, plausible=(1e-4, 1.0), doc="gate oxide capacitance per area")
+    vth_n: float = qty("V", gt=0, plausible=(0.05, 5.0), doc="nominal NMOS threshold (estimates only)")
 
 
 @dataclass(frozen=True)
 class LayoutRules:
     """Rules the layout generators and checks know (lengths in m)."""
-    min_pd_side: float = qty("m", gt=0)
-    min_opening_side: float = qty("m", gt=0)
-    opening_to_pd_edge: float = qty("m", ge=0, doc="opening edge to PD edge, inside")
-    pd_to_cell_edge: float = qty("m", ge=0)
-    shield_overlap: float = qty("m", ge=0)
-    grid: float = qty("m", gt=0)
+    min_pd_side: float = qty("m", gt=0, plausible=(1e-7, 1e-3))
+    min_opening_side: float = qty("m", gt=0, plausible=(1e-8, 1e-3))
+    opening_to_pd_edge: float = qty("m", ge=0, plausible=(0.0, 1e-4), doc="opening edge to PD edge, inside")
+    pd_to_cell_edge: float = qty("m", ge=0, plausible=(0.0, 1e-4))
+    shield_overlap: float = qty("m", ge=0, plausible=(0.0, 1e-4))
+    grid: float = qty("m", gt=0, plausible=(1e-10, 1e-6))
 
 
 @dataclass(frozen=True)
@@ -92,7 +95,7 @@ class LayerMap:
 class Technology:
     name: str = ident()
     description: str = text()
-    supply: float = qty("V", gt=0, le=40)
+    supply: float = qty("V", gt=0, le=40, plausible=(0.5, 40.0))
     photodiode: Photodiode = table(Photodiode)
     mos: Mos = table(Mos)
     rules: LayoutRules = table(LayoutRules)
