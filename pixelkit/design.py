@@ -92,6 +92,8 @@ class Pixel:
     v_pd_reset: float = qty("V", 2.0, gt=0, plausible=(0.1, 40.0),
                             doc="EC drain: PD reset level (hard reset below VDD - Vth)")
     v_fd_reset: float = qty("V", 2.0, gt=0, plausible=(0.1, 40.0), doc="RST drain: FD reset level")
+    gse: float = num(1000.0, ge=1, le=1e9, doc="FD shielding: the storage node collects 1/gse of the PD's "
+                     "photocurrent (charge ratio eta_pd / eta_FD)")
     devices: Devices = table(Devices, default=Devices)
 
 

@@ -1,4 +1,32 @@
-"""Shot noise and kTC (reset) noise."""
+"""Temporal noise: kTC, shot noise, and the read-noise chain of the 5T pixel with NCDS.
+
+The chain (thesis fig. 3.3 sequence; all variances at the column, V^2):
+
+- **Resets and transfer.** EC resets the PD node (kT C_PD in charge) and RST resets
+  FD (kT C_FD) before the transfer: the common mode of the two carries charge
+  variance kT (C_PD + C_FD), i.e. kT / C_total in voltage. While TG conducts, its
+  channel noise drives the difference of the two nodes to equilibrium, kT / C_series;
+  when TG opens, FD keeps C_PD / C_total of that difference. Together
+
+      var(V_FD, signal sample) = kT / C_total + kT C_PD / (C_FD C_total) = kT / C_FD.
+
+- **NCDS.** The reset level comes from a *new* RST reset (non-correlated double
+  sampling, EFFECTS.md row 4): another kT / C_FD, uncorrelated. So 2 kT / C_FD at
+  FD, times A_sf^2 at the column.
+- **SF + column load (thermal).** Both transistors carry the same current; in weak
+  inversion each has current noise 2 q I and the follower's output conductance is
+  I / U_T, so the column (C_col) holds kT / C_col per sample whatever the current
+  (``sf_thermal``). Two uncorrelated samples: 2 kT / C_col. 1/f noise is left to the
+  SPICE figure (the kit has no closed form for the BSIM4 flicker parameters).
+- **Shot noise** of the dark charge (PD over t_int, FD over the storage wait) and
+  of the signal (Poisson, sqrt(N)).
+- **AFE** (probe ``afe``): C11 samples twice, the offset capacitor C12 once, C13 is
+  reset once and seen through the gain: 2 kT/C11 + kT/C12 + kT C13 / C11^2 at the
+  AFE input. The op-amp macromodel is noiseless.
+
+Input-referred electrons divide by the output-referred conversion gain
+(``fd.response``).
+"""
 from __future__ import annotations
 
 import numpy as np
@@ -19,3 +47,61 @@ def ktc_electrons(c: float, temperature_K: float) -> float:
 def shot_electrons(n_electrons):
     """Poisson shot noise of a mean of ``n_electrons`` (RMS electrons)."""
     return np.sqrt(np.asarray(n_electrons, dtype=float))
+
+
+def sf_thermal(c_col: float, temperature_K: float) -> float:
+    """Variance (V^2) of one column sample from the SF and its load, both in weak inversion."""
+    return K_B * temperature_K / c_col
+
+
+def column_capacitance(design) -> float:
+    """Column line: its parasitic C plus the RS source and load drain junctions at zero bias."""
+    from ..circuits.geometry import diffusion
+    mos, dev = design.tech.mos, design.pixel.devices
+    c = design.pixel.column_cap
+    for w in (dev.rs_w, dev.load_w):
+        a, p = diffusion(w, mos.diff_ext)
+        c += mos.cj * a + mos.cjsw * (p - w) + mos.cjswg * w
+    return c
+
+
+def afe_input_variance(design, temperature_K: float) -> float:
+    """kT/C of the SC AFE referred to its input (V^2)."""
+    a = design.afe
+    return K_B * temperature_K * (2.0 / a.c11 + 1.0 / a.c12 + a.c13 / a.c11 ** 2)
+
+
+def chain(design, which: str, a_sf: float, t_int: float | None = None, t_wait: float = 0.0) -> dict:
+    """Read-noise budget of ``which`` subpixel: variances by source, totals in V and e-.
+
+    ``t_int`` (default: the subpixel's ``t_int``) sets the dark shot noise; ``t_wait``
+    the FD leakage shot noise of the storage.
+    """
+    from . import fd
+    from .dark import dark_current
+    sub, temp = getattr(design, which), design.temperature
+    t_int = sub.t_int if t_int is None else t_int
+    r = fd.response(design, which, a_sf)
+    kt = K_B * temp
+    cg = r["cg_out_V_per_e"]
+    c_col = column_capacitance(design)
+    n_dark = dark_current(sub.area, sub.perimeter, temp, design.tech.photodiode) * t_int / Q
+    n_fd = fd.leakage(design) * t_wait / Q
+    col = {   # V^2 at the column (NCDS difference)
+        "reset_common_mode": a_sf ** 2 * kt / r["c_total_F"],
+        "tg_partition": a_sf ** 2 * kt * r["c_pd_node_F"] / (r["c_fd_F"] * r["c_total_F"]),
+        "fd_reset_ncds": a_sf ** 2 * kt / r["c_fd_F"],
+        "sf_load_thermal": 2.0 * sf_thermal(c_col, temp),
+        "dark_shot": n_dark * cg ** 2,
+        "fd_leakage_shot": (n_fd * (r["c_total_F"] / r["c_fd_F"]) ** 2) * cg ** 2,
+    }
+    pixel = sum(col.values())
+    afe = afe_input_variance(design, temp)
+    return {
+        "which": which, "cg_out_V_per_e": cg, "a_sf": a_sf, "c_col_F": c_col,
+        "variance_V2": col, "afe_input_V2": afe,
+        "electrons": {k: float(np.sqrt(v) / cg) for k, v in {**col, "afe_ktc": afe}.items()},
+        "pixel_V": float(np.sqrt(pixel)), "pixel_e": float(np.sqrt(pixel) / cg),
+        "afe_V": float(np.sqrt(pixel + afe)), "afe_e": float(np.sqrt(pixel + afe) / cg),
+        "dark_e": float(n_dark),
+    }

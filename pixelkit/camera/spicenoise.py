@@ -1,0 +1,67 @@
+"""The SPICE side of the noise and gain: ``.noise`` decks + sampled-noise theory, SF gain.
+
+An independent figure for the analytic chain of ``physics.noise``: the variances
+come from ngspice's BSIM4 noise sources at the real operating points and from the
+real device capacitances, not from the kit's C(V) model.
+
+    var_col = A_sf^2 (var_FD,transfer + var_FD,reset) + var_read,NCDS
+    var_read,NCDS = integral S_col(f) 2 (1 - cos 2 pi f dt) df
+
+``dt`` is the time between the signal and the reset sample (NCDS), so the SF's
+1/f noise is partly cancelled and its white noise doubled.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..circuits.noisebench import capacitor_deck, fd_sample_deck, read_deck
+from ..circuits.testbench import sf_bench, timings
+from ..errors import PixelkitError
+from ..spice import simulate_many
+from ..spice.batch import run_batch
+from ..spice.engine import _prepare
+
+
+def run_noise(net) -> dict:
+    """Run a ``.noise`` deck: {"f": Hz, "psd": V^2/Hz, "total_V": integrated RMS}."""
+    deck = _prepare(net, None)
+    plots, lines, _ = run_batch(deck.text(), deck.model_links())
+    spec = [p for p in plots if "onoise_spectrum" in p["data"]]
+    tot = [p for p in plots if "v(onoise_total)" in p["data"]]
+    if not spec or not tot:
+        raise PixelkitError(f"noise run '{net.title}' failed: " + " | ".join(lines[-5:]))
+    d = spec[0]["data"]
+    return {"f": np.real(np.asarray(d["frequency"])), "psd": np.real(np.asarray(d["onoise_spectrum"])) ** 2,
+            "total_V": float(np.real(np.asarray(tot[0]["data"]["v(onoise_total)"]))[0])}
+
+
+def ktc_capacitor(design, r: float, c: float) -> float:
+    """RMS noise (V) ngspice integrates on a bare capacitor ``c`` charged through ``r``."""
+    return run_noise(capacitor_deck(design, r, c))["total_V"]
+
+
+def sf_gain(design, v_fd: float | None = None, dv: float = 0.01) -> float:
+    """Small-signal gain of the SF + column load at FD = ``v_fd`` (default the PD reset level)."""
+    v = design.pixel.v_pd_reset if v_fd is None else v_fd
+    lo, hi = simulate_many([sf_bench(design, v - dv, "sf_gain_lo"), sf_bench(design, v + dv, "sf_gain_hi")], jobs=1)
+    return float((hi["col"][0] - lo["col"][0]) / (2 * dv))
+
+
+def ncds_read(design, which: str, a_sf: float) -> float:
+    """Variance (V^2) of the NCDS difference from the SF read chain (thermal + 1/f)."""
+    r = run_noise(read_deck(design, design.pixel.v_pd_reset))
+    tm = timings(design, design.experiment.t_window)[which]
+    dt = tm.t_reset_level(0) - tm.t_signal(0)
+    w = 2.0 * (1.0 - np.cos(2 * np.pi * r["f"] * dt))
+    return float(np.trapezoid(r["psd"] * w, r["f"]))
+
+
+def pixel_noise(design, which: str, a_sf: float | None = None) -> dict:
+    """SPICE read-noise figure of ``which`` subpixel at the column (V), by part."""
+    a = sf_gain(design) if a_sf is None else a_sf
+    sig = run_noise(fd_sample_deck(design, which, transfer=True))["total_V"] ** 2
+    rst = run_noise(fd_sample_deck(design, which, transfer=False))["total_V"] ** 2
+    read = ncds_read(design, which, a)
+    total = a * a * (sig + rst) + read
+    return {"a_sf": a, "fd_signal_V2": sig, "fd_reset_V2": rst, "read_ncds_V2": read,
+            "pixel_V": float(np.sqrt(total))}
