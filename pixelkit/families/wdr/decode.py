@@ -8,9 +8,11 @@ octave k means t = 2^k T (1 + f) with f = (v_high - V1)/(v_high - v_low) for eve
 k, (V1 - v_low)/(v_high - v_low) for odd k (and t = f' T in [0, T] with
 f' = (V1 - v_low)/(v_high - v_low)). Every octave gives one candidate; the one
 nearest the coarse time wins. The coded range is [T, 2^N T] (a flip before T is
-beyond I_max), and candidates of neighbouring octaves are at least 2T apart
-there, so the coarse code only has to be right within T (the read-in switches'
-gate feedthrough shifts it by ~0.8 T at the bright end: measured).
+beyond I_max). Because signal1 is continuous, the candidates of two neighbouring
+octaves mirror each other about their common boundary (the later octave twice
+as wide): a coarse code that is off by dt can pick the wrong one only within dt
+of a boundary, and then costs at most three times the distance to it (the read-in switches' gate feedthrough
+shifts the coarse code by ~0.8 T: measured at the bright end).
 The sample is taken t_d (the delay of the sampling pulse) after the flip:
 t_c = t_sample - t_d.
 
