@@ -78,3 +78,31 @@ def rolling(h, window, s, direction, l, out, as_json):
     keys = ("model_total_rows", "image_total_rows", "model_edge_rows", "image_edge_rows",
             "compensated_h_rows", "compensated_speed")
     emit(data, as_json, lambda x: "\n".join(f"{k:24s} {x[k]:.3f}" for k in keys))
+
+
+@sensor.command()
+@design_arg
+@click.option("--speed", "speed_text", default="60 km/h", show_default=True, help="true speed of the car")
+@click.option("--times", type=click.Choice(["sizing", "design"]), default="sizing", show_default=True,
+              help="exposure times and mask opening: pixelkit's sizing (analytic level) or the design file's")
+@click.option("--dc", "dc_text", default="0.15 m", show_default=True, help="uncertainty of the lateral distance")
+@click.option("--seed", type=int, default=0, show_default=True, help="temporal noise seed")
+@out_opt("picture: superposed, primary and secondary images with the trace (PNG; default reports/<design>/car.png)")
+@json_opt
+def car(design, speed_text, times, dc_text, seed, out, as_json):
+    """Dual-pixel images of a passing car and the speed measured from its secondary trace."""
+    from ..sensor import double_exposure as de
+    v = _quantity("speed", speed_text, "m/s")
+    if not 0 < v <= 100:
+        raise ConfigError("", "--speed", speed_text, "a speed > 0 and <= 360 km/h")
+    dc = _quantity("dc", dc_text, "m")
+    if dc < 0:
+        raise ConfigError("", "--dc", dc_text, "an uncertainty >= 0 m")
+    d = load(design)
+    r = de.measure(d, de.PassingCar(speed=v), de.exposure_times(d, times), dc=dc, seed=seed)
+    from ..sensor.pictures import double_exposure
+    r["picture"] = str(double_exposure(r, output_path(out, d, "car.png")))
+    data = {k: x for k, x in r.items() if k != "images"}
+    emit(data, as_json, lambda x: (f"measured {x['speed_kmh']:.2f} km/h (truth {x['truth_kmh']:.2f}, budget "
+                                   f"+-{x['dv_kmh']:.2f}); trace {x['trace_px']:.2f} px "
+                                   f"(truth {x['truth_trace_px']:.2f}); picture {x['picture']}"))

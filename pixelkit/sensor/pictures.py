@@ -47,7 +47,7 @@ def double_exposure(result: dict, path) -> Path:
     fig, axes = plt.subplots(1, 3, figsize=(11, 3.2))
     _show(axes[0], im["superposed"], "superposed (one array, two phases)", vmax=1.0)
     _show(axes[1], im["primary"], "primary array (fraction of swing)", vmax=1.0)
-    _show(axes[2], im["secondary"], "secondary array + extracted trace", vmax=1.0)
+    _show(axes[2], im["secondary"], "secondary array (own scale) + extracted trace")
     tr = result.get("trace")
     if tr:
         axes[2].plot([tr["x_start_px"], tr["x_end_px"]], [tr["row"], tr["row"]], "r-", lw=1.2)

@@ -56,15 +56,17 @@ def trapezoid(p, pitch: float = 1.0, origin: float = 0.0, floor: float = 1e-6, a
     top = float(p.max())
     if not top > 0:
         raise PixelkitError("the profile is empty (no signal)")
-    pos = lambda i: origin + (i + 0.5) * pitch  # noqa: E731
-    x = {f: (pos(_crossing(p, f * top, True)), pos(_crossing(p, f * top, False))) for f in (0.25, 0.5, 0.75)}
-    ramp = (x[0.75][0] - x[0.25][0]) + (x[0.25][1] - x[0.75][1])      # = 2 (x75 - x25) averaged
-    fwhm = x[0.5][1] - x[0.5][0]
-    support = np.nonzero(p > floor * top)[0]
     if apertures is None:
         edges = origin + np.arange(p.size + 1) * pitch
         apertures = (edges[:-1], edges[1:])
     lo, hi = (np.asarray(a, dtype=float) for a in apertures)
+    centres = 0.5 * (lo + hi)
+    pitch = float(np.median(np.diff(centres))) if centres.size > 1 else pitch
+    pos = lambda i: float(np.interp(i, np.arange(p.size), centres))  # noqa: E731
+    x = {f: (pos(_crossing(p, f * top, True)), pos(_crossing(p, f * top, False))) for f in (0.25, 0.5, 0.75)}
+    ramp = (x[0.75][0] - x[0.25][0]) + (x[0.25][1] - x[0.75][1])      # = 2 (x75 - x25) averaged
+    fwhm = x[0.5][1] - x[0.5][0]
+    support = np.nonzero(p > floor * top)[0]
     r0 = max(ramp, 0.05 * pitch)
     x0 = [x[0.5][0] - r0 / 2, r0, max(fwhm - r0, 0.0), top]
     fit = least_squares(lambda q: averaged(lo, hi, *q) - p, x0, x_scale=[pitch, pitch, pitch, top],
