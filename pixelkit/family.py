@@ -21,6 +21,20 @@ FAMILIES = {
 }
 
 
+#: family -> regression figure -> (relative, absolute tolerance in the figure's SI unit)
+REGRESS_TOLERANCES = {
+    "wdr": {"decode_max_err_frac": (0.0, 0.01), "dr_db": (0.0, 0.5), "cvdr_db": (0.0, 0.2),
+            "i_max_A": (0.01, 0.0), "knee.i_knee_model_A": (0.01, 0.0), "i_dark_A": (0.05, 0.0)},
+    "ratio": {"ratio_law_max_err_frac": (0.0, 0.005), "interval_law_max_err_frac": (0.0, 0.005),
+              "tau_s": (0.01, 0.0), "rf_min_spice": (0.01, 0.0),
+              "high_bias.ratio_law_max_err_frac": (0.0, 0.01), "intensity_spread_frac": (0.0, 0.01)},
+}
+
+
+def regress_tolerances(family: str) -> dict:
+    return REGRESS_TOLERANCES[family]
+
+
 def family_of(path) -> str:
     """The ``family`` key of a design file (default: the dual pixel), validated."""
     fam = read_toml(Path(path), "design").get("family", DEFAULT)

@@ -25,9 +25,17 @@ TOLERANCES = {
 }
 
 
+def tolerances(result: dict) -> dict:
+    """The dual pixel's TOLERANCES, or those of the result's pixel family (pixelkit/family.py)."""
+    if result.get("family"):
+        from .family import regress_tolerances
+        return regress_tolerances(result["family"])
+    return TOLERANCES
+
+
 def figures(result: dict) -> dict:
     out = {}
-    for name in TOLERANCES:
+    for name in tolerances(result):
         node = result
         for part in name.split("."):
             node = node[part]
@@ -37,7 +45,7 @@ def figures(result: dict) -> dict:
 
 def make_baseline(design_name: str, result: dict) -> dict:
     return {"design": design_name,
-            "figures": {k: {"value": v, "tol_rel": TOLERANCES[k][0], "tol_abs": TOLERANCES[k][1]}
+            "figures": {k: {"value": v, "tol_rel": tolerances(result)[k][0], "tol_abs": tolerances(result)[k][1]}
                         for k, v in figures(result).items()}}
 
 

@@ -84,3 +84,18 @@ def test_cli_simulate_json(cli, result):
     data = json.loads(out)
     assert data["family"] == "ratio"
     assert {"ratio_law_max_err_frac", "rf_min", "dr_adj_db"} <= set(data)
+
+
+def test_regress_baseline_flags_a_changed_column(tmp_path, cli, result):
+    """The family goes through `pixelkit regress` like the dual pixel: C_par 30 -> 40 fF moves tau."""
+    base = tmp_path / "baseline.json"
+    code, out, err = cli("regress", DESIGN, "--baseline", base, "--update")
+    assert code == 0, err
+    code, out, err = cli("regress", DESIGN, "--baseline", base, "--json")
+    assert code == 0, err
+    assert json.loads(out)["changed"] == []
+    changed = tmp_path / "d.toml"
+    changed.write_text(DESIGN.read_text().replace('c_par = "30 fF"', 'c_par = "40 fF"'))
+    code, out, err = cli("regress", changed, "--baseline", base, "--json")
+    assert code == 1, err
+    assert "tau_s" in {r["figure"] for r in json.loads(out)["changed"]}

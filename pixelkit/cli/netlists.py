@@ -54,16 +54,21 @@ def netlists(design, write, out, as_json):
 def regress(design, baseline, update, backend, jobs, as_json):
     """Compare a design's measured figures with a baseline; exit 1 when something changed."""
     from ..api import experiment
+    from ..family import DEFAULT, family_of, run_family
     from ..regress import compare, load_baseline, make_baseline, save_baseline
-    d = load(design)
-    result = experiment(d, backend=backend, jobs=jobs)
+    fam = family_of(design)
+    if fam == DEFAULT:
+        result = experiment(load(design), backend=backend, jobs=jobs)
+    else:  # another pixel family: its own experiment and figures
+        result = run_family(design, fam, backend=backend, jobs=jobs)
+    name = result["design"]
     if update:
-        save_baseline(Path(baseline), make_baseline(d.name, result))
+        save_baseline(Path(baseline), make_baseline(name, result))
         emit({"baseline": baseline, "written": True}, as_json, lambda x: f"baseline written: {x['baseline']}")
         return
     rows = compare(load_baseline(Path(baseline)), result)
     changed = [r for r in rows if r["changed"]]
-    emit({"design": d.name, "baseline": baseline, "changed": changed, "figures": rows}, as_json, _regress_text)
+    emit({"design": name, "baseline": baseline, "changed": changed, "figures": rows}, as_json, _regress_text)
     if changed:
         sys.exit(EXIT_REGRESSION)
 
