@@ -1,14 +1,14 @@
 """pixelkit: circuit-level CMOS image-sensor pixel and readout design kit.
 
 ``import pixelkit as pk`` gives the documented API of :mod:`pixelkit.api`
-(``pk.load_design``, ``pk.bench``, ``pk.simulate``, ``pk.measure``, ``pk.size``,
-``pk.layout``, ``pk.diagnose``, ...). Names are imported on first use, so
+(``pk.load_design``, ``pk.bench``, ``pk.simulate``, ``pk.measure_signals``, ``pk.size``,
+``pk.layout_design``, ``pk.diagnose``, ...). Names are imported on first use, so
 ``import pixelkit`` stays fast.
 """
 from __future__ import annotations
 
-__all__ = ["load_design", "benches", "bench", "simulate", "simulate_many", "measure", "write_waveforms",
-           "export_deck", "models", "experiment", "size", "layout", "diagnose", "WorkingRangeWarning"]
+__all__ = ["load_design", "benches", "bench", "simulate", "simulate_many", "measure_signals", "write_waveforms",
+           "export_deck", "models", "experiment", "size", "layout_design", "diagnose", "WorkingRangeWarning"]
 
 
 def __getattr__(name):

@@ -6,16 +6,18 @@ Every command of the command line is a thin layer over one of these functions::
     d = pk.load_design("designs/dual_pixel_revA.toml")     # validated, with its technology
     net = pk.bench(d, "bench_dual_pixel")                    # a testbench as a Netlist
     res = pk.simulate(net)                                   # a Result: time, vectors, meta
-    sig = pk.measure(d, res)                                 # double-sampled column signals (V)
+    sig = pk.measure_signals(d, res)                         # double-sampled column signals (V)
     pk.write_waveforms(res, "out.csv", ["col_p", "x1.xp.pd"])  # CSV (or .raw)
     pk.export_deck(d, "bench_dual_pixel", "bench.cir")       # a deck that runs in ngspice -b
     table = pk.models(d)                                     # analytic model table
     exp = pk.experiment(d)                                   # the thesis experiment (i_mid, i_5pct)
     sized = pk.size(d)                                       # mask opening and integration times
-    lay = pk.layout(d, "layouts")                            # GDS, extraction, pictures
+    lay = pk.layout_design(d, "layouts")                     # GDS, extraction, pictures
     gap = pk.diagnose(d, "measured.csv")                     # sim-to-real gap of measured data
 
 Units are SI throughout (A, V, s, m); results are plain dicts / numpy arrays.
+(``measure_signals`` and ``layout_design`` are not called ``measure`` / ``layout``:
+those names are the subpackages ``pixelkit.measure`` and ``pixelkit.layout``.)
 """
 from __future__ import annotations
 
@@ -66,7 +68,7 @@ def simulate_many(netlists, backend: str = "batch", jobs=None, options=None, use
     return _many(netlists, backend=backend, jobs=jobs, options=options, use_cache=use_cache)
 
 
-def measure(design, result) -> dict:
+def measure_signals(design, result) -> dict:
     """Double-sampled column signals (reset - signal level, V) of a dual-pixel bench result."""
     from .circuits.testbench import timings
     from .measure.pixel import double_sampled
@@ -111,10 +113,10 @@ def size(design, out=None, sensitivity: bool = False) -> dict:
     return size_design(design, out, sensitivity)
 
 
-def layout(design, out_dir="layouts", rows: int = 2, cols: int = 2, pictures: bool = True) -> dict:
+def layout_design(design, out_dir="layouts", rows: int = 2, cols: int = 2, pictures: bool = True) -> dict:
     """GDS of the dual pixel and an array, extracted PD geometry, 2D/3D pictures."""
-    from .layout.flow import layout_design
-    return layout_design(design, Path(out_dir), rows, cols, pictures)
+    from .layout.flow import layout_design as _layout
+    return _layout(design, Path(out_dir), rows, cols, pictures)
 
 
 def diagnose(design, measured, seed: int = 0) -> dict:

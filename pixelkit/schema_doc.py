@@ -27,6 +27,11 @@ def _value(x, dim) -> str:
         return "true" if x else "false"
     if isinstance(x, str):
         return f'"{x}"'
+    try:  # as errors show it (and as a user writes it)
+        from .units import si_text
+        return si_text(x, dim or "1")
+    except (ImportError, KeyError):
+        pass
     if dim in _PREFIXABLE and x != 0:
         for scale, p in _PREFIX:
             if abs(x) >= scale * 0.9999999:
@@ -43,9 +48,14 @@ def _range(meta) -> str:
     for key, sym in (("gt", ">"), ("ge", ">="), ("lt", "<"), ("le", "<=")):
         if meta.get(key) is not None:
             parts.append(f"{sym} {_value(meta[key], dim)}")
+    if meta.get("plausible") is not None:
+        lo, hi = meta["plausible"]
+        parts.append(f"plausible {_value(lo, dim)} to {_value(hi, dim)}")
+    if meta.get("unit_required"):
+        parts.append("unit required")
     if meta.get("choices"):
         parts.append("one of " + ", ".join(f"`{c}`" for c in meta["choices"]))
-    extra = [f"{k}: {v}" for k, v in sorted(meta.items()) if k not in _KNOWN and v is not None]
+    extra = [f"{k}: {v}" for k, v in sorted(meta.items()) if k not in _KNOWN and v not in (None, False)]
     return "; ".join(parts + extra) or "-"
 
 
@@ -100,7 +110,8 @@ def generate() -> str:
            "a unit (`\"15.1 um\"`, `\"400 nA\"`, `\"27 degC\"`, `\"60 dB\"` for a ratio); any SI prefix is "
            "accepted and the kit converts to SI. Ranges below are in SI. An unknown field, a missing "
            "required field, a wrong unit or a value outside its range is refused when the file loads, "
-           "naming the field. Cross-field rules (for example `secondary.pitch` = `primary.pitch` / "
+           "naming the field; so is a value outside its *plausible* range (the span a real chip, lens or "
+           "scene could have). Cross-field rules (for example `secondary.pitch` = `primary.pitch` / "
            "`secondary_per_pixel`, reset levels not above the technology's supply) are checked too; "
            "values inside these ranges can still be outside the circuit's working range, which is warned "
            "about (`pixelkit/working_range.py`)."]

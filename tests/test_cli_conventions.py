@@ -1,0 +1,179 @@
+"""The command-line convention: design positional, --json everywhere (errors too), one --out,
+--jobs/--backend where SPICE runs, distinct exit statuses, working-range warnings, progress.
+
+The expected exit statuses and JSON fields are the documented convention
+(README "Command line and Python API", pixelkit/errors.py), not the code's output;
+the soft-reset limit is derived here from the technology (supply - Vth).
+"""
+import json
+
+import click
+import pytest
+
+from conftest import REF
+from pixelkit.cli import register_all
+from pixelkit.cli.common import main
+
+register_all()
+
+#: Commands that run SPICE (directly or through the gap surrogate).
+SPICE_COMMANDS = {"simulate", "run", "array", "size", "regress", "gap predict", "gap diagnose", "gap selftest"}
+
+
+def _commands(group=main, prefix=""):
+    for name, cmd in group.commands.items():
+        full = f"{prefix}{name}"
+        if isinstance(cmd, click.Group):
+            yield from _commands(cmd, full + " ")
+        else:
+            yield full, cmd
+
+
+def _opts(cmd):
+    return {o for p in cmd.params for o in getattr(p, "opts", [])}
+
+
+def test_every_command_follows_the_convention():
+    seen = set()
+    for name, cmd in _commands():
+        seen.add(name)
+        opts = _opts(cmd)
+        assert "--json" in opts, f"{name} has no --json"
+        assert not {"--design", "--out-dir", "--output", "-o"} & opts, f"{name}: {opts}"
+        designs = [p for p in cmd.params if p.name == "design"]
+        if designs:
+            assert isinstance(designs[0], click.Argument), f"{name}: design must be positional"
+        if name in SPICE_COMMANDS:
+            assert {"--jobs", "--backend"} <= opts, f"{name} runs SPICE without --jobs/--backend"
+    assert SPICE_COMMANDS <= seen
+
+
+def _json(out):
+    return json.loads(out)
+
+
+def test_missing_file_error_as_json_with_field_value_and_status(cli, tmp_path):
+    code, out, err = cli("models", tmp_path / "nope.toml", "--json")
+    assert code == 2
+    e = _json(out)
+    assert e["exit_status"] == 2 and e["field"] == "design" and str(tmp_path / "nope.toml") in e["value"]
+    assert e["allowed"] and e["error"] and "Traceback" not in err
+
+
+def test_bad_field_error_as_json(cli, tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text(REF.read_text().replace('swing = "1.5 V"', 'swing = "1.5 A"'))
+    code, out, err = cli("simulate", bad, "--json")
+    e = _json(out)
+    assert code == 2 and e["field"] == "pixel.swing" and e["exit_status"] == 2
+
+
+def test_usage_error_as_json_and_plain(cli):
+    code, out, err = cli("array", REF, "--rows", "0", "--json")
+    e = _json(out)
+    assert code == 2 and e["field"] == "--rows" and e["exit_status"] == 2
+    code, out, err = cli("array", REF, "--rows", "0")
+    assert code == 2 and "--rows" in err and out == ""
+
+
+def test_list_commands_emit_json(cli):
+    code, out, err = cli("netlists", "--json")
+    assert code == 0 and "bench_dual_pixel" in _json(out)["generators"]
+
+
+def _in_process(argv, capsys):
+    from pixelkit.cli.common import entry
+    with pytest.raises(SystemExit) as ex:
+        entry(argv)
+    return ex.value.code, capsys.readouterr()
+
+
+def test_exit_statuses_are_distinct(capsys):
+    """1 difference, 2 user error, 3 internal fault, 4 simulation failed (errors.py, README)."""
+    from pixelkit.errors import ConfigError, RegressionFound, SimulationError
+
+    raised = {"regression": RegressionFound("2 figures changed"),
+              "user": ConfigError("d.toml", "pixel.swing", 9.0, "a value < 5 V"),
+              "internal": RuntimeError("a bug"),
+              "simulation": SimulationError("coarse8", ".tran", "Timestep too small", what="the bench at 1 nA")}
+
+    @main.command("_raise_for_test")
+    @click.argument("what")
+    @click.option("--json", "as_json", is_flag=True)
+    def _raise(what, as_json):
+        raise raised[what]
+
+    try:
+        codes = {}
+        for what in raised:
+            code, cap = _in_process(["_raise_for_test", what, "--json"], capsys)
+            codes[what] = code
+            assert json.loads(cap.out)["exit_status"] == code
+        assert codes == {"regression": 1, "user": 2, "internal": 3, "simulation": 4}
+        code, cap = _in_process(["_raise_for_test", "internal"], capsys)
+        assert code == 3 and "internal error" in cap.err and "Traceback" not in cap.err
+    finally:
+        del main.commands["_raise_for_test"]
+
+
+def _variant(tmp_path, v_pd, v_fd, name="v.toml"):
+    text = REF.read_text()
+    text = text.replace('v_pd_reset = "2.0 V"', f'v_pd_reset = "{v_pd} V"')
+    text = text.replace('v_fd_reset = "2.0 V"', f'v_fd_reset = "{v_fd} V"')
+    p = tmp_path / name
+    p.write_text(text)
+    return p
+
+
+def test_soft_reset_is_warned_with_the_reason(cli, tmp_path, ref_design):
+    t = ref_design.tech
+    limit = t.supply - t.mos.vth_n  # hard reset needs the drain below gate - Vth
+    assert 2.0 < limit < 2.8
+    code, out, err = cli("models", _variant(tmp_path, 2.8, 2.0), "--json")
+    assert code == 0
+    w = _json(out)["warnings"]
+    assert len(w) == 1 and "pixel.v_pd_reset" in w[0] and "soft reset" in w[0] and f"{limit:.3g}" in w[0]
+    assert "warning" in err
+    code, out, err = cli("models", REF, "--json")
+    assert code == 0 and "warnings" not in _json(out) and "warning" not in err
+
+
+def test_failed_simulation_keeps_deck_and_log_in_user_terms(cli, tmp_path):
+    """3.3 V resets with 3.3 V gates: ngspice stops (timestep too small) on the bright sweep point."""
+    design = _variant(tmp_path, 3.3, 3.3, "soft33.toml")
+    env_cwd = tmp_path / "work"
+    env_cwd.mkdir()
+    code, out, err = cli("simulate", design, "--json", cwd=env_cwd)
+    assert code == 4, out + err
+    e = _json(out)
+    assert e["exit_status"] == 4
+    assert "I_primary" in e["what"] and "nA" in e["what"] and "coarse" in e["what"]
+    assert len(e["tried"]) == 2 and "gmin" in e["tried"][0]
+    assert e["hints"] and any("v_pd_reset" in h for h in e["hints"])
+    assert any("soft reset" in w for w in e["warnings"])
+    folder = env_cwd / e["folder"]
+    assert folder.parent == env_cwd / "reports" / "dual_pixel_revA" / "failed"
+    log = (folder / "ngspice.log").read_text()
+    assert log.count("==== ") == 2 and "timestep too small" in log.lower()
+    assert ".options" in (folder / "deck.cir").read_text() and (folder / "models").is_dir()
+
+
+def test_progress_is_quiet_off_a_terminal_and_with_json(monkeypatch, capsys):
+    from pixelkit import progress
+    monkeypatch.delenv("PIXELKIT_PROGRESS", raising=False)
+    assert not progress.enabled()  # pytest's stderr is not a terminal
+    monkeypatch.setenv("PIXELKIT_PROGRESS", "1")
+    list(progress.progress(range(3), desc="visible"))
+    assert "visible" in capsys.readouterr().err
+    progress.set_quiet(True)  # what --json does
+    try:
+        list(progress.progress(range(3), desc="hidden"))
+        assert "hidden" not in capsys.readouterr().err
+    finally:
+        progress.set_quiet(False)
+
+
+def test_outputs_default_under_reports_design(cli, tmp_path):
+    code, out, err = cli("netlist", REF, "--json", cwd=tmp_path)
+    assert code == 0, err
+    assert (tmp_path / "reports" / "dual_pixel_revA" / "bench_dual_pixel.cir").is_file()
