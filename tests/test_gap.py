@@ -60,19 +60,19 @@ def test_predict_writes_the_nominal_column(tmp_path, ref_design, nominal, cli):
 
 
 def test_diagnose_json_and_html(tmp_path, ref_design, nominal, cli):
-    _, meas, _ = _dataset(ref_design, nominal, tmp_path, "coupling", seed=11, params=[5e7])
+    _, meas, _ = _dataset(ref_design, nominal, tmp_path, "readout_light", seed=11, params=[-40.0, 0.0])
     code, out, err = cli("gap", "diagnose", REF, "--measured", meas, "--json", "--out", tmp_path / "rep")
     assert code == 0, err
     r = json.loads(out)
     for key in ("gap_before_rms_V", "gap_after_rms_V", "shrink_frac", "best", "ranking", "where"):
         assert key in r
-    assert r["best"] == "coupling" and r["shrink_frac"] > 0.5
+    assert r["best"] == "readout_light" and r["shrink_frac"] > 0.5
     assert {"effect", "heldout_rms_V", "params"} <= set(r["ranking"][0])
     # where: on the AFE probe, following the light (coupling is light on an unshielded AFE)
     trends = {w["level"].split(":")[0]: w for w in r["where"] if w["factor"] == "trend vs i"}
     assert trends["afe probe"]["significant"] and not trends["pixel probe"]["significant"]
     html = (tmp_path / "rep" / "gap_section.html").read_text()
-    assert "coupling" in html and (tmp_path / "rep" / "gap_heatmap_primary.png").exists()
+    assert "readout_light" in html and (tmp_path / "rep" / "gap_heatmap_primary.png").exists()
 
 
 def _rewrite(src: Path, dst: Path, fn):

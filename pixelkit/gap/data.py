@@ -6,12 +6,22 @@ One row per operating point. Required columns (units in the names):
 measured files ``v_V``. Optional: ``v_std_V``, ``n_avg``, ``vdd_V``, ``f_read_Hz``,
 ``i_ph_prev_A`` (the same pixel's photocurrent in the previous frame, for lag).
 Any other column is carried along untouched. Nothing is dropped silently: every
-problem is listed with its row (1-based data line) and column.
+problem is listed with its row (1-based data line) and column. ``row``, ``col``
+and ``n_avg`` are integers written as digits only (``1_0`` and ``1e1`` are
+refused); a row with more fields than the header, a duplicated column name, a
+file that is not UTF-8 are errors. ``v_std_V`` must be >= 0, ``n_avg`` >= 1.
+
+``check_degenerate`` refuses, before any effect is named, a set that cannot
+support a diagnosis: fewer rows than the candidates' parameters need, a
+constant measured value, mostly duplicated rows, values beyond the physical
+range of the design (a photocurrent that would fill the well more than 100
+times, a level outside the supply rails).
 """
 from __future__ import annotations
 
 import csv
 import math
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -21,6 +31,8 @@ from ..errors import PixelkitError
 
 REQUIRED = ("array", "row", "col", "i_ph_A", "t_int_s", "t_wait_s", "temp_C", "probe")
 OPTIONAL = ("v_std_V", "n_avg", "vdd_V", "f_read_Hz", "i_ph_prev_A")
+INTEGER = ("row", "col", "n_avg")
+_INT = re.compile(r"^\s*[0-9]+\s*$")
 NUMERIC = ("row", "col", "i_ph_A", "t_int_s", "t_wait_s", "temp_C", "v_V") + OPTIONAL
 # quantities whose unit suffix a user may have got wrong: stem -> the expected column
 _STEMS = {"i_ph": "i_ph_A", "t_int": "t_int_s", "t_wait": "t_wait_s", "temp": "temp_C", "v": "v_V",
@@ -56,10 +68,31 @@ def read_table(path: str | Path, design, measured: bool) -> Table:
     path = Path(path)
     if not path.is_file():
         raise DataError(str(path), ["file not found"])
-    with open(path, newline="") as fh:
-        reader = csv.DictReader(fh)
-        header = reader.fieldnames or []
-        rows = list(reader)
+    try:
+        with open(path, newline="", encoding="utf-8-sig") as fh:
+            reader = csv.reader(fh)
+            lines = list(reader)
+    except UnicodeDecodeError as e:
+        raise DataError(str(path), [f"not UTF-8 text (byte {e.start}: {e.reason})"]) from None
+    except (OSError, csv.Error) as e:
+        raise DataError(str(path), [f"cannot be read as CSV: {e}"]) from None
+    if not lines:
+        raise DataError(str(path), ["empty file (no header)"])
+    header = [h.strip() for h in lines[0]]
+    dup = sorted({h for h in header if header.count(h) > 1})
+    if dup:
+        raise DataError(str(path), [f"column '{d}' appears {header.count(d)} times" for d in dup])
+    problems, rows = [], []
+    for k, fields in enumerate(lines[1:], 1):
+        if not fields:
+            continue
+        if len(fields) > len(header):
+            problems.append(f"row {k}: {len(fields)} fields, the header has {len(header)} (extra fields)")
+        rows.append(dict(zip(header, fields)))
+    if problems:
+        raise DataError(str(path), problems)
+    if not rows:
+        raise DataError(str(path), ["no data rows (header only)"])
     return validate(header, rows, design, measured, str(path))
 
 
@@ -86,6 +119,9 @@ def validate(header, rows, design, measured: bool, source: str) -> Table:
                 if txt is None or txt.strip() == "":
                     if h in need:
                         problems.append(f"row {i + 1}, column '{h}': empty")
+                    continue
+                if h in INTEGER and not _INT.match(txt):
+                    problems.append(f"row {i + 1}, column '{h}': '{txt}' is not a whole number (digits only)")
                     continue
                 try:
                     x = float(txt)
@@ -116,6 +152,13 @@ def validate(header, rows, design, measured: bool, source: str) -> Table:
             v = out[name][i]
             if math.isfinite(v) and v < 0:
                 problems.append(f"row {i + 1}, column '{name}': {v:g} is negative")
+        if "v_std_V" in out and math.isfinite(out["v_std_V"][i]) and out["v_std_V"][i] < 0:
+            problems.append(f"row {i + 1}, column 'v_std_V': {out['v_std_V'][i]:g} is negative (a standard deviation)")
+        if "n_avg" in out and math.isfinite(out["n_avg"][i]) and out["n_avg"][i] < 1:
+            problems.append(f"row {i + 1}, column 'n_avg': {out['n_avg'][i]:g} (allowed: 1 or more frames averaged)")
+        for name in ("f_read_Hz", "vdd_V"):
+            if name in out and math.isfinite(out[name][i]) and out[name][i] <= 0:
+                problems.append(f"row {i + 1}, column '{name}': {out[name][i]:g} must be positive")
         t = out["temp_C"][i]
         if math.isfinite(t) and not -60 <= t <= 200:
             problems.append(f"row {i + 1}, column 'temp_C': {t:g} is outside -60..200 degC")
@@ -124,6 +167,43 @@ def validate(header, rows, design, measured: bool, source: str) -> Table:
     if problems:
         raise DataError(source, problems)
     return Table(out, source)
+
+
+MAX_WELLS = 100.0
+
+
+def check_degenerate(table: Table, X, nom, candidates) -> None:
+    """Refuse a measured set that cannot support naming an effect (see the module docstring)."""
+    problems = []
+    y = table.num("v_V")
+    n = len(y)
+    from .effects import EFFECTS
+    k_max = 2 + max([len(EFFECTS[c][0]) for c in candidates if EFFECTS[c][1] is not None] or [0])
+    need = max(12, 4 * k_max)
+    if n < need:
+        problems.append(f"{n} rows: too few for the candidates' parameters (need at least {need})")
+    if n and np.ptp(y) == 0:
+        problems.append(f"column 'v_V' is constant ({y[0]:g} V on every row): nothing to diagnose")
+    keys = [tuple(_fmt(table.columns[c][i]) for c in table.columns) for i in range(n)]
+    n_unique = len(set(keys))
+    if n and n_unique < max(need, 0.5 * n):
+        problems.append(f"only {n_unique} distinct rows of {n} (duplicated rows)")
+    cond = [tuple(_fmt(table.columns[c][i]) for c in REQUIRED) for i in range(n)]
+    if n and len(set(cond)) < need:
+        problems.append(f"only {len(set(cond))} distinct operating points: too few for the candidates' parameters")
+    for a, name in enumerate(("primary", "secondary")):
+        q_max = nom.q_grid[name][-1]
+        bad = np.nonzero((X["arr"] == a) & (X["q"] > MAX_WELLS * q_max))[0]
+        for i in bad[:5]:
+            problems.append(f"row {i + 1}, column 'i_ph_A': {X['i'][i]:g} A fills the {name} well "
+                            f"{X['q'][i] / q_max:.3g} times over t_int (beyond physical range, limit "
+                            f"{MAX_WELLS:g} x)")
+    top = float(X["vdd"].max()) + 0.5
+    bad = np.nonzero((y < -0.5) | (y > top))[0]
+    for i in bad[:5]:
+        problems.append(f"row {i + 1}, column 'v_V': {y[i]:g} V is outside the supply rails (-0.5 .. {top:g} V)")
+    if problems:
+        raise DataError(table.source, problems)
 
 
 def write_table(table: Table, path: str | Path, extra: dict) -> Path:

@@ -1,10 +1,33 @@
-"""Candidate effects: compact physical augmentations of the nominal model (EFFECTS.md).
+"""Candidate effects, each in its physical domain (EFFECTS.md), as terms of ``nominal.predict``.
 
-Each effect maps its parameters to terms of ``nominal.predict``: extra charge
-``dq`` (C), a pixel-level signal shift ``dv_pix`` (V, + = more signal), an extra
-AFE gain error ``deps`` or an AFE output shift ``dv_afe`` (V). Parameters have
-physical bounds; ``scale`` is their typical size (the fit works in units of it).
-Temperatures in the data are in degC; 25 degC is the reference of T-laws.
+Domains (the term each effect feeds):
+
+- PD charge ``dq`` (passes through PD + FD charge sharing): ``dark_current``,
+  ``crosstalk``, ``lag``;
+- storage-node charge ``dq_fd`` (on the FD only, after the transfer; converted
+  with the SPICE-measured FD response, ``Nominal.fd_to_pd``): ``gse`` (stray
+  light on the FD), ``fd_leakage`` (droop with its T law);
+- chain gain ``dv_pix`` (pivots at the reset level, both probes): ``sf_gain``
+  (linear chain gain + compression);
+- AFE: ``afe_gain`` (``deps``, pivots at the reset level, where the SC stage's
+  output is Vref), ``charge_injection`` (reset-sample and AFE switch
+  injection: a pixel-probe level shift that double sampling cancels, and an AFE
+  output offset);
+- readout light ``readout_light``: junction photocurrent on the AFE's held
+  nodes, proportional to the irradiance and to the hold time (AFE probe), and on
+  the output stage (both probes), either sign;
+- columns, per stage: ``column_pixel`` (column load / SF mismatch: a per-column
+  offset of the pixel probe, cancelled by double sampling) and ``column_afe``
+  (C11/C13 ratio and injection mismatch: per-column gain and offset of the AFE);
+- set-up conditions when the data vary them: ``supply`` (``vdd_V``: supply
+  coupling of each probe) and ``settling`` (``f_read_Hz``: incomplete settling
+  of the column, a signal loss growing as exp(-t_row / tau)).
+
+Stray-light effects scale with the irradiance ``J`` (A/m^2 of photocurrent
+density) times the exposed area of their structure, never with the pixel's own
+photocurrent. Parameters have physical bounds; ``scale`` is their typical size
+(the fit works in units of it). Temperatures are in degC; 25 degC is the
+reference of T-laws.
 """
 from __future__ import annotations
 
@@ -26,12 +49,12 @@ def _t_law(X, td):
     return 2.0 ** ((X["T"] - 25.0) / td)
 
 
-def _gse(X, p):            # storage node sees light while it waits: Q = i t_wait / GSE
-    return {"dq": p[0] * X["i"] * X["t_wait"]}
+def _gse(X, p):            # light reaching the FD while it holds: 1/GSE of the PD's response
+    return {"dq_fd": p[0] * X["J"] * X["a_ref"] * X["t_wait"]}
 
 
-def _fd_leakage(X, p):     # FD droops in the dark while it waits; T-doubling
-    return {"dq": p[0] * _t_law(X, p[1]) * X["t_wait"]}
+def _fd_leakage(X, p):     # FD droop in the dark while it holds; T-doubling
+    return {"dq_fd": p[0] * _t_law(X, p[1]) * X["t_wait"]}
 
 
 def _dark_current(X, p):   # PD dark current over the integration; T-doubling; perimeter-scaled
@@ -39,36 +62,42 @@ def _dark_current(X, p):   # PD dark current over the integration; T-doubling; p
     return {"dq": p[0] * per * _t_law(X, p[1]) * X["t_int"]}
 
 
-def _charge_injection(X, p):  # reset-switch injection/feedthrough on the reset sample: AFE sees it
-    return {"dv_afe": p[0] + p[1] * X["signal"]}
+def _charge_injection(X, p):  # reset-switch feedthrough (both samples: cancelled in the AFE) and AFE injection
+    return {"dv_col": p[0] * (~X["afe"]), "dv_afe": p[1]}
 
 
-def _sf_gain(X, p):        # SF body effect: gain falls with the signal swing (compression)
-    return {"dv_pix": -p[0] * X["signal"] ** 2}
+def _sf_gain(X, p):        # chain gain: linear loss and compression, pivoting at the reset level
+    s = X["signal"]
+    return {"dv_pix": -p[0] * s - p[1] * s ** 2}
 
 
-def _afe_gain(X, p):       # op-amp gain lower than designed: extra eps
+def _afe_gain(X, p):       # SC stage gain lower than designed (C13 larger, finite A): extra eps
     return {"deps": p[0]}
 
 
-def _coupling(X, p):       # light on an unshielded AFE: offset that follows the light, not the charge
-    return {"dv_afe": -p[0] * X["i"] * X["afe"]}
+def _readout_light(X, p):  # junction photocurrent on the AFE's held nodes (x hold time) and the output stage
+    return {"dv_afe": p[0] * X["J"] * X["t_hold"] * X["afe"], "dv_out": p[1] * X["J"]}
 
 
-def _crosstalk(X, p):      # light under the mask of the secondary: fraction of the unmasked PD's light
-    return {"dq": p[0] * X["i"] * X["c_m"] * X["t_int"] * (X["arr"] == 1)}
-
-
-def column_shift(X, gain_afe, offset, gain):
-    """Column circuitry: per-row ``offset`` (V) and relative ``gain`` error of the sampled signal.
-
-    The pixel probe falls by gain x signal; the AFE output (inverting, gain_afe) rises by it.
-    """
-    return offset - gain * X["signal"] * np.where(X["afe"], -gain_afe, 1.0)
+def _crosstalk(X, p):      # light under the secondary's mask: irradiance x the masked area
+    return {"dq": p[0] * X["J"] * X["a_sub"] * X["t_int"] * (X["arr"] == 1)}
 
 
 def _lag(X, p):            # image lag: a fraction of the previous frame's charge stays
     return {"dq": p[0] * X["i_prev"] * X["t_int"]}
+
+
+def _supply(X, p):         # supply coupling: each probe moves with vdd
+    return {"dv_col": p[0] * X["dvdd"] * (~X["afe"]), "dv_afe": p[1] * X["dvdd"]}
+
+
+def _settling(X, p):       # column settling within the sample window (0.3 t_row): signal loss
+    return {"dv_pix": -X["signal"] * np.exp(-0.3 / (X["f_read"] * p[0]))}
+
+
+def column_shift(X, gain_afe, offset_pix, offset_afe, gain_afe_col):
+    """Per-stage column terms: pixel-probe offset; AFE offset and relative gain error."""
+    return np.where(X["afe"], offset_afe + gain_afe_col * gain_afe * X["signal"], offset_pix)
 
 
 EFFECTS = {
@@ -77,14 +106,37 @@ EFFECTS = {
                    _fd_leakage),
     "dark_current": ((Param("i_d_A", 0.0, 1e-11, 1e-14, 1e-15), Param("t_double_K", 3.0, 15.0, 1.0, 7.0)),
                      _dark_current),
-    "charge_injection": ((Param("offset_V", -0.2, 0.2, 1e-2, 0.0), Param("slope", -0.2, 0.2, 1e-2, 0.0)),
+    "charge_injection": ((Param("pixel_level_V", -0.2, 0.2, 1e-2, 0.0), Param("afe_offset_V", -0.2, 0.2, 1e-2, 0.0)),
                          _charge_injection),
-    "sf_gain": ((Param("k_per_V", -1.0, 1.0, 1e-2, 0.0),), _sf_gain),
+    "sf_gain": ((Param("loss", -0.3, 0.5, 1e-2, 0.0), Param("k_per_V", -1.0, 1.0, 1e-2, 0.0)), _sf_gain),
     "afe_gain": ((Param("eps_extra", -0.05, 1.0, 1e-2, 0.0),), _afe_gain),
-    "coupling": ((Param("k_V_per_A", 0.0, 1e9, 1e6, 1e4),), _coupling),
-    "crosstalk": ((Param("k_xt", 0.0, 0.2, 1e-3, 1e-4),), _crosstalk),
-    "column_fpn": ((), None),   # per-column offset and gain: built from the data (fit.py)
+    "readout_light": ((Param("afe_V_per_A_m2_s", -1e4, 1e4, 10.0, 0.0),
+                       Param("out_V_per_A_m2", -1.0, 1.0, 1e-5, 0.0)), _readout_light),
+    "crosstalk": ((Param("k_xt", 0.0, 0.5, 1e-3, 1e-4),), _crosstalk),
+    "column_pixel": ((), None),   # per-column terms: built from the data (fit.py)
+    "column_afe": ((), None),
     "lag": ((Param("lag", 0.0, 0.5, 1e-2, 1e-3),), _lag),
+    "supply": ((Param("pixel_V_per_V", -1.0, 1.0, 1e-2, 0.0), Param("afe_V_per_V", -1.0, 1.0, 1e-2, 0.0)), _supply),
+    "settling": ((Param("tau_s", 1e-9, 1e-5, 1e-7, 5e-8),), _settling),
 }
 
 NAMES = tuple(EFFECTS)
+
+
+def applicable(X) -> tuple:
+    """The candidates the data can say anything about (a factor that never varies cannot be fitted)."""
+    out = []
+    for name in NAMES:
+        if name == "lag" and not X["has_prev"]:
+            continue
+        if name == "supply" and np.ptp(X["dvdd"]) == 0:
+            continue
+        if name == "settling" and np.ptp(X["f_read"] / X["f_design"]) == 0:
+            continue
+        if name in ("column_pixel", "column_afe"):
+            probe = ~X["afe"] if name == "column_pixel" else X["afe"]
+            if any(np.unique(X["col"][probe & (X["arr"] == a)]).size < 2 for a in (0, 1)
+                   if (probe & (X["arr"] == a)).any()):
+                continue
+        out.append(name)
+    return tuple(out)

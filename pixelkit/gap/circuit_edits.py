@@ -1,0 +1,88 @@
+"""Edits of a full-chain deck (``dual_pixel_bench(with_afe=True)``) as Netlist data.
+
+Effects are inserted as circuit elements by transforming the Netlist object,
+never by editing the shared generators: an element added inside one
+subpixel's or one column's AFE subcircuit (each secondary subpixel and each
+AFE gets its own copy of its subcircuit first, so columns can differ), a
+parameter of a top-level element changed, a diode model added.
+
+The hold window of the FD (from the end of the global transfer to the first
+row's read) is where storage-node currents act; ``hold_window`` gives it and
+``pulse_charge`` the charge a PWL pulse of that window delivers.
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+
+from ..circuits.testbench import timings
+from ..spice.netlist import Element, Model, Netlist, Pwl, Subckt
+
+COLS = ("col_p", "col_s0", "col_s1", "col_s2")
+EDGE = 10e-9
+
+
+def specialise(net: Netlist, n_secondary: int) -> Netlist:
+    """Give every secondary subpixel and every column's AFE its own subcircuit copy."""
+    subs = {s.name: s for s in net.subckts}
+    new = [s for s in net.subckts if s.name not in ("dualpix", "scafe")]
+    for k in range(n_secondary):
+        new.append(replace(subs["pix5t_secondary"], name=f"pix5t_s{k}"))
+    dp = subs["dualpix"]
+    els = tuple(replace(e, value=f"pix5t_s{e.name[2:]}") if e.name.startswith("Xs") else e for e in dp.elements)
+    new.append(replace(dp, elements=els))
+    cols = [e.name[5:] for e in net.elements if e.name.startswith("Xafe_")]
+    if "scafe" in subs:
+        for c in cols:
+            new.append(replace(subs["scafe"], name=f"scafe_{c}"))
+    els = tuple(replace(e, value=f"scafe_{e.name[5:]}") if e.name.startswith("Xafe_") else e for e in net.elements)
+    return replace(net, subckts=tuple(new), elements=els)
+
+
+def pixel_subckt(which: str) -> str:
+    """``primary`` or ``s0``, ``s1``...: the subcircuit name of that subpixel after ``specialise``."""
+    return "pix5t_primary" if which == "primary" else f"pix5t_{which}"
+
+
+def add_to_subckt(net: Netlist, name: str, *elements: Element) -> Netlist:
+    subs = tuple(replace(s, elements=s.elements + tuple(elements)) if s.name == name else s for s in net.subckts)
+    if subs == net.subckts:
+        raise KeyError(name)
+    return replace(net, subckts=subs)
+
+
+def add_top(net: Netlist, *elements: Element, models: tuple = ()) -> Netlist:
+    return replace(net, elements=net.elements + tuple(elements), models=net.models + tuple(models))
+
+
+def set_param(net: Netlist, suffix: str, key: str, fn) -> Netlist:
+    """Change parameter ``key`` of the top-level element whose name ends with ``suffix``."""
+    els = []
+    for e in net.elements:
+        if e.name.endswith(suffix):
+            e = replace(e, params=tuple((k, fn(v) if k == key else v) for k, v in e.params))
+        els.append(e)
+    return replace(net, elements=tuple(els))
+
+
+def hold_window(design, array: str) -> tuple[float, float]:
+    """(start, end) of the FD hold before the first row's signal sample, in deck time."""
+    t = timings(design, design.experiment.t_window)[array]
+    return t.t_tx + 2 * EDGE, t.t_read
+
+
+def pulse(t0: float, t1: float, value: float) -> Pwl:
+    return Pwl(((0.0, 0.0), (t0, 0.0), (t0 + EDGE, value), (t1 - EDGE, value), (t1, 0.0)))
+
+
+def pulse_charge(t0: float, t1: float, value: float) -> float:
+    """Charge of ``pulse(t0, t1, value)`` (trapezoid)."""
+    return value * (t1 - t0 - EDGE)
+
+
+def fd_current(design, array: str, charge: float, which: str, tag: str) -> Element:
+    """A current source on FD during the hold that delivers ``charge`` (C; + lowers the FD)."""
+    t0, t1 = hold_window(design, array)
+    return Element(f"I{tag}", ("fd", "0"), pulse(t0, t1, charge / (t1 - t0 - EDGE)))
+
+
+DIODE = Model("dfault", "d", (("is", 1e-15), ("n", 1.0)))
