@@ -24,20 +24,48 @@ def _honour_umask(tmp) -> None:
     os.chmod(tmp, 0o666 & ~_umask())
 
 
+def check_output(path: str | os.PathLike) -> Path:
+    """``path`` if a file or folder can be written there; else one line naming it and why.
+
+    Called before a long run, so an unwritable or misplaced ``--out`` is found first,
+    not after the simulations.
+    """
+    from .errors import PixelkitError
+    path = Path(path)
+    probe = path
+    while not probe.exists():
+        if probe.parent == probe:
+            break
+        probe = probe.parent
+    if probe != path and not probe.is_dir():
+        raise PixelkitError(f"{path}: cannot write here: {probe} is a file, not a folder")
+    if not os.access(probe, os.W_OK | (os.X_OK if probe.is_dir() else 0)):
+        raise PixelkitError(f"{path}: cannot write here: {probe} is not writable")
+    return path
+
+
 def write_atomic(path: str | os.PathLike, data: str | bytes) -> Path:
     """Write ``data`` to ``path`` through a temporary file in the same folder."""
+    from .errors import PixelkitError
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        if path.is_dir():
+            raise IsADirectoryError(21, "a folder is in the way")
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
+    except OSError as exc:
+        raise PixelkitError(f"{path}: cannot write: {exc.strerror or exc}") from None
     mode = "wb" if isinstance(data, bytes) else "w"
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
     try:
         with os.fdopen(fd, mode) as fh:
             fh.write(data)
         _honour_umask(tmp)
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as exc:
         if os.path.exists(tmp):
             os.unlink(tmp)
+        if isinstance(exc, OSError):
+            raise PixelkitError(f"{path}: cannot write: {exc.strerror or exc}") from None
         raise
     return path
 

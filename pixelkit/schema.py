@@ -200,6 +200,26 @@ def read_toml(path: Path, what: str) -> dict:
         raise ConfigError(str(path), what, "nesting too deep", "valid TOML of sensible depth") from None
 
 
+_BARE_KEY = re.compile(r"^[A-Za-z0-9_-]+$")
+
+
+def _toml_string(v: str) -> str:
+    """A TOML basic string: backslash, quote and every control character escaped."""
+    out = []
+    for c in v:
+        if c in '"\\':
+            out.append("\\" + c)
+        elif ord(c) < 0x20 or ord(c) == 0x7F or c in "\u2028\u2029\x85":
+            out.append(f"\\u{ord(c):04X}")
+        else:
+            out.append(c)
+    return '"' + "".join(out) + '"'
+
+
+def _toml_key(k: str) -> str:
+    return k if _BARE_KEY.match(k) else _toml_string(k)
+
+
 def to_toml(data: dict[str, Any]) -> str:
     """Write a nested dict of strings, numbers, booleans and lists as TOML."""
     lines: list[str] = []
@@ -210,7 +230,7 @@ def to_toml(data: dict[str, Any]) -> str:
         if isinstance(v, (int, float)):
             return repr(v)
         if isinstance(v, str):
-            return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
+            return _toml_string(v)
         if isinstance(v, list):
             return "[" + ", ".join(scalar(x) for x in v) + "]"
         raise TypeError(f"cannot write {type(v).__name__} to TOML")
@@ -218,10 +238,10 @@ def to_toml(data: dict[str, Any]) -> str:
     def emit(table: dict, prefix: str):
         for k, v in table.items():
             if not isinstance(v, dict):
-                lines.append(f"{k} = {scalar(v)}")
+                lines.append(f"{_toml_key(k)} = {scalar(v)}")
         for k, v in table.items():
             if isinstance(v, dict):
-                name = f"{prefix}.{k}" if prefix else k
+                name = f"{prefix}.{_toml_key(k)}" if prefix else _toml_key(k)
                 lines.append("")
                 lines.append(f"[{name}]")
                 emit(v, name)

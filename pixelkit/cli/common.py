@@ -66,6 +66,8 @@ WARNINGS: list[str] = []
 
 def emit(data: dict, as_json: bool, render) -> None:
     """Print ``data`` as one JSON object, or as the human-readable text of ``render``."""
+    from ..finite import refuse_nonfinite
+    refuse_nonfinite(data)  # issue 9: no NaN / Infinity printed as a figure
     if as_json:
         if WARNINGS and isinstance(data, dict) and "warnings" not in data:
             data = {**data, "warnings": list(WARNINGS)}
@@ -128,11 +130,11 @@ waveforms_opt = click.option("--waveforms", type=click.Path(dir_okay=False), def
 
 def output_path(out, design, default_name: str) -> Path:
     """``--out`` if given, else ``reports/<design name>/<default_name>``."""
+    from ..fileio import check_output, reports_root
     if out:
-        return Path(out)
+        return check_output(Path(out))
     name = design if isinstance(design, str) else design.name
-    from ..fileio import reports_root
-    return reports_root() / name / default_name
+    return check_output(reports_root() / name / default_name)
 
 
 def load(design_path: str):

@@ -1,6 +1,7 @@
 """The ``pixelkit size`` flow: both levels, SPICE verification, sized design file, sensitivity."""
 from __future__ import annotations
 
+import os
 from dataclasses import replace
 from pathlib import Path
 
@@ -41,13 +42,37 @@ def verify(design, sized: dict, experiment: dict) -> dict:
             "t_int_primary_s": sized["t_int_primary_s"], "t_int_secondary_s": sized["t_int_secondary_s"]}
 
 
-def sized_design_text(design, sized: dict) -> str:
+def sized_name(name: str) -> str:
+    """``<name>_sized``, kept a valid design name (at most 64 characters, no double suffix)."""
+    base = name[: -len("_sized")] if name.endswith("_sized") else name
+    return base[: 64 - len("_sized")] + "_sized"
+
+
+def _moved(value: str, old_dir: Path, new_dir: Path) -> str:
+    """A relative path of the design file, rewritten to mean the same file from ``new_dir``."""
+    p = Path(value)
+    if p.is_absolute():
+        return value
+    return os.path.relpath((old_dir / p).resolve(), new_dir.resolve())
+
+
+def sized_design_text(design, sized: dict, out: Path | None = None) -> str:
+    """The design file with the sized values; loads again from ``out`` (strings escaped by
+    ``to_toml``, a valid name, relative technology / layout paths rewritten for ``out``'s folder)."""
+    from ..tech import builtin_names
     raw = {k: (dict(v) if isinstance(v, dict) else v) for k, v in design.raw.items()}
-    raw["name"] = f"{design.name}_sized"
+    raw["name"] = sized_name(design.name)
     raw["secondary"]["mask_opening"] = f"{sized['mask_open_m2'] * 1e12:.4f} um2"
     raw["primary"]["t_int"] = f"{sized['t_int_primary_s'] * 1e6:.2f} us"
     raw["secondary"]["t_int"] = f"{sized['t_int_secondary_s'] * 1e6:.2f} us"
-    head = (f"# Sized by pixelkit size from {design.source} ({sized['level']} level):\n"
+    if out is not None:
+        old_dir, new_dir = Path(design.source).parent, Path(out).parent
+        if raw["technology"] not in builtin_names():
+            raw["technology"] = _moved(raw["technology"], old_dir, new_dir)
+        if isinstance(raw.get("layout"), dict) and "gds" in raw["layout"]:
+            raw["layout"]["gds"] = _moved(raw["layout"]["gds"], old_dir, new_dir)
+    source = "".join(c if c.isprintable() else "?" for c in str(design.source))
+    head = (f"# Sized by pixelkit size from {source} ({sized['level']} level):\n"
             f"# C_M = {sized['c_m']:.2f}, opening {sized['mask_open_m2'] * 1e12:.4f} um2\n")
     return head + to_toml(raw)
 
@@ -87,7 +112,7 @@ def size_design(design, out: Path | None = None, with_sensitivity: bool = False,
     spice = solve(design, spice_curves(design, exp))
     chosen = spice if design.sizing.level == "spice" else analytic
     out = Path(out) if out else Path(design.source).with_name(f"{Path(design.source).stem}_sized.toml")
-    write_atomic(out, sized_design_text(design, chosen))
+    write_atomic(out, sized_design_text(design, chosen, out))
     result = {k: chosen[k] for k in ("c_m", "mask_open_m2", "t_int_primary_s", "t_int_secondary_s",
                                      "trace_px_at_speed_min", "motion_px_primary", "dark_frac_secondary",
                                      "headlight_frac")}

@@ -26,6 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..errors import PixelkitError
 from ..fileio import write_atomic
 from ..tech.modellib import files_fingerprint
 from .result import Result
@@ -108,9 +109,8 @@ def _write(k: str, meta: dict, time, vectors: list) -> None:
              **{f"v{i}": a for i, a in enumerate(arrays[1:])})
     try:
         write_atomic(entry_path(k), buf.getvalue())
-    except OSError as exc:  # a cache that cannot be written costs time, not results
-        sys.stderr.write(f"pixelkit: warning: cannot write the cache entry {entry_path(k)} "
-                         f"({exc.strerror or exc}); continuing without it\n")
+    except (OSError, PixelkitError) as exc:  # a cache that cannot be written costs time, not results
+        sys.stderr.write(f"pixelkit: warning: {exc}; continuing without caching\n")
 
 
 def save(k: str, result: Result) -> None:

@@ -132,21 +132,32 @@ _NESTED = re.compile(rb"""^[ \t]*\.(?:include|inc|lib)[ \t]+['"]?([^'"\s]+)""", 
 
 def _refuse_control_blocks(path: Path, folder: Path, source: str, where: str) -> None:
     """Refuse a model file holding a ``.control`` block, following its includes inside the folder."""
-    seen, todo = set(), [path]
+    root = folder.resolve()
+    seen, todo = set(), [path.resolve()]
     while todo and len(seen) < 200:
         f = todo.pop()
         if f in seen:
             continue
         seen.add(f)
         try:
-            blob = f.read_bytes()
+            st = f.stat()
+            has_control, nested = _scan(str(f), st.st_size, st.st_mtime_ns, str(root))
         except OSError as exc:
             raise ConfigError(source, where, str(f), f"a readable model file ({exc.strerror})") from None
-        if _CONTROL.search(blob):
+        if has_control:
             raise ConfigError(source, where, str(f),
                               "a model file without a .control block (model files are code; "
                               "the kit does not run simulator commands from them)")
-        for m in _NESTED.finditer(blob):
-            nested = (f.parent / m.group(1).decode("latin-1")).resolve()
-            if nested.is_file() and nested.is_relative_to(folder.resolve()):
-                todo.append(nested)
+        todo += [Path(n) for n in nested if Path(n) not in seen]
+
+
+@lru_cache(maxsize=256)
+def _scan(path: str, _size: int, _mtime_ns: int, root: str) -> tuple[bool, tuple[str, ...]]:
+    """(holds a .control/.endc line, the files inside ``root`` it includes); cached per file version."""
+    f = Path(path)
+    blob = f.read_bytes()
+    low = blob.lower()
+    has_control = (b".control" in low or b".endc" in low) and bool(_CONTROL.search(blob))
+    names = {m.group(1).decode("latin-1") for m in _NESTED.finditer(blob)}
+    nested = {(f.parent / n).resolve() for n in names}
+    return has_control, tuple(sorted(str(n) for n in nested if n.is_file() and n.is_relative_to(root)))
