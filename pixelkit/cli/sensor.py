@@ -106,3 +106,37 @@ def car(design, speed_text, times, dc_text, seed, out, as_json):
     emit(data, as_json, lambda x: (f"measured {x['speed_kmh']:.2f} km/h (truth {x['truth_kmh']:.2f}, budget "
                                    f"+-{x['dv_kmh']:.2f}); trace {x['trace_px']:.2f} px "
                                    f"(truth {x['truth_trace_px']:.2f}); picture {x['picture']}"))
+
+
+@sensor.command()
+@click.option("--row", type=click.IntRange(0, 100000), default=500, show_default=True,
+              help="row where the trace starts (eq. 2.18: row 500)")
+@click.option("--row-length", type=click.IntRange(1, 100000), default=1650, show_default=True,
+              help="pixel clocks per row, blanking included")
+@click.option("--f-pixclk", "f_text", default="22 MHz", show_default=True, help="pixel clock")
+@click.option("--gse", type=click.FloatRange(1, 1e9), default=310.0, show_default=True,
+              help="global shutter efficiency eta_pd / eta_mem")
+@click.option("--t-int", "t_text", default="0.2 ms", show_default=True, help="exposure the thesis set")
+@out_opt("picture: sharpness, trace contrast and their product against t_int / (t_wait / GSE) (PNG)")
+@json_opt
+def lowgse(row, row_length, f_text, gse, t_text, out, as_json):
+    """Low-GSE emulation of the double exposure: the rule t_int ~ t_readout / GSE and why it matters."""
+    from ..sensor import lowgse as lg
+    f = _quantity("f-pixclk", f_text, "Hz")
+    t_int = _quantity("t-int", t_text, "s")
+    if not f > 0:
+        raise ConfigError("", "--f-pixclk", f_text, "a clock > 0 Hz")
+    if not t_int > 0:
+        raise ConfigError("", "--t-int", t_text, "an exposure > 0 s")
+    cam = lg.Camera(n_rows=max(960, row + 1), row_length=row_length, f_pixclk=f, gse=gse)
+    rule = lg.rule_of_thumb(cam, row)
+    scene = lg.StreetScene(first_row=max(0, row - lg.StreetScene.rows // 2))
+    b = lg.balance(cam, scene)
+    data = {"t_rule_s": rule, "t_int_s": t_int, "t_int_over_rule": t_int / rule, "t_wait_s": cam.t_wait(row),
+            "best_ratio_image": b["best_ratio"], "sweep": b["sweep"]}
+    if out:
+        from ..sensor.pictures import balance
+        data["picture"] = str(balance(b, out))
+    emit(data, as_json, lambda x: (f"rule of thumb t_int ~ t_wait / GSE = {x['t_rule_s'] * 1e3:.4g} ms; set "
+                                   f"{x['t_int_s'] * 1e3:.4g} ms = {x['t_int_over_rule']:.2f} x rule; the image's "
+                                   f"sharpness x trace contrast peaks at t_int = {x['best_ratio_image']:g} x rule"))

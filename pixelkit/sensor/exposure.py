@@ -76,16 +76,19 @@ def expose(rects, rows: Cells, cols: Cells, windows: np.ndarray, dt: float, chun
     t0, t1 = float(windows[..., 0].min()), float(windows[..., 1].max())
     n_steps = max(1, int(np.ceil((t1 - t0) / dt - 1e-9)))
     image = np.zeros((rows.lo.size, cols.lo.size))
+    groups: dict = {}                 # rectangles sharing their rows: one matrix product per group
+    for r in rects:
+        groups.setdefault((r.y0, r.height, r.vy), []).append(r)
     for k0 in range(0, n_steps, chunk):
         tk = t0 + dt * np.arange(k0, min(n_steps, k0 + chunk))
         lo, hi = tk[:, None, None], tk[:, None, None] + dt
         ov = np.clip(np.minimum(hi, windows[None, :, :, 1]) - np.maximum(lo, windows[None, :, :, 0]), 0.0, None)
         w = (ov * windows[None, :, :, 2]).sum(axis=2)            # K x R: weighted time in the row's windows
         mid = tk + dt / 2
-        for r in rects:
-            cy = _coverage(rows, r.y0 + r.vy * mid, r.height)
-            cx = _coverage(cols, r.x0 + r.vx * mid, r.width)
-            image += r.irradiance * ((w * cy).T @ cx)
+        for (y0, height, vy), group in groups.items():
+            cy = _coverage(rows, y0 + vy * mid, height)
+            cx = sum(r.irradiance * _coverage(cols, r.x0 + r.vx * mid, r.width) for r in group)
+            image += (w * cy).T @ cx
     return image
 
 
