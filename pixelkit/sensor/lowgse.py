@@ -84,11 +84,11 @@ class StreetScene:
     first_row: int = 488             # the band sits around row 500 (eq. 2.18)
 
 
-def image(camera: Camera, scene: StreetScene, t_int: float, n_cols: int = 180) -> dict:
+def image(camera: Camera, scene: StreetScene, t_int: float, n_cols: int = 230) -> dict:
     """The emulated double-exposure image of ``scene`` (relative units), time-stepped."""
     u = scene.speed_px_s
     head_y = scene.rows / 2 - scene.headlight_px / 2
-    x_start = 12.0
+    x_start = 60.0
     rects = [Rect(-1.0, -1.0, n_cols + 2.0, scene.rows + 2.0, 0.0, 0.0, 1.0),       # static background
              Rect(-5 * n_cols, 0.0, 5 * n_cols + x_start + 2 * scene.headlight_px, scene.rows, u, 0.0,
                   scene.body[0] - 1.0)]

@@ -4,6 +4,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import matplotlib
+import matplotlib.ticker
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
@@ -66,8 +67,11 @@ def balance(result: dict, path) -> Path:
     ax0.semilogx(r, b["trace_contrast"], "s-", ms=3, label="trace contrast (image)")
     ax0.semilogx(r, b["product"], "k^-", ms=3, label="product")
     ax0.axvline(1.0, color="gray", ls=":")
+    ax0.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
     ax0.set_xlabel("t_int / (t_wait / GSE)")
     ax0.legend(fontsize=7)
     ax0.grid(alpha=0.3)
-    _show(ax1, result["image"], f"emulated double exposure at t_int = {result['t_int_s'] * 1e3:.3g} ms")
+    img = result["image"]
+    _show(ax1, img, f"emulated double exposure at t_int = {result['t_int_s'] * 1e3:.3g} ms "
+          "(display clipped: the headlight saturates)", vmax=3 * float(np.median(img)))
     return _save(fig, path)
