@@ -17,7 +17,8 @@ from pixelkit.cli.common import main
 register_all()
 
 #: Commands that run SPICE (directly or through the gap surrogate).
-SPICE_COMMANDS = {"simulate", "run", "array", "size", "regress", "gap predict", "gap diagnose", "gap selftest"}
+SPICE_COMMANDS = {"simulate", "run", "array", "size", "regress", "report", "gap predict", "gap diagnose",
+                  "gap selftest"}
 
 
 def _commands(group=main, prefix=""):
@@ -177,3 +178,23 @@ def test_outputs_default_under_reports_design(cli, tmp_path):
     code, out, err = cli("netlist", REF, "--json", cwd=tmp_path)
     assert code == 0, err
     assert (tmp_path / "reports" / "dual_pixel_revA" / "bench_dual_pixel.cir").is_file()
+
+
+@pytest.mark.parametrize("command", ["models", "simulate", "size", "netlist", "layout"])
+def test_impossible_geometry_refused_at_load_by_every_command(cli, tmp_path, command):
+    """A 6 x 6 um PD in an 8 um cell (issue 12): refused before any simulation, value as written.
+
+    (The check itself is issue 9's; this is the command-line side: every design command, exit 2,
+    JSON naming the field with the value as the user wrote it, nothing written.)
+    """
+    text = REF.read_text()
+    head, sec = text.split("[secondary]", 1)
+    sec = sec.replace('pd_width = "5 um"', 'pd_width = "6 um"', 1).replace('pd_height = "5 um"', 'pd_height = "6 um"', 1)
+    bad = tmp_path / "big.toml"
+    bad.write_text(head + "[secondary]" + sec)
+    code, out, err = cli(command, bad, "--json", cwd=tmp_path)
+    e = _json(out)
+    assert code == 2 and e["exit_status"] == 2, out + err
+    assert e["field"].startswith("secondary.") and e["value"] in ("6 um", "8 um")
+    assert "e-0" not in e["error"]  # no SI floats such as 9.999999999999999e-06
+    assert not (tmp_path / "reports").exists()
