@@ -1,13 +1,13 @@
 """Design file of the ratio pixel (``designs/ratio_pixel.toml``), validated on load."""
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass
 from pathlib import Path
 
 from ...errors import ConfigError
 from ...physics.conversion import rectangle
-from ...schema import ident, integer, load, num, qty, read_toml, table, text
-from ...tech import Technology, load_technology
+from ...schema import ident, integer, num, qty, table, text
+from ..base import FamilyDesign, load_family_design
 
 
 @dataclass(frozen=True)
@@ -63,30 +63,17 @@ class Readout:
 
 @dataclass(frozen=True)
 class Experiment:
-    i_ref: float = qty("A", 0.5e-9, gt=0, le=1e-6, doc="photocurrent of the dimmer PD of each pair")
     ratio_intensity: float = num(10.0, gt=1, le=1000, doc="ratio used for the intensity sweep")
 
 
 @dataclass(frozen=True)
-class RatioDesign:
-    name: str = ident()
-    revision: str = text()
+class RatioDesign(FamilyDesign):
     family: str = text(choices=("ratio",))
-    technology: str = text("gf180mcu_3v3")
-    corner: str = ident("", doc="model corner; empty = the technology's default")
-    temperature: float = qty("K", 300.15, gt=0, lt=500)
     loop: Loop = table(Loop, default=Loop)
     photodiodes: Photodiodes = table(Photodiodes, default=Photodiodes)
     readout: Readout = table(Readout, default=Readout)
     experiment: Experiment = table(Experiment, default=Experiment)
-    tech: Technology = field(default=None, metadata=dict(kind="skip"))
-    source: str = field(default="", metadata=dict(kind="skip"))
 
 
 def load_ratio_design(path: str | Path) -> RatioDesign:
-    path = Path(path)
-    design = load(RatioDesign, read_toml(path, "design"), "", str(path))
-    tech = load_technology(design.technology, relative_to=path.parent)
-    if design.corner and design.corner not in tech.models.corners:
-        raise ConfigError(str(path), "corner", design.corner, f"one of {', '.join(sorted(tech.models.corners))}")
-    return replace(design, tech=tech, source=str(path))
+    return load_family_design(RatioDesign, path)

@@ -20,6 +20,7 @@ import time
 
 import numpy as np
 
+from ...progress import step
 from ...spice import simulate_many
 from .circuit import T_PRE, ratio_bench, tau_nominal
 from .law import counter, interval_over_tau, ratio_from_count, ratio_from_interval, resolution
@@ -99,12 +100,12 @@ def _rf_min_spice(rows, lsb_per_tau):
     return float(np.exp(np.interp(lsb_per_tau, x, np.log(rf))))
 
 
-def _spread(rows):
-    """Relative spread of the output ratio over the intensity sweep (same R_F)."""
+def _spread(rows, rf):
+    """Relative spread of the output ratio over the intensity sweep (all at ratio ``rf``)."""
     r0 = [r for r in rows if r["role"] == "intensity" or (r["role"] == "ratio" and
-                                                         abs(max(r["rf"], 1 / r["rf"]) - 10) < 1e-9)]
+                                                         abs(max(r["rf"], 1 / r["rf"]) - rf) < 1e-9)]
     got = np.array([max(r["out_ratio"], 1 / r["out_ratio"]) for r in r0])
-    return float((got.max() - got.min()) / 10.0), [{"total_A": r["total_A"], "err_frac": abs(r["ratio_err_frac"])}
+    return float((got.max() - got.min()) / rf), [{"total_A": r["total_A"], "err_frac": abs(r["ratio_err_frac"])}
                                                    for r in sorted(r0, key=lambda q: q["total_A"])]
 
 
@@ -114,7 +115,8 @@ def run_ratio_experiment(design, backend: str = "batch", jobs: int | None = None
     cs = cells(design)
     biases = (ro.i_bias, ro.i_bias_high)
     nets = [ratio_bench(design, bench_pairs(cs), ib, title=f"ratio_bench_{k}") for k, ib in enumerate(biases)]
-    results = simulate_many(nets, backend=backend, jobs=jobs)
+    with step(f"ratio pixel: {len(nets)} benches"):
+        results = simulate_many(nets, backend=backend, jobs=jobs)
     out = {"design": design.name, "family": "ratio", "backend": backend}
     per_bias = []
     for ib, res in zip(biases, results):
@@ -123,7 +125,7 @@ def run_ratio_experiment(design, backend: str = "batch", jobs: int | None = None
         tau = 0.5 * (uniform["t_p_s"] + uniform["t_m_s"]) / 2.0
         law_err = _readout(design, rows, tau)
         ratio_rows = [r for r in rows if r["role"] == "ratio"]
-        spread, by_level = _spread(rows)
+        spread, by_level = _spread(rows, design.experiment.ratio_intensity)
         per_bias.append({"i_bias_A": ib, "tau_s": tau, "tau_nominal_s": tau_nominal(design, ib),
                          "ratio_law_max_err_frac": max(abs(r["ratio_err_frac"]) for r in ratio_rows),
                          "interval_law_max_err_frac": law_err,

@@ -32,7 +32,7 @@ from __future__ import annotations
 import math
 
 from ...circuits.devices import mosfet, photodiode, photodiode_model
-from ...spice.netlist import Element, Netlist, Param, Pulse, Pwl, Subckt, Tran
+from ...spice.netlist import Element, Netlist, Param, Pwl, Subckt, Tran
 from .stimulus import signal1, signal2
 
 PORTS = ("vdd", "vrst", "v0", "vbn", "vwell", "rst", "expo", "sig1", "sig2", "int", "c1", "c2")

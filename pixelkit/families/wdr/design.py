@@ -1,13 +1,13 @@
 """Design file of the WDR pixel (``designs/wdr_pixel.toml``), validated on load."""
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass
 from pathlib import Path
 
 from ...errors import ConfigError
 from ...physics.conversion import rectangle
-from ...schema import ident, integer, load, qty, read_toml, table, text
-from ...tech import Technology, load_technology
+from ...schema import integer, qty, table, text
+from ..base import FamilyDesign, load_family_design
 
 
 @dataclass(frozen=True)
@@ -71,31 +71,21 @@ class Noise:
 
 
 @dataclass(frozen=True)
-class WdrDesign:
-    name: str = ident()
-    revision: str = text()
+class WdrDesign(FamilyDesign):
     family: str = text(choices=("wdr",))
-    technology: str = text("gf180mcu_3v3")
-    corner: str = ident("", doc="model corner; empty = the technology's default")
-    temperature: float = qty("K", 300.15, gt=0, lt=500)
     pixel: Pixel = table(Pixel, default=Pixel)
     comparator: Comparator = table(Comparator, default=Comparator)
     coding: Coding = table(Coding, default=Coding)
     noise: Noise = table(Noise, default=Noise)
-    tech: Technology = field(default=None, metadata=dict(kind="skip"))
-    source: str = field(default="", metadata=dict(kind="skip"))
 
 
 def load_wdr_design(path: str | Path) -> WdrDesign:
-    path = Path(path)
-    design = load(WdrDesign, read_toml(path, "design"), "", str(path))
-    tech = load_technology(design.technology, relative_to=path.parent)
+    design = load_family_design(WdrDesign, path)
+    tech, path = design.tech, design.source
     for f in ("v_reset", "v0"):
         if getattr(design.pixel, f) >= tech.supply:
             raise ConfigError(str(path), f"pixel.{f}", getattr(design.pixel, f),
                               f"a level below the supply ({tech.supply:g} V)")
     if design.coding.v_high >= tech.supply:
-        raise ConfigError(str(path), "coding.v_high", design.coding.v_high, f"a level below the supply")
-    if design.corner and design.corner not in tech.models.corners:
-        raise ConfigError(str(path), "corner", design.corner, f"one of {', '.join(sorted(tech.models.corners))}")
-    return replace(design, tech=tech, source=str(path))
+        raise ConfigError(str(path), "coding.v_high", design.coding.v_high, f"a level below the supply ({tech.supply:g} V)")
+    return design

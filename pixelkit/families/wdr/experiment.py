@@ -20,6 +20,7 @@ import time
 
 import numpy as np
 
+from ...progress import step
 from ...spice import simulate_many
 from .circuit import T_RESET, t_exposure, wdr_bench
 from .decode import decode
@@ -39,7 +40,8 @@ def run_wdr_experiment(design, backend: str = "batch", jobs: int | None = None) 
     t0 = time.perf_counter()
     cd = design.coding
     cur = currents(design)
-    res = simulate_many([wdr_bench(design, cur)], backend=backend, jobs=jobs)[0]
+    with step(f"WDR pixel: {len(cur)} pixels over 2^{cd.steps} T"):
+        res = simulate_many([wdr_bench(design, cur)], backend=backend, jobs=jobs)[0]
     t_exp = t_exposure(design)
     t_read = res.time[-1]
     t_rs = T_RESET + 1e-6

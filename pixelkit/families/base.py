@@ -1,0 +1,31 @@
+"""What every family's design file shares: identity, technology, corner, temperature."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+from ..errors import ConfigError
+from ..schema import ident, load, qty, read_toml, text
+from ..tech import Technology, load_technology
+
+
+@dataclass(frozen=True)
+class FamilyDesign:
+    name: str = ident()
+    revision: str = text()
+    family: str = text()
+    technology: str = text("gf180mcu_3v3", doc="a built-in technology name or a path to a .toml file")
+    corner: str = ident("", doc="model corner; empty = the technology's default")
+    temperature: float = qty("K", 300.15, gt=0, lt=500)
+    tech: Technology = field(default=None, metadata=dict(kind="skip"))
+    source: str = field(default="", metadata=dict(kind="skip"))
+
+
+def load_family_design(cls, path: str | Path):
+    """Load and validate a design of family class ``cls``, with its technology."""
+    path = Path(path)
+    design = load(cls, read_toml(path, "design"), "", str(path))
+    tech = load_technology(design.technology, relative_to=path.parent)
+    if design.corner and design.corner not in tech.models.corners:
+        raise ConfigError(str(path), "corner", design.corner, f"one of {', '.join(sorted(tech.models.corners))}")
+    return replace(design, tech=tech, source=str(path))
