@@ -33,9 +33,9 @@ def result(design):
 
 
 def test_decoded_intensity_follows_truth_over_five_decades(result):
-    """Stated error: 6 % (the node-capacitance estimate dominates; measured ~5 %)."""
+    """Stated error: 4 % (measured 2.8 %: the node-capacitance estimate and the dark-current model)."""
     assert result["decades"] >= 5.0
-    assert result["decode_max_err_frac"] < 0.06
+    assert result["decode_max_err_frac"] < 0.04
     regimes = {r["regime"] for r in result["sweep"]}
     assert regimes == {"low", "high"}, "the sweep must cover both signal 3 and the comparator"
 

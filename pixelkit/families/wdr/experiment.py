@@ -4,7 +4,8 @@ One deck: a dark pixel plus photocurrents from 1e-3 of the knee to a flip at
 1.3 T (all pixels share the coding buses and the controls). The truth is the
 photocurrent each pixel's current source carries; the decoder only sees the
 stored voltages (C1, C2, V(int) at the end of the frame) and each pixel's reset
-sample, plus the dark pixel's rate (dark-frame subtraction).
+sample, plus the dark pixel read at half and full exposure (its dark current and
+how that falls with the node voltage).
 
 - decode_max_err_frac: worst |I_decoded / I_true - 1| over the sweep
 - knee: the smallest current that flipped and the largest that did not bracket
@@ -23,7 +24,7 @@ import numpy as np
 from ...progress import step
 from ...spice import simulate_many
 from .circuit import T_RESET, t_exposure, wdr_bench
-from .decode import decode
+from .decode import dark_model, decode
 from .model import delta_q, figures
 
 LOW = (1e-3, 1e-2, 0.3, 0.85)           # fractions of the knee current (signal 3)
@@ -47,11 +48,13 @@ def run_wdr_experiment(design, backend: str = "batch", jobs: int | None = None) 
     t_rs = T_RESET + 1e-6
     v_start = [float(res.at(f"v(int{k})", t_rs)) for k in range(len(cur))]
     v3 = [float(res.at(f"v(int{k})", t_read)) for k in range(len(cur))]
+    v_half = float(res.at("v(int0)", T_RESET + t_exp / 2))
+    dark = dark_model(design, v_start[0], v_half, v3[0])
     i_dark = float(delta_q(design, v_start[0], v3[0])) / t_exp
     rows = []
     for k, i in enumerate(cur[1:], start=1):
         v1, v2 = float(res.at(f"v(c1_{k})", t_read)), float(res.at(f"v(c2_{k})", t_read))
-        d = decode(design, v1, v2, v3[k], v_start[k], i_dark)
+        d = decode(design, v1, v2, v3[k], v_start[k], dark)
         samp = res[f"v(xp{k}.samp)"]
         hit = np.nonzero(samp > design.tech.supply / 2)[0]
         t_flip = float(res.time[hit[0]]) - T_RESET - cd.t_delay if len(hit) else None
@@ -76,7 +79,7 @@ def run_wdr_experiment(design, backend: str = "batch", jobs: int | None = None) 
         "v_noise_V": m["v_noise_V"],
         "knee": {"i_knee_model_A": m["i_knee_A"], "largest_unflipped_A": max(held),
                  "smallest_flipped_A": min(flipped)},
-        "i_dark_A": i_dark,
+        "i_dark_A": i_dark, "dark_slope_A_per_V": dark[1],
         "sweep": rows,
         "n_runs": 1, "n_cached": int(bool(res.meta.get("cached"))),
         "wall_s": time.perf_counter() - t0,
