@@ -176,6 +176,8 @@ class Design:
     secondary: Subpixel = table(Subpixel)
     pixel: Pixel = table(Pixel)
     afe: Afe = table(Afe)
+    family: str = text("dual_pixel", choices=("dual_pixel",),
+                       doc="pixel family; the others (wdr, ratio) load through pixelkit/family.py")
     corner: str = ident("", doc="model corner; empty = the technology's default")
     temperature: float = qty("K", 300.15, gt=0, lt=500, plausible=(213.15, 473.15))
     secondary_per_pixel: int = integer(3, ge=1, le=16)
@@ -207,6 +209,9 @@ def load_design(path: str | Path) -> Design:
     """Load and validate a design file, with its technology."""
     path = Path(path)
     raw = read_toml(path, "design")
+    if raw.get("family", "dual_pixel") != "dual_pixel":  # another family: a clear refusal
+        raise ConfigError(str(path), "family", raw["family"], "a dual-pixel design for this command "
+                          "(wdr and ratio designs run with simulate, models and regress)")
     design = load(Design, raw, "", str(path))
     tech = load_technology(design.technology, relative_to=path.parent)
     src = str(path)

@@ -99,3 +99,8 @@ def test_regress_baseline_flags_a_changed_column(tmp_path, cli, result):
     code, out, err = cli("regress", changed, "--baseline", base, "--json")
     assert code == 1, err
     assert "tau_s" in {r["figure"] for r in json.loads(out)["changed"]}
+
+
+def test_dual_pixel_commands_refuse_a_family_design_clearly(cli):
+    code, out, err = cli("run", DESIGN)
+    assert code == 2 and "family = 'ratio'" in err and "Traceback" not in err
