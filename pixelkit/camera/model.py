@@ -1,0 +1,144 @@
+"""The designed pixel array as a camera: the analytic inputs of the virtual camera.
+
+One ``ArrayCamera`` per array (primary, secondary), from the design:
+
+- response: the photo-charge n (e-) lands on the PD node + FD (charge sharing, the
+  C(V) of ``junction``), the column moves by A_sf times the shared node's drop
+  (``fd``); it clips at the column swing (the experiment's measured swing, or
+  A_sf x ``pixel.swing`` without SPICE);
+- temporal noise: the read-noise chain of ``physics.noise`` (pixel probe: NCDS at
+  the column, without the dark shot noise, which the camera draws itself), signal
+  and dark shot noise (Poisson), quantization;
+- storage: row r waits t_pre + (r + 0.4) t_row on FD, picking up the FD leakage and
+  1/gse of the PD's photocurrent (``fd``);
+- QE (EMVA eta): the technology's QE at ``wavelength`` times the photoactive
+  area over the pixel area (pitch^2): the secondary's mask opening is its fill factor;
+- an ideal ADC: ``bits`` over 1.2 x the clip level, dark level at 128 DN.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+
+from ..circuits.timing import GsTiming
+from ..constants import Q
+from ..physics import fd
+from ..physics.dark import dark_current
+from ..physics.junction import Node
+from ..physics.noise import chain
+from ..physics.subpixel import pd_node
+
+ARRAYS = ("primary", "secondary")
+
+
+@dataclass(frozen=True)
+class Adc:
+    bits: int
+    full_scale_V: float
+    offset_dn: float = 128.0
+
+    @property
+    def lsb_V(self) -> float:
+        return self.full_scale_V / 2 ** self.bits
+
+    def digitize(self, v):
+        dn = np.rint(self.offset_dn + np.asarray(v) / self.lsb_V)
+        return np.clip(dn, 0, 2 ** self.bits - 1).astype(np.int64)
+
+
+@dataclass(frozen=True)
+class ArrayCamera:
+    name: str
+    rows: int
+    cols: int
+    pitch_m: float
+    eta: float                 # EMVA QE: electrons per photon on the pixel area
+    wavelength_m: float
+    node: Node                 # PD node + FD (shared after the transfer)
+    v0: float                  # their bias at the start (the PD reset level)
+    a_sf: float
+    clip_V: float              # column swing
+    read_V: float              # temporal read noise at the column (no dark shot)
+    dark_e_per_s: float        # PD dark current
+    fd_leak_V_per_s: float     # FD leakage, at the column
+    pls_V_per_e: float         # column V per PD photo-electron per second of FD wait (1/gse)
+    t_row: float
+    t_pre: float
+    t_int: float
+    temperature_K: float
+    adc: Adc
+    chain: dict
+
+    @property
+    def cg0_V_per_e(self) -> float:
+        """Output-referred conversion gain at zero signal."""
+        return self.a_sf * Q / float(self.node.capacitance(self.v0))
+
+    @property
+    def k0_dn_per_e(self) -> float:
+        return self.cg0_V_per_e / self.adc.lsb_V
+
+    def signal_exact_V(self, n_e):
+        """Column signal (V) for ``n_e`` photo/dark electrons on the node (C(V) exact, unclipped)."""
+        q = self.node.charge(self.v0) - np.asarray(n_e, dtype=float) * Q
+        return self.a_sf * (self.v0 - self.node.bias_for_charge(q))
+
+    @cached_property
+    def _table(self):
+        n = np.linspace(0.0, 1.5 * self.electrons_for_fraction(1.0), 20001)
+        return n, self.signal_exact_V(n)
+
+    def signal_V(self, n_e):
+        """``signal_exact_V`` from a 20001-point table up to 1.5 x the clip charge (images are large)."""
+        n, v = self._table
+        n_e = np.asarray(n_e, dtype=float)
+        if n_e.size and n_e.max() > n[-1]:
+            return self.signal_exact_V(n_e)
+        return np.interp(n_e, n, v)
+
+    def slope_V_per_e(self, n_e):
+        """d signal / d n at ``n_e``: A_sf q / C(V)."""
+        v = self.v0 - np.asarray(self.signal_V(n_e)) / self.a_sf
+        return self.a_sf * Q / self.node.capacitance(v)
+
+    def t_wait(self, rows=None):
+        """Storage wait (s) of each row's signal sample."""
+        r = np.arange(self.rows if rows is None else rows)
+        return self.t_pre + (r + 0.4) * self.t_row
+
+    def electrons_for_fraction(self, frac: float) -> float:
+        """Electrons that take the column to ``frac`` of its clip level."""
+        v = self.v0 - frac * self.clip_V / self.a_sf
+        return float(self.node.charge(self.v0) - self.node.charge(v)) / Q
+
+
+def combined_node(design, which: str, a_sf: float) -> Node:
+    p = pd_node(design, which, parasitics=True)
+    f = fd.fd_node(design, a_sf)
+    return Node(p.terms + f.terms, p.c_fixed + f.c_fixed)
+
+
+def array_camera(design, which: str, a_sf: float, clip_V: float | None = None, wavelength_m: float = 550e-9,
+                 bits: int = 12, shape: tuple | None = None) -> ArrayCamera:
+    """The analytic camera of ``which`` array (``clip_V``: the measured column swing, if known).
+
+    ``shape`` (rows, cols): the image size, default the design's array; a larger
+    virtual sensor (same row time) gives the photon transfer more pixels per step.
+    """
+    sub, tech = getattr(design, which), design.tech
+    clip = a_sf * design.pixel.swing if clip_V is None else clip_V
+    r = fd.response(design, which, a_sf)
+    ch = chain(design, which, a_sf)
+    read_var = sum(v for k, v in ch["variance_V2"].items() if k not in ("dark_shot", "fd_leakage_shot"))
+    eta = float(tech.qe(wavelength_m)) * sub.photoactive_area / sub.pitch ** 2
+    return ArrayCamera(
+        name=which, rows=shape[0] if shape else sub.rows, cols=shape[1] if shape else sub.cols, pitch_m=sub.pitch, eta=eta, wavelength_m=wavelength_m,
+        node=combined_node(design, which, a_sf), v0=design.pixel.v_pd_reset, a_sf=a_sf, clip_V=clip,
+        read_V=float(np.sqrt(read_var)),
+        dark_e_per_s=dark_current(sub.area, sub.perimeter, design.temperature, tech.photodiode) / Q,
+        fd_leak_V_per_s=a_sf * fd.leakage(design) / r["c_fd_F"],
+        pls_V_per_e=a_sf * Q / (design.pixel.gse * r["c_fd_F"]),
+        t_row=1.0 / sub.f_read, t_pre=GsTiming(0.0, 1.0).t_pre, t_int=sub.t_int, temperature_K=design.temperature,
+        adc=Adc(bits, 1.2 * clip), chain=ch)
