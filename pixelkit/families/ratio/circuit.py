@@ -95,10 +95,13 @@ def ratio_bench(design, pairs, i_bias: float, title: str = "ratio_bench") -> Net
     """
     vdd = design.tech.supply
     r_max = max(max(a / b, b / a) for pair in pairs for a, b in pair)
-    stop = T_PRE + 1.3 * (1 + r_max) * tau_nominal(design, i_bias) * 2
+    # the slower column trips at (1 + R_F) tau; the node carries more than C_par
+    # (inverter gate, junctions: 1.5x on the reference design), so allow 3x
+    stop = T_PRE + 3.0 * (1 + r_max) * tau_nominal(design, i_bias)
     lp = design.loop
     el = [Element("Vdd", ("vdd", "0"), vdd), Element("Vsrc", ("vsrc", "0"), lp.v_source),
-          Element("Vsel", ("sel", "0"), design.readout.v_select), Element("Vclamp", ("vclamp", "0"), design.readout.v_clamp_gate),
+          Element("Vsel", ("sel", "0"), design.readout.v_select),
+          Element("Vclamp", ("vclamp", "0"), design.readout.v_clamp_gate),
           Element("Vpre", ("preb", "0"), Pwl(((0.0, 0.0), (T_PRE, 0.0), (T_PRE + EDGE, vdd)))),
           Element("Ibias", ("vdd", "vbn"), i_bias),
           mosfet("bias", "vbn", "vbn", "0", "0", lp.tail_w, lp.tail_l, design.tech)]
@@ -106,7 +109,8 @@ def ratio_bench(design, pairs, i_bias: float, title: str = "ratio_bench") -> Net
         el.append(Element(f"Xp{k}", ("vdd", "vsrc", "vbn", "sel", f"h_p{k}", f"h_m{k}", f"v_p{k}", f"v_m{k}"),
                           "ratio_pixel", (("ih_p", hp), ("ih_m", hm), ("iv_p", vp), ("iv_m", vm))))
         for c in ("h_p", "h_m", "v_p", "v_m"):
-            el.append(Element(f"Xc_{c}{k}", ("vdd", "preb", "vclamp", f"{c}{k}", f"c{c}{k}", f"o{c}{k}"), "ratio_column"))
+            el.append(Element(f"Xc_{c}{k}", ("vdd", "preb", "vclamp", f"{c}{k}", f"c{c}{k}", f"o{c}{k}"),
+                              "ratio_column"))
     t = design.tech
     return Netlist(title=title, elements=tuple(el), analysis=Tran(EDGE, stop, 0.0, stop / 2000),
                    subckts=(ratio_loop(design), ratio_pixel(), column_readout(design)),

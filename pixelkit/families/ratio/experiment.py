@@ -20,6 +20,7 @@ import time
 
 import numpy as np
 
+from ...errors import PixelkitError
 from ...progress import step
 from ...spice import simulate_many
 from .circuit import T_PRE, ratio_bench, tau_nominal
@@ -68,6 +69,9 @@ def measure(design, result, cs) -> list[dict]:
         i_m = float(result.at(f"i(v.xc_{d}_m{k}.va)", T_PRE * 0.95))
         t_p = _trip(result.time, result[f"v(o{d}_p{k})"], vdd / 2)
         t_m = _trip(result.time, result[f"v(o{d}_m{k})"], vdd / 2)
+        if np.isnan(t_p) or np.isnan(t_m):
+            raise PixelkitError(f"{design.source}: pixel {k} ({d} pair, R_F = {c['rf']:.3g}) did not trip within "
+                                f"{result.time[-1] * 1e6:.3g} us: check readout.c_par, v_clamp_gate and v_select")
         rows.append({**{x: c[x] for x in ("role", "rf", "total_A")}, "pixel": k, "pair": d,
                      "i_out_p_A": i_p, "i_out_m_A": i_m, "out_ratio": i_m / i_p,
                      "ratio_err_frac": (i_m / i_p) / c["rf"] - 1.0, "t_p_s": t_p, "t_m_s": t_m,

@@ -87,5 +87,6 @@ def load_wdr_design(path: str | Path) -> WdrDesign:
             raise ConfigError(str(path), f"pixel.{f}", getattr(design.pixel, f),
                               f"a level below the supply ({tech.supply:g} V)")
     if design.coding.v_high >= tech.supply:
-        raise ConfigError(str(path), "coding.v_high", design.coding.v_high, f"a level below the supply ({tech.supply:g} V)")
+        raise ConfigError(str(path), "coding.v_high", design.coding.v_high,
+                          f"a level below the supply ({tech.supply:g} V)")
     return design
