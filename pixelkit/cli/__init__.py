@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import importlib
 
-COMMAND_MODULES = ("simulate", "netlists", "array", "size", "layout", "gap", "report", "sensor")
+COMMAND_MODULES = ("simulate", "netlists", "array", "size", "layout", "gap", "report", "sensor", "camera")
 
 
 def register_all() -> None:
