@@ -69,7 +69,9 @@ def test_compensation_recovers_height_speed_and_position(direction):
         assert abs(r["image_centre_row"] - r["true_centre_row"]) <= 1.0
     # the article's quadratic, solved as printed, does not give h in the H > h regime
     r = study(H_OBJ, 60.0, 0.35, direction)["numbers"]
-    assert not abs(r["published_quadratic_h_rows"] - H_OBJ) <= 1.0
+    assert r["published_quadratic_h_rows"] is not None and abs(r["published_quadratic_h_rows"] - H_OBJ) > 1.0
+    # ... and in the H < h regime it has no root in (0, L') at all
+    assert study(20.0, 8.0, 0.3, direction)["numbers"]["published_quadratic_h_rows"] is None
 
 
 def test_compensated_vertical_image_has_the_true_height():
@@ -104,7 +106,12 @@ def test_timing_rows_and_blanking():
     g = ShutterTiming("global", 960, 1650, 22e6, t_int=200e-6, t0=1e-6)
     assert g.storage_wait()[500] == pytest.approx(1e-6 + 500 * 1650 / 22e6)
     r = ShutterTiming("rolling_readout", 10, 100, 1e6, scan="up")
-    assert r.read_times()[-1] == 0 and np.allclose(r.exposure()[:, 1] - r.exposure()[:, 0], r.t_frame)
+    assert r.read_times()[-1] == 0 and np.allclose(r.read_times() - r.reset_times(), r.t_frame)
+    from pixelkit.errors import ConfigError
+    with pytest.raises(ConfigError, match="t_int"):
+        ShutterTiming("rolling_shutter", 10, 100, 1e6, t_int=2e-3)      # longer than the 1 ms frame
+    with pytest.raises(ConfigError, match="mode"):
+        ShutterTiming("electronic", 10, 100, 1e6, t_int=1e-4)
 
 
 def test_cli_rolling_json_and_errors(cli, tmp_path):

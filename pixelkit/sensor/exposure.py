@@ -74,6 +74,7 @@ def expose(rects, rows: Cells, cols: Cells, windows: np.ndarray, dt: float, chun
     if not dt > 0:
         raise PixelkitError(f"time step {dt!r} must be > 0")
     t0, t1 = float(windows[..., 0].min()), float(windows[..., 1].max())
+    dt = min(dt, t1 - t0) if t1 > t0 else 1.0
     n_steps = max(1, int(np.ceil((t1 - t0) / dt - 1e-9)))
     image = np.zeros((rows.lo.size, cols.lo.size))
     groups: dict = {}                 # rectangles sharing their rows: one matrix product per group
@@ -92,10 +93,11 @@ def expose(rects, rows: Cells, cols: Cells, windows: np.ndarray, dt: float, chun
     return image
 
 
-def step_for(rects, rows: Cells, cols: Cells, per_cell: int = 16, longest: float | None = None) -> float:
-    """A time step that moves every rectangle at most 1/``per_cell`` of an aperture (or cell)."""
+def step_for(rects, rows: Cells, cols: Cells, per_cell: int = 16) -> float:
+    """A time step that moves every rectangle at most 1/``per_cell`` of the smallest aperture.
+
+    Without motion any step is exact (inf: one step per window).
+    """
     size = min(np.min(rows.hi - rows.lo), np.min(cols.hi - cols.lo))
     v = max([abs(r.vx) for r in rects] + [abs(r.vy) for r in rects] + [0.0])
-    if v == 0:
-        return longest if longest else 1.0
-    return float(size / (per_cell * v))
+    return float(size / (per_cell * v)) if v > 0 else float("inf")

@@ -24,7 +24,7 @@ thesis); gamma and the clock are known (1 ns of jitter on 53.6 ms: negligible).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 from ..errors import ConfigError
 
@@ -104,7 +104,3 @@ def from_image(x1: float, x2: float, c: float, gamma: float, t_int: float, focal
 def image_position(s: float, c: float, gamma: float, focal_length: float) -> float:
     """Where a point at s along the line (from the perpendicular's foot) appears: x = f tan(gamma - atan(s/c))."""
     return focal_length * math.tan(gamma - math.atan(s / c))
-
-
-def with_pixel_error(p: TracePoint, n_px: float) -> TracePoint:
-    return replace(p, pixel_error_px=n_px)

@@ -87,8 +87,3 @@ class ShutterTiming:
     def storage_wait(self) -> np.ndarray:
         """Time each row's charge waits on the storage node before it is read (0 for rolling)."""
         return self.read_times() - self.exposure()[:, 1]
-
-    def table(self) -> dict:
-        e = self.exposure()
-        return {"reset_s": e[:, 0], "exposure_end_s": e[:, 1], "read_s": self.read_times(),
-                "t_row_s": self.t_row, "t_readout_s": self.t_frame}
