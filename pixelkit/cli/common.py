@@ -169,14 +169,47 @@ def _fail(as_json: bool, status: int, message: str, details: dict | None = None)
     sys.exit(status)
 
 
+class Interrupted(BaseException):
+    """Ctrl-C, raised by our SIGINT handler (click turns KeyboardInterrupt into a blank line + Abort)."""
+
+
+_INTERRUPT = {"said": False, "count": 0}
+
+
+def _on_sigint(_signum, _frame):
+    """Raise :class:`Interrupted`; if the clean shutdown hangs (a lock held by the interrupted
+    code) or Ctrl-C comes again, end hard after a moment with the same line and status."""
+    import threading
+    _INTERRUPT["count"] += 1
+
+    def hard_exit():
+        if not _INTERRUPT["said"]:
+            sys.stderr.write("pixelkit: error: interrupted\n")
+        sys.stderr.flush()
+        os._exit(EXIT_INTERRUPTED)
+
+    if _INTERRUPT["count"] > 1:
+        hard_exit()
+    timer = threading.Timer(3.0, hard_exit)
+    timer.daemon = True
+    timer.start()
+    raise Interrupted()
+
+
 def entry(argv=None):
     """Console entry point: one-line (or JSON) errors with distinct exit statuses, no tracebacks."""
+    import signal
     from . import register_all
     register_all()
     args = list(sys.argv[1:] if argv is None else argv)
     as_json = "--json" in args
+    if argv is None:  # the console script: Ctrl-C ends with one line and status 130
+        signal.signal(signal.SIGINT, _on_sigint)
     try:
         main(args=args, standalone_mode=False)
+    except Interrupted:
+        _INTERRUPT["said"] = True
+        _fail(as_json, EXIT_INTERRUPTED, "interrupted")
     except click.exceptions.Exit as exc:
         sys.exit(exc.exit_code)
     except click.exceptions.Abort:

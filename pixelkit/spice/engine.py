@@ -50,7 +50,9 @@ def _stop_everything():
     if _POOL is not None:
         for proc in list(getattr(_POOL, "_processes", {}).values()):
             proc.terminate()
-        _POOL.shutdown(wait=False, cancel_futures=True)
+        # no cancel_futures: the broken pool fails the queued futures itself (cancelling them
+        # too races with that and prints an InvalidStateError traceback on Python 3.11)
+        _POOL.shutdown(wait=False)
         _POOL = None
 
 

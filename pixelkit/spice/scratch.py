@@ -32,10 +32,12 @@ _OWNER = "owner.pid"
 _ROOT: Path | None = None
 _LOCK = threading.Lock()
 _WATCH = ("import os, shutil, sys, time\n"
-          "sys.stdin.buffer.read()\n"
-          "for _ in range(12):\n"
+          "sys.stdin.buffer.read()\n"  # returns when the main process has gone, however it went
+          "for _ in range(20):\n"       # a dying worker may still write for a moment
           "    shutil.rmtree(sys.argv[1], ignore_errors=True)\n"
-          "    time.sleep(0.5)\n")
+          "    time.sleep(0.3)\n"
+          "    if not os.path.exists(sys.argv[1]):\n"
+          "        break\n")
 
 
 def root() -> Path:
