@@ -34,6 +34,15 @@ def test_image_balance_peaks_at_the_rule():
     assert s["trace_contrast"] == sorted(s["trace_contrast"], reverse=True)   # ... weaker trace
 
 
+@pytest.mark.parametrize("ratio", [0.25, 4.0])
+def test_speed_from_the_emulated_trace(ratio):
+    """Eq. 2.15: the trace drawn during the row's wait gives v = d / t_wait (truth: the scene's speed)."""
+    cam, scene = lg.Camera(), lg.StreetScene()
+    r = lg.trace_speed(cam, scene, ratio * lg.rule_of_thumb(cam, 500))
+    assert abs(r["trace_px"] - r["truth_px"]) < 1.0
+    assert r["speed_px_s"] == pytest.approx(scene.speed_px_s, rel=0.01)
+
+
 def test_cli_lowgse(cli):
     code, out, err = cli("sensor", "lowgse", "--json")
     assert code == 0, err

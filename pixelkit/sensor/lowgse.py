@@ -26,7 +26,9 @@ import numpy as np
 
 from ..errors import ConfigError
 from .exposure import Cells, Rect, expose, step_for
+from .profile import crossing
 from .timing import ShutterTiming
+from .trace import background_removed
 
 
 @dataclass(frozen=True)
@@ -104,6 +106,29 @@ def image(camera: Camera, scene: StreetScene, t_int: float, n_cols: int = 230) -
     img = expose(rects, rows, cols, win, step_for(rects, rows, cols, per_cell=8))
     return {"image": img, "head_rows": (int(head_y), int(np.ceil(head_y + scene.headlight_px))),
             "x_start": x_start, "t_wait_s": camera.t_wait(scene.first_row + scene.rows // 2)}
+
+
+def trace_speed(camera: Camera, scene: StreetScene, t_int: float) -> dict:
+    """Speed from the emulated trace, v = d / t_wait (eq. 2.15), against the scene's truth.
+
+    The headlight's sharp image (exposure phase) marks where the path starts
+    (its centre); the trace's far end is where the trace falls to half its
+    plateau (the source's centre at the row's read).
+    """
+    r = image(camera, scene, t_int)
+    top, bottom = r["head_rows"]
+    row = (top + bottom) // 2
+    p = background_removed(r["image"], row, bottom - top + 2)
+    x = np.arange(p.size) + 0.5
+    spot = p > 0.5 * p.max()
+    start = float((p[spot] * x[spot]).sum() / p[spot].sum())
+    beyond = x > start + 1.5 * scene.headlight_px
+    plateau = float(np.median(p[beyond][p[beyond] > 0.25 * p[beyond].max()]))
+    end = float(crossing(p * beyond, 0.5 * plateau, from_left=False)) + 0.5
+    t_wait = camera.t_wait(scene.first_row + row)
+    truth = scene.speed_px_s * (t_wait + t_int / 2)     # centre at mid-exposure -> centre at the read
+    return {"trace_px": end - start, "truth_px": truth, "t_wait_s": t_wait,
+            "speed_px_s": (end - start) / t_wait, "truth_speed_px_s": scene.speed_px_s}
 
 
 def metrics(camera: Camera, scene: StreetScene, t_int: float) -> dict:

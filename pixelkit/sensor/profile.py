@@ -16,7 +16,7 @@ from scipy.optimize import least_squares
 from ..errors import PixelkitError
 
 
-def _crossing(p: np.ndarray, level: float, from_left: bool) -> float:
+def crossing(p: np.ndarray, level: float, from_left: bool) -> float:
     """Fractional sample index where ``p`` first reaches ``level`` (linear interpolation)."""
     idx = np.nonzero(p >= level)[0]
     if idx.size == 0:
@@ -63,7 +63,7 @@ def trapezoid(p, pitch: float = 1.0, origin: float = 0.0, floor: float = 1e-6, a
     centres = 0.5 * (lo + hi)
     pitch = float(np.median(np.diff(centres))) if centres.size > 1 else pitch
     pos = lambda i: float(np.interp(i, np.arange(p.size), centres))  # noqa: E731
-    x = {f: (pos(_crossing(p, f * top, True)), pos(_crossing(p, f * top, False))) for f in (0.25, 0.5, 0.75)}
+    x = {f: (pos(crossing(p, f * top, True)), pos(crossing(p, f * top, False))) for f in (0.25, 0.5, 0.75)}
     ramp = (x[0.75][0] - x[0.25][0]) + (x[0.25][1] - x[0.75][1])      # = 2 (x75 - x25) averaged
     fwhm = x[0.5][1] - x[0.5][0]
     support = np.nonzero(p > floor * top)[0]
