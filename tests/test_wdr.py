@@ -48,10 +48,15 @@ def test_decoded_flip_time_matches_the_sampling_edge(result):
 
 
 def test_knee_is_where_v0_puts_it(result):
-    """Currents at 0.85x and 1.16x the model's knee dQ(V_start -> V0) / 2^N T bracket it."""
+    """The model's knee (charge model + dark current: the photocurrent that reaches V0 at 2^N T)
+    is bracketed by SPICE pixels that did and did not flip, at V0 and at a second V0."""
     k = result["knee"]
     assert k["largest_unflipped_A"] < k["i_knee_model_A"] < k["smallest_flipped_A"]
     assert k["smallest_flipped_A"] / k["largest_unflipped_A"] < 1.4
+    alt = result["knee_other_v0"]
+    assert alt["v0_V"] == pytest.approx(1.6)
+    assert alt["bracket"] == (0.9, 1.1) and alt["flipped"] == [False, True]
+    assert alt["i_knee_model_A"] < 0.6 * k["i_knee_model_A"], "a higher V0 acts at less light"
 
 
 def test_dynamic_range_against_cvdr_plus_steps(result):

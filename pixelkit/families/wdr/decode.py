@@ -57,7 +57,7 @@ def dark_model(design, v_start: float, v_half: float, v_end: float) -> tuple[flo
     return i1 - g * m1, g
 
 
-def _low_light(design, v_start: float, v3: float, dark: tuple[float, float]) -> float:
+def low_light_current(design, v_start: float, v3: float, dark: tuple[float, float]) -> float:
     """I such that C(V) dV/dt = -(I + a + g V) takes the node from v_start to v3 in 2^N T."""
     t_exp = (2 ** design.coding.steps) * design.coding.t_unit
     a, g = dark
@@ -72,13 +72,18 @@ def _low_light(design, v_start: float, v3: float, dark: tuple[float, float]) -> 
     return float(brentq(excess, lo, hi, xtol=1e-22, rtol=1e-10))
 
 
+def knee_current(design, v_start: float, dark: tuple[float, float]) -> float:
+    """The photocurrent that reaches V0 exactly at the end of the frame (dark current included)."""
+    return low_light_current(design, v_start, design.pixel.v0, dark)
+
+
 def decode(design, v1: float, v2: float, v3: float, v_start: float, dark=(0.0, 0.0)) -> dict:
     """t_c (s; None at low light), the regime and the photocurrent (A); ``dark`` = (a, g)."""
     cd, px = design.coding, design.pixel
     t_exp = (2 ** cd.steps) * cd.t_unit
     t_coarse = (cd.v_high - v2) / (cd.v_high - cd.v_low) * t_exp
     if t_coarse >= t_exp - 0.5 * cd.t_unit:
-        return {"regime": "low", "t_c_s": None, "i_A": _low_light(design, v_start, v3, dark)}
+        return {"regime": "low", "t_c_s": None, "i_A": low_light_current(design, v_start, v3, dark)}
     t_c = sample_time(v1, v2, cd) - cd.t_delay
     i_dark = dark[0] + dark[1] * (v_start + px.v0) / 2
     i = float(delta_q(design, v_start, px.v0)) / t_c - i_dark
