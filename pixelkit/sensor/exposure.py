@@ -77,6 +77,7 @@ def expose(rects, rows: Cells, cols: Cells, windows: np.ndarray, dt: float, chun
     dt = min(dt, t1 - t0) if t1 > t0 else 1.0
     n_steps = max(1, int(np.ceil((t1 - t0) / dt - 1e-9)))
     image = np.zeros((rows.lo.size, cols.lo.size))
+    chunk = max(16, min(chunk, 4_000_000 // (rows.lo.size * windows.shape[1] + cols.lo.size)))   # bounded memory
     groups: dict = {}                 # rectangles sharing their rows: one matrix product per group
     for r in rects:
         groups.setdefault((r.y0, r.height, r.vy), []).append(r)

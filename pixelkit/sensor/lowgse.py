@@ -155,7 +155,8 @@ def balance(camera: Camera = Camera(), scene: StreetScene = StreetScene(),
             ratios=(0.125, 0.25, 0.5, 1.0, 2.0, 4.0, 8.0)) -> dict:
     """Sweep t_int around the rule of thumb; the product of sharpness and trace contrast and its peak."""
     t_rule = rule_of_thumb(camera, scene.first_row + scene.rows // 2)
-    ms = [metrics(camera, scene, k * t_rule) for k in ratios]
+    from ..progress import progress
+    ms = [metrics(camera, scene, k * t_rule) for k in progress(ratios, desc="low-GSE balance sweep", unit="image")]
     prod = np.array([m["sharpness"] * m["trace_contrast"] for m in ms])
     best = int(np.argmax(prod))
     sweep = {"ratio": [m["ratio"] for m in ms], "t_int_s": [m["t_int_s"] for m in ms],
