@@ -45,8 +45,11 @@ def speed(pixel_error_px, as_json, **values):
         kw[key] = _quantity(name, values[key], dim)
     try:
         p = TracePoint(pixel_error_px=pixel_error_px, **kw)
-    except ConfigError as exc:
-        raise ConfigError("", f"--{exc.field}", exc.value, exc.allowed) from None
+    except ConfigError as exc:      # name the option and the value as written
+        key = exc.field.replace("-", "_")
+        opt = f"--{exc.field.replace('_', '-')}" if key in values else f"angle {exc.field} (--gamma, --alpha, --beta)"
+        value = values.get(key, f"{exc.value:g} deg" if isinstance(exc.value, float) else exc.value)
+        raise ConfigError("", opt, value, exc.allowed) from None
     r = error_budget(p)
     r["terms_kmh"] = {k: v * 3.6 for k, v in r["terms_ms"].items()}
     emit(r, as_json, lambda x: (f"v = {x['v_kmh']:.2f} km/h, dv = {x['dv_kmh']:.2f} km/h "
