@@ -74,6 +74,9 @@ def _windows(camera: Camera, t_int: float, first: int, n: int) -> np.ndarray:
     return w
 
 
+X_START = 60.0     # column of the headlight's left edge at t = 0
+
+
 @dataclass(frozen=True)
 class StreetScene:
     """A car (striped body) with a headlight passing in front of a static background, in pixels and seconds."""
@@ -86,26 +89,30 @@ class StreetScene:
     first_row: int = 488             # the band sits around row 500 (eq. 2.18)
 
 
-def image(camera: Camera, scene: StreetScene, t_int: float, n_cols: int = 230) -> dict:
-    """The emulated double-exposure image of ``scene`` (relative units), time-stepped."""
+def scene_rects(camera: Camera, scene: StreetScene, t_int: float, n_cols: int):
+    """Rectangles (relative irradiance), row and column apertures and windows of the emulated frame."""
     u = scene.speed_px_s
     head_y = scene.rows / 2 - scene.headlight_px / 2
-    x_start = 60.0
     rects = [Rect(-1.0, -1.0, n_cols + 2.0, scene.rows + 2.0, 0.0, 0.0, 1.0),       # static background
-             Rect(-5 * n_cols, 0.0, 5 * n_cols + x_start + 2 * scene.headlight_px, scene.rows, u, 0.0,
+             Rect(-5 * n_cols, 0.0, 5 * n_cols + X_START + 2 * scene.headlight_px, scene.rows, u, 0.0,
                   scene.body[0] - 1.0)]
     period = 2 * scene.stripe_px
     travel = u * (t_int + camera.t_wait(scene.first_row + scene.rows))
     for k in range(int((n_cols + travel) / period) + 2):          # the stripes that pass the view
-        x = x_start + 2 * scene.headlight_px - (k + 1) * period
+        x = X_START + 2 * scene.headlight_px - (k + 1) * period
         rects.append(Rect(x, 0.0, scene.stripe_px, scene.rows, u, 0.0, scene.body[1] - scene.body[0]))
-    rects.append(Rect(x_start, head_y, scene.headlight_px, scene.headlight_px, u, 0.0, scene.headlight - scene.body[0]))
-    rows = Cells.grid(scene.rows)
-    cols = Cells.grid(n_cols)
-    win = _windows(camera, t_int, scene.first_row, scene.rows)
+    rects.append(Rect(X_START, head_y, scene.headlight_px, scene.headlight_px, u, 0.0,
+                      scene.headlight - scene.body[0]))
+    return rects, Cells.grid(scene.rows), Cells.grid(n_cols), _windows(camera, t_int, scene.first_row, scene.rows)
+
+
+def image(camera: Camera, scene: StreetScene, t_int: float, n_cols: int = 230) -> dict:
+    """The emulated double-exposure image of ``scene`` (relative units), time-stepped."""
+    rects, rows, cols, win = scene_rects(camera, scene, t_int, n_cols)
     img = expose(rects, rows, cols, win, step_for(rects, rows, cols, per_cell=8))
+    head_y = scene.rows / 2 - scene.headlight_px / 2
     return {"image": img, "head_rows": (int(head_y), int(np.ceil(head_y + scene.headlight_px))),
-            "x_start": x_start, "t_wait_s": camera.t_wait(scene.first_row + scene.rows // 2)}
+            "x_start": X_START, "t_wait_s": camera.t_wait(scene.first_row + scene.rows // 2)}
 
 
 def trace_speed(camera: Camera, scene: StreetScene, t_int: float) -> dict:
