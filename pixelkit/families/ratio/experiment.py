@@ -24,6 +24,7 @@ from ...errors import PixelkitError
 from ...progress import step
 from ...spice import simulate_many
 from .circuit import T_PRE, ratio_bench, tau_nominal
+from .devices import weak_inversion
 from .law import counter, interval_over_tau, ratio_from_count, ratio_from_interval, resolution
 
 RATIOS = (1.0, 1.618, 3.0, 10.0, 20.0, 30.0)
@@ -148,6 +149,7 @@ def run_ratio_experiment(design, backend: str = "batch", jobs: int | None = None
         "high_bias": {k: high[k] for k in ("i_bias_A", "ratio_law_max_err_frac", "interval_law_max_err_frac",
                                            "intensity_spread_frac", "tau_s")},
         "intensity_spread_frac": nom["intensity_spread_frac"],
+        "weak_inversion": weak_inversion(design, backend=backend),
         "biases": per_bias,
         "n_runs": len(results),
         "n_cached": sum(bool(r.meta.get("cached")) for r in results),

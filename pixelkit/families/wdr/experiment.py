@@ -28,6 +28,7 @@ import numpy as np
 from ...progress import step
 from ...spice import simulate_many
 from .circuit import T_RESET, t_exposure, wdr_bench
+from .dark import dark_current_vs_voltage
 from .decode import dark_model, decode, knee_current
 from .model import delta_q, figures
 
@@ -92,6 +93,9 @@ def run_wdr_experiment(design, backend: str = "batch", jobs: int | None = None) 
     return {
         "design": design.name, "family": "wdr", "backend": backend,
         "decode_max_err_frac": max(abs(r["err_frac"]) for r in rows),
+        "decode_max_err_frac_one_dark_rate": max(
+            abs(decode(design, r["v1_V"], r["v2_V"], r["v3_V"], r["v_start_V"], (i_dark, 0.0))["i_A"]
+                / r["i_true_A"] - 1.0) for r in rows),
         "decades": math.log10(cur[-1] / cur[1]),
         "dr_db": dr,
         "dr_formula_db": m["dr_formula_db"], "cvdr_db": m["cvdr_db"],
@@ -105,6 +109,7 @@ def run_wdr_experiment(design, backend: str = "batch", jobs: int | None = None) 
                           "bracket": KNEE_BRACKET,
                           "flipped": [_flipped(alt, res_alt, k) for k in range(len(alt_cur))]},
         "i_dark_A": i_dark, "dark_slope_A_per_V": dark[1],
+        "dark_current_vs_voltage": dark_current_vs_voltage(design, backend=backend),
         "sweep": rows,
         "n_runs": 2, "n_cached": sum(bool(r.meta.get("cached")) for r in (res, res_alt)),
         "wall_s": time.perf_counter() - t0,
