@@ -92,7 +92,7 @@ class Pixel:
     v_pd_reset: float = qty("V", 2.0, gt=0, plausible=(0.1, 40.0),
                             doc="EC drain: PD reset level (hard reset below VDD - Vth)")
     v_fd_reset: float = qty("V", 2.0, gt=0, plausible=(0.1, 40.0), doc="RST drain: FD reset level")
-    gse: float = num(1000.0, ge=1, le=1e9, doc="FD shielding: the storage node collects 1/gse of the PD's "
+    gse: float = num(1000.0, ge=1, le=1e9, plausible=(10.0, 1e7), doc="FD shielding: the storage node collects 1/gse of the PD's "
                      "photocurrent (charge ratio eta_pd / eta_FD)")
     devices: Devices = table(Devices, default=Devices)
 
@@ -116,15 +116,15 @@ class Afe:
 class Experiment:
     """The thesis's same-window simulation experiment (fig. A.1 - A.3)."""
     t_window: float = qty("s", 16e-6, gt=0, le=1e-3, plausible=(1e-8, 1e-3), doc="exposure window of the experiment")
-    mid_fraction: float = num(0.5, gt=0, lt=1, doc="primary target: fraction of swing")
-    low_fraction: float = num(0.05, gt=0, lt=1, doc="secondary target: fraction of swing")
+    mid_fraction: float = num(0.5, gt=0, lt=1, plausible=(0.01, 0.99), doc="primary target: fraction of swing")
+    low_fraction: float = num(0.05, gt=0, lt=1, plausible=(0.001, 0.99), doc="secondary target: fraction of swing")
 
 
 @dataclass(frozen=True)
 class Optics:
     focal_length: float = qty("m", gt=0, le=1.0, plausible=(1e-4, 1.0))
     f_number: float = num(gt=0.5, le=64)
-    transmission: float = num(0.9, gt=0, le=1)
+    transmission: float = num(0.9, gt=0, le=1, plausible=(0.01, 1.0))
 
 
 @dataclass(frozen=True)
@@ -137,7 +137,7 @@ class Scene:
                             doc="scene illuminance at which the primary sits at mid-scale")
     headlight: float = qty("W/m2", gt=0, plausible=(1e-9, 1e5),
                            doc="headlight irradiance at the sensor (the spot's image)")
-    reflectance: float = num(0.2, gt=0, le=1)
+    reflectance: float = num(0.2, gt=0, le=1, plausible=(1e-3, 1.0))
     spectrum_temperature: float = qty("K", 2856.0, gt=1000, plausible=(1000.0, 20000.0),
                                       doc="black-body colour temperature of the light")
     max_temperature: float = qty("K", 358.15, gt=0, lt=500, plausible=(213.15, 473.15), doc="maximum die temperature")
@@ -153,13 +153,13 @@ class Sizing:
     t_ratio: float = num(0.0, ge=0, plausible=(0.0, 1e6), doc="fixed t_secondary / t_primary; 0 = free")
     level: str = text("spice", choices=("analytic", "spice"))
     objective: str = text("trace", choices=("trace", "margin"), doc="trace: longest trace; margin: centre the bounds")
-    min_trace_px: float = num(5.0, gt=0, plausible=(0.0, 1e5), doc="shortest usable trace at speed_min (speed accuracy)")
-    fov_fraction: float = num(0.8, gt=0, le=1, doc="longest trace at speed_max, as a fraction of the width")
-    max_motion_px: float = num(1.0, gt=0, plausible=(0.0, 1e5), doc="primary image motion limit at speed_max")
-    dark_fraction: float = num(0.05, gt=0, lt=1, doc="dark signal over t_secondary at max temperature")
-    headlight_max: float = num(0.9, gt=0, le=1, doc="headlight signal below this fraction of swing")
-    headlight_snr: float = num(10.0, gt=0, plausible=(0.0, 1e6), doc="headlight signal over the secondary's noise floor")
-    margin: float = num(0.05, ge=0, lt=0.5, doc="relative margin required on every inequality")
+    min_trace_px: float = num(5.0, gt=0, plausible=(0.1, 1e5), doc="shortest usable trace at speed_min (speed accuracy)")
+    fov_fraction: float = num(0.8, gt=0, le=1, plausible=(0.01, 1.0), doc="longest trace at speed_max, as a fraction of the width")
+    max_motion_px: float = num(1.0, gt=0, plausible=(0.01, 1e5), doc="primary image motion limit at speed_max")
+    dark_fraction: float = num(0.05, gt=0, lt=1, plausible=(1e-4, 0.99), doc="dark signal over t_secondary at max temperature")
+    headlight_max: float = num(0.9, gt=0, le=1, plausible=(0.01, 1.0), doc="headlight signal below this fraction of swing")
+    headlight_snr: float = num(10.0, gt=0, plausible=(0.1, 1e6), doc="headlight signal over the secondary's noise floor")
+    margin: float = num(0.05, ge=0, lt=0.5, plausible=(0.0, 0.5), doc="relative margin required on every inequality")
 
 
 @dataclass(frozen=True)

@@ -211,3 +211,29 @@ def dark_bench(design, which: str, t_int: float, title: str = "dark_bench") -> N
           mosfet("ec", "vpdr", "ec", "pd", "0", dev.ec_w, dev.ec_l, t),
           mosfet("tg", "fd", "tg", "pd", "0", dev.tg_w, dev.tg_l, t))
     return _deck(design, title, el, (), Tran(1e-9, t_reset + t_int, 0.0, t_int / 200), options=LONG_OPTIONS)
+
+
+def sf_bench(design, v_fd: float, title: str = "sf_bench") -> Netlist:
+    """Operating point of one SF with RS on and its column load, gate held at ``v_fd``."""
+    dev, t, vdd = design.pixel.devices, design.tech, design.tech.supply
+    el = (Element("Vdd", ("vdd", "0"), vdd), Element("Vfd", ("fd", "0"), v_fd), Element("Vrs", ("rs", "0"), vdd),
+          mosfet("sf", "vdd", "fd", "sfo", "0", dev.sf_w, dev.sf_l, t),
+          mosfet("rs", "sfo", "rs", "col", "0", dev.rs_w, dev.rs_l, t),
+          *column.bias(design), *column.load(design, "col"))
+    return _deck(design, title, el, (), Op())
+
+
+def dark_bench(design, which: str, t_int: float, title: str = "dark_bench") -> Netlist:
+    """The PD node of ``which`` subpixel with its EC and TG (off), reset by EC then dark for ``t_int``.
+
+    The PD's dark current comes from the diode card (the kit's one law at the deck
+    temperature); the EC/TG junctions add what the BSIM4 models leak. gmin 1e-18.
+    """
+    sub, dev, t, px = getattr(design, which), design.pixel.devices, design.tech, design.pixel
+    t_reset, edge = 1e-6, 10e-9
+    el = (Element("Vpdr", ("vpdr", "0"), px.v_pd_reset), Element("Vfd", ("fd", "0"), px.v_fd_reset),
+          Element("Vec", ("ec", "0"), waveform([(0.0, t_reset)], t.supply, edge)), Element("Vtg", ("tg", "0"), 0.0),
+          photodiode("pd", "pd", sub.area, sub.perimeter, t),
+          mosfet("ec", "vpdr", "ec", "pd", "0", dev.ec_w, dev.ec_l, t),
+          mosfet("tg", "fd", "tg", "pd", "0", dev.tg_w, dev.tg_l, t))
+    return _deck(design, title, el, (), Tran(1e-9, t_reset + t_int, 0.0, t_int / 200), options=LONG_OPTIONS)

@@ -6,10 +6,15 @@ it, and so what the analytic node holds:
 - the TG drain and the RST source diffusions: bottom junction (area), field
   sidewall (perimeter minus the gate edge) and gate-edge sidewall, all with the
   technology's MOS junction parameters (the C(V) of ``junction``), plus the gate
-  overlap ``cgso W`` of each switch (their gates sit at a fixed level in storage);
-- the SF gate: the drain overlap ``cgso W`` to VDD, and the gate-source
-  capacitance (2/3 Cox W L + cgso W in saturation) bootstrapped by the follower:
-  only ``(1 - A_sf)`` of it loads FD (Miller).
+  overlap of each switch (their gates sit at 0 V in storage and readout);
+- the SF gate: the drain overlap to VDD, and the gate-source capacitance
+  (2/3 Cox W L + the source overlap, in saturation) bootstrapped by the
+  follower: only ``(1 - A_sf)`` of it loads FD (Miller).
+
+An overlap is ``cgso W`` plus the bias-dependent LDD part of BSIM4's capmod 2,
+``cgsl W (1 - 1/sqrt(1 - 4 V_ov / ckappa))`` for an overlap voltage V_ov < 0 (gate
+below the diffusion) and the full ``cgsl W`` above; it is taken at the node's bias.
+Without it the FD is 10 % short of what SPICE's devices put on it (0.16 fF of 2.0).
 
 Charge sharing: TG conducts in its linear region during the transfer, so the PD
 node (PD junction + EC/TG diffusions, ``subpixel.pd_node(parasitics=True)``) and
@@ -25,15 +30,16 @@ level, NCDS) moves by ``A_sf`` times that. Hence
 BSIM4 device models at the read operating point (``circuits.testbench.sf_gain``):
 the kit has no closed form for those models. Everything else is closed form.
 
-Storage: FD leaks with the kit's one dark-current law (``dark``) on the FD
-diffusions, and collects a parasitic photocurrent I_ph / gse (the design's
+Storage: FD leaks through its diffusions by the device models' junction law
+(``diffusion_leakage``: BSIM4's, which SPICE applies to the same diffusions), and collects a parasitic photocurrent I_ph / gse (the design's
 ``pixel.gse`` = eta_pd / eta_FD, a charge ratio set by the shielding) while it waits.
 """
 from __future__ import annotations
 
 from ..circuits.geometry import diffusion
+import numpy as np
+
 from ..constants import Q
-from .dark import dark_scale
 from .junction import Junction, Node
 
 
@@ -44,26 +50,35 @@ def mos_junctions(tech) -> tuple[Junction, Junction]:
             Junction(0.0, 0.5, 1.0, mos.cjswg, mos.mjswg, mos.pbswg))
 
 
-def switch_side(w: float, tech) -> tuple[tuple, float]:
-    """Junction terms and fixed overlap C (F) that one source/drain of width ``w`` adds to a node."""
+def overlap(w: float, v_ov: float, mos) -> float:
+    """Gate overlap capacitance (F) of width ``w`` at overlap voltage ``v_ov`` = V_gate - V_diffusion."""
+    ldd = 1.0 if v_ov >= 0 else 1.0 - 1.0 / np.sqrt(1.0 - 4.0 * v_ov / mos.ckappa)
+    return w * (mos.cgso + mos.cgsl * ldd)
+
+
+def switch_side(w: float, tech, v_ov: float = 0.0) -> tuple[tuple, float]:
+    """Junction terms and overlap C (F) one source/drain of width ``w`` adds to a node."""
     body, edge = mos_junctions(tech)
     a, p = diffusion(w, tech.mos.diff_ext)
-    return ((a, p - w, body), (0.0, w, edge)), tech.mos.cgso * w
+    return ((a, p - w, body), (0.0, w, edge)), overlap(w, v_ov, tech.mos)
 
 
-def sf_gate(design, a_sf: float) -> float:
+def sf_gate(design, a_sf: float, v_fd: float | None = None) -> float:
     """Capacitance (F) the SF gate adds to FD: drain overlap + (1 - A_sf) x gate-source."""
     dev, mos = design.pixel.devices, design.tech.mos
-    c_gs = 2.0 / 3.0 * mos.cox * dev.sf_w * dev.sf_l + mos.cgso * dev.sf_w
-    return mos.cgso * dev.sf_w + (1.0 - a_sf) * c_gs
+    v = design.pixel.v_pd_reset if v_fd is None else v_fd
+    c_gs = 2.0 / 3.0 * mos.cox * dev.sf_w * dev.sf_l + overlap(dev.sf_w, 1.0, mos)
+    return overlap(dev.sf_w, v - design.tech.supply, mos) + (1.0 - a_sf) * c_gs
 
 
-def fd_node(design, a_sf: float) -> Node:
-    """C(V) of the floating diffusion (reverse bias V of its junctions)."""
+def fd_node(design, a_sf: float, v_fd: float | None = None) -> Node:
+    """C(V) of the floating diffusion (reverse bias V of its junctions); overlaps taken at ``v_fd``
+    (default the PD reset level), with TG and RST gates at 0 V."""
     dev, tech = design.pixel.devices, design.tech
-    terms, c_fixed = [], sf_gate(design, a_sf)
+    v = design.pixel.v_pd_reset if v_fd is None else v_fd
+    terms, c_fixed = [], sf_gate(design, a_sf, v)
     for w in (dev.tg_w, dev.rst_w):
-        t, c = switch_side(w, tech)
+        t, c = switch_side(w, tech, -v)
         terms += t
         c_fixed += c
     return Node(tuple(terms), c_fixed)
@@ -77,17 +92,40 @@ def fd_diffusion(design) -> tuple[float, float]:
     return a1 + a2, p1 + p2
 
 
-def leakage(design, temperature_K: float | None = None) -> float:
-    """FD junction leakage (A): the PD's dark-current densities and doubling law on the FD diffusions.
+def _bandgap(t: float) -> float:
+    """Silicon bandgap (eV) at ``t`` (K), the BSIM4 expression."""
+    return 1.16 - 7.02e-4 * t * t / (t + 1108.0)
 
-    The technology gives one generation-current density pair (``photodiode.dark_*``);
-    the FD's n+/p-sub junction is assumed to leak alike (EFFECTS.md row 2: mV/s to
-    tens of mV/s at room temperature on a few fF).
+
+def diffusion_leakage(w: float, tech, temperature_K: float) -> float:
+    """Reverse current (A) of one source/drain diffusion of width ``w``: the device models' own law.
+
+    BSIM4 (tempmod 0): I_s = js A + jsw (P - W), scaled by
+    exp([Eg(T0)/kT0 - Eg(T)/kT + xtis ln(T/T0)] / njs) from the models' tnom T0.
+    SPICE applies exactly this to every MOS diffusion; the analytic model uses it for
+    the FD (its only leak) and for the switch diffusions on the PD node.
     """
-    pd = design.tech.photodiode
-    a, p = fd_diffusion(design)
+    from ..constants import K_B
+    mos = tech.mos
+    a, p = diffusion(w, mos.diff_ext)
+    t0, t = mos.t_nom, temperature_K
+    kq = K_B / Q
+    arg = (_bandgap(t0) / (kq * t0) - _bandgap(t) / (kq * t) + mos.xtis * np.log(t / t0)) / mos.njs
+    return (mos.js * a + mos.jsw * (p - w)) * float(np.exp(arg))
+
+
+def leakage(design, temperature_K: float | None = None) -> float:
+    """FD leakage (A): its TG drain and RST source diffusions (``diffusion_leakage``)."""
+    dev = design.pixel.devices
     t = design.temperature if temperature_K is None else temperature_K
-    return (pd.dark_area * a + pd.dark_perimeter * p) * dark_scale(t, pd)
+    return sum(diffusion_leakage(w, design.tech, t) for w in (dev.tg_w, dev.rst_w))
+
+
+def pd_switch_leakage(design, temperature_K: float | None = None) -> float:
+    """What the EC and TG source diffusions add to the PD node's dark current (A)."""
+    dev = design.pixel.devices
+    t = design.temperature if temperature_K is None else temperature_K
+    return sum(diffusion_leakage(w, design.tech, t) for w in (dev.ec_w, dev.tg_w))
 
 
 def response(design, which: str, a_sf: float, v_bias: float | None = None) -> dict:
@@ -100,7 +138,7 @@ def response(design, which: str, a_sf: float, v_bias: float | None = None) -> di
     v = design.pixel.v_pd_reset if v_bias is None else v_bias
     c_pd = float(pd_node(design, which).capacitance(v))
     c_node = float(pd_node(design, which, parasitics=True).capacitance(v))
-    c_fd = float(fd_node(design, a_sf).capacitance(v))
+    c_fd = float(fd_node(design, a_sf, v).capacitance(v))
     c_tot = c_node + c_fd
     return {"v_bias_V": v, "c_pd_F": c_pd, "c_pd_node_F": c_node, "c_fd_F": c_fd, "c_total_F": c_tot,
             "cg_pd_V_per_e": Q / c_pd, "sharing": c_node / c_tot, "cg_fd_V_per_e": Q / c_tot,
@@ -124,8 +162,11 @@ def signal_gse(design, which: str, a_sf: float) -> float:
 
 
 def storage_signal(design, which: str, a_sf: float, i_ph: float, t_wait: float,
-                   temperature_K: float | None = None) -> float:
-    """Column signal (V) the FD adds while it waits ``t_wait``: leakage + parasitic light."""
-    r = response(design, which, a_sf)
+                   temperature_K: float | None = None, v_fd: float | None = None) -> float:
+    """Column signal (V) the FD adds while it waits ``t_wait``: leakage + parasitic light.
+
+    ``v_fd``: the FD's bias while it stores (default the PD reset level); ``a_sf`` the SF
+    gain there."""
+    r = response(design, which, a_sf, v_fd)
     i = leakage(design, temperature_K) + pls_current(design, i_ph)
     return a_sf * i * t_wait / r["c_fd_F"]

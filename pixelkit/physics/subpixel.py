@@ -7,30 +7,27 @@ parameters) and their gate overlaps; this is what a SPICE discharge sees.
 """
 from __future__ import annotations
 
-from ..circuits.geometry import diffusion
 from ..physics import conversion
 from .dark import dark_current
+from .fd import switch_side
 from .junction import Junction, Node
 
 SUBPIXELS = ("primary", "secondary")
 
 
 def pd_node(design, which: str, parasitics: bool = False) -> Node:
-    """C(V) of the photodiode of ``which`` subpixel, optionally with its switch parasitics."""
+    """C(V) of the photodiode of ``which`` subpixel, optionally with its switch parasitics
+    (EC and TG source diffusions and overlaps, gates at 0 V, overlaps at the PD reset level)."""
     sub = getattr(design, which)
     tech = design.tech
     terms = [(sub.area, sub.perimeter, Junction.of(tech.photodiode))]
     c_fixed = 0.0
     if parasitics:
-        mos = tech.mos
-        body = Junction(mos.cj, mos.mj, mos.pb, mos.cjsw, mos.mjsw, mos.pbsw)
-        gate_edge = Junction(0.0, 0.5, 1.0, mos.cjswg, mos.mjswg, mos.pbswg)
         dev = design.pixel.devices
         for w in (dev.ec_w, dev.tg_w):
-            a, p = diffusion(w, mos.diff_ext)
-            terms.append((a, p - w, body))
-            terms.append((0.0, w, gate_edge))
-            c_fixed += mos.cgso * w
+            t, c = switch_side(w, tech, -design.pixel.v_pd_reset)
+            terms += t
+            c_fixed += c
     return Node(tuple(terms), c_fixed)
 
 

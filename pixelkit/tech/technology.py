@@ -60,6 +60,14 @@ class Mos:
     cgso: float = qty("F/m", ge=0, plausible=(0.0, 1e-8), doc="gate-source/drain overlap capacitance per width")
     cox: float = qty("F/m2", gt=0, plausible=(1e-4, 1.0), doc="gate oxide capacitance per area")
     vth_n: float = qty("V", gt=0, plausible=(0.05, 5.0), doc="nominal NMOS threshold (estimates only)")
+    cgsl: float = qty("F/m", 0.0, ge=0, plausible=(0.0, 1e-8),
+                      doc="bias-dependent (LDD) overlap per width (BSIM4 cgsl/cgdl, capmod 2)")
+    ckappa: float = qty("V", 0.6, gt=0, plausible=(0.01, 10.0), doc="BSIM4 ckappas: LDD overlap voltage scale")
+    js: float = qty("A/m2", 0.0, ge=0, plausible=(0.0, 1.0), doc="diffusion junction saturation current (BSIM4 jss)")
+    jsw: float = qty("A/m", 0.0, ge=0, plausible=(0.0, 1e-6), doc="its field-sidewall part (BSIM4 jsws)")
+    njs: float = num(1.0, gt=0.5, le=3, plausible=(0.8, 2.0), doc="junction emission coefficient (BSIM4 njs)")
+    xtis: float = num(3.0, ge=0, le=10, plausible=(0.0, 6.0), doc="junction current temperature exponent (BSIM4 xtis)")
+    t_nom: float = qty("K", 298.15, gt=0, lt=500, doc="temperature of js/jsw (the models' tnom)")
 
 
 @dataclass(frozen=True)
