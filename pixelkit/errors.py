@@ -23,6 +23,12 @@ class PixelkitError(Exception):
 
     exit_status = EXIT_USER
 
+    def __str__(self) -> str:
+        """Always one line: a line break or control character from a file name or a value
+        (``\n``, ``\x85``, U+2028 ...) is shown escaped (issue 9)."""
+        text = super().__str__()
+        return text if text.isprintable() else "".join(c if c.isprintable() else ascii(c)[1:-1] for c in text)
+
     def details(self) -> dict:
         """Structured fields of the error for ``--json`` (besides the message)."""
         return {}
@@ -39,6 +45,8 @@ class ConfigError(PixelkitError):
 
     def details(self) -> dict:
         shown = None if self.value is _MISSING else self.value
+        if isinstance(shown, float) and shown != shown or shown in (float("inf"), float("-inf")):
+            shown = repr(shown)  # NaN / Infinity are not JSON
         return {"source": self.source, "field": self.field, "value": shown, "allowed": self.allowed}
 
 

@@ -74,6 +74,8 @@ def _symbol(sym: str) -> tuple[float, tuple[int, ...]]:
         return 3600.0, _BASE["s"]
     if sym == "min":
         return 60.0, _BASE["s"]
+    if sym == "dB":
+        raise ValueError("dB is a ratio, only for dimensionless fields")
     for table in (_DERIVED, _BASE):
         if sym in table:
             if table is _BASE:

@@ -1,0 +1,294 @@
+"""Seeded fuzz over every design and technology field: no internal error, no implausible
+value accepted, no written file that does not load again.
+
+The expectations are independent of the schema's own ranges: no real chip has a
+quantity of 1e300 or 1e-300 of its unit (except ~0 where zero is meaningful), a
+NaN or infinite value, or a shell command in a name. Most mutations run through
+the in-process loader (what every command calls first); a seeded sample runs
+through the command line to check the exit status and the one-line / JSON error.
+"""
+import dataclasses
+import json
+import math
+import random
+import re
+import tomllib
+from pathlib import Path
+
+import pytest
+
+from conftest import REF, ROOT
+from pixelkit.design import Design, load_design
+from pixelkit.errors import PixelkitError
+from pixelkit.finite import first_nonfinite
+from pixelkit.schema import to_toml
+from pixelkit.tech.technology import Technology
+from pixelkit.units import DIMENSIONS
+
+SEED = 9
+PER_FIELD = 7          # mutations per field, drawn (seeded) from the corpus below
+CLI_SAMPLE = 6         # mutated files also run through `pixelkit models`
+TECH = ROOT / "pixelkit" / "tech" / "builtin" / "c35_thesis.toml"
+MARK = "/tmp/pixelkit_fuzz_pwned"
+
+
+def _unit(meta) -> str:
+    example = DIMENSIONS[meta.get("dim", "1")][1]
+    parts = example.split(" ", 1)
+    return parts[1] if len(parts) > 1 else ""
+
+
+#: name -> value for a field of metadata ``meta`` (None = delete the field).
+CORPUS = {
+    "tiny": lambda m: f"1e-300 {_unit(m)}".strip(),
+    "huge": lambda m: f"1e300 {_unit(m)}".strip(),
+    "negative": lambda m: f"-1 {_unit(m)}".strip(),
+    "zero": lambda m: f"0 {_unit(m)}".strip(),
+    "nan_text": lambda m: f"nan {_unit(m)}".strip(),
+    "overflow": lambda m: f"1e999 {_unit(m)}".strip(),
+    "bare_number": lambda m: 60,
+    "toml_nan": lambda m: float("nan"),
+    "toml_inf": lambda m: float("-inf"),
+    "bool": lambda m: True,
+    "empty": lambda m: "",
+    "list": lambda m: [1, 2],
+    "table": lambda m: {"a": 1},
+    "injection": lambda m: f"x\u2028.control\u2028shell touch {MARK}\u2028.endc",
+    "long": lambda m: "9" * 5000,
+    "db_huge": lambda m: "1e300 dB",
+    "wrong_unit": lambda m: "1 lx" if m.get("dim") != "lx" else "1 V",
+    "big_int": lambda m: 10 ** 30,
+    "missing": lambda m: None,
+    "fullwidth": lambda m: f"\uff11 {_unit(m)}".strip(),
+    "control_char": lambda m: f"1\x07 {_unit(m)}".strip(),
+}
+ALWAYS = ("tiny", "huge", "bare_number")
+
+
+def _leaves(cls, prefix=""):
+    """(dotted path, metadata) of every loadable scalar field of a schema dataclass."""
+    for f in dataclasses.fields(cls):
+        kind = f.metadata.get("kind", "skip")
+        if kind == "skip":
+            continue
+        path = f"{prefix}{f.name}"
+        if kind == "table":
+            yield from _leaves(f.metadata["cls"], path + ".")
+        else:
+            yield path, dict(f.metadata)
+
+
+def _set(raw: dict, dotted: str, value):
+    node = raw
+    *head, last = dotted.split(".")
+    for part in head:
+        node = node.setdefault(part, {})
+    if value is None:
+        node.pop(last, None)
+    else:
+        node[last] = value
+
+
+def _tech_raw() -> dict:
+    from pixelkit.tech import load_technology
+    raw = tomllib.loads(TECH.read_text())
+    raw["models"]["folder"] = str(load_technology("c35_thesis").models.folder)
+    return raw
+
+
+def _cases():
+    rng = random.Random(SEED)
+    fields = [("design", p, m) for p, m in _leaves(Design)]
+    fields += [("tech", p, m) for p, m in _leaves(Technology)]
+    fields += [("tech", "models.folder", {"kind": "str"}), ("tech", "models.default_corner", {"kind": "ident"}),
+               ("tech", "photodiode.qe_curve", {"kind": "list"})]
+    for where, path, meta in fields:
+        names = list(ALWAYS) + rng.sample([n for n in CORPUS if n not in ALWAYS], PER_FIELD - len(ALWAYS))
+        for name in names:
+            yield where, path, meta, name
+
+
+def _write_case(tmp: Path, k: int, where, path, meta, name) -> Path:
+    value = CORPUS[name](meta)
+    design = tomllib.loads(REF.read_text())
+    if where == "design":
+        _set(design, path, value)
+    else:
+        tech = _tech_raw()
+        _set(tech, path, value)
+        (tmp / f"t{k}.toml").write_text(to_toml(tech))
+        design["technology"] = str(tmp / f"t{k}.toml")
+    out = tmp / f"d{k}.toml"
+    out.write_text(to_toml(design))
+    return out
+
+
+def _must_refuse(name: str, meta: dict) -> bool:
+    """Independent expectation: values no real chip, lens or scene has."""
+    qty = meta.get("kind") == "qty"
+    if name in ("huge", "nan_text", "overflow", "toml_nan", "toml_inf", "db_huge") and qty:
+        return True
+    if name == "tiny" and qty and meta.get("ge") is None and meta.get("dim") != "K":
+        return True  # 1e-300 of a unit is only meaningful as "zero", where zero is allowed (1e-300 degC is 0 degC)
+    if name == "injection" and meta.get("kind") in ("ident", "qty", "int", "bool"):
+        return True
+    return name in ("big_int", "list", "table") and meta.get("kind") in ("qty", "int", "ident", "bool")
+
+
+def test_fuzz_every_field(tmp_path):
+    from pixelkit.optimize.flow import sized_design_text
+    from pixelkit.physics.subpixel import model_table
+    problems, n_loaded, n_refused, files = [], 0, 0, []
+    other = tmp_path / "elsewhere" / "deeper"
+    other.mkdir(parents=True)
+    sized = {"mask_open_m2": 0.64e-12, "t_int_primary_s": 1e-3, "t_int_secondary_s": 12e-3, "level": "analytic",
+             "c_m": 39.0}
+    for k, (where, path, meta, name) in enumerate(_cases()):
+        label = f"{where}:{path}={name}"
+        f = _write_case(tmp_path, k, where, path, meta, name)
+        files.append((label, f))
+        try:
+            d = load_design(f)
+        except PixelkitError as exc:
+            n_refused += 1
+            if "\n" in str(exc) or "\u2028" in str(exc):
+                problems.append(f"{label}: error is not one line: {str(exc)[:200]!r}")
+            continue
+        except Exception as exc:  # noqa: BLE001 - an internal error is what the fuzz looks for
+            problems.append(f"{label}: internal error {type(exc).__name__}: {exc}"[:300])
+            continue
+        n_loaded += 1
+        if _must_refuse(name, meta):
+            problems.append(f"{label}: accepted a value no chip has")
+        try:
+            hit = first_nonfinite(model_table(d))
+        except PixelkitError:
+            hit = None
+        except Exception as exc:  # noqa: BLE001
+            problems.append(f"{label}: model table internal error {type(exc).__name__}: {exc}"[:300])
+            continue
+        if hit:
+            problems.append(f"{label}: loaded, but the model table holds {hit}")
+        written = other / f"{d.name}_{k}_sized.toml"
+        written.write_text(sized_design_text(d, sized, written))
+        try:
+            again = load_design(written)
+            assert again.revision == d.revision and again.name.endswith("_sized")
+        except Exception as exc:  # noqa: BLE001
+            problems.append(f"{label}: the sized design written from it does not load: {exc}"[:300])
+    assert not Path(MARK).exists()
+    assert not problems, "\n".join(problems[:40])
+    assert n_refused > n_loaded > 0  # the corpus is mostly hostile, and some of it is harmless
+
+    rng = random.Random(SEED)
+    from conftest import run_cli
+    for label, f in rng.sample(files, CLI_SAMPLE):
+        code, out, err = run_cli("models", f, "--json", timeout=120)
+        assert code in (0, 2), (label, code, err)
+        obj = json.loads(out, parse_constant=lambda c: pytest.fail(f"{label}: {c} in JSON"))
+        assert ("error" in obj) == (code == 2), label
+        code2, out2, err2 = run_cli("models", f, timeout=120)
+        assert code2 == code and (code == 0 or len(err2.strip().splitlines()) == 1), (label, err2)
+
+
+@pytest.mark.parametrize("make,ok", [
+    (lambda p: p.write_bytes(b"\xef\xbb\xbf" + REF.read_bytes()), True),          # a BOM is fine
+    (lambda p: p.write_bytes(REF.read_bytes().replace(b'"A"', b'"\xff\xfe"')), False),  # not UTF-8
+    (lambda p: p.write_text("x = " + "[" * 5000 + "]" * 5000 + "\n"), False),    # 5000-deep
+    (lambda p: p.write_bytes(b""), False),
+    (lambda p: p.write_bytes(bytes(range(256)) * 4), False),                       # binary
+    (lambda p: p.mkdir(), False),                                                  # a folder
+    (lambda p: p.write_text(REF.read_text().replace('"60 dB"', "60")), False),     # ambiguous gain
+    (lambda p: p.write_text(REF.read_text().replace('"60 dB"', '"1000 V/V"')), True),
+    (lambda p: p.write_text(REF.read_text().replace('"200 fF"', '"1e300 fF"')), False),
+    (lambda p: p.write_text(REF.read_text().replace('"60 dB"', '"1e300 dB"')), False),
+], ids=["bom", "latin1", "deep", "empty", "binary", "folder", "gain60", "gainVV", "column_cap", "dB"])
+def test_whole_file_faults_are_one_line(tmp_path, make, ok):
+    p = tmp_path / "d.toml"
+    make(p)
+    if ok:
+        assert load_design(p).afe.gain == pytest.approx(1000.0)
+        return
+    with pytest.raises(PixelkitError) as e:
+        load_design(p)
+    assert "\n" not in str(e.value) and str(p) in str(e.value)
+
+
+def test_errors_echo_values_as_written(tmp_path):
+    p = tmp_path / "d.toml"
+    p.write_text(REF.read_text().replace('swing = "1.5 V"', 'swing = "1e-300 V"'))
+    with pytest.raises(PixelkitError) as e:
+        load_design(p)
+    assert "pixel.swing = '1e-300 V'" in str(e.value) and "50 mV" in str(e.value)
+    p.write_text(REF.read_text().replace('"60 dB"', "60"))
+    with pytest.raises(PixelkitError) as e:
+        load_design(p)
+    assert "afe.gain = 60" in str(e.value) and "ambiguous" in str(e.value)
+
+
+def _tech_variant(tmp_path, **edits):
+    raw = _tech_raw()
+    for dotted, v in edits.items():
+        _set(raw, dotted.replace("__", "."), v)
+    (tmp_path / "t.toml").write_text(to_toml(raw))
+    d = tmp_path / "d.toml"
+    d.write_text(REF.read_text().replace('"c35_thesis"', json.dumps(str(tmp_path / "t.toml"))))
+    return d
+
+
+@pytest.mark.parametrize("edits,rule", [
+    ({"layers__shield": {"layer": 21, "datatype": 0}}, "distinct_layers"),   # pd and shield on one layer
+    ({"rules__grid": "1 um"}, "grid_resolves_opening"),                       # 0.64 um2 drawn as 1 um2
+])
+def test_layout_rules_refused_at_load_with_the_rule_name(tmp_path, edits, rule):
+    with pytest.raises(PixelkitError) as e:
+        load_design(_tech_variant(tmp_path, **edits))
+    assert rule in str(e.value)
+
+
+def test_pd_that_leaves_no_room_for_transistors_is_refused_by_every_command(tmp_path, cli):
+    """A 6 x 6 um PD in the 8 um secondary cell: the five transistors do not fit (the layout
+    generator's rule), refused by `models` too, not only by `layout`."""
+    p = tmp_path / "d.toml"
+    p.write_text(re.sub(r'^pd_width = "5 um"\npd_height = "5 um"', 'pd_width = "6 um"\npd_height = "6 um"',
+                        REF.read_text(), flags=re.M))
+    code, out, err = cli("models", p)
+    assert code == 2 and "transistors_fit" in err and len(err.strip().splitlines()) == 1
+
+
+def test_size_writer_output_loads_again_from_another_folder(tmp_path):
+    """A control character in `revision`, a 64-character name, a relative technology path:
+    the sized design, written into another folder, loads again with the same values."""
+    from pixelkit.optimize.flow import sized_design_text
+    src = tmp_path / "src"
+    src.mkdir()
+    (src / "tech.toml").write_text(to_toml(_tech_raw()))
+    raw = tomllib.loads(REF.read_text())
+    raw.update(name="n" * 64, revision="A\x07\"B\\\u2028", technology="tech.toml")
+    (src / "d.toml").write_text(to_toml(raw))
+    d = load_design(src / "d.toml")
+    out = tmp_path / "out" / "sized.toml"
+    out.parent.mkdir()
+    sized = {"mask_open_m2": 0.81e-12, "t_int_primary_s": 2e-3, "t_int_secondary_s": 20e-3, "level": "spice",
+             "c_m": 30.9}
+    out.write_text(sized_design_text(d, sized, out))
+    again = load_design(out)
+    assert again.revision == raw["revision"] and len(again.name) <= 64 and again.name.endswith("_sized")
+    assert Path(again.tech.source).resolve() == (src / "tech.toml").resolve()
+    assert again.secondary.mask_opening == pytest.approx(0.81e-12) and again.primary.t_int == pytest.approx(2e-3)
+
+
+def test_measured_swing_too_small_stops_the_figures(ref_design):
+    from pixelkit.experiments.thesis import _check_swing
+    with pytest.raises(PixelkitError) as e:
+        _check_swing(ref_design, 1.7e-23, 0.5)
+    assert "primary swing" in str(e.value) and "not computed" in str(e.value)
+    _check_swing(ref_design, 0.9, 0.9)
+
+
+def test_nonfinite_figures_are_not_printed():
+    from pixelkit.finite import refuse_nonfinite
+    with pytest.raises(PixelkitError) as e:
+        refuse_nonfinite({"primary": {"fwc_e": math.inf}})
+    assert "primary.fwc_e" in str(e.value)
+    refuse_nonfinite({"a": [1.0, 2.0], "b": "x"})
