@@ -58,6 +58,16 @@ def run_family(path, family: str, backend: str = "batch", jobs: int | None = Non
     return _attr(mod, fn)(load_family_design(path, family), backend=backend, jobs=jobs)
 
 
+def family_waveforms(path, family: str, out, backend: str = "batch") -> str:
+    """Write the waveforms of the family's main bench (its experiment's sweep deck; a cache hit)."""
+    from .api import write_waveforms
+    from .families import goldens
+    from .spice import simulate
+    d = load_family_design(path, family)
+    net = goldens.wdr_sweep_of(d) if family == "wdr" else goldens.ratio_sweep_of(d)
+    return str(write_waveforms(simulate(net, backend=backend), out))
+
+
 def family_models(path, family: str) -> dict:
     """Closed-form figures of the family (``pixelkit models``)."""
     d = load_family_design(path, family)
@@ -77,6 +87,8 @@ def family_text(result: dict) -> str:
     for k, v in result.items():
         if isinstance(v, float):
             lines.append(f"  {k:<28} {v:.6g}")
+        elif k == "waveforms":
+            lines.append(f"  {k:<28} {v}")
         elif isinstance(v, dict) and all(isinstance(x, (int, float)) for x in v.values()):
             lines += [f"  {k}.{a:<{max(1, 27 - len(k))}} {x:.6g}" for a, x in v.items()]
     return "\n".join(lines)

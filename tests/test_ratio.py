@@ -78,12 +78,14 @@ def test_bad_design_names_the_field(tmp_path):
         family_of(p)
 
 
-def test_cli_simulate_json(cli, result):
-    code, out, err = cli("simulate", DESIGN, "--json")
+def test_cli_simulate_json(cli, result, tmp_path):
+    wave = tmp_path / "ratio.csv"
+    code, out, err = cli("simulate", DESIGN, "--json", "--waveforms", wave)
     assert code == 0, err
     data = json.loads(out)
     assert data["family"] == "ratio"
     assert {"ratio_law_max_err_frac", "rf_min", "dr_adj_db"} <= set(data)
+    assert data["waveforms"] == str(wave) and wave.read_text().startswith("time_s,")
 
 
 def test_regress_baseline_flags_a_changed_column(tmp_path, cli, result):

@@ -39,11 +39,14 @@ def simulate(design, backend, jobs, waveforms, as_json):
     --waveforms writes the dual-pixel bench at (i_mid, i_5pct).
     """
     from ..api import experiment
-    from ..family import DEFAULT, family_of, family_text, run_family
+    from ..family import DEFAULT, family_of, family_text, family_waveforms, run_family
     from ..report.text import simulate_text
     fam = family_of(design)
     if fam != DEFAULT:  # another pixel family (pixelkit/family.py): its own experiment
-        return emit(run_family(design, fam, backend=backend, jobs=jobs), as_json, family_text)
+        r = run_family(design, fam, backend=backend, jobs=jobs)
+        if waveforms:
+            r["waveforms"] = family_waveforms(design, fam, waveforms, backend)
+        return emit(r, as_json, family_text)
     d = load(design)
     r = experiment(d, backend=backend, jobs=jobs)
     if waveforms:

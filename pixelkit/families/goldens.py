@@ -35,10 +35,15 @@ def wdr_cells(_ref) -> Netlist:
     return _cells(_wdr(), "wdr_pixel", [wdr_pixel(_wdr())])
 
 
-def wdr_sweep(_ref) -> Netlist:
+def wdr_sweep_of(design) -> Netlist:
+    """The WDR experiment's main deck for ``design``."""
     from .wdr.circuit import wdr_bench
     from .wdr.experiment import currents
-    return wdr_bench(_wdr(), currents(_wdr()))
+    return wdr_bench(design, currents(design))
+
+
+def wdr_sweep(_ref) -> Netlist:
+    return wdr_sweep_of(_wdr())
 
 
 def ratio_cells(_ref) -> Netlist:
@@ -47,11 +52,15 @@ def ratio_cells(_ref) -> Netlist:
     return _cells(d, "ratio_pixel", [ratio_loop(d), ratio_pixel(), column_readout(d)])
 
 
-def ratio_sweep(_ref) -> Netlist:
+def ratio_sweep_of(design) -> Netlist:
+    """The ratio experiment's deck at the nominal bias for ``design``."""
     from .ratio.circuit import ratio_bench
     from .ratio.experiment import bench_pairs, cells
-    d = _ratio()
-    return ratio_bench(d, bench_pairs(cells(d)), d.readout.i_bias)
+    return ratio_bench(design, bench_pairs(cells(design)), design.readout.i_bias, title="ratio_bench_0")
+
+
+def ratio_sweep(_ref) -> Netlist:
+    return ratio_sweep_of(_ratio())
 
 
 GENERATORS = {"wdr_pixel": wdr_cells, "wdr_sweep": wdr_sweep,
