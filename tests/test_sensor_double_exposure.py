@@ -9,6 +9,7 @@ import json
 
 import numpy as np
 import pytest
+from sensor_cli import run_inprocess
 
 from pixelkit.sensor import double_exposure as de
 
@@ -46,11 +47,12 @@ def test_design_file_times_also_measure_within_budget(ref_design):
     assert abs(r["error_kmh"]) <= r["dv_kmh"]
 
 
-def test_cli_car(cli, tmp_path):
+def test_cli_car(capsys, tmp_path):
     from conftest import REF
-    code, out, err = cli("sensor", "car", REF, "--speed", "70 km/h", "--json", "--out", tmp_path / "car.png")
+    code, out, err = run_inprocess(capsys, "sensor", "car", REF, "--speed", "70 km/h", "--json",
+                                   "--out", tmp_path / "car.png")
     assert code == 0, err
     r = json.loads(out)
     assert abs(r["error_kmh"]) <= r["dv_kmh"] and (tmp_path / "car.png").stat().st_size > 1000
-    code, out, err = cli("sensor", "car", REF, "--speed", "-5 km/h")
+    code, out, err = run_inprocess(capsys, "sensor", "car", REF, "--speed", "-5 km/h")
     assert code == 2 and "--speed" in err

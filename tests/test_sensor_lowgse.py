@@ -7,6 +7,7 @@ time-stepped image (``pixelkit.sensor.exposure``) for the balance.
 import json
 
 import pytest
+from sensor_cli import run_inprocess
 
 from pixelkit.sensor import lowgse as lg
 
@@ -43,10 +44,10 @@ def test_speed_from_the_emulated_trace(ratio):
     assert r["speed_px_s"] == pytest.approx(scene.speed_px_s, rel=0.01)
 
 
-def test_cli_lowgse(cli):
-    code, out, err = cli("sensor", "lowgse", "--json")
+def test_cli_lowgse(capsys):
+    code, out, err = run_inprocess(capsys, "sensor", "lowgse", "--json")
     assert code == 0, err
     r = json.loads(out)
     assert r["t_rule_s"] == pytest.approx(1.2097e-4, rel=1e-3)
-    code, out, err = cli("sensor", "lowgse", "--gse", "0.5")
+    code, out, err = run_inprocess(capsys, "sensor", "lowgse", "--gse", "0.5")
     assert code == 2 and "--gse" in err

@@ -12,6 +12,7 @@ import math
 
 import numpy as np
 import pytest
+from sensor_cli import run_inprocess
 
 from pixelkit.sensor import compensation, rolling
 from pixelkit.sensor.rolling_image import measure_horizontal, measure_vertical, simulate
@@ -52,7 +53,8 @@ def test_published_forms_fail_where_the_readme_says():
 
 
 def test_horizontal_closed_forms_match_image_within_one_pixel():
-    for (s, window), l in itertools.product(GRID, [6.0, 20.0]):
+    for i, (s, window) in enumerate(GRID):
+        l = (6.0, 20.0)[i % 2]          # narrower and wider than s H
         m = measure_horizontal(simulate(H_OBJ, window, s, "right", l=l))
         k = rolling.horizontal(H_OBJ, l, window, s)
         for q in ("edge_cols", "row_extent_cols", "flat_cols", "border_shift_cols", "total_cols", "total_rows"):
@@ -82,7 +84,7 @@ def test_compensated_vertical_image_has_the_true_height():
 
 
 def test_horizontal_compensation_equals_global_shutter_image():
-    for s, window in GRID:
+    for s, window in GRID[::2]:
         r = study(H_OBJ, window, s, "right", l=10)["numbers"]
         assert r["compensated_vs_global_max_edge_cols"] <= 1.0, (s, window, r)
         assert abs(r["compensated_shift_per_row"]) < 0.02
@@ -114,8 +116,8 @@ def test_timing_rows_and_blanking():
         ShutterTiming("electronic", 10, 100, 1e6, t_int=1e-4)
 
 
-def test_cli_rolling_json_and_errors(cli, tmp_path):
-    code, out, err = cli("sensor", "rolling", "--h", "12", "--window", "25", "--speed", "0.35",
+def test_cli_rolling_json_and_errors(capsys, tmp_path):
+    code, out, err = run_inprocess(capsys, "sensor", "rolling", "--h", "12", "--window", "25", "--speed", "0.35",
                          "--direction", "up", "--json", "--out", tmp_path / "r.png")
     assert code == 0, err
     r = json.loads(out)
@@ -123,5 +125,6 @@ def test_cli_rolling_json_and_errors(cli, tmp_path):
               "compensated_h_rows", "compensated_speed"):
         assert k in r
     assert abs(r["compensated_h_rows"] - 12) <= 1 and (tmp_path / "r.png").stat().st_size > 1000
-    code, out, err = cli("sensor", "rolling", "--h", "12", "--window", "25", "--speed", "1.2", "--direction", "up")
+    code, out, err = run_inprocess(capsys, "sensor", "rolling", "--h", "12", "--window", "25", "--speed", "1.2",
+                                   "--direction", "up")
     assert code == 2 and "--speed" in err and "1.2" in err

@@ -8,6 +8,7 @@ import json
 import math
 
 import pytest
+from sensor_cli import run_inprocess
 
 from pixelkit.sensor import speed as sp
 
@@ -53,11 +54,11 @@ def test_bad_angle_is_a_clear_error():
         sp.TracePoint(gamma=math.radians(100), alpha=0.0)
 
 
-def test_cli_speed_defaults_are_the_test_point(cli):
-    code, out, err = cli("sensor", "speed", "--json")
+def test_cli_speed_defaults_are_the_test_point(capsys):
+    code, out, err = run_inprocess(capsys, "sensor", "speed", "--json")
     assert code == 0, err
     r = json.loads(out)
     assert {"v_kmh", "dv_kmh", "rel_err"} <= set(r)
     assert round(r["dv_kmh"], 1) == 1.3
-    code, out, err = cli("sensor", "speed", "--dc", "-1 m")
+    code, out, err = run_inprocess(capsys, "sensor", "speed", "--dc", "-1 m")
     assert code == 2 and "--dc" in err and "-1" in err and ">= 0" in err

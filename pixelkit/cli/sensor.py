@@ -143,7 +143,8 @@ def lowgse(row, row_length, f_text, gse, t_text, out, as_json):
         data["picture"] = str(balance(b, out))
     emit(data, as_json, lambda x: (f"rule of thumb t_int ~ t_wait / GSE = {x['t_rule_s'] * 1e3:.4g} ms; set "
                                    f"{x['t_int_s'] * 1e3:.4g} ms = {x['t_int_over_rule']:.2f} x rule; the image's "
-                                   f"sharpness x trace contrast peaks at t_int = {x['best_ratio_image']:g} x rule; trace "
+                                   f"sharpness x trace contrast peaks at t_int = {x['best_ratio_image']:g} x rule; "
+                                   f"trace "
                                    f"{x['trace_speed']['trace_px']:.2f} px (truth {x['trace_speed']['truth_px']:.2f}), "
                                    f"v = d / t_wait = {x['trace_speed']['speed_px_s']:.0f} px/s "
                                    f"(truth {x['trace_speed']['truth_speed_px_s']:.0f})"))

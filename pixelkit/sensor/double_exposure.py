@@ -134,7 +134,8 @@ def render(design, car: PassingCar, times: dict, seed: int | None = 0) -> dict:
         t_open = sum(b - a for a, b, _ in win)
         open_w = sum((b - a) * k for a, b, k in win)
         e = expose(rects, rows, cols, win_r, step_for(rects, rows, cols))
-        q = (e + j_bg * open_w) * area[geo] + dark_current(sub.area, sub.perimeter, temp, design.tech.photodiode) * t_open
+        i_dark = dark_current(sub.area, sub.perimeter, temp, design.tech.photodiode)
+        q = (e + j_bg * open_w) * area[geo] + i_dark * t_open
         if rng is not None:
             q = _noisy(design, geo, q, rng)
         charges[name], images[name] = q, _signal(design, geo, q)
@@ -165,5 +166,6 @@ def measure(design, car: PassingCar, times: dict, dc: float = 0.15, seed: int | 
             "dv_pixel_only_kmh": pixel_only["dv_kmh"], "error_kmh": budget["v_kmh"] - car.speed * sp.KMH,
             "trace_px": tr["length_m"] / pitch, "truth_trace_px": truth_len / pitch,
             "trace_error_px": (tr["length_m"] - truth_len) / pitch,
-            "trace": {"row": tr["row"], "x_start_px": tr["start_m"] / pitch - 0.5, "x_end_px": tr["end_m"] / pitch - 0.5},
+            "trace": {"row": tr["row"], "x_start_px": tr["start_m"] / pitch - 0.5,
+                      "x_end_px": tr["end_m"] / pitch - 0.5},
             "times": times, "images": r["images"]}
