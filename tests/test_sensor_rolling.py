@@ -128,3 +128,15 @@ def test_cli_rolling_json_and_errors(capsys, tmp_path):
     code, out, err = run_inprocess(capsys, "sensor", "rolling", "--h", "12", "--window", "25", "--speed", "1.2",
                                    "--direction", "up")
     assert code == 2 and "--speed" in err and "1.2" in err
+
+
+def test_article_quadratic_against_its_own_size_formulas():
+    """Derivation check: eliminating s from L = s(H+h)/(1 -+ s) + h gives 2h^2 - (L' + 3L'')h + ...;
+    the printed coefficient (3L' + L'') does not return h even on the article's own sizes."""
+    import numpy as np
+    h, window, s = 12.0, 60.0, 0.5
+    lc = rolling.published_vertical(h, window, s, "up")["total_rows"]
+    ls = rolling.published_vertical(h, window, s, "down")["total_rows"]
+    c0 = 2 * lc * ls - window * (ls - lc)
+    assert min(abs(np.roots([2, -(lc + 3 * ls), c0]) - h)) < 1e-9
+    assert min(abs(np.roots([2, -(3 * lc + ls), c0]) - h)) > 5
