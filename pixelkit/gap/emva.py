@@ -1,84 +1,304 @@
-"""Camera-level gap analysis of an EMVA 1288 descriptor dataset.
+"""EMVA 1288 datasets: strict reading, the standard's figures, and the camera-level gap.
 
-Nominal model (EMVA 1288 Linear): mu_y = mu_y.dark + R mu_p with R = K eta,
-sigma_y^2 = sigma_y.dark^2 + K (mu_y - mu_y.dark), clipped at the ADC's full
-scale; K from the photon-transfer slope and R from the response slope over
-0 - 70 % of saturation, dark level and noise from the dark pairs, the dark
-current from the slope of the dark level against exposure.
+Reading (``read_descriptor``, ``load_image``): the descriptor layout of the
+emva1288 reference implementation (``v``, ``n bits width height``, ``b
+exposure photons`` / ``d exposure`` each followed by ``i path`` lines: two
+images per temporal step, more for a spatial stack). Exposure is in
+nanoseconds, the reference's convention (its dark-current figures multiply the
+slope by 1e9), unless a comment line states the unit (``# ... exposure in us``;
+ns, us, ms or s). PNGs of any bit depth (8 - 16) are read as the integers they
+hold (a 12-bit camera in 16-bit PNGs is *not* rescaled) and must fit the
+stated bit depth. Image paths must stay inside the dataset folder. Every
+problem (binary or non-UTF-8 descriptor, bad ``n``/``b``/``d``/``i`` line,
+missing, truncated or mis-sized image, no dark steps) is one line naming the
+file and what is wrong.
 
-Where: residuals of the mean and of the variance against the nominal model,
-by fraction of saturation. Which: candidate camera-level augmentations, each
+Figures (``figures``): computed as the reference implementation computes them
+(``emva1288.process.results``): K and R by least squares through the origin
+over 0 - 70 % of saturation (saturation = the variance maximum, found as the
+reference scans for it), QE = R / K, temporal dark noise from the dark
+variance (its intercept against exposure when there are more than two
+exposures; floored at 0.24 DN^2), sigma_d, mu_p.min, saturation capacity,
+SNR_max, DR, linearity error (weighted fit over 5 - 95 %), dark current from
+the mean AND from the variance, DSNU and PRNU from the spatial stacks.
+
+Camera-level gap (``analyse``). Nominal model (EMVA 1288 Linear): mu_y =
+mu_y.dark + R mu_p, sigma_y^2 = sigma_y.dark^2 + K (mu_y - mu_y.dark), clipped
+at the ADC's full scale. Where: residuals of the mean and of the variance by
+fraction of saturation. Which: candidate camera-level augmentations, each
 fitted on the even exposure steps and judged on the odd (held-out) ones:
 
 - ``nonlinearity``: response compression mu = mu_d + R mu_p (1 - b R mu_p)
   (the pixel-level ``sf_gain`` / C(V) signature);
-- ``soft_saturation``: pixels do not all clip at once: each pixel's value is
-  clipped at full scale and the mean is taken over a Gaussian spread of
-  pixel responses (PRNU s times the signal, plus temporal noise);
+- ``soft_saturation``: pixels do not all clip at once (a Gaussian spread of
+  pixel responses clipped at full scale);
 - ``dark_current``: the dark level grows with exposure (mu += D t).
+
+And the dark noise: when the dark current from the variance and from the mean
+disagree (ratio outside 1/1.5 .. 1.5, both positive and resolved), the answer
+names ``non_poisson_dark_noise`` (e.g. RTS / hot-pixel tails, or a dark offset
+drift that is not shot noise); a dark variance that grows while the dark mean
+does not (or falls) is named the same way.
 """
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
-import matplotlib.image as mpimg
 import numpy as np
 from scipy.optimize import least_squares
 from scipy.stats import norm
 
-from ..errors import ConfigError
+from ..errors import PixelkitError
+
+UNITS = {"ns": 1e-9, "us": 1e-6, "µs": 1e-6, "ms": 1e-3, "s": 1.0}
+_UNIT_RE = re.compile(r"exposure[^\n]*?\bin\s+(ns|us|µs|ms|s)\b", re.I)
+S2Q = 1.0 / 12.0
+
+
+class EmvaError(PixelkitError):
+    def __init__(self, where, what):
+        super().__init__(f"{where}: {what}")
+
+
+def _num(tok, line_no, path, what, integer=False):
+    try:
+        v = int(tok) if integer else float(tok)
+    except ValueError:
+        raise EmvaError(f"{path}:{line_no}", f"{what} '{tok}' is not a{'n integer' if integer else ' number'}") from None
+    if not np.isfinite(v) or v < 0:
+        raise EmvaError(f"{path}:{line_no}", f"{what} {tok} must be finite and >= 0")
+    return v
 
 
 def read_descriptor(folder: str | Path) -> dict:
     folder = Path(folder)
     path = folder / "EMVA1288_Data.txt" if folder.is_dir() else folder
     if not path.is_file():
-        raise ConfigError(str(path), "emva dataset", str(folder), "a folder with EMVA1288_Data.txt")
-    base = path.parent
-    steps, cur, bits = [], None, 8
-    for k, line in enumerate(path.read_text().splitlines(), 1):
+        raise EmvaError(str(path), "not found (an EMVA 1288 dataset is a folder with EMVA1288_Data.txt)")
+    raw = path.read_bytes()
+    if b"\0" in raw:
+        raise EmvaError(str(path), "binary file (NUL bytes), not an EMVA 1288 descriptor")
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError as e:
+        raise EmvaError(str(path), f"not UTF-8 text (byte {e.start})") from None
+    base = path.parent.resolve()
+    steps, cur, fmt, unit = [], None, None, "ns"
+    for k, line in enumerate(text.splitlines(), 1):
         f = line.split()
-        if not f or f[0].startswith("#"):
+        if not f:
+            continue
+        if f[0].startswith("#"):
+            m = _UNIT_RE.search(line)
+            if m:
+                unit = m.group(1).lower()
+            continue
+        if f[0] == "v":
             continue
         if f[0] == "n":
-            bits = int(f[1])
+            if len(f) != 4:
+                raise EmvaError(f"{path}:{k}", f"'{line.strip()}' should be 'n bits width height'")
+            if fmt is not None:
+                raise EmvaError(f"{path}:{k}", "a second 'n' line")
+            bits, w, h = (_num(x, k, path, name, True) for x, name in zip(f[1:], ("bits", "width", "height")))
+            if not 1 <= bits <= 16 or w < 1 or h < 1:
+                raise EmvaError(f"{path}:{k}", f"'{line.strip()}': bits must be 1..16, width and height >= 1")
+            fmt = {"bits": bits, "width": w, "height": h}
         elif f[0] in ("b", "d"):
-            cur = {"kind": f[0], "t": float(f[1]) * 1e-6, "mu_p": float(f[2]) if f[0] == "b" else 0.0, "imgs": []}
+            want = 3 if f[0] == "b" else 2
+            if len(f) != want:
+                form = "b exposure photons" if f[0] == "b" else "d exposure"
+                raise EmvaError(f"{path}:{k}", f"'{line.strip()}' should be '{form}'")
+            t = _num(f[1], k, path, "exposure")
+            mu_p = _num(f[2], k, path, "photons") if f[0] == "b" else 0.0
+            cur = {"kind": "d" if mu_p == 0.0 else "b", "t": t * UNITS[unit], "t_raw": t, "mu_p": mu_p,
+                   "imgs": [], "line": k}
             steps.append(cur)
         elif f[0] == "i":
             if cur is None:
-                raise ConfigError(str(path), f"line {k}", line, "an image line after a b or d line")
-            cur["imgs"].append(base / f[1])
-    return {"bits": bits, "steps": steps, "source": str(path)}
+                raise EmvaError(f"{path}:{k}", "an 'i' line before any 'b' or 'd' line")
+            if len(f) != 2:
+                raise EmvaError(f"{path}:{k}", f"'{line.strip()}' should be 'i relative/path.png'")
+            p = (base / Path(*f[1].replace("\\", "/").split("/"))).resolve()
+            if not p.is_relative_to(base):
+                raise EmvaError(f"{path}:{k}", f"image path '{f[1]}' leaves the dataset folder")
+            if not p.is_file():
+                raise EmvaError(f"{path}:{k}", f"image '{f[1]}' not found")
+            cur["imgs"].append(p)
+        else:
+            raise EmvaError(f"{path}:{k}", f"unknown line '{line.strip()[:40]}' (allowed: v, n, b, d, i, #)")
+    if fmt is None:
+        raise EmvaError(str(path), "no 'n bits width height' line")
+    for s_ in steps:
+        if len(s_["imgs"]) < 2:
+            raise EmvaError(f"{path}:{s_['line']}", "a step needs at least two images")
+    temporal = [s_ for s_ in steps if len(s_["imgs"]) == 2]
+    if not any(s_["kind"] == "d" for s_ in temporal):
+        raise EmvaError(str(path), "no dark steps (a 'd' line, or 'b' with 0 photons, with two images)")
+    if not any(s_["kind"] == "b" for s_ in temporal):
+        raise EmvaError(str(path), "no bright steps with two images")
+    return {"bits": fmt["bits"], "width": fmt["width"], "height": fmt["height"], "steps": steps,
+            "source": str(path), "exposure_unit": unit}
 
 
-def _img(p: Path) -> np.ndarray:
-    a = mpimg.imread(str(p))
-    return np.asarray(a * 255.0 if a.dtype != np.uint8 else a, float)
+def load_image(p: Path, desc: dict) -> np.ndarray:
+    """One image as the integers it holds; checked against the descriptor's size and bit depth."""
+    from PIL import Image, UnidentifiedImageError
+    try:
+        with Image.open(p) as im:
+            im.load()
+            a = np.asarray(im)
+    except (UnidentifiedImageError, OSError, SyntaxError, ValueError) as e:
+        raise EmvaError(str(p), f"unreadable or truncated image ({e})") from None
+    if a.ndim != 2 or not np.issubdtype(a.dtype, np.integer):
+        raise EmvaError(str(p), f"not a grayscale integer image (shape {a.shape}, {a.dtype})")
+    if a.shape != (desc["height"], desc["width"]):
+        raise EmvaError(str(p), f"size {a.shape[1]} x {a.shape[0]} differs from the descriptor's "
+                                f"{desc['width']} x {desc['height']}")
+    if int(a.max()) >= 2 ** desc["bits"]:
+        raise EmvaError(str(p), f"value {int(a.max())} does not fit the stated {desc['bits']} bits")
+    return a.astype(np.int64)
 
 
-def measure_steps(desc: dict) -> dict:
-    """Temporal pairs: mean and temporal variance per step (bright and dark)."""
-    out = {"b": [], "d": []}
-    for s in desc["steps"]:
-        if len(s["imgs"]) != 2:
-            continue   # spatial stacks are not temporal pairs
-        a, b = _img(s["imgs"][0]), _img(s["imgs"][1])
-        out[s["kind"]].append((s["t"], s["mu_p"], 0.5 * (a.mean() + b.mean()), 0.5 * np.var(a - b)))
-    return {k: np.array(v) for k, v in out.items()}
+def _pair(s_, desc):
+    a, b = (load_image(p, desc) for p in s_["imgs"])
+    mean = 0.5 * (a.mean() + b.mean())
+    var = 0.5 * np.mean(np.square(a - b)) - 0.5 * (a.mean() - b.mean()) ** 2
+    return mean, var
 
 
-def nominal_fit(m: dict, full_scale: float) -> dict:
+def temporal_data(desc: dict) -> dict:
+    """Per exposure: dark mean/variance, and each bright step's (mu_p, mean, variance), as the reference."""
+    by_t = {}
+    for s_ in desc["steps"]:
+        if len(s_["imgs"]) == 2:
+            by_t.setdefault(s_["t"], []).append(s_)
+    texp, u_p, u_y, s2_y, u_d, s2_d = [], [], [], [], [], []
+    for t in sorted(by_t):
+        darks = [s_ for s_ in by_t[t] if s_["kind"] == "d"]
+        if not darks:
+            raise EmvaError(desc["source"], f"exposure {t:g} s has bright steps but no dark step")
+        md, vd = _pair(darks[0], desc)
+        for s_ in sorted((s_ for s_ in by_t[t] if s_["kind"] == "b"), key=lambda x: x["mu_p"]):
+            m, v = _pair(s_, desc)
+            texp.append(t)
+            u_p.append(s_["mu_p"])
+            u_y.append(m)
+            s2_y.append(v)
+            u_d.append(md)
+            s2_d.append(vd)
+    if not u_y:
+        raise EmvaError(desc["source"], "no bright step shares an exposure time with a dark step")
+    return {k: np.array(v) for k, v in (("texp", texp), ("u_p", u_p), ("u_y", u_y), ("s2_y", s2_y),
+                                          ("u_ydark", u_d), ("s2_ydark", s2_d))}
+
+
+def _stack(s_, desc):
+    imgs = np.array([load_image(p, desc) for p in s_["imgs"]], float)
+    L = imgs.shape[0]
+    avg = imgs.mean(axis=0)
+    var_mean = imgs.var(axis=0, ddof=1).mean()
+    return {"L": L, "avg_mean": avg.mean(), "avg_var": avg.var(ddof=1), "var_mean": var_mean}
+
+
+def _slope0(x, y):
+    return float(np.sum(x * y) / np.sum(x * x))
+
+
+def _index_sat(s2_y):
+    """The reference's scan for the variance maximum (from the top exposure down)."""
+    max_, max_i = 0.0, 0
+    for i in range(len(s2_y) - 1, -1, -1):
+        if s2_y[i] >= max_ or s2_y[abs(i - 1)] >= max_:
+            max_, max_i = s2_y[i], i
+        elif s2_y[i] < max_ and s2_y[abs(i - 1)] < max_:
+            break
+    return max_i
+
+
+def figures(desc: dict, tp: dict | None = None) -> dict:
+    """The EMVA 1288 figures of a dataset, computed as the reference implementation does."""
+    tp = temporal_data(desc) if tp is None else tp
+    Y = tp["u_y"] - tp["u_ydark"]
+    V = tp["s2_y"] - tp["s2_ydark"]
+    i_sat = _index_sat(tp["s2_y"])
+    i_max = int(np.max(np.nonzero(Y <= 0.7 * Y[i_sat])[0]))
+    sl = slice(0, i_max + 1)
+    K = _slope0(Y[sl], V[sl])
+    R = _slope0(tp["u_p"][sl], Y[sl])
+    qe = 100.0 * R / K
+    texp = tp["texp"]
+    multi = np.unique(texp).size > 2
+    s2_dark = float(np.polyfit(texp, tp["s2_ydark"], 1)[1]) if multi else float(tp["s2_ydark"][0])
+    s2_dark = max(s2_dark, 0.24)
+    sigma_y_dark = np.sqrt(s2_dark)
+    u_p_min = (100.0 / qe) * (sigma_y_dark / K + 0.5)
+    u_p_sat = float(tp["u_p"][i_sat])
+    u_e_sat = qe * u_p_sat / 100.0
+    lo = int(np.min(np.nonzero(Y >= 0.05 * Y[i_sat])[0]))
+    hi = int(np.max(np.nonzero(Y <= 0.95 * Y[i_sat])[0])) + 1
+    X_, Y_ = tp["u_p"][lo:hi], Y[lo:hi]
+    xy, xy2, x2y2 = np.sum(X_ / Y_), np.sum(X_ / Y_ ** 2), np.sum((X_ / Y_) ** 2)
+    _y, _y2 = np.sum(1 / Y_), np.sum(1 / Y_ ** 2)
+    b = (xy * xy2 - x2y2 * _y) / (xy2 ** 2 - x2y2 * _y2)
+    a = (xy - b * xy2) / x2y2
+    dev = 100.0 * (Y - (a * tp["u_p"] + b)) / (a * tp["u_p"] + b)
+    per_s = 1.0  # texp is in seconds already
+    if multi:
+        m_slope = float(np.polyfit(texp, tp["u_ydark"], 1)[0]) * per_s
+        v_slope = float(np.polyfit(texp, tp["s2_ydark"], 1)[0]) * per_s
+    else:
+        m_slope = v_slope = float("nan")
+    dark_var_DN = v_slope / K if multi and v_slope >= 0 else float("nan")
+    out = {"K_DN_per_e": K, "R_DN_per_photon": R, "QE_percent": qe, "sigma_y_dark_DN": float(sigma_y_dark),
+           "sigma_d_e": float(np.sqrt(s2_dark - S2Q) / K), "u_p_min": float(u_p_min), "u_p_sat": u_p_sat,
+           "u_e_sat": float(u_e_sat), "SNR_max": float(np.sqrt(u_e_sat)), "SNR_max_dB": float(20 * np.log10(np.sqrt(u_e_sat))),
+           "DR": float(u_p_sat / u_p_min), "DR_dB": float(20 * np.log10(u_p_sat / u_p_min)),
+           "LE_min_percent": float(np.min(dev[lo:hi])), "LE_max_percent": float(np.max(dev[lo:hi])),
+           "dark_current_mean_DN_per_s": m_slope, "dark_current_mean_e_per_s": m_slope / K,
+           "dark_current_var_DN_per_s": dark_var_DN, "dark_current_var_e_per_s": dark_var_DN / K,
+           "index_saturation": int(i_sat), "bits": desc["bits"], "exposure_unit": desc["exposure_unit"]}
+    spatial = [s_ for s_ in desc["steps"] if len(s_["imgs"]) > 2]
+    dark_st = [s_ for s_ in spatial if s_["kind"] == "d"]
+    bright_st = [s_ for s_ in spatial if s_["kind"] == "b"]
+    if dark_st and bright_st:
+        d, br = _stack(dark_st[0], desc), _stack(bright_st[0], desc)
+        s2y_d = d["avg_var"] - d["var_mean"] / d["L"]
+        s2y = br["avg_var"] - br["var_mean"] / br["L"]
+        out["DSNU_e"] = float(np.sqrt(s2y_d) / K) if s2y_d >= 0 else float("nan")
+        out["PRNU_percent"] = float(np.sqrt(s2y - s2y_d) * 100 / (br["avg_mean"] - d["avg_mean"])) \
+            if s2y >= s2y_d else float("nan")
+    return out
+
+
+def _dark_noise_verdict(fig) -> dict | None:
+    m, v = fig["dark_current_mean_e_per_s"], fig["dark_current_var_e_per_s"]
+    if not (np.isfinite(m) and np.isfinite(v)) or v <= 0:
+        return None
+    ratio = v / m if m != 0 else float("inf")
+    if 1 / 1.5 <= ratio <= 1.5:
+        return None
+    return {"effect": "non_poisson_dark_noise", "ratio_var_to_mean": float(ratio),
+            "text": f"dark current from the variance is {ratio:.2g} x that from the mean: the dark signal is not "
+                    f"shot-noise limited (RTS / hot pixels, or a drifting dark offset)"}
+
+
+def measure_steps(desc: dict, tp: dict) -> dict:
+    """Bright (t, mu_p, mean, var) and dark (t, 0, mean, var) arrays for the gap analysis."""
+    b = np.column_stack([tp["texp"], tp["u_p"], tp["u_y"], tp["s2_y"]])
+    _, first = np.unique(tp["texp"], return_index=True)
+    d = np.column_stack([tp["texp"][first], np.zeros(first.size), tp["u_ydark"][first], tp["s2_ydark"][first]])
+    return {"b": b, "d": d}
+
+
+def nominal_fit(m: dict, full_scale: float, fig: dict) -> dict:
+    """The linear camera model with the figures' K and R (the reference's fits)."""
     t, mu_p, mu, var = m["b"].T
     td, _, mud, vard = m["d"].T
-    dark = np.interp(t, td, mud)
-    dark_var = np.interp(t, td, vard)
-    i_sat = int(np.argmax(var))
-    mu_sat = mu[i_sat]
-    lin = (mu - dark) <= 0.7 * (mu_sat - dark)
-    K = np.polyfit(mu[lin] - dark[lin], var[lin] - dark_var[lin], 1)[0]
-    R = np.polyfit(mu_p[lin], mu[lin] - dark[lin], 1)[0]
-    D = np.polyfit(td, mud, 1)[0]
+    mu_sat = mu[fig["index_saturation"]]
+    K, R = fig["K_DN_per_e"], fig["R_DN_per_photon"]
+    D = np.polyfit(td, mud, 1)[0] if td.size > 1 else 0.0
     return {"K_DN_per_e": float(K), "R_DN_per_photon": float(R), "eta": float(R / K),
             "dark_DN": float(mud.mean()), "dark_current_DN_per_s": float(D),
             "sigma_dark_DN": float(np.sqrt(vard.mean())), "sigma_d_e": float(np.sqrt(max(vard.mean() - 1 / 12, 0)) / K),
@@ -107,10 +327,13 @@ CANDIDATES = {"nonlinearity": ([1e-4], [0.0], [1e-2]), "soft_saturation": ([0.02
 
 
 def analyse(folder) -> dict:
+    """EMVA 1288 figures plus the camera-level gap: where the data leave the linear model, and why."""
     desc = read_descriptor(folder)
-    m = measure_steps(desc)
+    tp = temporal_data(desc)
+    fig = figures(desc, tp)
+    m = measure_steps(desc, tp)
     fs = 2 ** desc["bits"] - 1
-    nom = nominal_fit(m, float(fs))
+    nom = nominal_fit(m, float(fs), fig)
     t, mu_p, mu, var = m["b"].T
     train = np.arange(mu.size) % 2 == 0
     test = ~train
@@ -138,7 +361,8 @@ def analyse(folder) -> dict:
     ranking.sort(key=lambda x: x["heldout_rms_DN"])
     before = ranking[[x["effect"] for x in ranking].index("none")]["heldout_rms_DN"]
     best = ranking[0]
-    return {"dataset": desc["source"], "n_bright_steps": int(mu.size), "n_dark_steps": int(m["d"].shape[0]),
+    dark_noise = _dark_noise_verdict(fig)
+    return {"figures": fig, "dark_noise": dark_noise, "dataset": desc["source"], "n_bright_steps": int(mu.size), "n_dark_steps": int(m["d"].shape[0]),
             "nominal": nom, "where": where, "ranking": ranking, "best": best["effect"],
             "gap_before_rms_DN": before, "gap_after_rms_DN": best["heldout_rms_DN"],
             "shrink_frac": 1 - best["heldout_rms_DN"] / before,

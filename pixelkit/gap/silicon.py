@@ -1,0 +1,360 @@
+"""Virtual silicon: measured-like data made by ngspice, with effects inserted as circuit elements.
+
+Each case is a small lab campaign of ``N_OP`` operating points; each operating
+point is ONE full-chain deck of the reference design (dual pixel: the primary
+and three secondary subpixels, their column loads, S1X/S2X and one SC AFE per
+column), so a deck gives eight rows (four columns x pixel / AFE probe). The
+operating point's conditions (integration time, irradiance, wait before
+readout, temperature, previous frame) enter the deck as the charges and
+currents they imply; the effect enters as circuit elements (``INSERT``):
+
+- ``gse``: a current pulse on each FD during its hold, proportional to the
+  subpixel's irradiance x the wait (stray light on the storage node);
+- ``fd_leakage``: the same element in the dark, with its temperature law;
+- ``dark_current``: a DC current source on each PD (T law, area/perimeter);
+- ``charge_injection``: a coupling capacitor from the RST clock line to FD and
+  from the AFE's p1 clock to its virtual-ground node vm;
+- ``sf_gain``: a conductance, switched in with the row select, from each
+  column line to a source at the column's reset level (a chain gain loss that
+  pivots at the reset level);
+- ``afe_gain``: a capacitor in parallel with C13 (mismatched capacitors);
+- ``readout_light``: a junction photocurrent on each AFE's vm node,
+  proportional to the irradiance of the pixel it reads, either sign, while the
+  AFE is clocked (the deck clocks it only during its row; a real AFE resets
+  its nodes every row, so only the hold within the row matters);
+- ``crosstalk``: extra current on the secondary PDs, irradiance x masked area;
+- ``lag``: extra PD charge, a fraction of the previous frame's;
+- ``column_pixel``: mismatched column-load transistor widths;
+- ``column_afe``: mismatched C11 and a per-column clock coupling capacitor;
+- out of library (the right answer is "not explained"): ``col_clamp`` (a
+  diode, switched in with the row select, clamping the column line: a compressive output nonlinearity), ``col_bridge`` (a resistive bridge
+  between two secondary columns), ``fd_pullup`` (a leak from FD to the supply,
+  level dependent, no temperature law).
+
+Temperatures enter only through the effects' T laws and the design's dark
+current law (the deck runs at the design temperature, as the nominal
+surrogate does). The simulated levels get the test set-up's gain and offset
+and Gaussian noise of ``NOISE_V / sqrt(N_AVG)``, stated in the file. Parameter
+ranges are written below (EFFECTS.md magnitudes).
+"""
+from __future__ import annotations
+
+import csv
+import io
+import json
+from pathlib import Path
+
+import numpy as np
+
+from ..circuits.devices import mosfet
+from ..circuits.testbench import dual_pixel_bench, timings
+from ..fileio import write_atomic
+from ..measure.pixel import levels
+from ..spice.netlist import Element
+from . import circuit_edits as ce
+from .nominal import ARRAYS
+
+N_OP = 7
+NOISE_V = 0.6e-3
+N_AVG = 4
+SUBS = ("primary", "s0", "s1", "s2")
+CASES_DIR = Path(__file__).with_name("silicon_cases")
+IN_LIBRARY = ("gse", "fd_leakage", "dark_current", "charge_injection", "sf_gain", "afe_gain", "readout_light",
+              "crosstalk", "lag", "column_pixel", "column_afe")
+OUT_OF_LIBRARY = ("col_clamp", "col_bridge", "fd_pullup")
+HEADER = ("case", "array", "row", "col", "i_ph_A", "t_int_s", "t_wait_s", "temp_C", "probe", "v_V", "v_std_V",
+          "n_avg", "i_ph_prev_A")
+
+
+def _sign(g):
+    return float(g.choice([-1.0, 1.0]))
+
+
+# effect -> function(rng) -> dict of circuit-element parameters (SI)
+RANGES = {
+    "gse": lambda g: {"pls": 1.0 / g.uniform(300, 10000)},
+    "fd_leakage": lambda g: {"i_fd_A": g.uniform(5e-17, 5e-16), "t_double_K": g.uniform(6.0, 8.0)},
+    "dark_current": lambda g: {"i_d_A": g.uniform(2e-16, 2e-15), "t_double_K": g.uniform(5.0, 9.0)},
+    "charge_injection": lambda g: {"c_rst_fd_F": g.uniform(3e-18, 3e-17), "c_p1_vm_F": g.uniform(0.3e-15, 3e-15)},
+    "sf_gain": lambda g: {"r_col_ohm": g.uniform(6e6, 2.5e7)},           # 3 - 10 % chain gain loss
+    "afe_gain": lambda g: {"dc13_F": g.uniform(0.01, 0.05) * 500e-15},
+    "readout_light": lambda g: {"a_junction_m2": _sign(g) * g.uniform(3e-11, 3e-10)},   # 0.7 - 7 mV on the secondary AFE
+    "crosstalk": lambda g: {"k_xt": g.uniform(0.003, 0.03)},
+    "lag": lambda g: {"lag": g.uniform(0.01, 0.05)},
+    "column_pixel": lambda g: {"load_w_rel_sd": g.uniform(0.02, 0.08)},
+    "column_afe": lambda g: {"c11_rel_sd": g.uniform(0.003, 0.01), "c_clk_sd_F": g.uniform(0.3e-15, 1.5e-15)},
+    "col_clamp": lambda g: {"clamp_at_frac": g.uniform(0.35, 0.6)},
+    "col_bridge": lambda g: {"r_bridge_ohm": g.uniform(1e5, 4e5)},
+    "fd_pullup": lambda g: {"r_pullup_ohm": g.uniform(2e14, 1e15)},
+}
+
+
+def operating_points(design, nom, g) -> list[dict]:
+    """``N_OP`` lab-like operating points (one deck each)."""
+    ops = []
+    for k in range(N_OP):
+        t_int = float(np.exp(g.uniform(np.log(50e-6), np.log(2e-3))))
+        row = int(g.integers(0, design.primary.rows))
+        extra = float(g.choice([0.0, 10e-3, 40e-3]))
+        temp = float(g.choice([25.0, 45.0, 65.0]))
+        dark = g.random() < 0.12
+        i = {}
+        for s in SUBS:
+            arr = "primary" if s == "primary" else "secondary"
+            frac = 0.0 if dark else g.uniform(0.03, 0.6)
+            i[s] = frac * nom.q_grid[arr][-1] / t_int
+        ops.append({"t_int": t_int, "row": row, "extra_wait": extra, "temp": temp, "i": i,
+                    "i_prev": {s: i[s] * g.uniform(0.0, 2.0) for s in SUBS}, "col_p": k % 3})
+    return ops
+
+
+FD_LIMIT = 0.25     # storage-node charge kept below this fraction of the FD's own swing
+
+
+def limit_waits(design, nom, ops, effect, p) -> None:
+    """Shorten an operating point's extra wait until the storage-node charge stays in range.
+
+    A lab does the same: a wait that drives the FD out of its swing measures nothing.
+    """
+    if effect not in ("gse", "fd_leakage"):
+        return
+    for op in ops:
+        for extra in (op["extra_wait"], 10e-3, 2e-3, 0.0):
+            if extra > op["extra_wait"]:
+                continue
+            op["extra_wait"] = extra
+            ok = True
+            for s in SUBS:
+                arr = _arr(s)
+                tw = _t_wait(design, op, arr)
+                if effect == "gse":
+                    q = p["pls"] * op["i"][s] / getattr(design, arr).photoactive_area * design.primary.photoactive_area * tw
+                else:
+                    q = p["i_fd_A"] * 2.0 ** ((op["temp"] - 25.0) / p["t_double_K"]) * tw
+                ok &= q * max(nom.fd_ratio[arr][1]) < FD_LIMIT * nom.q_grid[arr][-1]
+            if ok:
+                break
+
+
+def _t_wait(design, op, arr):
+    f = design.primary.f_read if arr == "primary" else design.secondary.f_read
+    return (op["row"] + 1) / f + op["extra_wait"]
+
+
+def _arr(s):
+    return "primary" if s == "primary" else "secondary"
+
+
+def _col_of(s):
+    return "col_p" if s == "primary" else f"col_{s}"
+
+
+def _col_label(s, op):
+    return op["col_p"] if s == "primary" else int(s[1])
+
+
+def _columns(design, g, effect, p):
+    """Per-column draws of the column effects, keyed by (array, column label)."""
+    keys = [("primary", c) for c in range(3)] + [("secondary", c) for c in range(3)]
+    out = {}
+    if effect == "column_pixel":
+        out = {k: {"w": 1 + g.normal(0, p["load_w_rel_sd"])} for k in keys}
+    elif effect == "column_afe":
+        out = {k: {"c11": 1 + g.normal(0, p["c11_rel_sd"]), "cc": abs(g.normal(0, p["c_clk_sd_F"])),
+                   "line": str(g.choice(["p1", "p1b"]))} for k in keys}
+    return out
+
+
+def deck(design, nom, op, effect, p, colp, title):
+    """The full-chain deck of one operating point with ``effect`` inserted."""
+    t_w = design.experiment.t_window
+    from ..physics.dark import dark_current
+    q = {}
+    for s in SUBS:
+        arr = _arr(s)
+        area, per = nom.dark[arr]
+        q[s] = (op["i"][s] + dark_current(area, per, op["temp"] + 273.15, nom.pd)) * op["t_int"]
+    net = dual_pixel_bench(design, q["primary"] / t_w, tuple(q[s] / t_w for s in SUBS[1:]), with_afe=True,
+                           title=title)
+    net = ce.specialise(net, design.secondary_per_pixel)
+    law = 2.0 ** ((op["temp"] - 25.0) / p["t_double_K"]) if "t_double_K" in p else 1.0
+    for s in SUBS:
+        arr, sub = _arr(s), ce.pixel_subckt(s)
+        J = op["i"][s] / getattr(design, arr).photoactive_area
+        tw = _t_wait(design, op, arr)
+        el = []
+        if effect == "gse":
+            el.append(ce.fd_current(design, arr, p["pls"] * J * design.primary.photoactive_area * tw, s, "gse"))
+        elif effect == "fd_leakage":
+            el.append(ce.fd_current(design, arr, p["i_fd_A"] * law * tw, s, "leak"))
+        elif effect == "dark_current":
+            ratio = 1.0 if arr == "primary" else design.secondary.perimeter / design.primary.perimeter
+            el.append(Element("Idk", ("pd", "0"), p["i_d_A"] * ratio * law * op["t_int"] / t_w))
+        elif effect == "charge_injection":
+            el.append(Element("Ccf", ("rst", "fd"), p["c_rst_fd_F"]))
+        elif effect == "crosstalk" and arr == "secondary":
+            el.append(Element("Ixt", ("pd", "0"), p["k_xt"] * J * design.secondary.area * op["t_int"] / t_w))
+        elif effect == "lag":
+            el.append(Element("Ilag", ("pd", "0"), p["lag"] * op["i_prev"][s] * op["t_int"] / t_w))
+        elif effect == "fd_pullup":
+            t0, t1 = ce.hold_window(design, arr)
+            el.append(Element("Rpu", ("fd", "vdd"), p["r_pullup_ohm"] * (t1 - t0) / tw))
+        if el:
+            net = ce.add_to_subckt(net, sub, *el)
+        col = _col_of(s)
+        afe = f"scafe_{col}"
+        if effect == "charge_injection":
+            net = ce.add_to_subckt(net, afe, Element("Ccp", ("p1", "vm"), p["c_p1_vm_F"]))
+        elif effect == "afe_gain":
+            net = ce.add_to_subckt(net, afe, Element("Cdc13", ("vm", "c"), p["dc13_F"]))
+        elif effect == "readout_light":
+            t = timings(design, design.experiment.t_window)[arr]   # the AFE is clocked only while its row is read
+            net = ce.add_to_subckt(net, afe, Element("Ilt", ("vm", "0"),
+                                                     ce.pulse(t.row(0), t.t_stop - ce.EDGE, p["a_junction_m2"] * J)))
+        elif effect == "column_afe":
+            c = colp[(arr, _col_label(s, op))]
+            net = _scale_c11(ce.add_to_subckt(net, afe, Element("Ccc", (c["line"], "vm"), max(c["cc"], 1e-18))),
+                             afe, c["c11"])
+        elif effect == "column_pixel":
+            w = colp[(arr, _col_label(s, op))]["w"]
+            net = ce.set_param(net, f"ld_{col}", "w", lambda v, w=w: v * w)
+        elif effect == "sf_gain":
+            vr = float(nom.v_rst[arr].mean())
+            gate = "rs_p" if arr == "primary" else "rs_s"   # connected while the row is selected
+            net = ce.add_top(net, Element(f"Vpiv_{col}", (f"piv_{col}", "0"), vr),
+                             mosfet(f"sw_{col}", col, gate, f"m_{col}", "0", 1e-6, 0.35e-6, design.tech),
+                             Element(f"Rsf_{col}", (f"m_{col}", f"piv_{col}"), p["r_col_ohm"]))
+        elif effect == "col_clamp":
+            v_lo = float(np.interp(p["clamp_at_frac"], np.linspace(0, 1, nom.v_sig[arr].size), nom.v_sig[arr]))
+            gate = "rs_p" if arr == "primary" else "rs_s"
+            net = ce.add_top(net, Element(f"Vcl_{col}", (f"cl_{col}", "0"), v_lo + 0.45),
+                             mosfet(f"swc_{col}", col, gate, f"mc_{col}", "0", 1e-6, 0.35e-6, design.tech),
+                             Element(f"Dcl_{col}", (f"cl_{col}", f"mc_{col}"), "dfault"),
+                             models=(ce.DIODE,) if s == "primary" else ())
+    if effect == "col_bridge":
+        net = ce.add_top(net, Element("Rbridge", ("col_s0", "col_s1"), p["r_bridge_ohm"]))
+    return net
+
+
+def _scale_c11(net, afe, factor):
+    from dataclasses import replace
+    subs = []
+    for s in net.subckts:
+        if s.name == afe:
+            s = replace(s, elements=tuple(replace(e, value=e.value * factor) if e.name == "C11" else e
+                                          for e in s.elements))
+        subs.append(s)
+    return replace(net, subckts=tuple(subs))
+
+
+def simulate_case(design, nom, effect: str | None, seed: int, backend="batch", jobs=None) -> tuple[list, dict]:
+    """(rows as dicts, truth) of one case: ``N_OP`` decks, noise and set-up added."""
+    from ..spice import simulate_many
+    g = np.random.default_rng(seed)
+    ops = operating_points(design, nom, g)
+    p = RANGES[effect](g) if effect else {}
+    limit_waits(design, nom, ops, effect, p)
+    colp = _columns(design, g, effect, p)
+    nets = [deck(design, nom, op, effect, p, colp, f"si{seed}_{k}") for k, op in enumerate(ops)]
+    kw = {"backend": backend} if jobs is None else {"backend": backend, "jobs": jobs}
+    res = simulate_many(nets, **kw)
+    gain, offset = 1 + g.uniform(-0.02, 0.02), g.uniform(-0.02, 0.02)
+    tm = timings(design, design.experiment.t_window)
+    rows = []
+    for op, r in zip(ops, res):
+        for s in SUBS:
+            arr, col = _arr(s), _col_of(s)
+            v_pix = levels(r, col, tm[arr])[0]
+            v_afe = float(r.at(f"out_{col}", tm[arr].t_reset_level(0)))
+            for probe, v in (("pixel", v_pix), ("afe", v_afe)):
+                rows.append({"array": arr, "row": op["row"], "col": _col_label(s, op), "i_ph_A": op["i"][s],
+                             "t_int_s": op["t_int"], "t_wait_s": _t_wait(design, op, arr), "temp_C": op["temp"],
+                             "probe": probe, "v_clean_V": v, "i_ph_prev_A": op["i_prev"][s]})
+    for row in rows:
+        row["v_V"] = offset + gain * row.pop("v_clean_V") + g.normal(0, NOISE_V / np.sqrt(N_AVG))
+        row["v_std_V"], row["n_avg"] = NOISE_V, N_AVG
+    kind = "none" if effect is None else ("out_of_library" if effect in OUT_OF_LIBRARY else effect)
+    truth = {"effect": kind, "circuit": effect or "none", "params": p, "seed": seed,
+             "setup_gain": gain, "setup_offset_V": offset}
+    return rows, truth
+
+
+def plan_cases(n_per_effect=9, n_readout_light=12, n_ool_per_kind=7, n_clean=20,
+               seed0=1000) -> list[tuple[str | None, int]]:
+    """(effect, seed) of every committed case, interleaved round-robin over the kinds."""
+    queues = [[e] * (n_readout_light if e == "readout_light" else n_per_effect) for e in IN_LIBRARY]
+    queues += [[e] * n_ool_per_kind for e in OUT_OF_LIBRARY] + [[None] * n_clean]
+    out = []
+    while any(queues):
+        for q in queues:
+            if q:
+                out.append((q.pop(), seed0 + len(out)))
+    return out
+
+
+def _fmt(v):
+    return f"{v:.9g}" if isinstance(v, float) else str(v)
+
+
+def write_cases(design, nom, folder: Path = CASES_DIR, plan=None, progress=None, jobs=None) -> dict:
+    """Simulate every planned case; write ``cases.csv`` (all rows, ``case`` column) and ``truth.json``.
+
+    Both files are rewritten (atomically) after every case, so an interrupted run
+    leaves the cases done so far, consistent.
+    """
+    plan = plan or plan_cases()
+    buf = io.StringIO()
+    w = csv.writer(buf)
+    w.writerow(HEADER)
+    truths = {}
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    for k, (effect, seed) in enumerate(plan):
+        rows, truth = simulate_case(design, nom, effect, seed, jobs=jobs)
+        cid = f"c{seed}"
+        truths[cid] = truth
+        for r in rows:
+            w.writerow([cid] + [_fmt(r[h]) for h in HEADER[1:]])
+        write_atomic(folder / "cases.csv", buf.getvalue())
+        write_atomic(folder / "truth.json", json.dumps(truths, indent=1, sort_keys=True))
+        if progress:
+            progress(k + 1, len(plan))
+    return {"n_cases": len(truths), "folder": str(folder)}
+
+
+def load_cases(folder: Path = CASES_DIR) -> tuple[dict, dict]:
+    """{case id: list of row dicts} and the truths of the committed cases."""
+    folder = Path(folder)
+    truths = json.loads((folder / "truth.json").read_text())
+    cases: dict = {}
+    with open(folder / "cases.csv", newline="") as fh:
+        for r in csv.DictReader(fh):
+            cases.setdefault(r.pop("case"), []).append(r)
+    return cases, truths
+
+
+def table_of(design, rows, source):
+    """A validated ``Table`` from committed row dicts (the same checks a user's file gets)."""
+    from .data import validate
+    header = list(rows[0])
+    return validate(header, rows, design, True, source)
+
+
+def run_committed(design, nom, folder: Path = CASES_DIR, only=None) -> dict:
+    """Diagnose every committed SPICE case (blind); score by kind."""
+    from .diagnose import diagnose
+    from .selftest import score
+    cases, truths = load_cases(folder)
+    out = []
+    for cid, rows in cases.items():
+        t = truths[cid]
+        if only and t["effect"] not in only:
+            continue
+        d = diagnose(design, table_of(design, rows, f"{folder}/cases.csv#{cid}"), nom)
+        out.append({"case": cid, "truth": t["effect"], "circuit": t["circuit"], "found": d["best"],
+                    "explained": d["explained"], "indistinguishable": d["indistinguishable"],
+                    "shrink": d["shrink_frac"], "before_V": d["gap_before_rms_V"], "after_V": d["gap_after_rms_V"]})
+    r = score(out)
+    r.update({"kind": "SPICE-generated", "rows_per_case": 8 * N_OP, "noise_V": NOISE_V, "n_avg": N_AVG,
+              "cases": out})
+    return r
