@@ -42,3 +42,9 @@ def test_models_json_keys(cli):
     for sub in ("primary", "secondary"):
         assert {"c_jdep_F", "cg_V_per_e", "fwc_e", "area_m2", "perimeter_m"} <= set(data[sub])
     assert data["c_a"] == pytest.approx(8.18, rel=0.02) and data["c_c"] == pytest.approx(3.6, rel=0.02)
+    # PD-referred and output-referred CG side by side at the design's own reset bias (2.0 V);
+    # the output-referred one is checked against a SPICE charge step in test_noise.py
+    for sub in ("primary", "secondary"):
+        r = data[sub]["at_reset"]
+        assert r["v_bias_V"] == pytest.approx(2.0)
+        assert r["cg_out_V_per_e"] < r["cg_pd_V_per_e"] < data[sub]["cg_V_per_e"] * 1.0001

@@ -3,13 +3,14 @@
 The photodiode alone gives the thesis's C_jdep, conversion gain and full well
 (table 3.2, eq. 3.10 - 3.13). The in-pixel PD *node* adds what the netlist hangs
 on it: the EC and TG source diffusions (junction C with the technology's MOS
-parameters) and their gate overlaps; this is what a SPICE discharge sees.
+parameters) and their gate overlaps; this is what a SPICE discharge sees. What
+the column sees (charge sharing with FD, the SF gain) is ``fd.response``.
 """
 from __future__ import annotations
 
 from ..physics import conversion
 from .dark import dark_current
-from .fd import switch_side
+from .fd import response, switch_side
 from .junction import Junction, Node
 
 SUBPIXELS = ("primary", "secondary")
@@ -49,9 +50,19 @@ def figures(design, which: str) -> dict:
     }
 
 
-def model_table(design) -> dict:
-    """The figures ``pixelkit models`` prints; ratios as eq. 3.10 and 3.13 define them."""
+def model_table(design, a_sf: float | None = None) -> dict:
+    """The figures ``pixelkit models`` prints; ratios as eq. 3.10 and 3.13 define them.
+
+    Besides the thesis's table at its 2.5 V, each subpixel gets ``at_reset``: the
+    PD-referred and output-referred conversion gain side by side at the design's own
+    PD reset level (``fd.response``). ``a_sf``: the SF gain, default from a SPICE
+    operating point of the SF and its column load (``camera.spicenoise.sf_gain``).
+    """
+    if a_sf is None:
+        from ..camera.spicenoise import sf_gain
+        a_sf = sf_gain(design)
     p, s = figures(design, "primary"), figures(design, "secondary")
+    p["at_reset"], s["at_reset"] = (response(design, w, a_sf) for w in SUBPIXELS)
     return {
         "design": design.name,
         "technology": design.tech.name,

@@ -25,11 +25,22 @@ _SIZE_ROWS = (("C_M", "c_m", 1.0, ".1f"), ("mask opening (um2)", "mask_open_m2",
               ("primary motion (px)", "motion_px_primary", 1.0, ".2f"))
 
 
+_RESPONSE_ROWS = (("C_PD (fF)", "c_pd_F", 1e15, ".2f"), ("PD node incl. EC/TG (fF)", "c_pd_node_F", 1e15, ".2f"),
+                  ("C_FD (fF)", "c_fd_F", 1e15, ".2f"), ("CG PD-referred q/C_PD (uV/e-)", "cg_pd_V_per_e", 1e6, ".2f"),
+                  ("charge sharing C_node/(C_node+C_FD)", "sharing", 1.0, ".3f"),
+                  ("SF gain A_sf", "a_sf", 1.0, ".3f"),
+                  ("CG output-referred (uV/e-)", "cg_out_V_per_e", 1e6, ".2f"))
+
+
 def model_text(t: dict) -> str:
     lines = [f"Analytic models: {t['design']} ({t['technology']}, C_jdep at V_R = {t['reset_bias_V']:g} V)",
              _row("", "primary", "secondary"), *_pairs(t["primary"], t["secondary"], _MODEL_ROWS),
              f"  C_A = A1/A2 = {t['c_a']:.3f}   C_C = C_jdep1/C_jdep2 = {t['c_c']:.3f}   "
              f"photoactive ratio = {t['photoactive_ratio']:.1f}"]
+    if "at_reset" in t["primary"]:
+        p, s = t["primary"]["at_reset"], t["secondary"]["at_reset"]
+        lines += [f"At the design's reset bias ({p['v_bias_V']:g} V): PD-referred and output-referred (column) CG",
+                  *_pairs(p, s, _RESPONSE_ROWS)]
     return "\n".join(lines)
 
 
