@@ -109,7 +109,7 @@ def ratio_bench(design, pairs, i_bias: float, title: str = "ratio_bench") -> Net
         el.append(Element(f"Xp{k}", ("vdd", "vsrc", "vbn", "sel", f"h_p{k}", f"h_m{k}", f"v_p{k}", f"v_m{k}"),
                           "ratio_pixel", (("ih_p", hp), ("ih_m", hm), ("iv_p", vp), ("iv_m", vm))))
         for c in ("h_p", "h_m", "v_p", "v_m"):
-            el.append(Element(f"Xc_{c}{k}", ("vdd", "preb", "vclamp", f"{c}{k}", f"c{c}{k}", f"o{c}{k}"),
+            el.append(Element(f"Xc_{c}{k}", ("vdd", "preb", "vclamp", f"{c}{k}", f"col_{c}{k}", f"out_{c}{k}"),
                               "ratio_column"))
     t = design.tech
     return Netlist(title=title, elements=tuple(el), analysis=Tran(EDGE, stop, 0.0, stop / 2000),

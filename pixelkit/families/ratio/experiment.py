@@ -68,8 +68,8 @@ def measure(design, result, cs) -> list[dict]:
         k, d = n // 2, "hv"[n % 2]
         i_p = float(result.at(f"i(v.xc_{d}_p{k}.va)", T_PRE * 0.95))
         i_m = float(result.at(f"i(v.xc_{d}_m{k}.va)", T_PRE * 0.95))
-        t_p = _trip(result.time, result[f"v(o{d}_p{k})"], vdd / 2)
-        t_m = _trip(result.time, result[f"v(o{d}_m{k})"], vdd / 2)
+        t_p = _trip(result.time, result[f"v(out_{d}_p{k})"], vdd / 2)
+        t_m = _trip(result.time, result[f"v(out_{d}_m{k})"], vdd / 2)
         if np.isnan(t_p) or np.isnan(t_m):
             raise PixelkitError(f"{design.source}: pixel {k} ({d} pair, R_F = {c['rf']:.3g}) did not trip within "
                                 f"{result.time[-1] * 1e6:.3g} us: check readout.c_par, v_clamp_gate and v_select")

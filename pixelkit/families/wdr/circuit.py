@@ -99,8 +99,9 @@ def wdr_bench(design, currents, title: str = "wdr_bench") -> Netlist:
           mosfet("bias", "vbn", "vbn", "0", "0", design.comparator.tail_w, design.comparator.tail_l, t)]
     for k, i in enumerate(currents):
         el.append(Element(f"Xp{k}", ("vdd", "vrst", "v0", "vbn", "vwell", "rst", "expo", "sig1", "sig2",
-                                     f"int{k}", f"c1_{k}", f"c2_{k}"), "wdr_pixel", (("iph", float(i)),)))
-    saves = [f"{n}{k}" for k in range(len(currents)) for n in ("int", "c1_", "c2_")]
+                                     f"out_s3_{k}", f"out_s1_{k}", f"out_s2_{k}"), "wdr_pixel",
+                          (("iph", float(i)),)))
+    saves = [f"out_{n}_{k}" for k in range(len(currents)) for n in ("s3", "s1", "s2")]
     saves += [f"xp{k}.{n}" for k in range(len(currents)) for n in ("samp", "pd")] + ["sig1", "sig2"]
     return Netlist(title=title, elements=tuple(el), analysis=Tran(100e-9, stop, 0.0, cd.t_unit / 16),
                    subckts=(wdr_pixel(design),), models=photodiode_model(t),

@@ -19,7 +19,7 @@ T_READ = 15e-6
 
 def dark_current_vs_voltage(design, backend: str = "batch") -> list[dict]:
     net = wdr_bench(design, [0.0] * len(VOLTAGES), title="wdr_dark_vs_v")
-    forced = tuple(Element(f"Vf{k}", (f"int{k}", "0"), v) for k, v in enumerate(VOLTAGES))
+    forced = tuple(Element(f"Vf{k}", (f"out_s3_{k}", "0"), v) for k, v in enumerate(VOLTAGES))
     net = replace(net, elements=net.elements + forced, analysis=Tran(1e-6, 20e-6, 0.0, 1e-6), saves=())
     r = simulate(net, backend=backend)
     return [{"v_V": v, "i_dark_A": abs(float(r.at(f"i(vf{k})", T_READ)))} for k, v in enumerate(VOLTAGES)]
