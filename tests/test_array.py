@@ -1,7 +1,8 @@
 """The 2 x 2 array (fig. 3.13): every subpixel matches its single-pixel simulation."""
 import numpy as np
 
-from pixelkit.circuits.testbench import array_bench, dual_pixel_bench, timings
+from pixelkit.circuits.array import array_bench
+from pixelkit.circuits.testbench import dual_pixel_bench, timings
 from pixelkit.measure.pixel import double_sampled
 from pixelkit.plots.waveforms import plot_columns
 from pixelkit.spice import simulate, simulate_many
@@ -12,7 +13,7 @@ IS = [[1e-11 * (j + 1) for j in range(6)], [1e-11 * (j + 7) for j in range(6)]]
 
 def test_2x2_matches_single_pixels(ref_design, experiment, tmp_path):
     d = ref_design
-    arr = simulate(array_bench(d, 2, 2, IP, IS))
+    arr = simulate(array_bench(d, IP, IS))
     tm2 = timings(d, d.experiment.t_window, 2)
     tm1 = timings(d, d.experiment.t_window, 1)
     singles = simulate_many([dual_pixel_bench(d, IP[r][c], tuple(IS[r][3 * c:3 * c + 3]), title=f"single{r}{c}")

@@ -22,7 +22,7 @@ plus a residual offset ~ eps Vos; Cp is the parasitic capacitance at vm.
 """
 from __future__ import annotations
 
-from ..spice.netlist import Element, Subckt
+from ..spice.netlist import Element, Param, Subckt
 from .devices import tgate
 
 PORTS = ("in", "out", "vref", "p1", "p1b", "p2", "p2b", "vdd")
@@ -30,15 +30,17 @@ SWITCH_W, SWITCH_L = 1e-6, 0.35e-6
 
 
 def sc_afe(design) -> Subckt:
+    """The AFE cell; its capacitors are parameters (default: the design's values), so a
+    Monte Carlo instance can carry its own drawn values (``Xafe ... c11=...``)."""
     a, t = design.afe, design.tech
     op = "opamp_macro" if a.opamp == "macro" else "opamp_ota"
     return Subckt("scafe", PORTS, (
-        Element("C11", ("in", "vm"), a.c11),
-        Element("C12", ("vm", "x"), a.c12),
-        Element("C13", ("vm", "c"), a.c13),
+        Element("C11", ("in", "vm"), Param("c11")),
+        Element("C12", ("vm", "x"), Param("c12")),
+        Element("C13", ("vm", "c"), Param("c13")),
         *tgate("Sfb", "x", "out", "p1", "p1b", SWITCH_W, SWITCH_L, t),
         *tgate("Sref", "vm", "vref", "p1", "p1b", SWITCH_W, SWITCH_L, t),
         *tgate("Sc", "c", "vref", "p1", "p1b", SWITCH_W, SWITCH_L, t),
         *tgate("So", "c", "out", "p2", "p2b", SWITCH_W, SWITCH_L, t),
         Element("Xop", ("vref", "x", "out", "vdd"), op),
-    ))
+    ), (("c11", a.c11), ("c12", a.c12), ("c13", a.c13)))

@@ -1,16 +1,39 @@
-"""Arrays of integrated dual pixels (2 x 2 = 4 primary + 12 secondary, up to the chip's 27 x 50).
+"""Arrays of integrated dual pixels, up to the chip's 27 x 50 primary + 27 x 150 secondary.
 
-``pixel_array(design, rows, cols)`` is a subcircuit ``pixarray_RxC`` with ports
+Two forms:
 
-    vdd vpdr vrst ec_p tg_p ec_s tg_s            global (EC / TG: global shutter)
-    rs_p_r rst_p_r rs_s_r rst_s_r  (each row r)  row select and FD reset per row
-    col_p_c (each primary column), col_s_j (each secondary column, j = N c + k)
+- ``pixel_array(design, rows, cols)``: the array as one subcircuit of ``dualpix`` cells
+  (ports ``vdd vpdr vrst ec_p tg_p ec_s tg_s``, per row ``rs_p_r rst_p_r rs_s_r rst_s_r``,
+  per column ``col_p_c`` and ``col_s_j``, j = N c + k); the golden cell ``array_2x2``.
+- ``array_bench(design, iph_p, iph_s, tile=...)``: a deck of one frame of an array - or
+  of a :class:`Tile` of it (some arrays, rows and columns) - with the global-shutter
+  sequence, the column loads and, ``with_afe``, each column's S1X/S2X samplers and SC
+  AFE. Every subpixel is instantiated directly, so a tile is the same circuit as the
+  corresponding part of the whole frame: row ``r`` is read at its own time of the
+  frame (the full-frame timing), and a tile stops when its last row is read.
 
-and one photocurrent parameter per subpixel: ``iph_p_r_c`` and ``iph_s_r_j``.
+Photocurrents are per subpixel: ``iph_p[r][c]`` (rows x cols) and ``iph_s[r][j]``
+(rows x N cols), in A.
 """
 from __future__ import annotations
 
+import zlib
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import ConfigError
 from ..spice.netlist import Element, Param, Subckt
+from ..tech.modellib import Include
+from . import column
+from .devices import mosfet
+
+KINDS = ("primary", "secondary")
+PREFIX = {"primary": "p", "secondary": "s"}
+#: ``.param sw_stat_mismatch=1`` after the model library: the GF180 models' own
+#: per-instance mismatch (Pelgrom: ``par_vth``, ``par_k`` in ``sm141064.ngspice``).
+MISMATCH_INCLUDE = Include("include", Path(__file__).resolve().parent / "stat", "mismatch_on.spice", "")
 
 
 def array_ports(design, rows: int, cols: int) -> tuple:
@@ -36,3 +59,119 @@ def pixel_array(design, rows: int, cols: int) -> Subckt:
             params.append((f"iph_p_{r}_{c}", 0.0))
             params += [(f"iph_s_{r}_{n * c + k}", 0.0) for k in range(n)]
     return Subckt(f"pixarray_{rows}x{cols}", array_ports(design, rows, cols), tuple(elems), tuple(params))
+
+
+@dataclass(frozen=True)
+class Tile:
+    """A part of a frame: the arrays ``kinds``, the rows ``rows`` and the dual-pixel columns
+    ``cols`` (secondary columns N c .. N c + N - 1 of each). ``lead``: rows read before
+    ``rows`` only to leave the column circuits as the frame leaves them (the AFE input
+    keeps the previous row's reset level until S1X closes: a row-to-row memory)."""
+    kinds: tuple
+    rows: tuple
+    cols: tuple
+    lead: tuple = ()
+
+    @property
+    def simulated_rows(self) -> tuple:
+        return tuple(sorted(set(self.lead) | set(self.rows)))
+
+    def columns(self, kind: str, n: int) -> list[int]:
+        return list(self.cols) if kind == "primary" else [n * c + k for c in self.cols for k in range(n)]
+
+
+def frame_shape(design, iph_p, iph_s) -> tuple[int, int]:
+    """(rows, cols) of the photocurrent maps; a ConfigError when they do not fit the chip."""
+    ip, is_ = np.asarray(iph_p, float), np.asarray(iph_s, float)
+    n = design.secondary_per_pixel
+    if ip.ndim != 2 or ip.size == 0:
+        raise ConfigError("array", "iph_primary_A", ip.shape, "a rows x cols map")
+    rows, cols = ip.shape
+    if is_.shape != (rows, n * cols):
+        raise ConfigError("array", "iph_secondary_A", is_.shape, f"a {rows} x {n * cols} map")
+    if rows > design.primary.rows or cols > design.primary.cols:
+        raise ConfigError(design.source, "array size", f"{rows} x {cols}",
+                          f"at most the chip's {design.primary.rows} x {design.primary.cols}")
+    if not (np.all(np.isfinite(ip)) and np.all(np.isfinite(is_))) or ip.min() < 0 or is_.min() < 0:
+        raise ConfigError("array", "photocurrent", "negative or not finite", "finite currents >= 0 A")
+    return rows, cols
+
+
+def whole(rows: int, cols: int) -> Tile:
+    return Tile(KINDS, tuple(range(rows)), tuple(range(cols)))
+
+
+def tile_seed(seed: int, tile: Tile) -> int:
+    """The ngspice seed of one tile of a Monte Carlo frame: each tile draws its own devices."""
+    return zlib.crc32(f"{seed}:{tile.kinds}:{tile.simulated_rows}:{tile.cols}".encode()) % 2_000_000_000 + 1
+
+
+def afe_caps(design, seed: int | None, kind: str, j: int) -> tuple:
+    """(c11, c12, c13) of the AFE of column ``j`` of ``kind``: the design's, or drawn.
+
+    Monte Carlo: each capacitor ~ N(C, (A_C / sqrt(C / C_density)) C), the technology's
+    capacitor matching (``mismatch.cap_pelgrom``, ``mismatch.cap_density``), seeded by
+    (seed, kind, column) so a column draws the same values in every tile.
+    """
+    a = design.afe
+    nominal = (a.c11, a.c12, a.c13)
+    if seed is None:
+        return nominal
+    from ..mc.pelgrom import cap_sigma_rel
+    rng = np.random.default_rng([seed, KINDS.index(kind), j])
+    return tuple(float(c * (1 + cap_sigma_rel(design, c) * rng.standard_normal())) for c in nominal)
+
+
+def array_bench(design, iph_p, iph_s, tile: Tile | None = None, t_exp: float | None = None,
+                with_afe: bool = False, mismatch_seed: int | None = None, max_step: float | None = None,
+                title: str = "array_bench"):
+    """A frame (or a tile of it) read row by row; see the module docstring."""
+    from .opamp import opamp
+    from .afe import sc_afe
+    from .pixel5t import pixel5t
+    from .testbench import _deck, _options, _tran, controls, sample_clocks, supplies, timings
+    rows, cols = frame_shape(design, iph_p, iph_s)
+    ip, is_ = np.asarray(iph_p, float), np.asarray(iph_s, float)
+    tile = tile or whole(rows, cols)
+    n = design.secondary_per_pixel
+    t_exp = design.experiment.t_window if t_exp is None else t_exp
+    tm = timings(design, t_exp, rows)
+    sim_rows = tile.simulated_rows
+    el = [*supplies(design), *controls(design, tm, sim_rows, True, tile.kinds), *column.bias(design)]
+    subckts = []
+    if with_afe:
+        el.append(Element("Vref", ("vref", "0"), design.afe.vref))
+        subckts += [opamp(design), sc_afe(design)]
+    for kind in tile.kinds:
+        s, cur = PREFIX[kind], (ip if kind == "primary" else is_)
+        subckts.append(pixel5t(design, kind))
+        if with_afe:
+            el += sample_clocks(design, tm[kind], s, sim_rows)
+        for j in tile.columns(kind, n):
+            col = f"col_{s}_{j}"
+            for r in sim_rows:
+                el.append(Element(f"X{s}_{r}_{j}", ("vdd", "vpdr", "vrst", f"ec_{s}", f"tg_{s}", f"rst_{s}_{r}",
+                                                   f"rs_{s}_{r}", col), f"pix5t_{kind}",
+                                  (("iph", float(cur[r][j])),)))
+            absent = rows - len(sim_rows)
+            if absent:  # the other rows' RS switches (off) load the column: one device, m = their count
+                dev = design.pixel.devices
+                rs = mosfet(f"rsoff_{col}", f"sfo_off_{col}", "0", col, "0", dev.rs_w, dev.rs_l, design.tech)
+                el.append(replace(rs, params=(*rs.params, ("m", absent))))
+            el += column.load(design, col)
+            if with_afe:
+                el += column.sampler(design, col, f"in_{col}", f"s1_{s}", f"s2_{s}")
+                caps = afe_caps(design, mismatch_seed, kind, j)
+                el.append(Element(f"Xafe_{col}", (f"in_{col}", f"out_{col}", "vref", f"p1_{s}", f"p1_{s}b",
+                                                  f"p2_{s}", f"p2_{s}b", "vdd"), "scafe",
+                                  tuple(zip(("c11", "c12", "c13"), caps)) if mismatch_seed is not None else ()))
+    last = max(tile.rows)
+    stop = max(tm[k].row(last + 1) + 0.05 * tm[k].t_row for k in tile.kinds)
+    tran = replace(_tran(tm), stop=stop)
+    if max_step is not None:
+        tran = replace(tran, max_step=max_step)
+    net = _deck(design, title, el, subckts, tran, options=_options(tm))
+    if mismatch_seed is not None:
+        net = replace(net, includes=(*net.includes, MISMATCH_INCLUDE),
+                      options=(*net.options, ("seed", tile_seed(mismatch_seed, tile))))
+    return net

@@ -14,12 +14,12 @@ from pathlib import Path
 from ..families.goldens import GENERATORS as FAMILY_GENERATORS
 from ..spice.netlist import Netlist, Op
 from .afe import sc_afe
-from .array import pixel_array
+from .array import array_bench, pixel_array
 from .devices import photodiode_model
 from .dual_pixel import dual_pixel
 from .opamp import opamp_macro, opamp_ota
 from .pixel5t import pixel5t
-from .testbench import afe_bench, array_bench, dual_pixel_bench, pd_pair_bench
+from .testbench import afe_bench, dual_pixel_bench, pd_pair_bench
 
 
 def _cells(design, title, subckts) -> Netlist:
@@ -42,7 +42,7 @@ GENERATORS = {
     "array_2x2": lambda d: _cells(d, "array_2x2", [*dual_pixel(d), pixel_array(d, 2, 2)]),
     "bench_dual_pixel": lambda d: dual_pixel_bench(d, 1.4e-9, 52e-12),
     "bench_dual_pixel_afe": lambda d: dual_pixel_bench(d, 1.4e-9, 52e-12, with_afe=True),
-    "bench_array_2x2": lambda d: array_bench(d, 2, 2, [[2e-10, 4e-10], [6e-10, 8e-10]],
+    "bench_array_2x2": lambda d: array_bench(d, [[2e-10, 4e-10], [6e-10, 8e-10]],
                                              [[1e-11 * (j + 1) for j in range(6)],
                                               [1e-11 * (j + 7) for j in range(6)]]),
     "bench_afe": lambda d: afe_bench(d, _afe_pairs()),

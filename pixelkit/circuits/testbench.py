@@ -12,7 +12,6 @@ from dataclasses import replace
 from ..spice.netlist import Element, Netlist, Op, Pwl, Tran
 from . import column
 from .afe import sc_afe
-from .array import array_ports, pixel_array
 from .devices import mosfet, photodiode, photodiode_model
 from .dual_pixel import dual_pixel
 from .opamp import opamp
@@ -75,14 +74,17 @@ def supplies(design) -> tuple:
             Element("Vrstd", ("vrst", "0"), px.v_fd_reset))
 
 
-def controls(design, tm: dict, rows: int, row_lines: bool) -> list:
-    """Control sources of both arrays. ``row_lines``: per-row RS/RST names (arrays)."""
+def controls(design, tm: dict, rows, row_lines: bool, kinds=("primary", "secondary")) -> list:
+    """Control sources of the arrays ``kinds``. ``rows``: a count or the row indices to drive;
+    ``row_lines``: per-row RS/RST names (arrays)."""
     vdd, out = design.tech.supply, []
     for arr, s in (("primary", "p"), ("secondary", "s")):
+        if arr not in kinds:
+            continue
         t = tm[arr]
         out.append(Element(f"Vec_{s}", (f"ec_{s}", "0"), waveform(t.ec(), vdd, t.edge)))
         out.append(Element(f"Vtg_{s}", (f"tg_{s}", "0"), waveform(t.tg(), vdd, t.edge)))
-        for r in range(rows):
+        for r in t.row_list(rows):
             sfx = f"_{r}" if row_lines else ""
             out.append(Element(f"Vrst_{s}{sfx}", (f"rst_{s}{sfx}", "0"), waveform(t.rst(r), vdd, t.edge)))
             out.append(Element(f"Vrs_{s}{sfx}", (f"rs_{s}{sfx}", "0"), waveform(t.rs(r), vdd, t.edge)))
@@ -135,25 +137,6 @@ def dual_pixel_bench(design, iph_p: float, iph_s, t_exp: float | None = None, wi
     return _deck(design, title, el, subckts, _tran(tm), options=_options(tm))
 
 
-def array_bench(design, rows: int, cols: int, iph_p, iph_s, t_exp: float | None = None,
-                title: str = "array_bench") -> Netlist:
-    """An array read row by row; ``iph_p[r][c]`` and ``iph_s[r][j]`` are the photocurrents."""
-    n = design.secondary_per_pixel
-    t_exp = design.experiment.t_window if t_exp is None else t_exp
-    tm = timings(design, t_exp, rows)
-    params = [(f"iph_p_{r}_{c}", float(iph_p[r][c])) for r in range(rows) for c in range(cols)]
-    params += [(f"iph_s_{r}_{j}", float(iph_s[r][j])) for r in range(rows) for j in range(n * cols)]
-    el = [*supplies(design), *controls(design, tm, rows, row_lines=True), *column.bias(design),
-          Element("Xarr", array_ports(design, rows, cols), f"pixarray_{rows}x{cols}", tuple(params))]
-    for c in range(cols):
-        el += column.load(design, f"col_p_{c}")
-    for j in range(n * cols):
-        el += column.load(design, f"col_s_{j}")
-    subckts = (*dual_pixel(design), pixel_array(design, rows, cols))
-    stop = max(t.t_stop for t in tm.values())
-    return _deck(design, title, el, subckts, Tran(5e-9, stop, 0.0, 20e-9))
-
-
 def afe_bench(design, pairs, t_cycle: float | None = None, vos: float = 0.0,
               title: str = "afe_bench") -> Netlist:
     """The SC AFE fed (Vsig, Vrst) pairs: Vsig during p1, Vrst during p2 of each cycle."""
@@ -185,32 +168,6 @@ def pd_pair_bench(design, i_primary: float, i_secondary: float, t_stop: float, v
           photodiode("s", "pds", s.area, s.perimeter, t), Element("Is", ("pds", "0"), i_secondary))
     return _deck(design, title, el, (), Tran(t_stop / 500, t_stop, 0.0, t_stop / 500, uic=True),
                  ic=(("pdp", v0), ("pds", v0)))
-
-
-def sf_bench(design, v_fd: float, title: str = "sf_bench") -> Netlist:
-    """Operating point of one SF with RS on and its column load, gate held at ``v_fd``."""
-    dev, t, vdd = design.pixel.devices, design.tech, design.tech.supply
-    el = (Element("Vdd", ("vdd", "0"), vdd), Element("Vfd", ("fd", "0"), v_fd), Element("Vrs", ("rs", "0"), vdd),
-          mosfet("sf", "vdd", "fd", "sfo", "0", dev.sf_w, dev.sf_l, t),
-          mosfet("rs", "sfo", "rs", "col", "0", dev.rs_w, dev.rs_l, t),
-          *column.bias(design), *column.load(design, "col"))
-    return _deck(design, title, el, (), Op())
-
-
-def dark_bench(design, which: str, t_int: float, title: str = "dark_bench") -> Netlist:
-    """The PD node of ``which`` subpixel with its EC and TG (off), reset by EC then dark for ``t_int``.
-
-    The PD's dark current comes from the diode card (the kit's one law at the deck
-    temperature); the EC/TG junctions add what the BSIM4 models leak. gmin 1e-18.
-    """
-    sub, dev, t, px = getattr(design, which), design.pixel.devices, design.tech, design.pixel
-    t_reset, edge = 1e-6, 10e-9
-    el = (Element("Vpdr", ("vpdr", "0"), px.v_pd_reset), Element("Vfd", ("fd", "0"), px.v_fd_reset),
-          Element("Vec", ("ec", "0"), waveform([(0.0, t_reset)], t.supply, edge)), Element("Vtg", ("tg", "0"), 0.0),
-          photodiode("pd", "pd", sub.area, sub.perimeter, t),
-          mosfet("ec", "vpdr", "ec", "pd", "0", dev.ec_w, dev.ec_l, t),
-          mosfet("tg", "fd", "tg", "pd", "0", dev.tg_w, dev.tg_l, t))
-    return _deck(design, title, el, (), Tran(1e-9, t_reset + t_int, 0.0, t_int / 200), options=LONG_OPTIONS)
 
 
 def sf_bench(design, v_fd: float, title: str = "sf_bench") -> Netlist:

@@ -103,11 +103,17 @@ class GsTiming:
         t0 = self.row(r)
         return [(t0 + 0.02 * self.t_row, t0 + 0.98 * self.t_row)]
 
+    def row_list(self, rows=None) -> list:
+        """Rows to clock: all (None), the first ``rows`` (an int), or the given row indices."""
+        if rows is None:
+            return list(range(self.rows))
+        return list(range(rows)) if isinstance(rows, int) else list(rows)
+
     def s1(self, rows=None):
-        return [self.s1_window(r) for r in range(self.rows if rows is None else rows)]
+        return [self.s1_window(r) for r in self.row_list(rows)]
 
     def s2(self, rows=None):
-        return [self.s2_window(r) for r in range(self.rows if rows is None else rows)]
+        return [self.s2_window(r) for r in self.row_list(rows)]
 
 
 def waveform(intervals, high: float, edge: float, invert: bool = False) -> Pwl:

@@ -1,48 +1,64 @@
-"""``pixelkit array``: an array read row by row (fig. 3.13)."""
+"""``pixelkit array``: one frame of the pixel arrays under a scene, up to the whole chip."""
 from __future__ import annotations
 
 import click
 
-from .common import design_arg, emit, json_opt, load, main, out_opt, output_path, spice_opts, waveforms_opt
+from .common import design_arg, emit, json_opt, load, main, out_opt, output_path, spice_opts
 
 
 @main.command("array")
 @design_arg
 @click.option("--rows", type=click.IntRange(1, 27), default=2, show_default=True)
-@click.option("--cols", type=click.IntRange(1, 50), default=2, show_default=True)
-@out_opt("PNG of the readout waveforms (default: reports/<design>/array_RxC.png)")
+@click.option("--cols", type=click.IntRange(1, 50), default=2, show_default=True,
+              help="dual-pixel columns (the secondary array has N x as many)")
+@click.option("--scene", default="gradient", show_default=True,
+              help="gradient | uniform | a .csv / .npy map | an image (.png, .jpg, ...)")
+@click.option("--unit", type=click.Choice(["lx", "W/m2", "A/m2", "rel", "fs"]), default=None,
+              help="unit of the scene map (default: lx for .csv/.npy, rel for images, fs for the "
+                   "built-in scenes); see pixelkit.chip.scene")
+@click.option("--afe", "with_afe", is_flag=True, help="add each column's S1X/S2X samplers and SC AFE")
+@click.option("--split", type=click.Choice(["rows", "none"]), default="rows", show_default=True,
+              help="rows: one deck per array and row (fast, exact up to numerics); none: one deck")
+@click.option("--check", is_flag=True, help="also simulate undivided and report the largest difference")
+@click.option("--seed", type=int, default=None, help="Monte Carlo mismatch draw (GF180 statistical models)")
+@click.option("--t-exp", "t_exp", type=float, default=None,
+              help="simulated exposure in s (default: the experiment window); charge of t_int kept")
+@click.option("--scheduler", default=None, help="Dask scheduler address (default: local workers)")
+@out_opt("folder for frame.csv and frame.png (default reports/<design>/array_RxC)", folder=True)
 @spice_opts
-@waveforms_opt
 @json_opt
-def array_cmd(design, rows, cols, out, backend, jobs, waveforms, as_json):
-    """Simulate an array read row by row (fig. 3.13); one photocurrent per subpixel."""
-    from ..api import simulate, write_waveforms
-    from ..circuits.testbench import array_bench, timings
-    from ..measure.pixel import double_sampled
-    from ..plots.waveforms import plot_columns
+def array_cmd(design, rows, cols, scene, unit, with_afe, split, check, seed, t_exp, scheduler, out,
+              backend, jobs, as_json):
+    """Simulate one frame of both arrays (with column circuits) under a scene."""
+    from ..chip.frame import simulate_frame
+    from ..chip.report import frame_table, plot_frame
+    from ..chip.scene import default_map, load_map, photocurrents
+    from ..fileio import write_atomic
     d = load(design)
-    n = d.secondary_per_pixel
-    # distinct photocurrents so that every subpixel is told apart (as in fig. 3.13)
-    ip = [[0.2e-9 * (1 + r * cols + c) for c in range(cols)] for r in range(rows)]
-    is_ = [[10e-12 * (1 + r * n * cols + j) for j in range(n * cols)] for r in range(rows)]
-    net = array_bench(d, rows, cols, ip, is_)
-    net.meta["what"] = f"{rows} x {cols} array bench of {d.name}"
-    res = simulate(net, backend=backend)
-    tm = timings(d, d.experiment.t_window, rows)
-    data = {"rows": rows, "cols": cols,
-            "primary_signal_V": [[double_sampled(res, f"col_p_{c}", tm["primary"], r) for c in range(cols)]
-                                 for r in range(rows)],
-            "secondary_signal_V": [[double_sampled(res, f"col_s_{j}", tm["secondary"], r)
-                                    for j in range(n * cols)] for r in range(rows)],
-            "iph_primary_A": ip, "iph_secondary_A": is_}
-    cols_p = [f"col_p_{c}" for c in range(cols)]
-    cols_s = [f"col_s_{j}" for j in range(n * cols)]
-    data["plot"] = str(plot_columns(res, {"primary": cols_p, "secondary": cols_s},
-                                    output_path(out, d, f"array_{rows}x{cols}.png"),
-                                    f"{d.name}: {rows} x {cols} readout (after SF, before AFE)"))
-    if waveforms:
-        data["waveforms"] = str(write_waveforms(res, waveforms))
-    emit(data, as_json, lambda x: "\n".join([f"plot: {x['plot']}"] + [
-        f"row {r}: primary {[round(v * 1e3, 1) for v in x['primary_signal_V'][r]]} mV, "
-        f"secondary {[round(v * 1e3, 1) for v in x['secondary_signal_V'][r]]} mV" for r in range(x["rows"])]
-        + ([f"waveforms: {x['waveforms']}"] if waveforms else [])))
+    m, default_unit = default_map(rows, d.secondary_per_pixel * cols, scene) if scene in ("gradient", "uniform") else load_map(scene)
+    ph = photocurrents(d, rows, cols, m, unit or default_unit, t_exp)
+    kw = dict(with_afe=with_afe, t_exp=t_exp, mismatch_seed=seed, backend=backend, jobs=jobs,
+              scheduler=scheduler)
+    f = simulate_frame(d, ph.iph_p, ph.iph_s, split=split, **kw)
+    folder = output_path(out, d, f"array_{rows}x{cols}")
+    folder.mkdir(parents=True, exist_ok=True)
+    write_atomic(folder / "frame.csv", frame_table(f, ph))
+    data = {**f.as_dict(), **ph.as_dict(), "csv": str(folder / "frame.csv"),
+            "plot": str(plot_frame(f, folder / "frame.png", f"{d.name}: {rows} x {cols} frame"))}
+    if check:
+        ref = simulate_frame(d, ph.iph_p, ph.iph_s, split="rows" if split == "none" else "none", **kw)
+        data["check_max_diff_V"] = max(float(abs(f.signal[k] - ref.signal[k]).max()) for k in f.signal)
+        data["check_wall_s"] = ref.wall_s
+    if f.failures:
+        data["error"] = "some decks failed"
+
+    def text(x):
+        lines = [f"{x['rows']} x {x['cols']} frame, {x['decks']} deck(s), {x['wall_s']:.1f} s",
+                 f"clipped (saturated): {x['clipped']}", f"table: {x['csv']}", f"plot: {x['plot']}"]
+        if "check_max_diff_V" in x:
+            lines.append(f"split vs undivided: largest difference {x['check_max_diff_V'] * 1e3:.3f} mV")
+        lines += [f"FAILED {e['deck']}: {e['message']}" for e in x["failures"]]
+        return "\n".join(lines)
+    emit(data, as_json, text)
+    if f.failures:
+        raise SystemExit(4)

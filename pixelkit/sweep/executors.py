@@ -1,0 +1,83 @@
+"""Where independent simulation tasks run: local workers by default, or a Dask cluster.
+
+``run_tasks(fn, tasks, jobs=, scheduler=)`` calls the module-level function
+``fn(task)`` for every task and yields ``(index, outcome)`` as each one finishes, with a
+progress bar. ``fn`` does its own work through the kit's engine (and its cache), so a
+finished task is on disk the moment it finishes: an interrupted run loses only the
+tasks that were running.
+
+- local (default): ``jobs`` threads; each drives its own ngspice process (batch
+  backend), so the cores work in parallel while Python waits.
+- ``scheduler="tcp://host:port"``: a Dask distributed scheduler (``dask.distributed``);
+  ``fn`` and the tasks are pickled to its workers, which must have pixelkit installed
+  and see the same model files. A ``Client`` object may be passed instead of an address.
+"""
+from __future__ import annotations
+
+from concurrent.futures import ThreadPoolExecutor, as_completed
+
+from ..errors import ConfigError
+from ..progress import progress
+
+
+def run_tasks(fn, tasks, jobs: int | None = None, scheduler=None, desc: str = "simulating"):
+    tasks = list(tasks)
+    if not tasks:
+        return
+    if scheduler is not None:
+        yield from _dask(fn, tasks, scheduler, desc)
+        return
+    from ..spice.engine import default_jobs
+    jobs = max(1, int(jobs or default_jobs()))
+    with progress(total=len(tasks), desc=desc) as bar:
+        if jobs == 1:
+            for i, t in enumerate(tasks):
+                out = fn(t)
+                bar.update(1)
+                yield i, out
+            return
+        with ThreadPoolExecutor(max_workers=jobs) as ex:
+            futs = {ex.submit(fn, t): i for i, t in enumerate(tasks)}
+            try:
+                for f in as_completed(futs):
+                    bar.update(1)
+                    yield futs[f], f.result()
+            except BaseException:
+                for f in futs:
+                    f.cancel()
+                raise
+
+
+def _client(scheduler):
+    try:
+        from dask.distributed import Client
+    except ImportError:  # pragma: no cover - declared dependency
+        raise ConfigError("", "scheduler", scheduler, "dask[distributed] installed") from None
+    if isinstance(scheduler, Client):
+        return scheduler, False
+    if not isinstance(scheduler, str) or "://" not in scheduler and ":" not in scheduler:
+        raise ConfigError("", "scheduler", scheduler, "a Dask scheduler address such as tcp://host:8786")
+    try:
+        return Client(scheduler, timeout="20s"), True
+    except (OSError, TimeoutError) as exc:
+        raise ConfigError("", "scheduler", scheduler,
+                          f"a reachable Dask scheduler ({type(exc).__name__}: {exc})") from None
+
+
+def _dask(fn, tasks, scheduler, desc):
+    from dask.distributed import as_completed as dask_completed
+    client, own = _client(scheduler)
+    try:
+        futs = client.map(fn, tasks, pure=False)
+        index = {f.key: i for i, f in enumerate(futs)}
+        with progress(total=len(tasks), desc=f"{desc} (dask)") as bar:
+            try:
+                for f in dask_completed(futs):
+                    bar.update(1)
+                    yield index[f.key], f.result()
+            except BaseException:
+                client.cancel(futs)
+                raise
+    finally:
+        if own:
+            client.close()
