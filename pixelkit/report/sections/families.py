@@ -77,7 +77,8 @@ def build(ctx) -> Section:
     r = run_ratio_experiment(rd, backend=ctx.backend, jobs=ctx.jobs)
     hb = r["high_bias"]
     text = [
-        f"WDR pixel ({wd.name}): {len(w['sweep'])} photocurrents over {w['decades']:.1f} decades in one deck (and two around the knee at a second V0); "
+        f"WDR pixel ({wd.name}): {len(w['sweep'])} photocurrents over {w['decades']:.1f} decades in one deck "
+        "(and two around the knee at a second V0); "
         f"worst decoding error {100 * w['decode_max_err_frac']:.1f} %. Simulated DR {w['dr_db']:.1f} dB "
         f"against CVDR + 20 log10(2^N) = {w['cvdr_db']:.1f} + {w['dr_steps_db']:.1f} = "
         f"{w['dr_formula_db']:.1f} dB (paper: 112 dB expected, ~100 dB measured).",
