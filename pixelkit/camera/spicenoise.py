@@ -65,3 +65,18 @@ def pixel_noise(design, which: str, a_sf: float | None = None) -> dict:
     total = a * a * (sig + rst) + read
     return {"a_sf": a, "fd_signal_V2": sig, "fd_reset_V2": rst, "read_ncds_V2": read,
             "pixel_V": float(np.sqrt(total))}
+
+
+def output_cg(design, n_primary: float = 20000, n_secondary: float = 5000, backend: str = "batch") -> dict:
+    """Output-referred CG (V/e-) from SPICE: a known photo-charge (I x the experiment's window)
+    against a dark run, double-sampled at the column, per array."""
+    from ..circuits.testbench import dual_pixel_bench
+    from ..constants import Q
+    from ..measure.pixel import double_sampled
+    tw = design.experiment.t_window
+    dark, step = simulate_many([dual_pixel_bench(design, 0.0, 0.0, title="cg_dark"),
+                                dual_pixel_bench(design, n_primary * Q / tw, n_secondary * Q / tw, title="cg_step")],
+                               backend=backend)
+    tm = timings(design, tw)
+    return {which: (double_sampled(step, col, tm[which]) - double_sampled(dark, col, tm[which])) / n
+            for which, col, n in (("primary", "col_p", n_primary), ("secondary", "col_s0", n_secondary))}

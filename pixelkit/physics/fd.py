@@ -170,3 +170,9 @@ def storage_signal(design, which: str, a_sf: float, i_ph: float, t_wait: float,
     r = response(design, which, a_sf, v_fd)
     i = leakage(design, temperature_K) + pls_current(design, i_ph)
     return a_sf * i * t_wait / r["c_fd_F"]
+
+
+def output_conversion_gain(design, which: str) -> float:
+    """Output-referred CG (V/e-) at the design's reset bias, A_sf from the SF's operating point."""
+    from ..camera.spicenoise import sf_gain
+    return response(design, which, sf_gain(design))["cg_out_V_per_e"]
