@@ -76,3 +76,66 @@ def test_slope_and_settling_of_an_rc():
     # settling within 1 % of the final value: tau ln(100) (final taken at 5 tau, 0.7 % short of 1 V)
     t = settling_time(r.time, r["v(b)"], 0.0, 5e-6, 0.01)
     assert t == pytest.approx(tau * np.log(1 / (0.01 + np.exp(-5))), rel=0.03)
+
+
+def _start_simulation(backend, tmp_path):
+    """`pixelkit simulate` on a fresh cache; returns (process, its scratch roots' glob) once it simulates."""
+    import glob
+    import os
+    import subprocess
+    import sys
+    import time
+
+    from conftest import REF, ROOT
+    env = dict(os.environ, PIXELKIT_CACHE=str(tmp_path / "cache"), PIXELKIT_REPORTS=str(tmp_path / "rep"))
+    p = subprocess.Popen([sys.executable, "-m", "pixelkit", "simulate", str(REF), "--backend", backend],
+                         cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                         start_new_session=True)
+    pattern = f"/tmp/pixelkit-{p.pid}-*"
+    t0 = time.time()
+    while not glob.glob(pattern) and time.time() - t0 < 60 and p.poll() is None:
+        time.sleep(0.1)
+    time.sleep(1.5)  # well inside the sweep (tens of runs)
+    return p, pattern
+
+
+def _children(pid):
+    import subprocess
+    return subprocess.run(["pgrep", "-P", str(pid)], capture_output=True, text=True).stdout.split()
+
+
+def _gone(pids, pattern, within=8.0):
+    import glob
+    import os
+    import time
+    t0 = time.time()
+    while time.time() - t0 < within:
+        alive = [k for k in pids if os.path.exists(f"/proc/{k}") and "zombie" not in open(f"/proc/{k}/status").read()]
+        if not alive and not glob.glob(pattern):
+            return True
+        time.sleep(0.2)
+    return False
+
+
+@pytest.mark.parametrize("backend", ["batch", "shared"])
+def test_ctrl_c_ends_cleanly(backend, tmp_path):
+    """SIGINT mid-sweep: one line, exit 130, no worker or ngspice left, no scratch folder left."""
+    import signal
+    p, pattern = _start_simulation(backend, tmp_path)
+    kids = _children(p.pid)
+    p.send_signal(signal.SIGINT)
+    out, err = p.communicate(timeout=60)
+    assert p.returncode == 130 and err.strip() == "pixelkit: error: interrupted", err[-500:]
+    assert kids and _gone(kids, pattern)
+
+
+@pytest.mark.parametrize("backend", ["batch", "shared"])
+def test_sigkill_leaves_no_workers_or_scratch(backend, tmp_path):
+    """SIGKILL of the main process: its ngspice children (parent-death signal), shared-backend
+    workers (they watch their parent) and scratch root (the watchdog) all go within seconds."""
+    import signal
+    p, pattern = _start_simulation(backend, tmp_path)
+    kids = _children(p.pid)
+    p.send_signal(signal.SIGKILL)
+    p.communicate(timeout=60)
+    assert kids and _gone(kids, pattern)

@@ -39,7 +39,7 @@ def _pool(jobs: int) -> ProcessPoolExecutor:
             _POOL.shutdown(wait=True)
         _POOL = ProcessPoolExecutor(max_workers=jobs, mp_context=mp.get_context("spawn"),
                                     max_tasks_per_child=200, initializer=scratch.worker_init,
-                                    initargs=(str(scratch.root()),))
+                                    initargs=(str(scratch.root()), os.getpid()))
     return _POOL
 
 
@@ -183,7 +183,9 @@ def _run(decks, backend, jobs):
             return list(progress(runs, **bar) if bar else runs)
         finally:
             ex.shutdown(wait=False, cancel_futures=True)
-    runs = _pool(jobs).map(_shared_worker, texts)
+    pool = _pool(jobs)  # submit, not map: map cancels pending futures on an interrupt, which races
+    futures = [pool.submit(_shared_worker, t) for t in texts]  # the broken-pool handling (3.11)
+    runs = (f.result() for f in futures)
     return list(progress(runs, **bar) if bar else runs)
 
 

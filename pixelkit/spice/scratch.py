@@ -120,9 +120,11 @@ def set_links(folder: Path, links: dict) -> None:
         link.symlink_to(target, target_is_directory=True)
 
 
-def watch_parent(interval: float = 0.5) -> None:
-    """In a worker: exit as soon as the parent process is gone (it was killed)."""
-    parent = os.getppid()
+def watch_parent(parent: int, interval: float = 0.5) -> None:
+    """In a worker: exit as soon as the main process ``parent`` is gone (it was killed),
+    including when it died while this worker was still starting."""
+    if os.getppid() != parent:
+        os._exit(1)
 
     def loop():
         while True:
@@ -133,11 +135,11 @@ def watch_parent(interval: float = 0.5) -> None:
     threading.Thread(target=loop, daemon=True, name="pixelkit-parent-watch").start()
 
 
-def worker_init(path: str) -> None:
-    """Initializer of shared-backend worker processes."""
+def worker_init(path: str, parent: int) -> None:
+    """Initializer of shared-backend worker processes (``parent``: the main process's pid)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the main process handles Ctrl-C and ends us
     adopt(path)
-    watch_parent()
+    watch_parent(parent)
 
 
 def child_command(argv: list[str]) -> list[str]:
