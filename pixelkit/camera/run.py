@@ -11,7 +11,7 @@ from .figures import emva_figures
 from .mismatch import draw
 from .model import ARRAYS, array_camera
 from .ptc import analytic, series
-from .spicenoise import sf_gain
+from .spicenoise import output_cg, pixel_noise, sf_gain
 
 
 def measured_swings(design, backend: str = "batch") -> dict:
@@ -53,6 +53,13 @@ def camera(design, seed: int = 1, swings: dict | None = None, emva_out: str | Pa
     a_sf = sf_gain(design)
     swings = measured_swings(design, backend) if swings is None else swings
     out = {which: array_report(design, which, a_sf, swings.get(which), seed, steps, shape) for which in ARRAYS}
+    cg = output_cg(design, backend=backend)
+    for which in ARRAYS:   # the independent SPICE figures beside the analytic ones
+        sp = pixel_noise(design, which, a_sf)
+        f = out[which]["figures"]
+        f["cg_out_spice_V_per_e"] = cg[which]
+        f["read_noise_spice_e"] = sp["pixel_V"] / f["cg_out_V_per_e"]
+        f["read_noise_chain_no_dark_e"] = out[which]["camera"].read_V / f["cg_out_V_per_e"]
     if emva_out is not None:
         for which in ARRAYS:
             r = out[which]

@@ -6,8 +6,10 @@ import click
 from .common import design_arg, emit, json_opt, load, main, out_opt, output_path, spice_opts
 
 _ROWS = (("K (DN/e-)", "k_dn_per_e", 1.0, ".4g"), ("CG out (uV/e-)", "cg_out_V_per_e", 1e6, ".3f"),
+         ("CG out, SPICE step (uV/e-)", "cg_out_spice_V_per_e", 1e6, ".3f"),
          ("read noise, EMVA (e-)", "read_noise_e", 1.0, ".1f"),
-         ("read noise, chain (e-)", "read_noise_chain_e", 1.0, ".1f"),
+         ("read noise, chain (e-)", "read_noise_chain_no_dark_e", 1.0, ".1f"),
+         ("read noise, SPICE (e-)", "read_noise_spice_e", 1.0, ".1f"),
          ("QE (EMVA eta)", "qe", 1.0, ".4g"), ("saturation (e-)", "saturation_e", 1.0, ".0f"),
          ("DR (dB)", "dr_db", 1.0, ".1f"), ("SNR max (dB)", "snr_max_db", 1.0, ".1f"),
          ("linearity error (%)", "linearity_error_pct", 1.0, ".2f"), ("GSE (signal)", "gse", 1.0, ".1f"),
