@@ -100,3 +100,6 @@ class InfeasibleError(PixelkitError):
     def __init__(self, message: str, conflicts: list[str]):
         self.conflicts = conflicts
         super().__init__(f"{message}: constraints in conflict: {', '.join(conflicts)}")
+
+    def details(self) -> dict:
+        return {"conflicts": list(self.conflicts)}

@@ -7,7 +7,8 @@ The convention every command follows (README, "Command line and Python API"):
   working-range warnings on stderr and adds them to the JSON output);
 - ``--json`` (``json_opt``) on every command: the result is one JSON object on
   stdout, progress bars are silenced, and an error is one JSON object on stdout
-  ``{"error", "field", "value", "allowed", "exit_status", ...}``;
+  ``{"error", "field", "value", "allowed", "exit_status", ...}`` (and, as
+  without ``--json``, one line ``pixelkit: error: ...`` on stderr);
 - one output option, ``--out`` (``out_opt``): a file or a folder, depending on
   the command. Without it, outputs go under ``reports/<design>/`` of the current
   folder (``$PIXELKIT_REPORTS`` replaces ``reports``), see :func:`output_path`;
@@ -164,8 +165,7 @@ def _fail(as_json: bool, status: int, message: str, details: dict | None = None)
         if WARNINGS:
             obj["warnings"] = list(WARNINGS)
         click.echo(json.dumps(obj, indent=1, default=_jsonable))
-    else:
-        click.echo(f"pixelkit: error: {message}", err=True)
+    click.echo(f"pixelkit: error: {message}", err=True)  # the one line for a person, JSON or not
     sys.exit(status)
 
 
