@@ -139,3 +139,22 @@ def test_sigkill_leaves_no_workers_or_scratch(backend, tmp_path):
     p.send_signal(signal.SIGKILL)
     p.communicate(timeout=60)
     assert kids and _gone(kids, pattern)
+
+
+@pytest.mark.parametrize("blob,what", [
+    (b"Title: t\nPlotname: Transient Analysis\nFlags: real\nNo. Variables: 2\nNo. Points: 0\n"
+     b"Variables:\n\t0\ttime\ttime\n\t1\tv(a)\tvoltage\nBinary:\n", "0 points"),
+    (b"Title: t\nPlotname: Transient Analysis\nFlags: real\nNo. Variables: 2\nNo. Points: 10\n"
+     b"Variables:\n\t0\ttime\ttime\n\t1\tv(a)\tvoltage\nBinary:\n" + b"\0" * 40, "truncated"),
+    (b"Title: t\nNo. Variables: x\n", "invalid literal"),
+    (b"", "no plot"),
+], ids=["zero-points", "truncated", "garbage-header", "empty"])
+def test_bad_raw_file_is_one_line_naming_the_file(tmp_path, blob, what):
+    """An aborted transient leaves a 0-point raw file: a RawError (the engine then retries),
+    never an internal error."""
+    from pixelkit.spice.raw import RawError, read_raw
+    f = tmp_path / "out.raw"
+    f.write_bytes(blob)
+    with pytest.raises(RawError) as e:
+        read_raw(f)
+    assert str(f) in str(e.value) and what in str(e.value) and "\n" not in str(e.value)
