@@ -19,11 +19,9 @@ from conftest import REF, ROOT
 def array_run(tmp_path_factory):
     from conftest import run_cli
     d = tmp_path_factory.mktemp("wave")
-    code, out, err = run_cli("array", REF, "--rows", "1", "--cols", "1", "--out", d / "a.png",
-                             "--waveforms", d / "w.csv", "--json")
+    code, out, err = run_cli("simulate", REF, "--waveforms", d / "w.csv", "--json")
     assert code == 0, out + err
-    code2, out2, err2 = run_cli("array", REF, "--rows", "1", "--cols", "1", "--out", d / "a.png",
-                                "--waveforms", d / "w.raw", "--json")
+    code2, out2, err2 = run_cli("simulate", REF, "--waveforms", d / "w.raw", "--json")  # cached now
     assert code2 == 0, out2 + err2
     return d, json.loads(out)
 
@@ -32,7 +30,7 @@ def test_waveform_csv_has_time_and_unit_named_columns(array_run):
     d, r = array_run
     header = (d / "w.csv").read_text().splitlines()[0].split(",")
     assert header[0] == "time_s"
-    assert {"v(col_p_0)_V", "v(col_s_0)_V", "v(col_s_2)_V"} <= set(header)
+    assert {"v(col_p)_V", "v(col_s0)_V", "v(col_s2)_V", "v(x1.xp.pd)_V", "i(vdd)_A"} <= set(header)
     assert all(h.endswith(("_V", "_A")) for h in header[1:])
     data = np.loadtxt(d / "w.csv", delimiter=",", skiprows=1)
     assert data.shape[1] == len(header) and np.all(np.diff(data[:, 0]) > 0)
@@ -44,12 +42,12 @@ def test_raw_waveforms_load_in_ngspice_and_match_the_csv(array_run, tmp_path):
     data = np.loadtxt(d / "w.csv", delimiter=",", skiprows=1)
     k = len(data) // 2
     (tmp_path / "load.cir").write_text(
-        f"* load test\n.control\nload {d / 'w.raw'}\nprint length(time)\nprint v(col_p_0)[{k}]\n.endc\n.end\n")
+        f"* load test\n.control\nload {d / 'w.raw'}\nprint length(time)\nprint v(col_p)[{k}]\n.endc\n.end\n")
     p = subprocess.run(["ngspice", "-b", "load.cir"], cwd=tmp_path, capture_output=True, text=True, timeout=60)
     vals = [ln.split("=")[1] for ln in p.stdout.splitlines() if " = " in ln]
     assert len(vals) == 2, p.stdout[-1500:]
     assert int(float(vals[0])) == len(data)
-    assert abs(float(vals[1]) - data[k, header.index("v(col_p_0)_V")]) < 1e-9
+    assert abs(float(vals[1]) - data[k, header.index("v(col_p)_V")]) < 1e-9
 
 
 def test_written_files_honour_the_umask(tmp_path):
