@@ -1,0 +1,98 @@
+"""Sweeps: labelled results, failed points kept with ngspice's message, resume, Dask."""
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pixelkit.circuits.testbench import dual_pixel_bench, timings
+from pixelkit.errors import ConfigError
+from pixelkit.measure.pixel import double_sampled
+from pixelkit.spice import simulate
+from pixelkit.sweep.run import default_stimulus, run_sweep
+from pixelkit.sweep.space import parse_axis
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_sweep_labels_points_and_keeps_failures(ref_design):
+    """Independent path for the labels: the same point simulated directly, outside the sweep.
+    trtol 1e-6 makes ngspice give up ('Timestep too small'): those points must be listed with
+    that message, not dropped; the signal must grow with the photocurrent."""
+    d = ref_design
+    s = run_sweep(d, [parse_axis("iph_p=200p,800p"), parse_axis("option.trtol=7,1e-6")], jobs=2)
+    ds = s.dataset
+    assert ds["signal_primary_V"].dims == ("iph_p", "option.trtol") and ds.sizes == {"iph_p": 2, "option.trtol": 2}
+    assert len(s.points) == 4 and len(s.failures) == 2
+    for p in s.failures:
+        assert p["option.trtol"] == 1e-6 and "timestep too small" in p["message"].lower()
+    ok = ds.sel({"option.trtol": 7.0})
+    assert bool(ok["ok"].all()) and float(ok["signal_primary_V"][1]) > float(ok["signal_primary_V"][0]) + 0.05
+    stim = default_stimulus(d, d.experiment.t_window)
+    direct = simulate(dual_pixel_bench(d, 800e-12, stim["iph_s"], title="direct"))
+    want = double_sampled(direct, "col_p", timings(d, d.experiment.t_window)["primary"])
+    assert float(ok["signal_primary_V"].sel(iph_p=800e-12)) == pytest.approx(want, abs=1e-9)
+    head = s.table().splitlines()[0].split(",")
+    assert head[:3] == ["iph_p_A", "option.trtol", "signal_primary_V"] and "message" in head
+
+
+def test_design_axes_and_bad_axes(ref_design):
+    """A design key goes through the design schema: a value it refuses is a ConfigError
+    naming the field; a corner axis runs the corner's model section."""
+    with pytest.raises(ConfigError, match="sf_bias"):
+        run_sweep(ref_design, [parse_axis("pixel.sf_bias=5 A")])
+    with pytest.raises(ConfigError, match="NAME=VALUES"):
+        parse_axis("iph_p")
+    with pytest.raises(ConfigError, match=">= 0"):
+        parse_axis("iph_p=-1n")
+    s = run_sweep(ref_design, [parse_axis("corner=ss,ff")], jobs=2)
+    rst = s.dataset["reset_primary_V"]
+    # slow NMOS: higher SF threshold, lower column reset level than fast
+    assert float(rst.sel(corner="ss")) < float(rst.sel(corner="ff")) - 0.02
+
+
+def test_interrupted_sweep_resumes_without_recomputing(tmp_path):
+    """Interrupt a real `pixelkit sweep` after some points have finished, run it again: the
+    second run simulates exactly the points the first did not finish (cache entries counted
+    on disk: the independent record of what finished)."""
+    env = dict(os.environ, PIXELKIT_CACHE=str(tmp_path / "cache"), PIXELKIT_PROGRESS="0")
+    args = [sys.executable, "-m", "pixelkit", "sweep", "designs/dual_pixel_revA.toml", "--over",
+            "iph_p=lin:100p:1.5n:8", "--jobs", "1", "--out", str(tmp_path / "o"), "--json"]
+    p = subprocess.Popen(args, cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    sim = tmp_path / "cache" / "sim"
+    deadline = time.time() + 120
+    while time.time() < deadline and len(list(sim.glob("*/*.npz"))) < 3:
+        time.sleep(0.05)
+    p.send_signal(signal.SIGINT)
+    p.communicate(timeout=60)
+    done = len(list(sim.glob("*/*.npz")))
+    assert 3 <= done < 8, f"interrupt came too late or too early ({done} of 8 finished)"
+    q = subprocess.run(args, cwd=ROOT, env=env, capture_output=True, text=True, timeout=300)
+    assert q.returncode == 0, q.stderr
+    r = json.loads(q.stdout)
+    assert r["computed"] == 8 - done
+    assert sum(pt["cached"] for pt in r["points"]) == done
+    sig = [pt["signal_primary_V"] for pt in r["points"]]
+    assert np.all(np.diff(sig) > 0)
+
+
+def test_dask_cluster_gives_the_local_numbers(ref_design, tmp_path, monkeypatch):
+    """A Dask LocalCluster (2 worker processes) started here runs the sweep; the local
+    executor then finds every point in the cache and the numbers are the same."""
+    from dask.distributed import LocalCluster
+    monkeypatch.setenv("PIXELKIT_CACHE", str(tmp_path / "cache"))
+    axes = [parse_axis("iph_p=150p,600p"), parse_axis("iph_s=20p,60p")]
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        remote = run_sweep(ref_design, axes, scheduler=cluster.scheduler_address)
+    assert not remote.failures and not any(p["cached"] for p in remote.points)
+    local = run_sweep(ref_design, axes, jobs=2)
+    assert all(p["cached"] for p in local.points)
+    for f in ("signal_primary_V", "signal_secondary_V"):
+        assert np.array_equal(remote.dataset[f].values, local.dataset[f].values)
+    assert float(local.dataset["signal_secondary_V"].sel(iph_p=150e-12, iph_s=60e-12)) > \
+        float(local.dataset["signal_secondary_V"].sel(iph_p=150e-12, iph_s=20e-12))
