@@ -292,3 +292,25 @@ def test_nonfinite_figures_are_not_printed():
         refuse_nonfinite({"primary": {"fwc_e": math.inf}})
     assert "primary.fwc_e" in str(e.value)
     refuse_nonfinite({"a": [1.0, 2.0], "b": "x"})
+
+
+def test_report_section_lists_values_near_a_range_edge(tmp_path):
+    """A 4.9 V swing (plausible up to 5 V) with a 5 V supply is listed first as near the edge;
+    a 1.5 V swing is not."""
+    from pixelkit.report.sections import inputs
+
+    class Ctx:
+        pass
+    ctx = Ctx()
+    ctx.design = load_design(REF)
+    assert "design: pixel.swing" not in inputs.build(ctx).data["near_edge"]
+    tech = _tech_raw()
+    tech["supply"] = "5 V"
+    (tmp_path / "t.toml").write_text(to_toml(tech))
+    p = tmp_path / "d.toml"
+    p.write_text(REF.read_text().replace('"c35_thesis"', json.dumps(str(tmp_path / "t.toml")))
+                 .replace('swing = "1.5 V"', 'swing = "4.9 V"').replace('"2.0 V"', '"4.95 V"'))
+    ctx.design = load_design(p)
+    s = inputs.build(ctx)
+    assert "design: pixel.swing" in s.data["near_edge"]
+    assert s.tables[0].rows[0][5] == "near the edge"

@@ -76,6 +76,7 @@ REGISTRY: list[tuple[str, str, str]] = [
     ("families", "Other pixel families: WDR and ratio pixels", "issue 16 (pixel families)"),
     ("variation", "Sweeps, corners and Monte Carlo", "issue 14 (sweeps / corners / Monte Carlo)"),
     ("gap", "Sim-to-real diagnosis (--measured)", "report"),
+    ("inputs", "Input checks: plausibility and model library", "issue 9 (hostile input)"),
     ("reproducibility", "Reproducibility", "report"),
 ]
 
