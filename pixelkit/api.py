@@ -1,6 +1,6 @@
 """The documented Python API: ``import pixelkit as pk``.
 
-Every command of the command line is a thin layer over one of these functions::
+The main commands of the command line are thin layers over these functions::
 
     import pixelkit as pk
     d = pk.load_design("designs/dual_pixel_revA.toml")     # validated, with its technology
@@ -11,7 +11,7 @@ Every command of the command line is a thin layer over one of these functions::
     pk.export_deck(d, "bench_dual_pixel", "bench.cir")       # a deck that runs in ngspice -b
     table = pk.models(d)                                     # analytic model table
     exp = pk.experiment(d)                                   # the thesis experiment (i_mid, i_5pct)
-    sized = pk.size(d)                                       # mask opening and integration times
+    sized = pk.size(d)                                       # mask opening, integration times
     lay = pk.layout_design(d, "layouts")                     # GDS, extraction, pictures
     gap = pk.diagnose(d, "measured.csv")                     # sim-to-real gap of measured data
 
@@ -107,10 +107,13 @@ def experiment(design, backend: str = "batch", jobs=None) -> dict:
     return run_experiment(design, backend=backend, jobs=jobs)
 
 
-def size(design, out=None, sensitivity: bool = False) -> dict:
-    """Size the secondary mask opening and the integration times; writes the sized design to ``out``."""
+def size(design, out=None, sensitivity: bool = False, backend: str = "batch") -> dict:
+    """Size the secondary mask opening and the integration times; writes the sized design to ``out``
+    (default ``reports/<design>/<design>_sized.toml``, as the command line)."""
+    from .fileio import reports_root
     from .optimize.flow import size_design
-    return size_design(design, out, sensitivity)
+    out = Path(out) if out else reports_root() / design.name / f"{design.name}_sized.toml"
+    return size_design(design, out, sensitivity, backend=backend)
 
 
 def layout_design(design, out_dir="layouts", rows: int = 2, cols: int = 2, pictures: bool = True) -> dict:
