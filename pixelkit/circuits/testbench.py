@@ -134,7 +134,10 @@ def dual_pixel_bench(design, iph_p: float, iph_s, t_exp: float | None = None, wi
             el.append(Element(f"Xafe_{c}", (f"in_{c}", f"out_{c}", "vref", f"p1_{s}", f"p1_{s}b",
                                             f"p2_{s}", f"p2_{s}b", "vdd"), "scafe"))
         subckts += [opamp(design), sc_afe(design)]
-    return _deck(design, title, el, subckts, _tran(tm), options=_options(tm))
+    net = _deck(design, title, el, subckts, _tran(tm), options=_options(tm))
+    net.meta["what"] = (f"the dual-pixel bench{' with AFE' if with_afe else ''} of {design.name} at "
+                        f"I_primary = {iph_p * 1e9:.4g} nA, I_secondary = {iph_s[0] * 1e12:.4g} pA")
+    return net
 
 
 def afe_bench(design, pairs, t_cycle: float | None = None, vos: float = 0.0,
@@ -166,8 +169,11 @@ def pd_pair_bench(design, i_primary: float, i_secondary: float, t_stop: float, v
     t, p, s = design.tech, design.primary, design.secondary
     el = (photodiode("p", "pdp", p.area, p.perimeter, t), Element("Ip", ("pdp", "0"), i_primary),
           photodiode("s", "pds", s.area, s.perimeter, t), Element("Is", ("pds", "0"), i_secondary))
-    return _deck(design, title, el, (), Tran(t_stop / 500, t_stop, 0.0, t_stop / 500, uic=True),
-                 ic=(("pdp", v0), ("pds", v0)))
+    net = _deck(design, title, el, (), Tran(t_stop / 500, t_stop, 0.0, t_stop / 500, uic=True),
+                ic=(("pdp", v0), ("pds", v0)))
+    net.meta["what"] = (f"the bare-PD pair of {design.name} (fig. A.1) at I = {i_primary * 1e9:.4g} nA / "
+                        f"{i_secondary * 1e9:.4g} nA from {v0:g} V")
+    return net
 
 
 def sf_bench(design, v_fd: float, title: str = "sf_bench") -> Netlist:
