@@ -219,6 +219,9 @@ def load_design(path: str | Path) -> Design:
         if getattr(design.pixel, f) > tech.supply:
             raise ConfigError(src, f"pixel.{f}", as_written(raw, f"pixel.{f}", getattr(design.pixel, f)),
                               f"a level no higher than the supply ({tech.supply:g} V)")
+    if design.afe.vref > tech.supply:
+        raise ConfigError(src, "afe.vref", as_written(raw, "afe.vref", design.afe.vref),
+                          f"a reference no higher than the supply ({tech.supply:g} V)")
     if tech.supply <= design.pixel.swing:
         raise ConfigError(src, "pixel.swing", as_written(raw, "pixel.swing", design.pixel.swing),
                           f"a swing below the supply ({tech.supply:g} V)")
