@@ -7,7 +7,8 @@ from pathlib import Path
 
 from ..circuits.testbench import dual_pixel_bench, timings
 from ..experiments.thesis import run_experiment
-from ..fileio import write_atomic
+from ..errors import PixelkitError
+from ..fileio import check_output, write_atomic
 from ..measure.pixel import double_sampled
 from ..schema import to_toml
 from ..spice import simulate
@@ -107,11 +108,14 @@ def sensitivity(design, nominal: dict, backend="batch") -> list[dict]:
 
 
 def size_design(design, out: Path | None = None, with_sensitivity: bool = False, backend="batch") -> dict:
+    out = Path(out) if out else Path(design.source).with_name(f"{Path(design.source).stem}_sized.toml")
+    check_output(out)  # before the simulations, not after them
+    if out.is_dir():
+        raise PixelkitError(f"{out}: cannot write the sized design here: it is a folder (give a file name)")
     exp = run_experiment(design, backend=backend)
     analytic = solve(design, analytic_curves(design))
     spice = solve(design, spice_curves(design, exp))
     chosen = spice if design.sizing.level == "spice" else analytic
-    out = Path(out) if out else Path(design.source).with_name(f"{Path(design.source).stem}_sized.toml")
     write_atomic(out, sized_design_text(design, chosen, out))
     result = {k: chosen[k] for k in ("c_m", "mask_open_m2", "t_int_primary_s", "t_int_secondary_s",
                                      "trace_px_at_speed_min", "motion_px_primary", "dark_frac_secondary",
