@@ -59,13 +59,13 @@ class Frame:
         return out
 
 
-def tiles(rows: int, cols: int, split: str, with_afe: bool = False) -> list[Tile]:
+def tiles(rows: int, cols: int, split: str, with_afe: bool = False, kinds=KINDS) -> list[Tile]:
     if split not in SPLITS:
         raise ConfigError("", "split", split, f"one of {', '.join(SPLITS)}")
     if split == "none":
-        return [Tile(KINDS, tuple(range(rows)), tuple(range(cols)))]
+        return [Tile(tuple(kinds), tuple(range(rows)), tuple(range(cols)))]
     lead = (lambda r: (r - 1,) if with_afe and r > 0 else ())
-    return [Tile((k,), (r,), tuple(range(cols)), lead(r)) for k in KINDS for r in range(rows)]
+    return [Tile((k,), (r,), tuple(range(cols)), lead(r)) for k in kinds for r in range(rows)]
 
 
 def _probe(task):
@@ -86,9 +86,11 @@ def _probe(task):
 
 def simulate_frame(design, iph_p, iph_s, with_afe: bool = False, split: str = "rows",
                    t_exp: float | None = None, mismatch_seed: int | None = None, backend: str = "batch",
-                   jobs: int | None = None, scheduler=None, options=None, max_step: float | None = None) -> Frame:
+                   jobs: int | None = None, scheduler=None, options=None, max_step: float | None = None,
+                   kinds=KINDS) -> Frame:
     """Simulate one frame; see the module docstring for ``split``. ``options``: simulator
-    options over the kit's defaults (``spice.options``)."""
+    options over the kit's defaults (``spice.options``); ``kinds``: the arrays to simulate
+    (the others' results stay NaN)."""
     from ..circuits.testbench import timings
     rows, cols = frame_shape(design, iph_p, iph_s)
     n = design.secondary_per_pixel
@@ -97,7 +99,7 @@ def simulate_frame(design, iph_p, iph_s, with_afe: bool = False, split: str = "r
     if max_step is None:
         max_step = min(t.t_row for t in tm.values()) / STEPS_PER_ROW
     tasks = []
-    for tile in tiles(rows, cols, split, with_afe):
+    for tile in tiles(rows, cols, split, with_afe, kinds):
         tag = "_".join(PREFIX[k] for k in tile.kinds) + (f"_r{tile.rows[0]}" if len(tile.rows) == 1 else "")
         net = array_bench(design, iph_p, iph_s, tile, t_exp, with_afe, mismatch_seed, max_step,
                           title=f"frame_{rows}x{cols}_{tag}")

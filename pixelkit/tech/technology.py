@@ -100,6 +100,14 @@ class LayerMap:
 
 
 @dataclass(frozen=True)
+class Mismatch:
+    """Matching of what the model library does not vary itself. (The GF180MCU MOSFET
+    models carry their own Pelgrom mismatch, switched on by ``sw_stat_mismatch``.)"""
+    cap_pelgrom: float = qty("m", gt=0, doc="capacitor matching: sigma(dC/C) x sqrt(area); 1 %um = 1e-8 m")
+    cap_density: float = qty("F/m2", gt=0, doc="capacitance per area (gives a capacitor's area from its value)")
+
+
+@dataclass(frozen=True)
 class Technology:
     name: str = ident()
     description: str = text()
@@ -108,6 +116,7 @@ class Technology:
     mos: Mos = table(Mos)
     rules: LayoutRules = table(LayoutRules)
     layers: LayerMap = table(LayerMap)
+    mismatch: Mismatch | None = table(Mismatch, None)
     models: ModelLibrary = field(default=None, metadata=dict(kind="skip"))
     source: str = field(default="", metadata=dict(kind="skip"))
 
