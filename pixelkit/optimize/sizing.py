@@ -10,6 +10,7 @@ sensor and of the headlight spot:
     fov         v_max t_s f / Z                      <= fov_fraction * width_s
     dark        I_dark,s(T_max) t_s                  <= dark_fraction * Q_full,s
     headlight   j_head A_open t_s                    <= Q(headlight_max),  >= snr * Q_noise
+                (Q_noise: the NCDS read noise and the headlight's shot noise in quadrature)
     opening     min_opening_side^2 <= A_open <= A_pd
     ratio       t_s = t_ratio t_p                    (when the design fixes it)
 
@@ -23,12 +24,12 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import casadi as ca
 import numpy as np
 
-from ..constants import K_B, Q
+from ..constants import Q
 from ..errors import ConfigError, InfeasibleError
 from ..physics.dark import dark_current
 from ..physics.photo import Spectrum, lux_to_irradiance, responsivity
@@ -55,6 +56,16 @@ def _require(design):
             raise ConfigError(design.source, sec, None, f"a [{sec}] table to size the design")
 
 
+def _read_noise_e(design, temperature_K: float) -> float:
+    """The secondary's temporal read noise (e-) at ``temperature_K``: the NCDS chain of
+    ``physics.noise`` (FD kT/C twice through the charge sharing, SF and load), A_sf from
+    the SF's operating point."""
+    from ..camera.spicenoise import sf_gain
+    from ..physics.noise import chain
+    d = replace(design, temperature=temperature_K)
+    return chain(d, "secondary", sf_gain(d))["pixel_e"]
+
+
 def _bounds(design, curves: Curves, lt: Light):
     """Closed-form bounds on t_p and t_s: {name: (kind, value)} with kind 'lo'/'hi'."""
     d, sc, op, sz = design, design.scene, design.optics, design.sizing
@@ -75,8 +86,7 @@ def _bounds(design, curves: Curves, lt: Light):
     tp = {"motion": ("hi", sz.max_motion_px * (1 - m) * z * d.primary.pitch / (sc.speed_max * f)),
           "criterion": ("eq", t_p)}
     q_head = lt.j_head * q_low / lt.j_bg                       # A_open t_s is fixed by the criterion
-    c_s = float(d.tech.photodiode.cj * d.secondary.area + d.tech.photodiode.cjsw * d.secondary.perimeter)
-    q_noise = math.sqrt(K_B * sc.max_temperature * c_s) + math.sqrt(q_head * Q)
+    q_noise = Q * math.hypot(_read_noise_e(d, sc.max_temperature), math.sqrt(q_head / Q))  # quadrature
     q_head_max = curves.charge_at("secondary", sz.headlight_max)
     checks = {"headlight_max": q_head <= q_head_max * (1 - m),
               "headlight_snr": q_head >= sz.headlight_snr * q_noise * (1 + m)}
