@@ -7,7 +7,6 @@ junction capacitances and leakage, the diode card, gmin 1e-18) against the close
 """
 from dataclasses import replace
 
-import numpy as np
 import pytest
 
 from pixelkit.camera.model import combined_node
