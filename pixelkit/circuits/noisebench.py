@@ -21,9 +21,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ..spice.netlist import Element, Netlist, check_node, fmt
-from . import column
 from .devices import mosfet, photodiode
-from .testbench import _deck
+from .testbench import _deck, read_chain
 
 #: Options of noise decks: floating nodes must not see gmin's 1e-15 S.
 NOISE_OPTIONS = (("gmin", 1e-18),)
@@ -63,18 +62,14 @@ def capacitor_deck(design, r: float, c: float) -> Netlist:
 
 
 def _pixel(design, which: str, ec: float, tg: float, rst: float) -> list:
-    """One subpixel's PD, switches (gates at fixed levels), SF, RS, column load."""
-    sub, dev, t, px = getattr(design, which), design.pixel.devices, design.tech, design.pixel
-    el = [Element("Vdd", ("vdd", "0"), t.supply), Element("Vec", ("ec", "0"), ec),
-          Element("Vtg", ("tg", "0"), tg), Element("Vrst", ("rst", "0"), rst), Element("Vrs", ("rs", "0"), t.supply),
-          mosfet("ec", "vpdr", "ec", "pd", "0", dev.ec_w, dev.ec_l, t),
-          mosfet("tg", "fd", "tg", "pd", "0", dev.tg_w, dev.tg_l, t),
-          mosfet("rst", "vrst", "rst", "fd", "0", dev.rst_w, dev.rst_l, t),
-          mosfet("sf", "vdd", "fd", "sfo", "0", dev.sf_w, dev.sf_l, t),
-          mosfet("rs", "sfo", "rs", "col", "0", dev.rs_w, dev.rs_l, t),
-          *column.bias(design), *column.load(design, "col"),
-          photodiode("pd", "pd", sub.area, sub.perimeter, t)]
-    return el
+    """One subpixel's PD, switches (gates at fixed levels) and its read chain."""
+    sub, dev, t = getattr(design, which), design.pixel.devices, design.tech
+    return [*read_chain(design), Element("Vec", ("ec", "0"), ec), Element("Vtg", ("tg", "0"), tg),
+            Element("Vrst", ("rst", "0"), rst),
+            mosfet("ec", "vpdr", "ec", "pd", "0", dev.ec_w, dev.ec_l, t),
+            mosfet("tg", "fd", "tg", "pd", "0", dev.tg_w, dev.tg_l, t),
+            mosfet("rst", "vrst", "rst", "fd", "0", dev.rst_w, dev.rst_l, t),
+            photodiode("pd", "pd", sub.area, sub.perimeter, t)]
 
 
 def fd_sample_deck(design, which: str, transfer: bool) -> Netlist:
@@ -98,9 +93,5 @@ def fd_sample_deck(design, which: str, transfer: bool) -> Netlist:
 
 
 def read_deck(design, v_fd: float) -> Netlist:
-    dev, t = design.pixel.devices, design.tech
-    el = (Element("Vdd", ("vdd", "0"), t.supply), Element("Vrs", ("rs", "0"), t.supply),
-          mosfet("sf", "vdd", "fd", "sfo", "0", dev.sf_w, dev.sf_l, t),
-          mosfet("rs", "sfo", "rs", "col", "0", dev.rs_w, dev.rs_l, t),
-          *column.bias(design), *column.load(design, "col"))
-    return _deck(design, "noise_read", el, (), Noise("col", "fd", v_fd, 1.0, 1e11, 40), options=NOISE_OPTIONS)
+    return _deck(design, "noise_read", read_chain(design), (), Noise("col", "fd", v_fd, 1.0, 1e11, 40),
+                 options=NOISE_OPTIONS)

@@ -176,14 +176,18 @@ def pd_pair_bench(design, i_primary: float, i_secondary: float, t_stop: float, v
     return net
 
 
-def sf_bench(design, v_fd: float, title: str = "sf_bench") -> Netlist:
-    """Operating point of one SF with RS on and its column load, gate held at ``v_fd``."""
+def read_chain(design) -> tuple:
+    """One SF (gate ``fd``) with RS on, its column line ``col`` and load, and the supply."""
     dev, t, vdd = design.pixel.devices, design.tech, design.tech.supply
-    el = (Element("Vdd", ("vdd", "0"), vdd), Element("Vfd", ("fd", "0"), v_fd), Element("Vrs", ("rs", "0"), vdd),
-          mosfet("sf", "vdd", "fd", "sfo", "0", dev.sf_w, dev.sf_l, t),
-          mosfet("rs", "sfo", "rs", "col", "0", dev.rs_w, dev.rs_l, t),
-          *column.bias(design), *column.load(design, "col"))
-    return _deck(design, title, el, (), Op())
+    return (Element("Vdd", ("vdd", "0"), vdd), Element("Vrs", ("rs", "0"), vdd),
+            mosfet("sf", "vdd", "fd", "sfo", "0", dev.sf_w, dev.sf_l, t),
+            mosfet("rs", "sfo", "rs", "col", "0", dev.rs_w, dev.rs_l, t),
+            *column.bias(design), *column.load(design, "col"))
+
+
+def sf_bench(design, v_fd: float, title: str = "sf_bench") -> Netlist:
+    """Operating point of the read chain with the SF gate held at ``v_fd``."""
+    return _deck(design, title, (*read_chain(design), Element("Vfd", ("fd", "0"), v_fd)), (), Op())
 
 
 def dark_bench(design, which: str, t_int: float, title: str = "dark_bench") -> Netlist:
