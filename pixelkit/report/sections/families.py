@@ -69,6 +69,9 @@ def _ratio_figure(ctx, r):
 
 
 def build(ctx) -> Section:
+    if not all((DESIGNS / f).is_file() for f in ("wdr_pixel.toml", "ratio_pixel.toml")):
+        return Section.unavailable(TITLE, f"the reference designs wdr_pixel.toml and ratio_pixel.toml are not in "
+                                          f"{DESIGNS} (an installed package without the repository)")
     wd = load_wdr_design(DESIGNS / "wdr_pixel.toml")
     rd = load_ratio_design(DESIGNS / "ratio_pixel.toml")
     ctx.progress("families: WDR pixel")
