@@ -91,3 +91,13 @@ def commit(path: Path, tmp: Path) -> Path:
 def reports_root() -> Path:
     """Where outputs go when no ``--out`` is given: ``$PIXELKIT_REPORTS``, default ``./reports``."""
     return Path(os.environ.get("PIXELKIT_REPORTS", "reports"))
+
+
+def json_default(x):
+    """``json.dumps(..., default=json_default)``: numpy scalars and arrays as numbers and lists."""
+    import numpy as np
+    if isinstance(x, np.generic):
+        return x.item()
+    if isinstance(x, np.ndarray):
+        return x.tolist()
+    return str(x)

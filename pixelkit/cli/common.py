@@ -60,6 +60,7 @@ from pathlib import Path
 import click
 
 from ..errors import EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_USER, PixelkitError
+from ..fileio import json_default
 
 #: Warnings raised while this command ran (working range, ...); ``emit`` adds them to JSON.
 WARNINGS: list[str] = []
@@ -72,18 +73,9 @@ def emit(data: dict, as_json: bool, render) -> None:
     if as_json:
         if WARNINGS and isinstance(data, dict) and "warnings" not in data:
             data = {**data, "warnings": list(WARNINGS)}
-        click.echo(json.dumps(data, indent=1, default=_jsonable))
+        click.echo(json.dumps(data, indent=1, default=json_default))
     else:
         click.echo(render(data))
-
-
-def _jsonable(x):
-    import numpy as np
-    if isinstance(x, np.generic):
-        return x.item()
-    if isinstance(x, np.ndarray):
-        return x.tolist()
-    return str(x)
 
 
 def warn(message: str) -> None:
@@ -164,7 +156,7 @@ def _fail(as_json: bool, status: int, message: str, details: dict | None = None)
                "exit_status": status}
         if WARNINGS:
             obj["warnings"] = list(WARNINGS)
-        click.echo(json.dumps(obj, indent=1, default=_jsonable))
+        click.echo(json.dumps(obj, indent=1, default=json_default))
     click.echo(f"pixelkit: error: {message}", err=True)  # the one line for a person, JSON or not
     sys.exit(status)
 

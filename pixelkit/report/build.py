@@ -17,6 +17,7 @@ import traceback
 from pathlib import Path
 
 from ..errors import ConfigError, PixelkitError
+from ..fileio import json_default
 from . import cache
 from .diff import diff_reports, load_report
 from .html import render
@@ -84,24 +85,15 @@ def _write_outputs(stage: Path, design, sections, meta: dict) -> dict:
             (stage / f"{t.name}.csv").write_text(_csv(t))
             tables[t.name] = {"section": s.key, "caption": t.caption, "columns": t.columns, "rows": t.rows}
         if s.data:
-            (stage / f"data_{s.key}.json").write_text(json.dumps(s.data, indent=1, default=_plain))
-    (stage / "design.json").write_text(json.dumps(design.raw, indent=1, default=_plain) + "\n")
+            (stage / f"data_{s.key}.json").write_text(json.dumps(s.data, indent=1, default=json_default))
+    (stage / "design.json").write_text(json.dumps(design.raw, indent=1, default=json_default) + "\n")
     summary = {"design": design.name, "revision": design.revision, **meta,
                "sections": {s.key: ("available" if s.available else ("failed" if s.failed else "not yet available"))
                             for s in sections},
                "checked": _checked(sections)}
     (stage / "summary.json").write_text(json.dumps(summary, indent=1) + "\n")
-    (stage / "tables.json").write_text(json.dumps(tables, indent=1, default=_plain) + "\n")
+    (stage / "tables.json").write_text(json.dumps(tables, indent=1, default=json_default) + "\n")
     return summary
-
-
-def _plain(x):
-    import numpy as np
-    if isinstance(x, np.generic):
-        return x.item()
-    if isinstance(x, np.ndarray):
-        return x.tolist()
-    return str(x)
 
 
 def _swap_into_place(stage: Path, out: Path) -> None:
