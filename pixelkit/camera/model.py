@@ -6,6 +6,7 @@ One ``ArrayCamera`` per array (primary, secondary), from the design:
   C(V) of ``junction``), the column moves by A_sf times the shared node's drop
   (``fd``); it clips at the column swing (the experiment's measured swing, or
   A_sf x ``pixel.swing`` without SPICE);
+- dark current: the PD's (the kit's law) plus its EC/TG diffusions' (the models' law);
 - temporal noise: the read-noise chain of ``physics.noise`` (pixel probe: NCDS at
   the column, without the dark shot noise, which the camera draws itself), signal
   and dark shot noise (Poisson), quantization;
@@ -137,7 +138,8 @@ def array_camera(design, which: str, a_sf: float, clip_V: float | None = None, w
         name=which, rows=shape[0] if shape else sub.rows, cols=shape[1] if shape else sub.cols, pitch_m=sub.pitch, eta=eta, wavelength_m=wavelength_m,
         node=combined_node(design, which, a_sf), v0=design.pixel.v_pd_reset, a_sf=a_sf, clip_V=clip,
         read_V=float(np.sqrt(read_var)),
-        dark_e_per_s=dark_current(sub.area, sub.perimeter, design.temperature, tech.photodiode) / Q,
+        dark_e_per_s=(dark_current(sub.area, sub.perimeter, design.temperature, tech.photodiode)
+                      + fd.pd_switch_leakage(design)) / Q,
         fd_leak_V_per_s=a_sf * fd.leakage(design) / r["c_fd_F"],
         pls_V_per_e=a_sf * Q / (design.pixel.gse * r["c_fd_F"]),
         t_row=1.0 / sub.f_read, t_pre=GsTiming(0.0, 1.0).t_pre, t_int=sub.t_int, temperature_K=design.temperature,

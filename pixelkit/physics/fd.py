@@ -39,7 +39,7 @@ from __future__ import annotations
 from ..circuits.geometry import diffusion
 import numpy as np
 
-from ..constants import Q
+from ..constants import K_B, Q
 from .junction import Junction, Node
 
 
@@ -105,7 +105,6 @@ def diffusion_leakage(w: float, tech, temperature_K: float) -> float:
     SPICE applies exactly this to every MOS diffusion; the analytic model uses it for
     the FD (its only leak) and for the switch diffusions on the PD node.
     """
-    from ..constants import K_B
     mos = tech.mos
     a, p = diffusion(w, mos.diff_ext)
     t0, t = mos.t_nom, temperature_K
