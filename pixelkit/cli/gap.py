@@ -1,4 +1,4 @@
-"""``pixelkit gap predict | diagnose | selftest | emva``."""
+"""``pixelkit gap predict | diagnose | plan | selftest | silicon | emva``."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -38,40 +38,88 @@ def predict(design, conditions, out, backend, jobs, as_json):
                    f"{nom.error['pixel_max_V'] * 1e3:.2f} mV, AFE {nom.error['afe_max_V'] * 1e3:.2f} mV at worst)")
 
 
+def setup_opts(f):
+    f = click.option("--gain-tol", type=click.FloatRange(0.0, 0.5), default=0.05, show_default=True,
+                     help="plausible test set-up gain: 1 +- this")(f)
+    return click.option("--offset-tol", type=click.FloatRange(0.0, 1.0), default=0.025, show_default=True,
+                        help="plausible test set-up offset: +- this (V)")(f)
+
+
+def _prepare(design, measured, backend):
+    from ..gap.data import read_table
+    from ..gap.nominal import build_nominal
+    from ..progress import step
+    d = load(design)
+    table = read_table(measured, d, measured=True)
+    with step("building the SPICE-calibrated surrogate (first run only)"):
+        nom = build_nominal(d, backend=backend)
+    return d, table, nom
+
+
 @gap.command()
 @design_arg
 @click.option("--measured", type=click.Path(dir_okay=False), required=True)
 @out_opt("write an HTML section in this folder", folder=True)
 @click.option("--seed", type=int, default=0, show_default=True, help="train / held-out split")
+@setup_opts
 @spice_opts
 @json_opt
-def diagnose(design, measured, out, seed, backend, jobs, as_json):
-    """Where the data leave the simulation, which effect explains it, how far the gap shrinks."""
-    from ..gap.data import read_table
+def diagnose(design, measured, out, seed, gain_tol, offset_tol, backend, jobs, as_json):
+    """Where the data leave the simulation, which effect explains it, whether the gap is explained."""
     from ..gap.diagnose import analyse
-    from ..gap.nominal import build_nominal
-    from ..progress import step
-    out_dir = out
-    d = load(design)
-    table = read_table(measured, d, measured=True)
-    with step("building the SPICE-calibrated surrogate (first run only)"):
-        nom = build_nominal(d, backend=backend)
-    r, X, resid = analyse(d, table, nom, seed=seed)
-    if out_dir:
+    from ..gap.fit import SetupBounds
+    d, table, nom = _prepare(design, measured, backend)
+    r, X, resid = analyse(d, table, nom, seed=seed, setup=SetupBounds(gain_tol, offset_tol))
+    if out:
         from ..gap.report import write_section
-        r["html"] = str(write_section(r, d.name, X, resid, Path(out_dir)))
+        r["html"] = str(write_section(r, d.name, X, resid, Path(out)))
     emit(r, as_json, _text)
 
 
 def _text(r):
-    lines = [f"best explanation: {r['best']}   held-out gap {r['gap_before_rms_V'] * 1e3:.2f} -> "
-             f"{r['gap_after_rms_V'] * 1e3:.2f} mV rms (shrink {r['shrink_frac'] * 100:.0f} %)"]
-    lines += [f"  {x['effect']:<18} held-out {x['heldout_rms_V'] * 1e3:8.3f} mV   BIC {x['bic']:9.1f}"
-              for x in r["ranking"]]
-    lines.append("where (significant first):")
+    noise = f"{r['noise_rms_V'] * 1e3:.2f} mV" if r["noise_rms_V"] else "unknown"
+    lines = [f"verdict: {r['verdict']}",
+             f"best: {r['best']}   held-out gap {r['gap_before_rms_V'] * 1e3:.2f} -> "
+             f"{r['gap_after_rms_V'] * 1e3:.2f} mV rms (shrink {r['shrink_frac'] * 100:.0f} %); noise {noise} "
+             f"({r['noise_source']}); held-out chi2/row {r['heldout_chi2_per_row']:.2f}"]
+    lines += [f"  {x['effect']:<18} held-out {x['heldout_rms_V'] * 1e3:8.3f} mV   BIC {x['bic']:11.1f}"
+              f"{'   beats none' if x['beats_none'] else ''}" for x in r["ranking"]]
+    if r["remainder_where"]:
+        lines.append("the remainder lies in:")
+        lines += [f"  {w['factor']:<16} {w['level']:<24} mean {w['mean_V'] * 1e3:+8.3f} mV  p={w['p']:.2g}"
+                  for w in r["remainder_where"]]
+    lines.append("where the data leave the nominal model (significant first):")
     lines += [f"  {w['factor']:<16} {w['level']:<24} n={w['n']:<5} mean {w['mean_V'] * 1e3:+8.3f} mV  p={w['p']:.2g}"
               for w in r["where"][:10]]
     return "\n".join(lines)
+
+
+@gap.command()
+@design_arg
+@click.option("--measured", type=click.Path(dir_okay=False), required=True)
+@click.option("--top", type=click.IntRange(1, 50), default=5, show_default=True)
+@setup_opts
+@spice_opts
+@json_opt
+def plan(design, measured, top, gain_tol, offset_tol, backend, jobs, as_json):
+    """Operating points that would separate the candidates these data cannot tell apart."""
+    from ..gap.diagnose import diagnose as run_diagnose
+    from ..gap.fit import SetupBounds
+    from ..gap.plan import plan as make_plan
+    d, table, nom = _prepare(design, measured, backend)
+    setup = SetupBounds(gain_tol, offset_tol)
+    r = run_diagnose(d, table, nom, setup=setup)
+    p = make_plan(d, table, nom, r, setup, top)
+    p["diagnosis"] = {"best": r["best"], "indistinguishable": r["indistinguishable"], "verdict": r["verdict"]}
+    emit(p, as_json, lambda x: "\n".join([
+        f"candidates: {', '.join(x['candidates'])} (noise {x['noise_V'] * 1e3:.2f} mV per measurement)",
+        "vary (alone, from the data's median point):",
+        *(f"  {lv['factor']:<13} -> {lv['value']:<8g} separation {lv['separation_sigma']:.1f} sigma"
+          if not isinstance(lv["value"], str) else
+          f"  {lv['factor']:<13} -> {lv['value']:<8} separation {lv['separation_sigma']:.1f} sigma" for lv in x["levers"]),
+        "best operating points:",
+        *(f"  {pt['separation_sigma']:7.1f} sigma  " + ", ".join(f"{k}={v}" for k, v in pt["point"].items())
+          for pt in x["points"])]))
 
 
 @gap.command()
@@ -79,37 +127,86 @@ def _text(r):
 @click.option("--per-effect", type=click.IntRange(1, 1000), default=10, show_default=True)
 @click.option("--clean", type=click.IntRange(0, 10000), default=20, show_default=True)
 @click.option("--seed", type=int, default=1, show_default=True)
+@click.option("--spice-cases", type=click.Path(file_okay=False), default=None,
+              help="folder of committed SPICE cases (default: the kit's pixelkit/gap/silicon_cases)")
+@click.option("--kind", type=click.Choice(["both", "surrogate", "spice"]), default="both", show_default=True)
 @spice_opts
 @json_opt
-def selftest(design, per_effect, clean, seed, backend, jobs, as_json):
-    """Blind diagnosis of virtual measurements, each with one withheld effect (DESIGN: the reference)."""
+def selftest(design, per_effect, clean, seed, spice_cases, kind, backend, jobs, as_json):
+    """Blind diagnosis: surrogate-generated cases and SPICE-generated cases, reported separately."""
+    from ..gap import silicon
     from ..gap.nominal import build_nominal
     from ..gap.selftest import run
     from ..progress import step
     d = load(design)
     with step("building the SPICE-calibrated surrogate (first run only)"):
         nom = build_nominal(d, backend=backend)
-    r = run(d, nom, per_effect, clean, seed)
-    emit(r, as_json, lambda x: "\n".join([
-        f"{x['n_cases']} blind cases: top-1 {x['top1_accuracy'] * 100:.1f} %, median shrink "
-        f"{x['median_shrink'] * 100:.1f} %, none on effect-free sets {x['none_on_clean'] * 100:.1f} %",
-        "confusion (rows: truth, columns: found):",
-        *(f"  {t:<18} " + " ".join(f"{n:>3}" for n in row.values()) for t, row in x["confusion"].items())]))
+    r = {}
+    if kind in ("both", "surrogate"):
+        r["surrogate"] = run(d, nom, per_effect, clean, seed)
+    if kind in ("both", "spice"):
+        r["spice"] = silicon.run_committed(d, nom, Path(spice_cases) if spice_cases else silicon.CASES_DIR)
+    emit(r, as_json, lambda x: "\n".join(_selftest_text(k, v) for k, v in x.items()))
+
+
+def _pct(v):
+    return "n/a" if v is None else f"{v * 100:.1f} %"
+
+
+def _selftest_text(kind, x):
+    return "\n".join([
+        f"{x['kind']}: {x['n_cases']} blind cases ({x['n_effect_cases']} in-library, "
+        f"{x['n_out_of_library_cases']} out-of-library, {x['n_clean_cases']} effect-free)",
+        f"  top-1 {_pct(x['top1_accuracy'])}, 'not explained' on out-of-library {_pct(x['not_explained_on_out_of_library'])}, "
+        f"none on effect-free {_pct(x['none_on_clean'])}",
+        "  per effect: " + ", ".join(f"{k} {_pct(v)}" for k, v in x["per_effect_top1"].items())])
+
+
+@gap.command()
+@click.argument("design", type=click.Path(dir_okay=False), required=False, default="designs/dual_pixel_revA.toml")
+@out_opt("folder for cases.csv and truth.json (default: the kit's pixelkit/gap/silicon_cases)", folder=True)
+@spice_opts
+@json_opt
+def silicon(design, out, backend, jobs, as_json):
+    """Make the virtual-silicon SPICE cases (effects inserted as circuit elements); slow: ~1000 decks."""
+    from ..gap import silicon as si
+    from ..gap.nominal import build_nominal
+    from ..progress import progress, step
+    d = load(design)
+    with step("building the SPICE-calibrated surrogate (first run only)"):
+        nom = build_nominal(d, backend=backend)
+    plan_ = si.plan_cases()
+    bar = progress(total=len(plan_), desc="SPICE cases", unit="case")
+    r = si.write_cases(d, nom, Path(out) if out else si.CASES_DIR, plan_, progress=lambda k, n: bar.update(1),
+                       jobs=jobs)
+    bar.close()
+    emit(r, as_json, lambda x: f"wrote {x['n_cases']} cases to {x['folder']}")
 
 
 @gap.command()
 @click.argument("dataset", type=click.Path(exists=True))
 @json_opt
 def emva(dataset, as_json):
-    """Camera-level gap of an EMVA 1288 dataset: linear photon-transfer nominal, where, which, how far."""
+    """EMVA 1288 figures of a dataset (any bit depth) and its camera-level gap: where, which, how far."""
     from ..gap.emva import analyse
     r = analyse(dataset)
-    emit(r, as_json, lambda x: "\n".join([
-        f"EMVA 1288 nominal: K = {x['nominal']['K_DN_per_e']:.4f} DN/e-, eta = {x['nominal']['eta']:.3f}, "
-        f"dark {x['nominal']['dark_DN']:.2f} DN, sigma_dark {x['nominal']['sigma_dark_DN']:.3f} DN, "
-        f"saturation {x['nominal']['mu_sat_DN']:.1f} DN ({x['nominal']['mu_e_sat']:.0f} e-)",
-        *(f"  {w['region']:<26} n={w['n']:<3} mean residual {w['mean_resid_DN']:+.3f} DN, "
-          f"variance {w['var_resid_rel'] * 100:+.1f} % vs PTC" for w in x["where"]),
-        *(f"  {c['effect']:<16} held-out rms {c['heldout_rms_DN']:.3f} DN" for c in x["ranking"]),
-        f"best: {x['best']} (held-out gap {x['gap_before_rms_DN']:.3f} -> {x['gap_after_rms_DN']:.3f} DN, "
-        f"shrink {x['shrink_frac'] * 100:.0f} %)"]))
+    emit(r, as_json, _emva_text)
+
+
+def _emva_text(x):
+    f = x["figures"]
+    lines = [f"EMVA 1288 ({f['bits']} bit, exposure in {f['exposure_unit']}): K = {f['K_DN_per_e']:.5g} DN/e-, "
+             f"QE = {f['QE_percent']:.1f} %, sigma_d = {f['sigma_d_e']:.3g} e-, saturation {f['u_e_sat']:.0f} e-, "
+             f"SNR_max {f['SNR_max_dB']:.1f} dB, DR {f['DR_dB']:.1f} dB, LE {f['LE_min_percent']:+.2f} / "
+             f"{f['LE_max_percent']:+.2f} %",
+             f"  dark current: {f['dark_current_mean_e_per_s']:.4g} e-/s from the mean, "
+             f"{f['dark_current_var_e_per_s']:.4g} e-/s from the variance"
+             + (f"; DSNU {f['DSNU_e']:.3g} e-, PRNU {f['PRNU_percent']:.3g} %" if "DSNU_e" in f else "")]
+    if x["dark_noise"]:
+        lines.append(f"  {x['dark_noise']['effect']}: {x['dark_noise']['text']}")
+    lines += [f"  {w['region']:<26} n={w['n']:<3} mean residual {w['mean_resid_DN']:+.3f} DN, "
+              f"variance {w['var_resid_rel'] * 100:+.1f} % vs PTC" for w in x["where"]]
+    lines += [f"  {c['effect']:<16} held-out rms {c['heldout_rms_DN']:.3f} DN" for c in x["ranking"]]
+    lines.append(f"best: {x['best']} (held-out gap {x['gap_before_rms_DN']:.3f} -> {x['gap_after_rms_DN']:.3f} DN, "
+                 f"shrink {x['shrink_frac'] * 100:.0f} %)")
+    return "\n".join(lines)

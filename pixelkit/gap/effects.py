@@ -106,7 +106,7 @@ EFFECTS = {
                    _fd_leakage),
     "dark_current": ((Param("i_d_A", 0.0, 1e-11, 1e-14, 1e-15), Param("t_double_K", 3.0, 15.0, 1.0, 7.0)),
                      _dark_current),
-    "charge_injection": ((Param("pixel_level_V", -0.2, 0.2, 1e-2, 0.0), Param("afe_offset_V", -0.2, 0.2, 1e-2, 0.0)),
+    "charge_injection": ((Param("pixel_level_V", -0.15, 0.15, 1e-2, 0.0), Param("afe_offset_V", -0.03, 0.03, 1e-2, 0.0)),
                          _charge_injection),
     "sf_gain": ((Param("loss", -0.3, 0.5, 1e-2, 0.0), Param("k_per_V", -1.0, 1.0, 1e-2, 0.0)), _sf_gain),
     "afe_gain": ((Param("eps_extra", -0.05, 1.0, 1e-2, 0.0),), _afe_gain),

@@ -2,7 +2,7 @@
 
 Every model, the nominal one included, carries the test set-up's unknown gain
 and offset (v_meas = a + b v_model; one pair for the whole dataset), bounded to
-a stated plausible range (``SetupBounds``; default gain 1 +- 5 %, offset +- 50
+a stated plausible range (``SetupBounds``; default gain 1 +- 5 %, offset +- 25
 mV): a fit that needs more sits on the bound, and the result says so instead of
 silently accepting a set-up gain of 0.9. Rows are weighted by their noise
 ``sigma`` (measurement noise of the averaged value plus the surrogate's own
@@ -26,7 +26,7 @@ from .nominal import predict
 class SetupBounds:
     """Plausible test set-up: gain within 1 +- ``gain_tol``, offset within +- ``offset_V``."""
     gain_tol: float = 0.05
-    offset_V: float = 0.05
+    offset_V: float = 0.025
 
 
 def column_keys(X):

@@ -237,12 +237,19 @@ def deck(design, nom, op, effect, p, colp, title):
 
 
 def _scale_c11(net, afe, factor):
+    """Scale C11 of one AFE copy (a number, or the subcircuit's ``c11`` parameter default)."""
     from dataclasses import replace
+
+    from ..spice.netlist import Param
     subs = []
     for s in net.subckts:
         if s.name == afe:
-            s = replace(s, elements=tuple(replace(e, value=e.value * factor) if e.name == "C11" else e
-                                          for e in s.elements))
+            c11 = next(e for e in s.elements if e.name == "C11")
+            if isinstance(c11.value, Param):
+                s = replace(s, params=tuple((k, v * factor if k == c11.value.name else v) for k, v in s.params))
+            else:
+                s = replace(s, elements=tuple(replace(e, value=e.value * factor) if e.name == "C11" else e
+                                              for e in s.elements))
         subs.append(s)
     return replace(net, subckts=tuple(subs))
 

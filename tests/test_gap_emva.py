@@ -1,0 +1,138 @@
+"""EMVA 1288: figures against the emva1288 reference implementation, any bit depth, broken datasets.
+
+Independent paths: the ``emva1288`` package (the EMVA's reference code) run on
+the same real dataset; re-quantised 12- and 16-bit copies written here with PIL
+(known scale), whose K in electrons must match the 8-bit original's.
+"""
+import json
+import logging
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+EMVA = Path(__file__).resolve().parents[2] / "shared" / "data" / "emva1288" / "EMVA1288_ReferenceSet_002_CMOS_08Bit"
+
+# kit figure -> emva1288 Results1288 attribute
+PAIRS = {"K_DN_per_e": "K", "R_DN_per_photon": "R", "QE_percent": "QE", "sigma_y_dark_DN": "sigma_y_dark",
+         "sigma_d_e": "sigma_d", "u_p_min": "u_p_min", "u_p_sat": "u_p_sat", "u_e_sat": "u_e_sat",
+         "SNR_max": "SNR_max", "DR": "DR", "LE_min_percent": "LE_min", "LE_max_percent": "LE_max",
+         "dark_current_mean_DN_per_s": "u_I_mean_DN", "dark_current_mean_e_per_s": "u_I_mean",
+         "dark_current_var_DN_per_s": "u_I_var_DN", "dark_current_var_e_per_s": "u_I_var",
+         "DSNU_e": "DSNU1288", "PRNU_percent": "PRNU1288"}
+
+
+@pytest.fixture(scope="module")
+def kit():
+    from pixelkit.gap.emva import analyse
+    return analyse(EMVA)
+
+
+def test_every_figure_matches_the_emva1288_reference(kit, monkeypatch):
+    if not hasattr(np, "asfarray"):   # the reference code predates numpy 2
+        monkeypatch.setattr(np, "asfarray", lambda x, dtype=float: np.asarray(x, dtype), raising=False)
+    from emva1288.process import Data1288, LoadImageData, ParseEmvaDescriptorFile, Results1288
+    p = ParseEmvaDescriptorFile(str(EMVA / "EMVA1288_Data.txt"), loglevel=logging.WARNING)
+    ref = Results1288(Data1288(LoadImageData(p.images, loglevel=logging.WARNING).data).data,
+                      loglevel=logging.WARNING)
+    f = kit["figures"]
+    for ours, theirs in PAIRS.items():
+        assert f[ours] == pytest.approx(float(getattr(ref, theirs)), rel=0.02), (ours, theirs)
+
+
+def _requantise(tmp_path, bits, scale, dither):
+    from PIL import Image
+    dst = tmp_path / f"emva{bits}"
+    (dst / "images").mkdir(parents=True)
+    rng = np.random.default_rng(bits)
+    for png in sorted((EMVA / "images").glob("*.png")):
+        a = np.asarray(Image.open(png)).astype(np.int64) * scale
+        if dither:
+            a = a + rng.integers(0, dither, a.shape)
+        Image.fromarray(a.astype(np.uint16)).save(dst / "images" / png.name)
+    text = (EMVA / "EMVA1288_Data.txt").read_text()
+    (dst / "EMVA1288_Data.txt").write_text(text.replace("n 8 128 128", f"n {bits} 128 128"))
+    return dst
+
+
+@pytest.mark.parametrize("bits,scale,dither", [(12, 16, 16), (16, 257, 0)])
+def test_higher_bit_depth_gives_the_same_K_in_electrons(tmp_path, kit, bits, scale, dither, cli):
+    folder = _requantise(tmp_path, bits, scale, dither)
+    code, out, err = cli("gap", "emva", folder, "--json")
+    assert code == 0, err
+    f = json.loads(out)["figures"]
+    k8 = kit["figures"]
+    assert f["bits"] == bits
+    assert f["K_DN_per_e"] / scale == pytest.approx(k8["K_DN_per_e"], rel=0.02)
+    assert f["QE_percent"] == pytest.approx(k8["QE_percent"], rel=0.02)
+    if not dither:   # dither on clipped pixels moves the variance maximum (the saturation step) by one step
+        assert f["u_e_sat"] == pytest.approx(k8["u_e_sat"], rel=0.02)
+    shutil.rmtree(folder)
+
+
+def test_exposure_unit_stated_in_the_descriptor(tmp_path, kit):
+    from pixelkit.gap.emva import analyse
+    dst = tmp_path / "us"
+    shutil.copytree(EMVA, dst)
+    d = dst / "EMVA1288_Data.txt"
+    d.write_text("# exposure in us\n" + d.read_text())
+    f = analyse(dst)["figures"]
+    assert f["exposure_unit"] == "us"
+    assert f["dark_current_mean_DN_per_s"] == pytest.approx(kit["figures"]["dark_current_mean_DN_per_s"] / 1e3,
+                                                            rel=1e-9)
+
+
+def test_nonlinear_region_and_dark_noise_named(kit):
+    worst = max(kit["where"], key=lambda w: abs(w["mean_resid_DN"]))
+    assert worst["region"].startswith(("90", "100"))
+    assert kit["best"] != "none" and kit["shrink_frac"] > 0.3
+    # this camera's dark level falls with exposure while its dark variance grows: not shot noise
+    assert kit["dark_noise"]["effect"] == "non_poisson_dark_noise"
+
+
+def _break(folder: Path, how: str) -> str:
+    d = folder / "EMVA1288_Data.txt"
+    text = d.read_text()
+    first = folder / "images" / "b_001_snap_001.png"
+    if how == "truncated":
+        first.write_bytes(first.read_bytes()[:200])
+        return "b_001_snap_001.png"
+    if how == "size":
+        from PIL import Image
+        Image.fromarray(np.zeros((64, 128), np.uint8)).save(first)
+        return "differs from the descriptor"
+    if how == "missing":
+        first.unlink()
+        return "not found"
+    if how == "bad_n":
+        d.write_text(text.replace("n 8 128 128", "n 8 128"))
+        return "n bits width height"
+    if how == "bad_b":
+        d.write_text(text.replace("b 040.00 018.25", "b 040.00 eighteen"))
+        return "is not a number"
+    if how == "no_dark":
+        d.write_text("\n".join(line for line in text.splitlines() if not line.startswith("d ")) + "\n")
+        return "dark"
+    if how == "binary":
+        d.write_bytes(b"\x00\x01PNG" * 10)
+        return "binary"
+    if how == "latin1":
+        d.write_bytes(("# caf\xe9\n" + text).encode("latin-1"))
+        return "not UTF-8"
+    if how == "outside":
+        d.write_text(text.replace("i images/b_001_snap_001.png", "i ../../../../etc/passwd"))
+        return "leaves the dataset folder"
+    raise ValueError(how)
+
+
+@pytest.mark.parametrize("how", ["truncated", "size", "missing", "bad_n", "bad_b", "no_dark", "binary", "latin1",
+                                 "outside"])
+def test_broken_dataset_gives_one_line(tmp_path, cli, how):
+    folder = tmp_path / "broken"
+    shutil.copytree(EMVA, folder)
+    needle = _break(folder, how)
+    code, out, err = cli("gap", "emva", folder)
+    assert code == 2 and "Traceback" not in err, err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and needle in lines[0], lines
