@@ -18,13 +18,13 @@ from ...families.ratio.experiment import run_ratio_experiment
 from ...families.ratio.law import interval_over_tau
 from ...families.wdr.design import load_wdr_design
 from ...families.wdr.experiment import run_wdr_experiment
-from ..figures import axes, save
 from . import Checked, Figure, Section, Table
 
 TITLE = "Other pixel families: WDR and ratio pixels"
 
 
 def _wdr_figure(ctx, w):
+    from ..figures import axes, save
     fig, (a, b) = axes(2, 9, 3.4)
     rows = w["sweep"]
     i = np.array([r["i_true_A"] for r in rows])
@@ -46,6 +46,7 @@ def _wdr_figure(ctx, w):
 
 
 def _ratio_figure(ctx, r):
+    from ..figures import axes, save
     fig, (a, b) = axes(2, 9, 3.4)
     rf = np.geomspace(1, 32, 100)
     a.plot(rf, interval_over_tau(rf), "k-", lw=0.8, label="law: R_F - 1/R_F")
