@@ -41,6 +41,18 @@ def test_counter_interval_follows_the_derived_law(result):
             assert math.copysign(1, c["interval_s"]) == math.copysign(1, c["rf"] - 1) or c["rf"] == 1
 
 
+def test_counts_decode_to_the_true_ratio_within_one_count(result):
+    """Behavioural counter on the SPICE intervals, then the decoder: count n brackets R_F
+    between the decoded n and n + 1 (the law's 5 % allowed at the edges)."""
+    for c in result["biases"][0]["cells"]:
+        if c["role"] != "ratio":
+            continue
+        n, rf = abs(c["count"]), max(c["rf"], 1 / c["rf"])
+        assert ratio_from_count(n, 1.0, 1.0) <= 1.05 * rf
+        assert rf <= 1.05 * ratio_from_count(n + 1, 1.0, 1.0)
+        assert (c["count"] < 0) == (c["rf"] < 1) or n == 0
+
+
 def test_resolution_with_t_lsb_equal_tau(result):
     golden = (1 + math.sqrt(5)) / 2
     assert result["rf_min"] == pytest.approx(golden, rel=1e-12)
