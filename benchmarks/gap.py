@@ -1,6 +1,6 @@
 """Gap diagnosis speed: a 2000-row dataset, all candidates, against one SPICE experiment run.
 
-    python benchmarks/gap.py [rows]
+    python benchmarks/gap.py [rows]      (also a module of benchmarks/run.py)
 """
 from __future__ import annotations
 
@@ -16,8 +16,8 @@ from pixelkit.gap.diagnose import diagnose
 from pixelkit.gap.nominal import build_nominal
 
 
-def main(rows: int = 2000):
-    d = reference_design()
+def measure(d, rows: int = 2000) -> dict:
+    """Wall times (s) of one SPICE experiment run, the nominal surrogate and the diagnosis."""
     t0 = time.perf_counter()
     run_experiment(d)
     base = time.perf_counter() - t0
@@ -29,12 +29,18 @@ def main(rows: int = 2000):
     table.columns["v_V"], truth = selftest.measure(d, nom, table, "gse", rng)
     t0 = time.perf_counter()
     r = diagnose(d, table, nom)
-    t_diag = time.perf_counter() - t0
+    return {"spice_s": base, "nominal_s": t_nom, "diagnosis_s": time.perf_counter() - t0,
+            "models": len(r["ranking"]), "found": r["best"], "truth": truth["effect"]}
+
+
+def main(rows: int = 2000):
+    r = measure(reference_design(), rows)
+    base, t_nom, t_diag = r["spice_s"], r["nominal_s"], r["diagnosis_s"]
     print(f"baseline: one SPICE experiment run (16 decks)        {base:7.2f} s")
     print(f"nominal surrogate (17 full-chain decks, uncached)    {t_nom:7.2f} s  {t_nom / base:5.2f} x baseline")
-    print(f"diagnosis of {rows} rows, {len(r['ranking'])} models incl. none  {t_diag:7.2f} s  "
+    print(f"diagnosis of {rows} rows, {r['models']} models incl. none  {t_diag:7.2f} s  "
           f"{t_diag / base:5.2f} x baseline")
-    print(f"total {t_nom + t_diag:.1f} s (limit 60 s); found {r['best']} (truth {truth['effect']})")
+    print(f"total {t_nom + t_diag:.1f} s (limit 60 s); found {r['found']} (truth {r['truth']})")
 
 
 if __name__ == "__main__":

@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..circuits.array import KINDS, PREFIX, Tile, array_bench, frame_shape
+from ..circuits.array import KINDS, PREFIX, Tile, array_bench, frame_shape, frame_timings
 from ..errors import ConfigError, SimulationError
 from ..sweep.executors import run_tasks
 
@@ -91,11 +91,10 @@ def simulate_frame(design, iph_p, iph_s, with_afe: bool = False, split: str = "r
     """Simulate one frame; see the module docstring for ``split``. ``options``: simulator
     options over the kit's defaults (``spice.options``); ``kinds``: the arrays to simulate
     (the others' results stay NaN)."""
-    from ..circuits.testbench import timings
     rows, cols = frame_shape(design, iph_p, iph_s)
     n = design.secondary_per_pixel
     t_exp = design.experiment.t_window if t_exp is None else t_exp
-    tm = timings(design, t_exp, rows)
+    tm = frame_timings(design, t_exp, rows)
     if max_step is None:
         max_step = min(t.t_row for t in tm.values()) / STEPS_PER_ROW
     tasks = []

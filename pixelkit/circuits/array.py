@@ -122,6 +122,14 @@ def afe_caps(design, seed: int | None, kind: str, j: int) -> tuple:
     return tuple(float(c * (1 + cap_sigma_rel(design, c) * rng.standard_normal())) for c in nominal)
 
 
+def frame_timings(design, t_exp: float, rows: int) -> dict:
+    """The frame's GS timing: EC holds the PDs in reset while the rows wait to be read
+    (anti-blooming). Without it a bright PD keeps integrating through the storage time, goes
+    into forward bias and spills onto FD, and ngspice stops ("timestep too small")."""
+    from .testbench import timings
+    return timings(design, t_exp, rows, ec_hold=True)
+
+
 def array_bench(design, iph_p, iph_s, tile: Tile | None = None, t_exp: float | None = None,
                 with_afe: bool = False, mismatch_seed: int | None = None, max_step: float | None = None,
                 title: str = "array_bench"):
@@ -129,13 +137,13 @@ def array_bench(design, iph_p, iph_s, tile: Tile | None = None, t_exp: float | N
     from .opamp import opamp
     from .afe import sc_afe
     from .pixel5t import pixel5t
-    from .testbench import _deck, _options, _tran, controls, sample_clocks, supplies, timings
+    from .testbench import _deck, _options, _tran, controls, sample_clocks, supplies
     rows, cols = frame_shape(design, iph_p, iph_s)
     ip, is_ = np.asarray(iph_p, float), np.asarray(iph_s, float)
     tile = tile or whole(rows, cols)
     n = design.secondary_per_pixel
     t_exp = design.experiment.t_window if t_exp is None else t_exp
-    tm = timings(design, t_exp, rows)
+    tm = frame_timings(design, t_exp, rows)
     sim_rows = tile.simulated_rows
     el = [*supplies(design), *controls(design, tm, sim_rows, True, tile.kinds), *column.bias(design)]
     subckts = []

@@ -1,0 +1,159 @@
+"""The benchmark suite: every figure a ratio or a scaling measured in this run.
+
+    python3 benchmarks/run.py [--json] [--quick] [--skip NAME ...]
+
+Figures (run on a quiet machine: the wall times scale with the load, the ratios much less):
+
+- ``overhead_vs_raw``: the kit's batch backend (deck writing, scratch folder, model
+  links, raw read, result typing, cache key) over raw ``ngspice -b -r`` on the same
+  decks (8 dual-pixel benches with their AFEs, serial, uncached). Limit 1.05.
+- ``parallel_speedup``: a 16-point sweep (``run_sweep``) on 1 worker over the same on
+  every core (2 here), each from an empty cache. Limit 1.9 on 2 cores.
+- array frames (``simulate_frame``, split by rows, with column loads): 2 x 2, 4 x 4,
+  8 x 8 and the whole chip 27 x 50 (both arrays; ``whole_array_s``; skipped by
+  ``--quick``); ``scaling_exponent`` k of t ~ pixels^k over those sizes; one full
+  27-row primary column with its AFE (``column_afe_s``, limit 60 s).
+- ``analytic_points_per_s``: the analytic C(V) discharge model's evaluations per second.
+- ``sizing_solve_s`` / ``sizing_vs_spice``: the casadi sizing solve against one SPICE run.
+- ``gap_diagnosis_s`` / ``gap_vs_spice``: gap diagnosis of 2000 rows against one SPICE
+  experiment run.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from common import reference_design
+
+
+def _fresh_cache():
+    os.environ["PIXELKIT_CACHE"] = tempfile.mkdtemp(prefix="pk-bench-")
+
+
+def overhead_vs_raw(d, n: int = 8) -> dict:
+    """Raw and kit runs interleaved deck by deck, so a change of machine load hits both alike."""
+    from pixelkit.circuits.testbench import dual_pixel_bench
+    from pixelkit.spice import simulate
+    from pixelkit.spice.engine import _prepare
+    from pixelkit.spice.scratch import SPICEINIT
+    nets = [dual_pixel_bench(d, 1e-10 * (k + 1), 5e-12 * (k + 1), with_afe=True, title=f"ovh{k}") for k in range(n)]
+    raw = kit = 0.0
+    with tempfile.TemporaryDirectory() as tmp:
+        Path(tmp, ".spiceinit").write_text(SPICEINIT)
+        for name, folder in nets[0].model_links().items():
+            Path(tmp, name).symlink_to(folder)
+        for k, net in enumerate(nets):
+            Path(tmp, f"d{k}.cir").write_text(_prepare(net, None).text())
+        simulate(nets[0], use_cache=False)  # imports and first-use set-up outside the timing
+        for k, net in enumerate(nets):
+            t0 = time.perf_counter()
+            subprocess.run(["ngspice", "-b", "-r", f"o{k}.raw", f"d{k}.cir"], cwd=tmp, capture_output=True, check=True)
+            raw += time.perf_counter() - t0
+            t0 = time.perf_counter()
+            simulate(net, use_cache=False)
+            kit += time.perf_counter() - t0
+    return {"overhead_vs_raw": kit / raw, "raw_s": raw, "kit_s": kit, "decks": n}
+
+
+def parallel_speedup(d) -> dict:
+    from pixelkit.spice.engine import default_jobs
+    from pixelkit.sweep.run import run_sweep
+    from pixelkit.sweep.space import parse_axis
+    axes = [parse_axis("iph_p=lin:100p:1.6n:16")]
+    out = {}
+    for jobs in (1, default_jobs()):
+        _fresh_cache()
+        t0 = time.perf_counter()
+        s = run_sweep(d, axes, jobs=jobs)
+        out[jobs] = time.perf_counter() - t0
+        assert not s.failures
+    j = default_jobs()
+    return {"parallel_speedup": out[1] / out[j], "serial_s": out[1], "parallel_s": out[j], "workers": j,
+            "points": 16}
+
+
+def _frame(d, rows, cols, with_afe=False, kinds=("primary", "secondary")):
+    from pixelkit.chip.frame import simulate_frame
+    from pixelkit.chip.scene import default_map, photocurrents
+    m, unit = default_map(rows, d.secondary_per_pixel * cols)
+    ph = photocurrents(d, rows, cols, m, unit)
+    _fresh_cache()
+    f = simulate_frame(d, ph.iph_p, ph.iph_s, with_afe=with_afe, kinds=kinds)
+    assert not f.failures, f.failures
+    return f.wall_s
+
+
+def array_scaling(d, quick: bool) -> dict:
+    sizes = [(2, 2), (4, 4), (8, 8)] + ([] if quick else [(27, 50)])
+    times = {f"{r}x{c}": _frame(d, r, c) for r, c in sizes}
+    px = np.array([r * c for r, c in sizes], float)
+    k = float(np.polyfit(np.log(px), np.log(list(times.values())), 1)[0])
+    out = {"frame_s": times, "scaling_exponent": k,
+           "column_afe_s": _frame(d, 27, 1, with_afe=True, kinds=("primary",))}
+    if not quick:
+        out["whole_array_s"] = times["27x50"]
+    return out
+
+
+def analytic_points_per_s(d) -> dict:
+    from pixelkit.physics.discharge import voltage
+    from pixelkit.physics.subpixel import pd_node
+    node = pd_node(d, "primary", parasitics=True)
+    t = np.linspace(0, d.experiment.t_window, 10000)
+    currents = np.geomspace(1e-12, 3e-9, 100)
+    t0 = time.perf_counter()
+    for i in currents:
+        voltage(t, node, d.pixel.v_pd_reset, i)
+    dt = time.perf_counter() - t0
+    return {"analytic_points_per_s": t.size * currents.size / dt}
+
+
+def sizing(d) -> dict:
+    import sizing as sizing_bench
+    r = sizing_bench.measure(d, repeats=5)
+    return {"sizing_solve_s": r["solve_s"], "sizing_vs_spice": r["solve_s"] / r["spice_s"]}
+
+
+def gap(d) -> dict:
+    import gap as gap_bench
+    r = gap_bench.measure(d, rows=2000)
+    return {"gap_diagnosis_s": r["diagnosis_s"], "gap_vs_spice": r["diagnosis_s"] / r["spice_s"]}
+
+
+STEPS = {"overhead": overhead_vs_raw, "parallel": parallel_speedup, "arrays": None,
+         "analytic": analytic_points_per_s, "sizing": sizing, "gap": gap}
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--json", action="store_true")
+    ap.add_argument("--quick", action="store_true", help="skip the whole 27 x 50 array")
+    ap.add_argument("--skip", nargs="*", default=[], choices=list(STEPS))
+    a = ap.parse_args(argv)
+    d = reference_design()
+    res = {"cores": os.cpu_count(), "load_before": os.getloadavg()[0]}
+    for name, fn in STEPS.items():
+        if name in a.skip:
+            continue
+        res.update(array_scaling(d, a.quick) if name == "arrays" else fn(d))
+    res["load_after"] = os.getloadavg()[0]
+    if a.json:
+        print(json.dumps(res, indent=1))
+        return
+    for k, v in res.items():
+        if isinstance(v, dict):
+            print(f"{k}: " + ", ".join(f"{kk} {vv:.2f}" for kk, vv in v.items()))
+        else:
+            print(f"{k}: {v:.4g}" if isinstance(v, float) else f"{k}: {v}")
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
