@@ -2,19 +2,20 @@
 
 A simple model (the Monte Carlo of the scale issue replaces it):
 
-- **Offset (DSNU).** NCDS does not cancel the SF threshold (the same SF reads both
-  samples, so it does), but the TG's channel charge, which half lands on FD when TG
+- **Offset (DSNU).** The SF threshold cancels in the double sampling (the same SF
+  reads both samples), but the TG's channel charge, which half lands on FD when TG
   opens, differs from pixel to pixel through the TG threshold: sigma_off =
-  1/2 Cox W L sigma_VT / C_FD at FD, times A_sf, with Pelgrom sigma_VT = A_VT /
-  sqrt(W L).
+  1/2 Cox W L sigma_VT / C_FD at FD, times A_sf, with sigma_VT the model library's
+  own Pelgrom coefficient for the TG's W and L (``mc.pelgrom.sigma_vth``).
 - **Gain (PRNU).** The photoactive area's edge is placed to within the layout grid
   (``rules.grid``): a masked opening of side a varies by 2 sigma_edge / a in
   relative area, an unmasked PD by the same over its own side; the PD junction's
-  capacitance by A_C / sqrt(area).
+  capacitance by A_C / sqrt(area), A_C the technology's capacitor matching
+  (``[mismatch] cap_pelgrom``; ``A_C`` below when the technology has none).
 - **Dark current** spreads by ``DARK_SPREAD`` (lognormal sigma) from pixel to pixel.
 
-The three constants below are not in the technology file; they are typical values
-for the 0.35 um class (EFFECTS.md row 15) and are marked as assumptions [A].
+The two constants below are typical values for the 0.35 um class (EFFECTS.md row 15),
+assumptions [A].
 """
 from __future__ import annotations
 
@@ -22,9 +23,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..mc.pelgrom import sigma_vth
 from ..physics import fd
 
-A_VT = 8e-9          # V m  (8 mV um)                          [A]
 A_C = 0.01e-6        # relative C mismatch x sqrt(area): 1 % um [A]
 DARK_SPREAD = 0.2    # lognormal sigma of the dark current      [A]
 
@@ -43,9 +44,10 @@ def sigmas(design, which: str, a_sf: float) -> tuple[float, float]:
     sub, tech, dev = getattr(design, which), design.tech, design.pixel.devices
     side = float(np.sqrt(sub.photoactive_area))
     s_edge = 2.0 * tech.rules.grid / side
-    s_cap = A_C / np.sqrt(sub.area)
+    a_c = tech.mismatch.cap_pelgrom if getattr(tech, "mismatch", None) is not None else A_C
+    s_cap = a_c / np.sqrt(sub.area)
     c_fd = float(fd.fd_node(design, a_sf).capacitance(design.pixel.v_pd_reset))
-    s_vt = A_VT / np.sqrt(dev.tg_w * dev.tg_l)
+    s_vt = sigma_vth(design, dev.tg_w, dev.tg_l)
     s_off = a_sf * 0.5 * tech.mos.cox * dev.tg_w * dev.tg_l * s_vt / c_fd
     return float(np.hypot(s_edge, s_cap)), float(s_off)
 

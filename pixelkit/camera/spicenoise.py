@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..circuits.noisebench import capacitor_deck, fd_sample_deck, read_deck
-from ..circuits.testbench import sf_bench, timings
+from ..circuits.testbench import timings
 from ..errors import PixelkitError
 from ..spice import simulate_many
 from ..spice.batch import run_batch
@@ -41,10 +41,10 @@ def ktc_capacitor(design, r: float, c: float) -> float:
 
 
 def sf_gain(design, v_fd: float | None = None, dv: float = 0.01) -> float:
-    """Small-signal gain of the SF + column load at FD = ``v_fd`` (default the PD reset level)."""
-    v = design.pixel.v_pd_reset if v_fd is None else v_fd
-    lo, hi = simulate_many([sf_bench(design, v - dv, "sf_gain_lo"), sf_bench(design, v + dv, "sf_gain_hi")], jobs=1)
-    return float((hi["col"][0] - lo["col"][0]) / (2 * dv))
+    """Small-signal gain of the SF + column load at FD = ``v_fd`` (default the PD reset level):
+    ``mc.pelgrom.sf_gain``, two operating points of the SF bench."""
+    from ..mc.pelgrom import sf_gain as op_gain
+    return op_gain(design, design.pixel.v_pd_reset if v_fd is None else v_fd, dv)
 
 
 def ncds_read(design, which: str, a_sf: float) -> float:
