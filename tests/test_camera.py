@@ -106,3 +106,14 @@ def test_camera_cli_rejects_a_bad_size(cli):
     from conftest import REF
     code, _, err = cli("camera", REF, "--size", "12xfoo")
     assert code == 2 and "size" in err and "ROWSxCOLS" in err
+
+
+def test_camera_refuses_to_overwrite_a_folder_that_is_not_a_dataset(cli, tmp_path):
+    """--emva-out DIR writes DIR/primary and DIR/secondary; a non-dataset folder in the way
+    is refused before anything is written (the other array's folder is not created)."""
+    from conftest import REF
+    (tmp_path / "secondary").mkdir()
+    (tmp_path / "secondary" / "mine.txt").write_text("keep")
+    code, _, err = cli("camera", REF, "--emva-out", tmp_path, "--out", tmp_path / "plots")
+    assert code == 2 and "not an EMVA 1288 dataset" in err
+    assert not (tmp_path / "primary").exists() and (tmp_path / "secondary" / "mine.txt").read_text() == "keep"

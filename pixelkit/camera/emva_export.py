@@ -31,11 +31,17 @@ def _spatial_step(cam, s) -> int:
     return int(np.argmin(np.abs(cam.signal_V(n) - 0.5 * cam.clip_V)))
 
 
-def write_dataset(folder, cam, s, mm, seed: int, stack: int = 16) -> Path:
-    """Write the dataset of ``cam`` (series ``s``, mismatch ``mm``) to ``folder``; returns it."""
+def check_target(folder) -> Path:
+    """A dataset folder may be new or a previous dataset (replaced); anything else is refused."""
     folder = Path(folder)
     if folder.exists() and not (folder / "EMVA1288_Data.txt").is_file():
         raise PixelkitError(f"{folder}: exists and is not an EMVA 1288 dataset; choose a new folder")
+    return folder
+
+
+def write_dataset(folder, cam, s, mm, seed: int, stack: int = 16) -> Path:
+    """Write the dataset of ``cam`` (series ``s``, mismatch ``mm``) to ``folder``; returns it."""
+    folder = check_target(folder)
     bits = 8 if cam.adc.bits <= 8 else 16
     rng = np.random.default_rng([seed, 11 if cam.name == "primary" else 12])
     folder.parent.mkdir(parents=True, exist_ok=True)

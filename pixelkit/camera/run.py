@@ -6,7 +6,7 @@ from pathlib import Path
 import numpy as np
 
 from ..physics import fd
-from .emva_export import write_dataset
+from .emva_export import check_target, write_dataset
 from .figures import emva_figures
 from .mismatch import draw
 from .model import ARRAYS, array_camera
@@ -50,6 +50,9 @@ def camera(design, seed: int = 1, swings: dict | None = None, emva_out: str | Pa
            steps: int = 50, shape: tuple | None = None, backend: str = "batch") -> dict:
     """Both arrays. ``swings``: column swings (default: measured by the thesis experiment);
     ``shape``: image size of the virtual sensor (default: each array's own)."""
+    if emva_out is not None:      # refuse a bad target before anything runs or is written
+        for which in ARRAYS:
+            check_target(Path(emva_out) / which)
     a_sf = sf_gain(design)
     swings = measured_swings(design, backend) if swings is None else swings
     out = {which: array_report(design, which, a_sf, swings.get(which), seed, steps, shape) for which in ARRAYS}
