@@ -12,7 +12,8 @@ def test_regress_passes_unchanged_and_fails_on_a_device_change(tmp_path, cli):
     assert code == 0, err
     assert json.loads(out)["changed"] == []
     changed = tmp_path / "d.toml"
-    changed.write_text(re.sub(r'^sf_w = "1 um"', 'sf_w = "4 um"', REF.read_text(), flags=re.M))
+    # a narrower SF (a wider one no longer fits the 8 um secondary cell: layout rule transistors_fit)
+    changed.write_text(re.sub(r'^sf_w = "1 um"', 'sf_w = "0.6 um"', REF.read_text(), flags=re.M))
     code, out, err = cli("regress", changed, "--baseline", base)
     assert code == 1, err
     assert "CHANGED" in out

@@ -106,7 +106,7 @@ def load_model_library(raw, base: Path, source: str) -> ModelLibrary:
             raise ConfigError(source, f"models.corners.{name}", lines, "a list of strings")
         corners[name] = tuple(_parse_include(x, folder, source, f"models.corners.{name}") for x in lines)
     default = raw.get("default_corner")
-    if default not in corners:
+    if not isinstance(default, str) or default not in corners:
         raise ConfigError(source, "models.default_corner", default, f"one of {', '.join(corners)}")
     return ModelLibrary(folder, default, corners)
 

@@ -103,8 +103,8 @@ class LayerMap:
 class Mismatch:
     """Matching of what the model library does not vary itself. (The GF180MCU MOSFET
     models carry their own Pelgrom mismatch, switched on by ``sw_stat_mismatch``.)"""
-    cap_pelgrom: float = qty("m", gt=0, doc="capacitor matching: sigma(dC/C) x sqrt(area); 1 %um = 1e-8 m")
-    cap_density: float = qty("F/m2", gt=0, doc="capacitance per area (gives a capacitor's area from its value)")
+    cap_pelgrom: float = qty("m", gt=0, plausible=(1e-10, 1e-6), doc="capacitor matching: sigma(dC/C) x sqrt(area); 1 %um = 1e-8 m")
+    cap_density: float = qty("F/m2", gt=0, plausible=(1e-5, 0.1), doc="capacitance per area (gives a capacitor's area from its value)")
 
 
 @dataclass(frozen=True)
