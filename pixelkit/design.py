@@ -213,7 +213,7 @@ def load_design(path: str | Path) -> Design:
         raise ConfigError(str(path), "family", raw["family"], "a dual-pixel design for this command "
                           "(wdr and ratio designs run with simulate, models and regress)")
     design = load(Design, raw, "", str(path))
-    tech = load_technology(design.technology, relative_to=path.parent)
+    tech = load_technology(design.technology, relative_to=path.parent, source=str(path))
     src = str(path)
     for f in ("v_pd_reset", "v_fd_reset"):
         if getattr(design.pixel, f) > tech.supply:

@@ -153,20 +153,23 @@ def _qe_curve(raw, source):
     return tuple(wl), tuple(qe)
 
 
-def load_technology(name_or_path: str | Path, relative_to: Path | None = None) -> Technology:
-    """Load a built-in technology by name, or a technology TOML file by path."""
+def load_technology(name_or_path: str | Path, relative_to: Path | None = None, source: str = "") -> Technology:
+    """Load a built-in technology by name, or a technology TOML file by path.
+
+    ``source``: the design file that names it (for error messages; default ``relative_to``).
+    """
     text_ = str(name_or_path)
+    source = source or str(relative_to or "")
     if text_ in builtin_names():
         path = BUILTIN_DIR / f"{text_}.toml"
     elif text_.endswith(".toml"):
         path = Path(text_)
         if not path.is_absolute() and relative_to is not None:
             path = relative_to / path
-        if not path.exists():
-            raise ConfigError(str(relative_to or ""), "technology", text_,
-                              "an existing technology file")
+        if not path.is_file():
+            raise ConfigError(source, "technology", text_, f"an existing technology file (looked for {path})")
     else:
-        raise ConfigError(str(relative_to or ""), "technology", text_,
+        raise ConfigError(source, "technology", text_,
                           f"a built-in technology ({', '.join(builtin_names())}) or a path to a .toml file")
     raw = read_toml(path, "technology")
     source = str(path)
