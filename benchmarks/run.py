@@ -7,8 +7,9 @@ Figures (run on a quiet machine: the wall times scale with the load, the ratios 
 - ``overhead_vs_raw``: the kit's batch backend (deck writing, scratch folder, model
   links, raw read, result typing, cache key) over raw ``ngspice -b -r`` on the same
   decks (8 dual-pixel benches with their AFEs, serial, uncached). Limit 1.05.
-- ``parallel_speedup``: a 16-point sweep (``run_sweep``) on 1 worker over the same on
-  every core (2 here), each from an empty cache. Limit 1.9 on 2 cores.
+- ``parallel_speedup``: a 16-point sweep (``run_sweep``, dual-pixel bench with its AFEs,
+  ~1 s a point) on 1 worker over the same on every core (2 here), each from an empty
+  cache. Limit 1.9 on 2 cores.
 - array frames (``simulate_frame``, split by rows, with column loads): 2 x 2, 4 x 4,
   8 x 8 and the whole chip 27 x 50 (both arrays; ``whole_array_s``; skipped by
   ``--quick``); ``scaling_exponent`` k of t ~ pixels^k over those sizes; one full
@@ -72,7 +73,7 @@ def parallel_speedup(d) -> dict:
     for jobs in (1, default_jobs()):
         _fresh_cache()
         t0 = time.perf_counter()
-        s = run_sweep(d, axes, jobs=jobs)
+        s = run_sweep(d, axes, with_afe=True, jobs=jobs)
         out[jobs] = time.perf_counter() - t0
         assert not s.failures
     j = default_jobs()
