@@ -6,15 +6,17 @@ run, options included, so ``ngspice -b deck.cir`` reproduces the failure),
 ``ngspice.log`` (ngspice's output of every attempt), a ``models`` link to the
 model folder and ``what.txt`` (which
 bench and operating point, in the user's terms). ``root`` is
-``reports/<design>/failed`` for the command line (``set_root``), else
-``$PIXELKIT_REPORTS/failed`` (``reports/failed`` of the current folder).
+``reports/<design>/failed`` for the command line (``set_root``), else (the
+Python API, tests) ``failed/`` in the kit's cache folder (``$PIXELKIT_CACHE``,
+default ``~/.cache/pixelkit``): library code does not write into the current
+folder on its own.
 """
 from __future__ import annotations
 
 import hashlib
 from pathlib import Path
 
-from ..fileio import reports_root, write_atomic
+from ..fileio import write_atomic
 
 _ROOT: Path | None = None
 
@@ -25,7 +27,10 @@ def set_root(folder) -> None:
 
 
 def root() -> Path:
-    return _ROOT if _ROOT is not None else reports_root() / "failed"
+    if _ROOT is not None:
+        return _ROOT
+    from .cache import cache_dir
+    return cache_dir().parent / "failed"
 
 
 def describe(net) -> str:
