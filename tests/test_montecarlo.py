@@ -39,7 +39,7 @@ def test_monte_carlo_is_reproducible_from_the_seed(ref_design, tmp_path, monkeyp
         assert a[k]["reset_level_V"] != c[k]["reset_level_V"]
     from pixelkit.chip.frame import simulate_frame
     f = simulate_frame(ref_design, np.zeros((2, 2)), np.zeros((2, 6)), jobs=2)
-    assert np.ptp(f.reset_level["secondary"]) < 1e-4   # nominal: identical pixels
+    assert np.ptp(f.reset_level["secondary"], axis=1).max() < 1e-6   # nominal: a row of identical pixels
 
 
 def test_mismatch_coefficients_from_the_model_card(ref_design):

@@ -52,11 +52,16 @@ class Frame:
         out = {"rows": self.rows, "cols": self.cols, "split": self.split, "decks": self.decks,
                "wall_s": self.wall_s, "failures": self.failures}
         for k in KINDS:
-            out[f"{k}_signal_V"] = self.signal[k].tolist()
-            out[f"{k}_reset_level_V"] = self.reset_level[k].tolist()
+            out[f"{k}_signal_V"] = _listed(self.signal[k])
+            out[f"{k}_reset_level_V"] = _listed(self.reset_level[k])
             if k in self.afe:
-                out[f"{k}_afe_out_V"] = self.afe[k].tolist()
+                out[f"{k}_afe_out_V"] = _listed(self.afe[k])
         return out
+
+
+def _listed(a: np.ndarray) -> list:
+    """Nested lists with None where a deck failed (JSON has no NaN)."""
+    return [[None if v != v else float(v) for v in row] for row in a]
 
 
 def tiles(rows: int, cols: int, split: str, with_afe: bool = False, kinds=KINDS) -> list[Tile]:
