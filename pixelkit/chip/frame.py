@@ -76,10 +76,10 @@ def tiles(rows: int, cols: int, split: str, with_afe: bool = False, kinds=KINDS)
 def _probe(task):
     """Simulate one tile (through the engine and its cache) and read its samples."""
     from ..measure.pixel import levels
-    from ..spice import simulate
-    net, backend, options, probes = task
+    from ..spice import simulate_many
+    net, backend, jobs, options, probes = task
     try:
-        res = simulate(net, backend=backend, options=options)
+        res = simulate_many([net], backend=backend, jobs=jobs, options=options)[0]
     except SimulationError as exc:
         return {"error": exc.message, "deck": net.title}
     out = {}
@@ -109,7 +109,7 @@ def simulate_frame(design, iph_p, iph_s, with_afe: bool = False, split: str = "r
                           title=f"frame_{rows}x{cols}_{tag}")
         probes = [((k, r, j), f"col_{PREFIX[k]}_{j}", tm[k], r, f"out_col_{PREFIX[k]}_{j}" if with_afe else None)
                   for k in tile.kinds for r in tile.rows for j in tile.columns(k, n)]
-        tasks.append((net, backend, options, probes))
+        tasks.append((net, backend, 1 if scheduler is not None else jobs, options, probes))
     shape = {"primary": (rows, cols), "secondary": (rows, n * cols)}
     sig = {k: np.full(shape[k], np.nan) for k in KINDS}
     rst = {k: np.full(shape[k], np.nan) for k in KINDS}

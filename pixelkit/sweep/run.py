@@ -70,12 +70,13 @@ def _point(task):
     """One point: simulate (through the cache) and measure. Runs in a worker."""
     from ..circuits.testbench import dual_pixel_bench, timings
     from ..measure.pixel import levels
-    from ..spice import simulate
-    design, stim, options, with_afe, backend, title = task
+    from ..spice import simulate_many
+    design, stim, options, with_afe, backend, jobs, title = task
     n = design.secondary_per_pixel
     net = dual_pixel_bench(design, stim["iph_p"], stim["iph_s"], stim["t_exp"], with_afe=with_afe, title=title)
     try:
-        res = simulate(net, backend=backend, options=options or None)
+        # shared backend: the engine's process pool of ``jobs`` workers serves every thread
+        res = simulate_many([net], backend=backend, jobs=jobs, options=options or None)[0]
     except SimulationError as exc:
         return {"ok": False, "message": exc.message, "cached": False}
     tm = timings(design, stim["t_exp"])
@@ -109,7 +110,7 @@ def run_sweep(design, axes: list[Axis], with_afe: bool = False, backend: str = "
         stim = default_stimulus(d, vals.get("t_exp", d.experiment.t_window))
         stim.update({a.name: vals[a.name] for a in axes if a.kind == "stimulus"})
         opts = tuple((a.name.split(".", 1)[1], vals[a.name]) for a in axes if a.kind == "option")
-        tasks.append((d, stim, opts, with_afe, backend, f"sweep{k}"))
+        tasks.append((d, stim, opts, with_afe, backend, 1 if scheduler is not None else jobs, f"sweep{k}"))
     t0 = time.perf_counter()
     outs = [None] * len(tasks)
     for i, out in run_tasks(_point, tasks, jobs=jobs, scheduler=scheduler, desc="sweep points"):
