@@ -15,7 +15,7 @@ from pixelkit.errors import ConfigError
 from pixelkit.measure.pixel import double_sampled
 from pixelkit.spice import simulate
 from pixelkit.sweep.run import default_stimulus, run_sweep
-from pixelkit.sweep.space import parse_axis
+from pixelkit.sweep.space import parse_axis, si_value
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -50,6 +50,8 @@ def test_design_axes_and_bad_axes(ref_design):
         parse_axis("iph_p")
     with pytest.raises(ConfigError, match=">= 0"):
         parse_axis("iph_p=-1n")
+    assert si_value(ref_design, "pixel.sf_bias") == (pytest.approx(400e-9), "A")   # the design file's 400 nA
+    assert si_value(ref_design, "corner") is None
     s = run_sweep(ref_design, [parse_axis("corner=ss,ff")], jobs=2)
     rst = s.dataset["reset_primary_V"]
     # slow NMOS: higher SF threshold, lower column reset level than fast

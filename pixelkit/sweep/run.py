@@ -22,7 +22,7 @@ import numpy as np
 
 from ..errors import SimulationError
 from .executors import run_tasks
-from .space import Axis, design_with
+from .space import Axis, design_with, si_value
 
 FIGURES = ("signal_primary_V", "signal_secondary_V", "reset_primary_V", "reset_secondary_V")
 AFE_FIGURES = ("afe_primary_V", "afe_secondary_V")
@@ -99,7 +99,7 @@ def run_sweep(design, axes: list[Axis], with_afe: bool = False, backend: str = "
         from ..errors import ConfigError
         raise ConfigError("sweep", "--over", names, "each axis once")
     grid = list(itertools.product(*(a.values for a in axes)))
-    designs = {}
+    designs, si = {}, []
     tasks = []
     for k, combo in enumerate(grid):
         vals = dict(zip(names, combo))
@@ -107,6 +107,8 @@ def run_sweep(design, axes: list[Axis], with_afe: bool = False, backend: str = "
         if dkey not in designs:
             designs[dkey] = design_with(design, dict(dkey))
         d = designs[dkey]
+        si.append({f"{name}_{unit}" if unit else f"{name}_si": v for name, _ in dkey
+                   for v, unit in [si_value(d, name) or (None, None)] if v is not None})
         stim = default_stimulus(d, vals.get("t_exp", d.experiment.t_window))
         stim.update({a.name: vals[a.name] for a in axes if a.kind == "stimulus"})
         opts = tuple((a.name.split(".", 1)[1], vals[a.name]) for a in axes if a.kind == "option")
@@ -116,9 +118,9 @@ def run_sweep(design, axes: list[Axis], with_afe: bool = False, backend: str = "
     for i, out in run_tasks(_point, tasks, jobs=jobs, scheduler=scheduler, desc="sweep points"):
         outs[i] = out
     figs = FIGURES + (AFE_FIGURES if with_afe else ())
-    points = [{**dict(zip(names, combo)), **{f: out.get(f) for f in figs},
+    points = [{**dict(zip(names, combo)), **extra, **{f: out.get(f) for f in figs},
                "ok": out["ok"], "message": out["message"], "cached": out["cached"]}
-              for combo, out in zip(grid, outs)]
+              for combo, extra, out in zip(grid, si, outs)]
     return Sweep(list(axes), points, time.perf_counter() - t0, _dataset(axes, points, figs))
 
 
@@ -140,4 +142,7 @@ def _dataset(axes, points, figs):
     for a in axes:
         if a.kind == "stimulus":
             ds[a.name].attrs["units"] = a.column.rsplit("_", 1)[1]
+        for key in [k for k in points[0] if k.startswith(a.name + "_") and a.kind == "design"]:
+            si = {p[a.name]: p[key] for p in points}
+            ds = ds.assign_coords({key: (a.name, [si[v] for v in a.values])})
     return ds

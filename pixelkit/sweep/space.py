@@ -123,3 +123,20 @@ def design_with(design, overrides: dict):
                               exc.allowed) from None
     from dataclasses import replace
     return replace(d, source=design.source)
+
+
+def si_value(design, key: str):
+    """(value in SI, unit) of the design field ``key`` when it is a quantity, else None."""
+    import dataclasses
+    obj, fields_ = design, None
+    for part in key.split("."):
+        if not dataclasses.is_dataclass(obj):
+            return None
+        fields_ = {f.name: f for f in dataclasses.fields(obj)}
+        if part not in fields_:
+            return None
+        f, obj = fields_[part], getattr(obj, part)
+    if f.metadata.get("kind") != "qty" or not isinstance(obj, (int, float)):
+        return None
+    dim = f.metadata.get("dim", "1")
+    return float(obj), ("" if dim == "1" else dim.replace("/", "_per_"))
