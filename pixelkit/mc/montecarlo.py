@@ -62,10 +62,8 @@ def run_monte_carlo(design, rows: int, cols: int, seed: int, with_afe: bool = Fa
     target = design.experiment.low_fraction * design.pixel.swing
     out["secondary"]["target_over_dsnu"] = target / out["secondary"]["dsnu_V"]
     est = reset_offset_sigma(design, backend=backend)
-    pooled = np.concatenate([np.asarray(fd.reset_level[k]) - np.asarray(fd.reset_level[k]).mean(axis=0)
-                             for k in ("primary", "secondary")], axis=1)
-    dof = pooled.size - pooled.shape[1]
-    measured = float(np.sqrt((pooled ** 2).sum() / dof))
+    both = np.concatenate([fd.reset_level[k] for k in ("primary", "secondary")], axis=1)  # same SF size
+    measured = _within_column_sigma(both)
     out["pelgrom"] = {**est, "measured_offset_fpn_V": measured, "ratio": measured / est["sigma_reset_V"],
-                      "samples": int(pooled.size), "dof": int(dof)}
+                      "samples": int(both.size), "dof": int(both.size - both.shape[1])}
     return out

@@ -72,7 +72,6 @@ def _point(task):
     from ..measure.pixel import levels
     from ..spice import simulate_many
     design, stim, options, with_afe, backend, jobs, title = task
-    n = design.secondary_per_pixel
     net = dual_pixel_bench(design, stim["iph_p"], stim["iph_s"], stim["t_exp"], with_afe=with_afe, title=title)
     try:
         # shared backend: the engine's process pool of ``jobs`` workers serves every thread
@@ -87,7 +86,6 @@ def _point(task):
         out[f"signal_{kind}_V"], out[f"reset_{kind}_V"] = rst - sig, rst
         if with_afe:
             out[f"afe_{kind}_V"] = float(res.at(f"out_{node}", tm[kind].t_reset_level(0)))
-    assert n >= 1
     return out
 
 
