@@ -107,6 +107,11 @@ class Afe:
     gain: float = num(1000.0, gt=1, plausible=(1.0, 1e7), unit_required=True,
                       doc="macromodel DC gain with its unit ('60 dB' or '1000 V/V')")
     gbw: float = qty("Hz", 50e6, gt=0, plausible=(1e3, 1e11), doc="macromodel gain-bandwidth")
+    noise_r: float = qty("Ohm", 25e3, ge=0, plausible=(0.0, 1e8),
+                         doc="macromodel input-referred thermal noise as an equivalent noise resistance: "
+                             "e_n^2 = 4 k T R_n (25 kOhm = 20 nV/rtHz at 27 degC; 0 = noiseless)")
+    noise_corner: float = qty("Hz", 100e3, ge=0, plausible=(0.0, 1e9),
+                              doc="macromodel 1/f corner: input PSD e_n^2 (1 + f_c / f)")
     nonoverlap: float = qty("s", 20e-9, gt=0, plausible=(1e-11, 1e-3), doc="non-overlap of the two clock phases")
     f_clk: float = qty("Hz", 500e3, gt=0, plausible=(1.0, 1e9),
                        doc="double-sampling rate (one signal + one reset per period)")

@@ -58,6 +58,7 @@ DIMENSIONS = {
     "W/m2": ((0, -3, 1, 0, 0, 0), "1.17 uW/um2"),
     "A/W": ((-2, 3, -1, 1, 0, 0), "0.3 A/W"),
     "K": ((0, 0, 0, 0, 1, 0), "27 degC"),
+    "Ohm": ((2, -3, 1, -2, 0, 0), "25 kOhm"),
     "lx": ((-2, 0, 0, 0, 0, 1), "1000 lx"),
     "m/s": ((1, -1, 0, 0, 0, 0), "60 km/h"),
     "rad": ((0, 0, 0, 0, 0, 0), "7.4 deg"),
@@ -160,7 +161,7 @@ def _finite(x: float, field: str, source: str, example: str, shown) -> float:
 
 _SI_PREFIX = [(1e9, "G"), (1e6, "M"), (1e3, "k"), (1.0, ""), (1e-3, "m"), (1e-6, "u"), (1e-9, "n"),
               (1e-12, "p"), (1e-15, "f"), (1e-18, "a")]
-_PREFIXED = {"m": "m", "s": "s", "Hz": "Hz", "V": "V", "A": "A", "F": "F", "m2": "m2"}
+_PREFIXED = {"m": "m", "s": "s", "Hz": "Hz", "V": "V", "A": "A", "F": "F", "m2": "m2", "Ohm": "Ohm"}
 
 
 def si_text(x: float, dimension: str) -> str:

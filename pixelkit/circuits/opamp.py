@@ -7,6 +7,18 @@ ideal output buffer: DC gain A = gm R, gain-bandwidth GBW = gm / (2 pi C), an
 input offset ``vos`` in series with ``inp``. NGSPICE_NOTES: a Gm-R model runs
 faster than the OTA; avoid infinite-bandwidth sources.
 
+Its input-referred noise, e_n^2(f) = 4 k T R_n (1 + f_c / f) V^2/Hz, is made of
+elements ngspice's ``.noise`` (and nothing else) sees, in series with ``inp``:
+
+- thermal: a resistor R_n (``afe.noise_r``) between the offset source and the Gm
+  input; no current flows into a VCCS input, so the resistor only adds its 4 k T R_n;
+- 1/f: a side loop, a 1 A DC current through a 1 Ohm resistor whose model has
+  ``kf``, ``af = 2`` (ngspice: S_v = KF I^AF R^2 / f = KF / f), copied into the input
+  path by a unity VCVS against a noiseless 1 V reference (so the DC and the
+  transient are unchanged). KF = 4 k T R_n f_c puts the corner at f_c at the deck
+  temperature. The 1 Ohm's own thermal noise (4 k T x 1 Ohm) is 1/R_n of the white
+  level and ignored.
+
 OTA (``opamp_ota``): NMOS differential pair with PMOS mirror load, PMOS common-
 source second stage, Miller capacitor with a nulling resistor, biased by one
 reference current. Sizes are set for Vref ~ 2 V input common mode at 3.3 V.
@@ -15,6 +27,7 @@ from __future__ import annotations
 
 import math
 
+from ..constants import K_B
 from ..spice.netlist import Element, Param, Subckt
 from .devices import mosfet
 
@@ -22,16 +35,34 @@ PORTS = ("inp", "inn", "out", "vdd")
 GM = 1e-4  # S; only the products gm R and gm / C matter
 
 
-def opamp_macro(gain: float, gbw: float) -> Subckt:
+def flicker_kf(r_noise: float, f_corner: float, temperature_K: float) -> float:
+    """KF of the 1 Ohm / 1 A flicker generator: its 1/f PSD equals 4 k T R_n at f_corner."""
+    return 4.0 * K_B * temperature_K * r_noise * f_corner
+
+
+def opamp_macro(gain: float, gbw: float, r_noise: float = 0.0, f_corner: float = 0.0,
+                temperature_K: float = 300.15) -> Subckt:
     r = gain / GM
     c = GM / (2 * math.pi * gbw)
+    noise, models, node = [], (), "inpo"
+    if r_noise > 0:
+        noise.append(Element("Rn", ("inpo", "inpn"), r_noise))
+        node = "inpn"
+        if f_corner > 0:
+            kf = flicker_kf(r_noise, f_corner, temperature_K)
+            noise += [Element("Ifl", ("0", "nfl"), 1.0), Element("Rfl", ("nfl", "0"), "rflicker", (("r", 1.0),)),
+                      Element("Vflr", ("nflr", "0"), 1.0),
+                      Element("Efl", ("inpf", node, "nfl", "nflr"), 1.0)]
+            models = (("rflicker", "r", (("kf", kf), ("af", 2.0))),)
+            node = "inpf"
     return Subckt("opamp_macro", PORTS, (
         Element("Vos", ("inp", "inpo"), Param("vos")),
-        Element("Gm", ("0", "n1", "inpo", "inn"), GM),
+        *noise,
+        Element("Gm", ("0", "n1", node, "inn"), GM),
         Element("R1", ("n1", "0"), r),
         Element("C1", ("n1", "0"), c),
         Element("Eout", ("out", "0", "n1", "0"), 1.0),
-    ), (("vos", 0.0),))
+    ), (("vos", 0.0),), models)
 
 
 def opamp_ota(tech, i_bias: float = 10e-6) -> Subckt:
@@ -51,7 +82,12 @@ def opamp_ota(tech, i_bias: float = 10e-6) -> Subckt:
     ))
 
 
+def macro(design) -> Subckt:
+    """The design's macromodel: its gain, GBW and input noise at the design temperature."""
+    a = design.afe
+    return opamp_macro(a.gain, a.gbw, a.noise_r, a.noise_corner, design.temperature)
+
+
 def opamp(design) -> Subckt:
     """The op-amp the design chose."""
-    a = design.afe
-    return opamp_macro(a.gain, a.gbw) if a.opamp == "macro" else opamp_ota(design.tech)
+    return macro(design) if design.afe.opamp == "macro" else opamp_ota(design.tech)

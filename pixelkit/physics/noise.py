@@ -20,9 +20,10 @@ The chain (thesis fig. 3.3 sequence; all variances at the column, V^2):
   SPICE figure (the kit has no closed form for the BSIM4 flicker parameters).
 - **Shot noise** of the dark charge (PD over t_int, FD over the storage wait) and
   of the signal (Poisson, sqrt(N)).
-- **AFE** (probe ``afe``): C11 samples twice, the offset capacitor C12 once, C13 is
-  reset once and seen through the gain: 2 kT/C11 + kT/C12 + kT C13 / C11^2 at the
-  AFE input. The op-amp macromodel is noiseless.
+- **AFE** (probe ``afe``): kT/C of C12 (through the noise gain 1/beta) and C13, the
+  op-amp's thermal noise folded by autozero + amplification and its 1/f noise
+  high-passed by the autozero (CDS) filter: ``physics.afe_noise`` (derivation there),
+  referred to the AFE input (the column).
 
 Input-referred electrons divide by the output-referred conversion gain
 (``fd.response``).
@@ -65,19 +66,13 @@ def column_capacitance(design) -> float:
     return c
 
 
-def afe_input_variance(design, temperature_K: float) -> float:
-    """kT/C of the SC AFE referred to its input (V^2)."""
-    a = design.afe
-    return K_B * temperature_K * (2.0 / a.c11 + 1.0 / a.c12 + a.c13 / a.c11 ** 2)
-
-
 def chain(design, which: str, a_sf: float, t_int: float | None = None, t_wait: float = 0.0) -> dict:
     """Read-noise budget of ``which`` subpixel: variances by source, totals in V and e-.
 
     ``t_int`` (default: the subpixel's ``t_int``) sets the dark shot noise; ``t_wait``
     the FD leakage shot noise of the storage.
     """
-    from . import fd
+    from . import afe_noise, fd
     from .dark import dark_current
     sub, temp = getattr(design, which), design.temperature
     t_int = sub.t_int if t_int is None else t_int
@@ -96,11 +91,12 @@ def chain(design, which: str, a_sf: float, t_int: float | None = None, t_wait: f
         "fd_leakage_shot": (n_fd * (r["c_total_F"] / r["c_fd_F"]) ** 2) * cg ** 2,
     }
     pixel = sum(col.values())
-    afe = afe_input_variance(design, temp)
+    afe_parts = afe_noise.input_variances(design)
+    afe = sum(afe_parts.values())
     return {
         "which": which, "cg_out_V_per_e": cg, "a_sf": a_sf, "c_col_F": c_col,
-        "variance_V2": col, "afe_input_V2": afe,
-        "electrons": {k: float(np.sqrt(v) / cg) for k, v in {**col, "afe_ktc": afe}.items()},
+        "variance_V2": col, "afe_input_V2": afe, "afe_variance_V2": afe_parts,
+        "electrons": {k: float(np.sqrt(v) / cg) for k, v in {**col, **afe_parts}.items()},
         "pixel_V": float(np.sqrt(pixel)), "pixel_e": float(np.sqrt(pixel) / cg),
         "afe_V": float(np.sqrt(pixel + afe)), "afe_e": float(np.sqrt(pixel + afe) / cg),
         "dark_e": float(n_dark),

@@ -142,6 +142,7 @@ class Subckt:
     ports: tuple
     elements: tuple
     params: tuple = ()  # ((name, default), ...)
+    models: tuple = ()  # ((model name, type, ((key, number), ...)), ...): local .model cards
 
     def __post_init__(self):
         check_name(self.name, "subcircuit name")
@@ -152,7 +153,9 @@ class Subckt:
         head = f".subckt {self.name} " + " ".join(self.ports)
         if self.params:
             head += " " + " ".join(f"{check_name(k)}={fmt(v, k)}" for k, v in self.params)
-        return "\n".join([head, *(e.text() for e in self.elements), f".ends {self.name}"])
+        cards = [f".model {check_name(m)} {check_name(kind)} ("
+                 + " ".join(f"{check_name(k)}={fmt(v, k)}" for k, v in kv) + ")" for m, kind, kv in self.models]
+        return "\n".join([head, *cards, *(e.text() for e in self.elements), f".ends {self.name}"])
 
 
 @dataclass(frozen=True)
