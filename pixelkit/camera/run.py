@@ -6,6 +6,7 @@ from pathlib import Path
 import numpy as np
 
 from ..physics import fd
+from .afe_spicenoise import afe_output_noise
 from .emva_export import check_target, write_dataset
 from .figures import emva_figures
 from .mismatch import draw
@@ -57,11 +58,13 @@ def camera(design, seed: int = 1, swings: dict | None = None, emva_out: str | Pa
     swings = measured_swings(design, backend) if swings is None else swings
     out = {which: array_report(design, which, a_sf, swings.get(which), seed, steps, shape) for which in ARRAYS}
     cg = output_cg(design, backend=backend)
+    afe_in = afe_output_noise(design)["total_V2"] * (design.afe.c13 / design.afe.c11) ** 2
     for which in ARRAYS:   # the independent SPICE figures beside the analytic ones
         sp = pixel_noise(design, which, a_sf)
         f = out[which]["figures"]
         f["cg_out_spice_V_per_e"] = cg[which]
         f["read_noise_spice_e"] = sp["pixel_V"] / f["cg_out_V_per_e"]
+        f["read_noise_afe_spice_e"] = np.sqrt(sp["pixel_V"] ** 2 + afe_in) / f["cg_out_V_per_e"]
         f["read_noise_chain_no_dark_e"] = out[which]["camera"].read_V / f["cg_out_V_per_e"]
     if emva_out is not None:
         for which in ARRAYS:

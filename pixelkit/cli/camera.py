@@ -10,6 +10,8 @@ _ROWS = (("K (DN/e-)", "k_dn_per_e", 1.0, ".4g"), ("CG out (uV/e-)", "cg_out_V_p
          ("read noise, EMVA (e-)", "read_noise_e", 1.0, ".1f"),
          ("read noise, chain (e-)", "read_noise_chain_no_dark_e", 1.0, ".1f"),
          ("read noise, SPICE (e-)", "read_noise_spice_e", 1.0, ".1f"),
+         ("read noise, AFE probe (e-)", "read_noise_afe_e", 1.0, ".1f"),
+         ("read noise, AFE, SPICE (e-)", "read_noise_afe_spice_e", 1.0, ".1f"),
          ("QE (EMVA eta)", "qe", 1.0, ".4g"), ("saturation (e-)", "saturation_e", 1.0, ".0f"),
          ("DR (dB)", "dr_db", 1.0, ".1f"), ("SNR max (dB)", "snr_max_db", 1.0, ".1f"),
          ("linearity error (%)", "linearity_error_pct", 1.0, ".2f"), ("GSE (signal)", "gse", 1.0, ".1f"),
