@@ -2,6 +2,9 @@
 output-referred conversion gain against a SPICE charge step."""
 from __future__ import annotations
 
+import numpy as np
+
+from ...camera.afe_spicenoise import afe_output_noise
 from ...camera.plots import noise_breakdown
 from ...camera.spicenoise import output_cg, pixel_noise, sf_gain
 from ...physics import fd
@@ -22,6 +25,9 @@ def build(ctx) -> Section:
     budget = [[s.replace("_", " "), ch["primary"]["electrons"][s], ch["secondary"]["electrons"][s]] for s in sources]
     budget += [["total, pixel probe (column)", ch["primary"]["pixel_e"], ch["secondary"]["pixel_e"]],
                ["total, AFE probe", ch["primary"]["afe_e"], ch["secondary"]["afe_e"]]]
+    afe_in = afe_output_noise(d)["total_V2"] * (d.afe.c13 / d.afe.c11) ** 2
+    budget.append(["total, AFE probe, SPICE (.noise at the AFE phases)",
+                   *(float(np.sqrt(sp[w]["pixel_V"] ** 2 + afe_in) / ch[w]["cg_out_V_per_e"]) for w in _ARR)])
     versus = []
     for w in _ARR:
         r = fd.response(d, w, a)
@@ -38,7 +44,11 @@ def build(ctx) -> Section:
         "it costs the conversion gain.",
         "Independent path: ngspice .noise of FD as each switch leaves it (BSIM4 noise sources, "
         "the devices' own capacitances) and of the read chain weighted by the NCDS filter; the "
-        "output-referred CG against a SPICE transient with a known photo-charge."]
+        "output-referred CG against a SPICE transient with a known photo-charge.",
+        "The AFE probe adds the SC amplifier: kT/C of C12 (through the noise gain 1/beta) and C13, "
+        "the op-amp's thermal noise folded by autozero over (pi/2) GBW (1 + beta), and its 1/f noise "
+        "high-passed by the autozero's 2 - 2cos(2 pi f T) (physics/afe_noise.py); independent path: "
+        "ngspice .noise of the AFE cell at its two phase operating points with sampling theory."]
     return Section(
         TITLE, text=text,
         tables=[Table("noise_budget", "Input-referred read noise by source (e- rms)",
