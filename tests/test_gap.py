@@ -68,7 +68,7 @@ def test_predict_writes_the_nominal_column(tmp_path, ref_design, nominal, cli):
     assert len(rows) == len(table)
     want = predict(nominal, features(table, nominal, ref_design))
     got = np.array([float(r["v_nominal_V"]) for r in rows])
-    assert got == pytest.approx(want, abs=1e-8)
+    assert got == pytest.approx(want, abs=1e-5)   # the CLI rebuilds (or reads) the same surrogate
     assert rows[0]["i_ph_prev_A"] != ""   # other columns are carried along
 
 

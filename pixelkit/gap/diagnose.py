@@ -171,8 +171,6 @@ def _verdict(best, explained, ambiguous, setup_flag, top):
 def _params(name, fr):
     if name in ("column_pixel", "column_afe"):
         vals = fr["theta"][2:]
-        if name == "column_pixel":
-            return {"offset_rms_V": float(np.std(vals)), "n_columns": int(vals.size)}
         half = len(vals) // 2
         return {"offset_rms_V": float(np.std(vals[:half])), "gain_rms": float(np.std(vals[half:])),
                 "n_columns": half}

@@ -10,14 +10,16 @@ Domains (the term each effect feeds):
 - chain gain ``dv_pix`` (pivots at the reset level, both probes): ``sf_gain``
   (linear chain gain + compression);
 - AFE: ``afe_gain`` (``deps``, pivots at the reset level, where the SC stage's
-  output is Vref), ``charge_injection`` (reset-sample and AFE switch
-  injection: a pixel-probe level shift that double sampling cancels, and an AFE
-  output offset);
+  output is Vref); ``charge_injection`` (clock feedthrough and switch
+  injection, per array: a pixel-probe level shift, and an AFE output offset,
+  since the feedthrough before the transfer is shared with the PD and the one
+  before the reset sample is not, double sampling leaves their difference);
 - readout light ``readout_light``: junction photocurrent on the AFE's held
   nodes, proportional to the irradiance and to the hold time (AFE probe), and on
   the output stage (both probes), either sign;
 - columns, per stage: ``column_pixel`` (column load / SF mismatch: a per-column
-  offset of the pixel probe, cancelled by double sampling) and ``column_afe``
+  offset of the pixel probe, cancelled by double sampling, and a per-column
+  signal gain from the load current's slewing, seen by both probes) and ``column_afe``
   (C11/C13 ratio and injection mismatch: per-column gain and offset of the AFE);
 - set-up conditions when the data vary them: ``supply`` (``vdd_V``: supply
   coupling of each probe) and ``settling`` (``f_read_Hz``: incomplete settling
@@ -62,8 +64,9 @@ def _dark_current(X, p):   # PD dark current over the integration; T-doubling; p
     return {"dq": p[0] * per * _t_law(X, p[1]) * X["t_int"]}
 
 
-def _charge_injection(X, p):  # reset-switch feedthrough (both samples: cancelled in the AFE) and AFE injection
-    return {"dv_col": p[0] * (~X["afe"]), "dv_afe": p[1]}
+def _charge_injection(X, p):  # clock feedthrough / injection: per array (its FD and PD capacitances differ)
+    prim = X["arr"] == 0
+    return {"dv_col": np.where(prim, p[0], p[1]) * (~X["afe"]), "dv_afe": np.where(prim, p[2], p[3])}
 
 
 def _sf_gain(X, p):        # chain gain: linear loss and compression, pivoting at the reset level
@@ -95,9 +98,10 @@ def _settling(X, p):       # column settling within the sample window (0.3 t_row
     return {"dv_pix": -X["signal"] * np.exp(-0.3 / (X["f_read"] * p[0]))}
 
 
-def column_shift(X, gain_afe, offset_pix, offset_afe, gain_afe_col):
-    """Per-stage column terms: pixel-probe offset; AFE offset and relative gain error."""
-    return np.where(X["afe"], offset_afe + gain_afe_col * gain_afe * X["signal"], offset_pix)
+def column_shift(X, gain_afe, offset_pix, offset_afe, gain_afe_col, gain_pix=0.0):
+    """Per-stage column terms: pixel-probe offset and signal gain; AFE offset and relative gain error."""
+    s = X["signal"]
+    return np.where(X["afe"], offset_afe + (gain_afe_col + gain_pix) * gain_afe * s, offset_pix - gain_pix * s)
 
 
 EFFECTS = {
@@ -106,8 +110,10 @@ EFFECTS = {
                    _fd_leakage),
     "dark_current": ((Param("i_d_A", 0.0, 1e-11, 1e-14, 1e-15), Param("t_double_K", 3.0, 15.0, 1.0, 7.0)),
                      _dark_current),
-    "charge_injection": ((Param("pixel_level_V", -0.15, 0.15, 1e-2, 0.0), Param("afe_offset_V", -0.03, 0.03, 1e-2, 0.0)),
-                         _charge_injection),
+    "charge_injection": ((Param("pixel_level_primary_V", -0.15, 0.15, 1e-2, 0.0),
+                          Param("pixel_level_secondary_V", -0.15, 0.15, 1e-2, 0.0),
+                          Param("afe_offset_primary_V", -0.03, 0.03, 1e-2, 0.0),
+                          Param("afe_offset_secondary_V", -0.03, 0.03, 1e-2, 0.0)), _charge_injection),
     "sf_gain": ((Param("loss", -0.3, 0.5, 1e-2, 0.0), Param("k_per_V", -1.0, 1.0, 1e-2, 0.0)), _sf_gain),
     "afe_gain": ((Param("eps_extra", -0.05, 1.0, 1e-2, 0.0),), _afe_gain),
     "readout_light": ((Param("afe_V_per_A_m2_s", -1e4, 1e4, 10.0, 0.0),

@@ -36,7 +36,7 @@ def column_keys(X):
 def _column_specs(name, cols):
     n = len(cols)
     if name == "column_pixel":
-        return [("offset_pix", -0.2, 0.2, 1e-3)] * n
+        return [("offset_pix", -0.2, 0.2, 1e-3)] * n + [("gain_pix", -0.3, 0.3, 1e-3)] * n
     return [("offset_afe", -0.2, 0.2, 1e-3)] * n + [("gain_afe", -0.3, 0.3, 1e-3)] * n
 
 
@@ -58,7 +58,7 @@ def model_fn(name, nom, X, cols=None):
         def f(theta):
             p = theta[2:]
             if name == "column_pixel":
-                sh = column_shift(X, nom.gain_afe, p[idx], zero, zero)
+                sh = column_shift(X, nom.gain_afe, p[:n][idx], zero, zero, p[n:][idx])
             else:
                 sh = column_shift(X, nom.gain_afe, zero, p[:n][idx], -p[n:][idx])
             return theta[0] + theta[1] * (base + sh)
@@ -87,13 +87,13 @@ def fit(name, nom, X_train, y_train, sigma, cols=None, setup: SetupBounds = Setu
 
     starts = [x0]
     if specs and name in EFFECTS and EFFECTS[name][1] is not None:
-        for sign in (1.0, -1.0):
-            s = x0.copy()
-            s[2:] = np.clip(sign * np.array([sp[3] for sp in specs]) / scales[2:], lo[2:] + 1e-9, hi[2:] - 1e-9)
-            starts.append(s)
+        s = x0.copy()   # a second start one typical size away (downwards when the parameter may be negative)
+        sign = np.where(np.array([sp[1] for sp in specs]) < 0, -1.0, 1.0)
+        s[2:] = np.clip(sign * np.array([sp[3] for sp in specs]) / scales[2:], lo[2:] + 1e-9, hi[2:] - 1e-9)
+        starts.append(s)
     best = None
     for s in starts:
-        r = least_squares(resid, s, bounds=(lo, hi), x_scale=1.0, method="trf", max_nfev=300)
+        r = least_squares(resid, s, bounds=(lo, hi), x_scale=1.0, method="trf", max_nfev=150)
         if best is None or r.cost < best.cost:
             best = r
     theta = best.x * scales

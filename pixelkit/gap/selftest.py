@@ -35,12 +35,13 @@ RANGES = {
     "gse": lambda g: [1.0 / _u(g, 300, 10000)],                             # GSE 300:1 .. 1e4:1
     "fd_leakage": lambda g: [_u(g, 5e-17, 5e-16), _u(g, 6.0, 8.0)],          # ~10 - 100 mV/s on C_FD at 25 C
     "dark_current": lambda g: [_u(g, 2e-16, 2e-15), _u(g, 5.0, 9.0)],        # 1.3 - 13 ke-/s (primary)
-    "charge_injection": lambda g: [g.choice([-1, 1]) * _u(g, 0.002, 0.02), g.choice([-1, 1]) * _u(g, 0.001, 0.01)],
+    "charge_injection": lambda g: [g.choice([-1, 1]) * _u(g, 0.002, 0.02), g.choice([-1, 1]) * _u(g, 0.002, 0.02),
+                                   g.choice([-1, 1]) * _u(g, 0.001, 0.01), g.choice([-1, 1]) * _u(g, 0.001, 0.01)],
     "sf_gain": lambda g: [_u(g, 0.03, 0.10), _u(g, 0.0, 0.05)],              # A_SF loss, ~1 % INL
     "afe_gain": lambda g: [_u(g, 0.01, 0.05)],
     "readout_light": None,                                                   # scaled to the campaign (below)
     "crosstalk": lambda g: [_u(g, 0.003, 0.03)],
-    "column_pixel": lambda g: [_u(g, 0.002, 0.01)],
+    "column_pixel": lambda g: [_u(g, 0.002, 0.01), _u(g, 0.002, 0.01)],
     "column_afe": lambda g: [_u(g, 0.001, 0.005), _u(g, 0.003, 0.01)],
     "lag": lambda g: [_u(g, 0.01, 0.05)],
     "supply": lambda g: [g.choice([-1, 1]) * _u(g, 0.01, 0.05), g.choice([-1, 1]) * _u(g, 0.01, 0.05)],
@@ -107,7 +108,7 @@ def measure(design, nom, table: Table, effect: str | None, rng, params=None) -> 
         g = dict(zip(uk, rng.normal(0, s[1] if len(s) > 1 else 0.0, uk.size)))
         ov, gv = np.array([o[k] for k in keys]), np.array([g[k] for k in keys])
         zero = np.zeros_like(ov)
-        sh = column_shift(X, nom.gain_afe, ov, zero, zero) if effect == "column_pixel" else \
+        sh = column_shift(X, nom.gain_afe, ov, zero, zero, gv) if effect == "column_pixel" else \
             column_shift(X, nom.gain_afe, zero, ov, gv)
         v = predict(nom, X) + sh
         truth["params"] = dict(zip(("offset_rms_V", "gain_rms"), s))
