@@ -17,6 +17,7 @@ import numpy as np
 from ..circuits.noisebench import capacitor_deck, fd_sample_deck, read_deck
 from ..circuits.testbench import timings
 from ..errors import PixelkitError
+from ..physics.noise import ncds_interval
 from ..spice import simulate_many
 from ..spice.batch import run_batch
 from ..spice.engine import _prepare
@@ -32,6 +33,7 @@ def run_noise(net) -> dict:
         raise PixelkitError(f"noise run '{net.title}' failed: " + " | ".join(lines[-5:]))
     d = spec[0]["data"]
     return {"f": np.real(np.asarray(d["frequency"])), "psd": np.real(np.asarray(d["onoise_spectrum"])) ** 2,
+            "psd_in": np.real(np.asarray(d["inoise_spectrum"])) ** 2,
             "total_V": float(np.real(np.asarray(tot[0]["data"]["v(onoise_total)"]))[0])}
 
 
@@ -50,8 +52,7 @@ def sf_gain(design, v_fd: float | None = None, dv: float = 0.01) -> float:
 def ncds_read(design, which: str, a_sf: float) -> float:
     """Variance (V^2) of the NCDS difference from the SF read chain (thermal + 1/f)."""
     r = run_noise(read_deck(design, design.pixel.v_pd_reset))
-    tm = timings(design, design.experiment.t_window)[which]
-    dt = tm.t_reset_level(0) - tm.t_signal(0)
+    dt = ncds_interval(design, which)
     w = 2.0 * (1.0 - np.cos(2 * np.pi * r["f"] * dt))
     return float(np.trapezoid(r["psd"] * w, r["f"]))
 

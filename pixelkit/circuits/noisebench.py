@@ -15,6 +15,8 @@ The BSIM4 channel thermal and flicker noise of the real devices are the sources.
   for FD in the reference design), which leaves the node when the switch opens.
 - ``read_deck``: the SF, RS and column load with FD held by a source: the spectrum
   at the column, which the NCDS difference then weights by 2 (1 - cos 2 pi f dt).
+- ``flicker_deck``: one NMOS as a source follower on an ideal current sink; the
+  input-referred spectrum (``inoise``) is its gate-referred noise S_vg (1/f at low f).
 """
 from __future__ import annotations
 
@@ -95,3 +97,11 @@ def fd_sample_deck(design, which: str, transfer: bool) -> Netlist:
 def read_deck(design, v_fd: float) -> Netlist:
     return _deck(design, "noise_read", read_chain(design), (), Noise("col", "fd", v_fd, 1.0, 1e11, 40),
                  options=NOISE_OPTIONS)
+
+
+def flicker_deck(design, w: float, l: float, i_d: float, v_g: float = 2.0) -> Netlist:
+    """One NMOS (W, L) as a follower carrying ``i_d`` from the supply, gate at ``v_g``."""
+    t = design.tech
+    el = (mosfet("f", "vdd", "g", "s", "0", w, l, t), Element("Vdd", ("vdd", "0"), t.supply),
+          Element("Ib", ("s", "0"), i_d))
+    return _deck(design, "noise_flicker", el, (), Noise("s", "g", v_g, 1.0, 1e3, 10), options=NOISE_OPTIONS)

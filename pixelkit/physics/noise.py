@@ -16,8 +16,17 @@ The chain (thesis fig. 3.3 sequence; all variances at the column, V^2):
 - **SF + column load (thermal).** Both transistors carry the same current; in weak
   inversion each has current noise 2 q I and the follower's output conductance is
   I / U_T, so the column (C_col) holds kT / C_col per sample whatever the current
-  (``sf_thermal``). Two uncorrelated samples: 2 kT / C_col. 1/f noise is left to the
-  SPICE figure (the kit has no closed form for the BSIM4 flicker parameters).
+  (``sf_thermal``). Two uncorrelated samples: 2 kT / C_col.
+- **SF + column load (1/f)** (``sf_flicker``). Each NMOS has gate-referred
+  S_vg = kf_vg / (cox W L f^ef) (technology ``mos.kf_vg``, ``mos.ef``, fitted to the
+  model library). The SF's reaches the column times A_sf; the load's drain-current
+  noise gm_ld^2 S_vg,ld divides by the follower's output conductance gm_sf / A_sf, and
+  in weak inversion at the same current gm_ld = gm_sf (the assumption of
+  ``sf_thermal``), so S_col = A_sf^2 kf_vg / (cox f^ef) (1/(W L)_sf + 1/(W L)_ld),
+  low-passed by the column pole f_col = (I / U_T) / (2 pi C_col). The two NCDS samples
+  are dt apart (signal, then the new reset's level), so the difference sees
+  |1 - exp(-j 2 pi f dt)|^2 = 2 - 2 cos(2 pi f dt): 1/f below 1/dt cancels, above it
+  the samples add. var = int S_col(f) (2 - 2 cos 2 pi f dt) / (1 + (f/f_col)^2) df.
 - **Shot noise** of the dark charge (PD over t_int, FD over the storage wait) and
   of the signal (Poisson, sqrt(N)).
 - **AFE** (probe ``afe``): kT/C of C12 (through the noise gain 1/beta) and C13, the
@@ -55,6 +64,31 @@ def sf_thermal(c_col: float, temperature_K: float) -> float:
     return K_B * temperature_K / c_col
 
 
+def column_flicker_psd(design, a_sf: float, f):
+    """1/f PSD (V^2/Hz) at the column from the SF and its load, below the column pole."""
+    mos, dev = design.tech.mos, design.pixel.devices
+    s1 = a_sf ** 2 * mos.kf_vg / mos.cox * (1.0 / (dev.sf_w * dev.sf_l) + 1.0 / (dev.load_w * dev.load_l))
+    return s1 / np.asarray(f, dtype=float) ** mos.ef
+
+
+def sf_flicker(design, a_sf: float, dt: float, c_col: float, points_per_decade: int = 100) -> float:
+    """Variance (V^2) of the NCDS difference from the SF's and the load's 1/f noise (derivation above)."""
+    if design.tech.mos.kf_vg <= 0:
+        return 0.0
+    f_col = design.pixel.sf_bias / (K_B * design.temperature / Q) / (2 * np.pi * c_col)
+    lo, hi = 1e-4 / dt, 1e4 * f_col
+    f = np.logspace(np.log10(lo), np.log10(hi), int(points_per_decade * np.log10(hi / lo)) + 1)
+    w = (2.0 - 2.0 * np.cos(2 * np.pi * f * dt)) / (1.0 + (f / f_col) ** 2)
+    return float(np.trapezoid(column_flicker_psd(design, a_sf, f) * w, f))
+
+
+def ncds_interval(design, which: str) -> float:
+    """Time from the signal sample to the (new reset's) reset-level sample of the first row."""
+    from ..circuits.testbench import timings
+    tm = timings(design, design.experiment.t_window)[which]
+    return tm.t_reset_level(0) - tm.t_signal(0)
+
+
 def column_capacitance(design) -> float:
     """Column line: its parasitic C plus the RS source and load drain junctions at zero bias."""
     from ..circuits.geometry import diffusion
@@ -87,6 +121,7 @@ def chain(design, which: str, a_sf: float, t_int: float | None = None, t_wait: f
         "tg_partition": a_sf ** 2 * kt * r["c_pd_node_F"] / (r["c_fd_F"] * r["c_total_F"]),
         "fd_reset_ncds": a_sf ** 2 * kt / r["c_fd_F"],
         "sf_load_thermal": 2.0 * sf_thermal(c_col, temp),
+        "sf_load_flicker": sf_flicker(design, a_sf, ncds_interval(design, which), c_col),
         "dark_shot": n_dark * cg ** 2,
         "fd_leakage_shot": (n_fd * (r["c_total_F"] / r["c_fd_F"]) ** 2) * cg ** 2,
     }

@@ -68,6 +68,10 @@ class Mos:
     njs: float = num(1.0, gt=0.5, le=3, plausible=(0.8, 2.0), doc="junction emission coefficient (BSIM4 njs)")
     xtis: float = num(3.0, ge=0, le=10, plausible=(0.0, 6.0), doc="junction current temperature exponent (BSIM4 xtis)")
     t_nom: float = qty("K", 298.15, gt=0, lt=500, doc="temperature of js/jsw (the models' tnom)")
+    kf_vg: float = qty("V2*F", 0.0, ge=0, plausible=(0.0, 1e-21),
+                       doc="NMOS gate-referred 1/f noise S_vg = kf_vg / (cox W L f^ef), fitted to the model "
+                           "library (circuits.noisebench.flicker_deck); 0 = no 1/f in the analytic chain")
+    ef: float = num(1.0, gt=0, le=2, plausible=(0.5, 1.5), doc="1/f exponent of the NMOS (BSIM4 ef)")
 
 
 @dataclass(frozen=True)
