@@ -54,6 +54,9 @@ autozero sample and the phase-2 sample, T = 1 / (2 f_clk) apart: the output is
 with H1 = 1 / (1 + j f / GBW), H2 = 1 / (1 + j f / (beta GBW)); below 1/T this is the
 CDS high-pass 2 - 2 cos(2 pi f T) and the 1/f noise cancels, above it the two
 samples add. Integrated numerically (log grid).
+
+With ``afe.opamp = "ota"`` these op-amp terms still use the macromodel's
+``noise_r`` / ``noise_corner`` (the transistor OTA's own BSIM4 noise is in SPICE only).
 """
 from __future__ import annotations
 

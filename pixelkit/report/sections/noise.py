@@ -39,7 +39,8 @@ def build(ctx) -> Section:
         "Read noise through the chain with non-correlated double sampling (the reset level comes "
         "from a new FD reset): after PD and FD share charge through TG, FD keeps kT/C_FD (the "
         "common mode of the two resets plus the TG partition), and the reset sample adds another "
-        "kT/C_FD; the SF and its load add kT/C_col per sample. Referred to the PD through the "
+        "kT/C_FD; the SF and its load add kT/C_col per sample, and their 1/f noise what the NCDS "
+        "difference 2 - 2cos(2 pi f dt) leaves of it. Referred to the PD through the "
         "small FD, this dominates: charge sharing with a 2 fF FD costs the read noise more than "
         "it costs the conversion gain.",
         "Independent path: ngspice .noise of FD as each switch leaves it (BSIM4 noise sources, "
