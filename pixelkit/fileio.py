@@ -24,6 +24,20 @@ def _honour_umask(tmp) -> None:
     os.chmod(tmp, 0o666 & ~_umask())
 
 
+def path_kind(path: str | os.PathLike) -> str | None:
+    """"file", "dir", "other" or None (absent or unusable, e.g. a name too long).
+
+    ``Path.is_file()`` raises on ENAMETOOLONG and similar; user-given paths go
+    through here so such a name is an ordinary "not there", never a traceback.
+    """
+    import stat
+    try:
+        mode = os.stat(path).st_mode
+    except (OSError, ValueError):
+        return None
+    return "file" if stat.S_ISREG(mode) else "dir" if stat.S_ISDIR(mode) else "other"
+
+
 def check_output(path: str | os.PathLike) -> Path:
     """``path`` if a file or folder can be written there; else one line naming it and why.
 
@@ -33,13 +47,13 @@ def check_output(path: str | os.PathLike) -> Path:
     from .errors import PixelkitError
     path = Path(path)
     probe = path
-    while not probe.exists():
+    while path_kind(probe) is None:
         if probe.parent == probe:
             break
         probe = probe.parent
-    if probe != path and not probe.is_dir():
+    if probe != path and path_kind(probe) != "dir":
         raise PixelkitError(f"{path}: cannot write here: {probe} is a file, not a folder")
-    if not os.access(probe, os.W_OK | (os.X_OK if probe.is_dir() else 0)):
+    if not os.access(probe, os.W_OK | (os.X_OK if path_kind(probe) == "dir" else 0)):
         raise PixelkitError(f"{path}: cannot write here: {probe} is not writable")
     return path
 

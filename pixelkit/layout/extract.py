@@ -12,6 +12,7 @@ from pathlib import Path
 import gdstk
 
 from ..errors import ConfigError
+from ..fileio import path_kind
 
 
 def _on(polys, layer):
@@ -33,7 +34,7 @@ def _perimeter(polys) -> float:
 def extract(gds: str | Path, tech) -> dict:
     """{"primary": {pd_area_m2, pd_perimeter_m, photoactive_area_m2}, "secondary": {...}} from a GDS."""
     path = Path(gds)
-    if not path.is_file():
+    if path_kind(path) != "file":
         raise ConfigError(str(path), "layout.gds", str(path), "an existing GDS file")
     lib = gdstk.read_gds(str(path))
     cells = {c.name: c for c in lib.cells}

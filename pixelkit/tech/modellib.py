@@ -19,6 +19,7 @@ from importlib import metadata
 from pathlib import Path
 
 from ..errors import ConfigError
+from ..fileio import path_kind
 
 _SECTION = re.compile(r"^[A-Za-z_][A-Za-z0-9_]{0,63}$")
 _FILE = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.\-/]{0,200}$")
@@ -81,7 +82,7 @@ def _resolve_folder(spec: str, base: Path, source: str) -> Path:
         folder = Path(spec).expanduser()
         if not folder.is_absolute():
             folder = base / folder
-    if not folder.is_dir():
+    if path_kind(folder) != "dir":
         raise ConfigError(source, "models.folder", spec, "an existing folder of model files")
     return folder.resolve()
 
@@ -120,7 +121,7 @@ def _parse_include(line: str, folder: Path, source: str, where: str) -> Include:
     if parts[0] == "lib" and not _SECTION.match(parts[2]):
         raise ConfigError(source, where, line, "a section name of letters, digits and '_'")
     path = folder / parts[1]
-    if not path.is_file():
+    if path_kind(path) != "file":
         raise ConfigError(source, where, line, f"a file that exists in {folder}")
     _refuse_control_blocks(path, folder, source, where)
     return Include(parts[0], folder, parts[1], parts[2] if parts[0] == "lib" else "")
@@ -160,4 +161,4 @@ def _scan(path: str, _size: int, _mtime_ns: int, root: str) -> tuple[bool, tuple
     has_control = (b".control" in low or b".endc" in low) and bool(_CONTROL.search(blob))
     names = {m.group(1).decode("latin-1") for m in _NESTED.finditer(blob)}
     nested = {(f.parent / n).resolve() for n in names}
-    return has_control, tuple(sorted(str(n) for n in nested if n.is_file() and n.is_relative_to(root)))
+    return has_control, tuple(sorted(str(n) for n in nested if path_kind(n) == "file" and n.is_relative_to(root)))

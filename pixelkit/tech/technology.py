@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..errors import ConfigError
+from ..fileio import path_kind
 from ..schema import flag, ident, integer, load, num, qty, read_toml, table, text
 from .modellib import ModelLibrary, load_model_library
 
@@ -170,7 +171,7 @@ def load_technology(name_or_path: str | Path, relative_to: Path | None = None, s
         path = Path(text_)
         if not path.is_absolute() and relative_to is not None:
             path = relative_to / path
-        if not path.is_file():
+        if path_kind(path) != "file":
             raise ConfigError(source, "technology", text_, f"an existing technology file (looked for {path})")
     else:
         raise ConfigError(source, "technology", text_,
