@@ -74,9 +74,16 @@ def plan(design, table, nom, result: dict, setup: SetupBounds = SetupBounds(), t
         k = int(np.argmax(d))
         pair_best[f"{a} vs {b}"] = {"separation_sigma": float(d[k]), "point": points[k],
                                     "difference_mV": float((preds[a] - preds[b])[k] * 1e3)}
-    order = np.argsort(-sep)[:top]
-    best_points = [{"point": points[k], "separation_sigma": float(sep[k]),
-                    "predictions_V": {n: float(preds[n][k]) for n in names}} for k in order]
+    best_points, seen = [], []
+    for k in np.argsort(-sep):   # points whose predictions repeat a listed one add nothing (a factor no model uses)
+        sig = np.array([preds[n][k] for n in names])
+        if any(np.allclose(sig, o, rtol=0, atol=1e-9) for o in seen):
+            continue
+        seen.append(sig)
+        best_points.append({"point": points[k], "separation_sigma": float(sep[k]),
+                            "predictions_V": {n: float(preds[n][k]) for n in names}})
+        if len(best_points) == top:
+            break
     median = {"array": ARRAYS[int(np.round(np.median(X["arr"])))], "probe": "afe" if X["afe"].mean() >= 0.5 else "pixel",
               "t_int_s": 300e-6, "fill": 0.1, "extra_wait_s": 0.0, "temp_C": 25.0, "f_read_rel": 1.0, "dvdd_V": 0.0}
     levers = []
