@@ -30,6 +30,31 @@ def test_row_split_matches_undivided(ref_design):
     assert np.all(np.diff(split.signal["primary"], axis=0) > 0.01)
 
 
+def test_row_split_matches_undivided_with_afe(ref_design):
+    """Independent path: the undivided 2 x 2 deck with every column's S1X/S2X and SC AFE.
+
+    With the AFE a row's deck also simulates the previous row (the column and C11 carry its
+    reset level into the row). Tolerances: reltol 1e-6, abstol 1e-12 (at 1e-6 / 1e-14 ngspice
+    stops, "timestep too small" on a clock source, and the engine's looser retry moved the
+    old comparison by ~2.5 mV), trtol 1: the undivided deck then moves by < 0.08 mV against
+    trtol 7 or a 10 ns maximum step (README), so it is converged well enough to judge a
+    0.1 mV limit. No deck may have been retried."""
+    d = ref_design
+    ip = np.array([[2e-10 + 1e-10 * (r + c) for c in range(2)] for r in range(2)])
+    is_ = np.array([[1e-11 * (1 + (r + j) % 5) for j in range(6)] for r in range(2)])
+    kw = dict(jobs=2, with_afe=True, options=(("reltol", 1e-6), ("abstol", 1e-12), ("trtol", 1)))
+    whole = simulate_frame(d, ip, is_, split="none", **kw)
+    split = simulate_frame(d, ip, is_, split="rows", **kw)
+    for f in (whole, split):
+        assert not f.failures and not f.retried, (f.failures, f.retried)
+    for k in ("primary", "secondary"):
+        for a, b in ((split.signal, whole.signal), (split.reset_level, whole.reset_level), (split.afe, whole.afe)):
+            assert np.all(np.isfinite(a[k])) and np.max(np.abs(a[k] - b[k])) < 1e-4, k
+    # the AFE output follows the column signal (inverting, gain about C11/C12 = 1)
+    dsig, dout = np.diff(split.signal["primary"], axis=1), np.diff(split.afe["primary"], axis=1)
+    assert np.all(dsig > 0.01) and np.all(np.abs(dout / dsig + 1) < 0.2)
+
+
 def test_scene_photocurrent_from_radiometry(ref_design):
     """A uniform 1000 lx scene: I = R_eff * E_sensor * A_photo * t_int / t_exp, with E_sensor
     = rho T E / (4 N^2) in W/m^2 through the black-body spectrum's luminous efficacy (the

@@ -2,17 +2,22 @@
 
 What is independent (and why the split is exact up to the simulator's numerics):
 
-- the two arrays have their own control lines and column buses: they share only the
-  ideal supplies and the column-load bias reference;
-- columns share only row lines (ideal sources) and supplies;
+- the two arrays have their own control lines, column buses and column-load bias (an ideal
+  current into a diode-connected NMOS per array, as each array's own bias generator): they
+  share only ideal sources. (One bias node shared by both arrays couples them through the
+  loads' Cgd while the columns slew, ~0.1 mV with the AFE, and no split could keep that);
+- the columns of an array share row lines (ideal sources), supplies and the array's bias
+  node, so a row's deck keeps all the array's columns;
 - during exposure every pixel is on its own; during read-out only the selected row
   drives a column (the other rows' RS switches are off and their lines static).
 
 So a frame splits into one deck per array and row (``split="rows"``), each holding
 that row's subpixels, all their columns (load, and with the AFE: S1X/S2X and the SC
 AFE) and the row's own controls at the row's own time in the frame; the deck stops
-when its row has been read. Cost then grows as rows x columns instead of the whole
-deck's ~rows^1.8 (a whole-column deck re-solves every row's pixels at every row's
+when its row has been read. With the AFE the previous row is simulated too (``lead``): the
+column and C11 enter a row holding the previous row's reset level, and for large signals
+the column does not settle within S1, so the row's signal depends on it. Cost then grows
+as rows x columns instead of the whole deck's ~rows^1.8 (a whole-column deck re-solves every row's pixels at every row's
 edges). ``split="none"`` simulates the frame as one deck (the reference); the test
 and ``pixelkit array --check`` compare both.
 """
@@ -47,10 +52,11 @@ class Frame:
     wall_s: float
     split: str
     failures: list = field(default_factory=list)
+    retried: list = field(default_factory=list)   # decks the engine re-ran with looser options
 
     def as_dict(self) -> dict:
         out = {"rows": self.rows, "cols": self.cols, "split": self.split, "decks": self.decks,
-               "wall_s": self.wall_s, "failures": self.failures}
+               "wall_s": self.wall_s, "failures": self.failures, "retried": self.retried}
         for k in KINDS:
             out[f"{k}_signal_V"] = _listed(self.signal[k])
             out[f"{k}_reset_level_V"] = _listed(self.reset_level[k])
@@ -82,7 +88,7 @@ def _probe(task):
         res = simulate_many([net], backend=backend, jobs=jobs, options=options)[0]
     except SimulationError as exc:
         return {"error": exc.message, "deck": net.title}
-    out = {}
+    out = {"retried": res.meta["retried"]["reason"] if res.meta.get("retried") else None, "deck": net.title}
     for key, node, timing, row, afe_node in probes:
         sig, rst = levels(res, node, timing, row)
         out[key] = (rst - sig, rst, float(res.at(afe_node, timing.t_reset_level(row))) if afe_node else None)
@@ -114,14 +120,17 @@ def simulate_frame(design, iph_p, iph_s, with_afe: bool = False, split: str = "r
     sig = {k: np.full(shape[k], np.nan) for k in KINDS}
     rst = {k: np.full(shape[k], np.nan) for k in KINDS}
     afe = {k: np.full(shape[k], np.nan) for k in KINDS} if with_afe else {}
-    failures = []
+    failures, retried = [], []
     t0 = time.perf_counter()
     for i, out in run_tasks(_probe, tasks, jobs=jobs, scheduler=scheduler, desc="frame tiles"):
         if "error" in out:
             failures.append({"deck": out["deck"], "message": out["error"]})
             continue
+        deck, why = out.pop("deck"), out.pop("retried")
+        if why:
+            retried.append({"deck": deck, "message": why})
         for (k, r, j), (s, lv, a) in out.items():
             sig[k][r, j], rst[k][r, j] = s, lv
             if with_afe:
                 afe[k][r, j] = a
-    return Frame(rows, cols, sig, rst, afe, len(tasks), time.perf_counter() - t0, split, failures)
+    return Frame(rows, cols, sig, rst, afe, len(tasks), time.perf_counter() - t0, split, failures, retried)

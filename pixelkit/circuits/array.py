@@ -145,7 +145,7 @@ def array_bench(design, iph_p, iph_s, tile: Tile | None = None, t_exp: float | N
     t_exp = design.experiment.t_window if t_exp is None else t_exp
     tm = frame_timings(design, t_exp, rows)
     sim_rows = tile.simulated_rows
-    el = [*supplies(design), *controls(design, tm, sim_rows, True, tile.kinds), *column.bias(design)]
+    el = [*supplies(design), *controls(design, tm, sim_rows, True, tile.kinds)]
     subckts = []
     if with_afe:
         el.append(Element("Vref", ("vref", "0"), design.afe.vref))
@@ -153,6 +153,7 @@ def array_bench(design, iph_p, iph_s, tile: Tile | None = None, t_exp: float | N
     for kind in tile.kinds:
         s, cur = PREFIX[kind], (ip if kind == "primary" else is_)
         subckts.append(pixel5t(design, kind))
+        el += column.bias(design, f"nbias_{s}")
         if with_afe:
             el += sample_clocks(design, tm[kind], s, sim_rows)
         for j in tile.columns(kind, n):
@@ -166,7 +167,7 @@ def array_bench(design, iph_p, iph_s, tile: Tile | None = None, t_exp: float | N
                 dev = design.pixel.devices
                 rs = mosfet(f"rsoff_{col}", f"sfo_off_{col}", "0", col, "0", dev.rs_w, dev.rs_l, design.tech)
                 el.append(replace(rs, params=(*rs.params, ("m", absent))))
-            el += column.load(design, col)
+            el += column.load(design, col, f"nbias_{s}")
             if with_afe:
                 el += column.sampler(design, col, f"in_{col}", f"s1_{s}", f"s2_{s}")
                 caps = afe_caps(design, mismatch_seed, kind, j)

@@ -11,17 +11,19 @@ from ..spice.netlist import Element
 from .devices import mosfet, tgate
 
 
-def bias(design) -> tuple:
-    """The load bias: an ideal reference current into a diode-connected NMOS (node nbias)."""
+def bias(design, node: str = "nbias") -> tuple:
+    """The load bias: an ideal reference current into a diode-connected NMOS (node ``node``)."""
     dev = design.pixel.devices
-    return (Element("Ibias", ("vdd", "nbias"), design.pixel.sf_bias),
-            mosfet("bias", "nbias", "nbias", "0", "0", dev.load_w, dev.load_l, design.tech))
+    tag = "" if node == "nbias" else f"_{node}"
+    return (Element(f"Ibias{tag}", ("vdd", node), design.pixel.sf_bias),
+            mosfet(f"bias{tag}", node, node, "0", "0", dev.load_w, dev.load_l, design.tech))
 
 
-def load(design, col: str) -> tuple:
-    """Current-source load and parasitic capacitance of column line ``col``."""
+def load(design, col: str, bias: str = "nbias") -> tuple:
+    """Current-source load (gate on the bias node ``bias``) and parasitic capacitance of column
+    line ``col``."""
     dev = design.pixel.devices
-    return (mosfet(f"ld_{col}", col, "nbias", "0", "0", dev.load_w, dev.load_l, design.tech),
+    return (mosfet(f"ld_{col}", col, bias, "0", "0", dev.load_w, dev.load_l, design.tech),
             Element(f"C{col}", (col, "0"), design.pixel.column_cap))
 
 

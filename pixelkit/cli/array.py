@@ -58,6 +58,7 @@ def array_cmd(design, rows, cols, scene, unit, with_afe, split, check, seed, t_e
         if "check_max_diff_V" in x:
             lines.append(f"split vs undivided: largest difference {x['check_max_diff_V'] * 1e3:.3f} mV")
         lines += [f"FAILED {e['deck']}: {e['message']}" for e in x["failures"]]
+        lines += [f"retried with looser options {e['deck']}: {e['message']}" for e in x["retried"]]
         return "\n".join(lines)
     emit(data, as_json, text)
     if f.failures:
