@@ -11,7 +11,13 @@ Statistics (all on rows the fit did not see, a deterministic 70/30 split):
   "no effect", fitted parameters cannot improve unseen rows by more than
   that), and its BIC (chi-square + k ln n on the training rows) is lower by
   more than ``BIC_MARGIN``; otherwise the answer is ``none``;
-- among those, the lowest BIC is named; every other candidate whose held-out
+- among those, the held-out chi-square decides (rows the fit did not see: a
+  many-parameter candidate, e.g. per-column terms, that absorbs a misspecified
+  remainder on the training rows gains nothing there, while BIC's k ln n
+  penalty is negligible once chi-square >> n): of the winners within
+  ``AMBIGUOUS_DCHI2`` of the lowest held-out chi-square, the lowest BIC (the
+  most parsimonious of those the held-out rows cannot tell apart) is named;
+  every other candidate whose held-out
   chi-square is within ``AMBIGUOUS_DCHI2`` (3.84, the 95 % point of a chi-square
   with one degree of freedom: a held-out likelihood ratio below 6.8) of it is
   listed as indistinguishable (``gap plan`` proposes the measurement that
@@ -112,6 +118,11 @@ def analyse(design, table, nom, seed: int = 0, candidates=None, setup: SetupBoun
                                            and none["bic"] - fr["bic"] > BIC_MARGIN)})
     ranking.sort(key=lambda r: r["bic"])
     winners = [r for r in ranking if r["beats_none"]]
+    if winners:
+        lowest = min(fits[r["effect"]]["heldout_chi2"] for r in winners)
+        named = next(r for r in winners if fits[r["effect"]]["heldout_chi2"] - lowest < AMBIGUOUS_DCHI2)
+        winners.remove(named)
+        winners.insert(0, named)
     best = winners[0]["effect"] if winners else "none"
     top = next((r["effect"] for r in ranking if r["effect"] != "none"), "none")
     ambiguous = []
@@ -170,10 +181,10 @@ def _verdict(best, explained, ambiguous, setup_flag, top):
 
 def _params(name, fr):
     if name in ("column_pixel", "column_afe"):
-        vals = fr["theta"][2:]
-        half = len(vals) // 2
-        return {"offset_rms_V": float(np.std(vals[:half])), "gain_rms": float(np.std(vals[half:])),
-                "n_columns": half}
+        vals, kinds = fr["theta"][2:], [spec[0] for spec in fr["specs"]]
+        out = {f"{k}_rms" + ("_V" if k.startswith("offset") else ""): float(np.std(vals[[j == k for j in kinds]]))
+               for k in dict.fromkeys(kinds)}
+        return out | {"n_columns": kinds.count(kinds[0])}
     return {spec[0]: iv for spec, iv in zip(fr["specs"], fr["intervals"])}
 
 

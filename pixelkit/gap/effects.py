@@ -66,12 +66,15 @@ def _dark_current(X, p):   # PD dark current over the integration; T-doubling; p
 
 def _charge_injection(X, p):  # clock feedthrough / injection: per array (its FD and PD capacitances differ)
     prim = X["arr"] == 0
-    return {"dv_col": np.where(prim, p[0], p[1]) * (~X["afe"]), "dv_afe": np.where(prim, p[2], p[3])}
+    # the coupling capacitance that injects also loads the FD: a relative signal loss (both probes)
+    return {"dv_col": np.where(prim, p[0], p[1]) * (~X["afe"]), "dv_afe": np.where(prim, p[2], p[3]),
+            "dv_pix": -np.where(prim, p[4], p[5]) * X["signal"]}
 
 
 def _sf_gain(X, p):        # chain gain: linear loss and compression, pivoting at the reset level
+    # a load on the column costs G / (gm + G): per array, each array's follower has its own gm
     s = X["signal"]
-    return {"dv_pix": -p[0] * s - p[1] * s ** 2}
+    return {"dv_pix": -np.where(X["arr"] == 0, p[0], p[2]) * s - p[1] * s ** 2}
 
 
 def _afe_gain(X, p):       # SC stage gain lower than designed (C13 larger, finite A): extra eps
@@ -101,7 +104,7 @@ def _settling(X, p):       # column settling within the sample window (0.3 t_row
 def column_shift(X, gain_afe, offset_pix, offset_afe, gain_afe_col, gain_pix=0.0):
     """Per-stage column terms: pixel-probe offset and signal gain; AFE offset and relative gain error."""
     s = X["signal"]
-    return np.where(X["afe"], offset_afe + (gain_afe_col + gain_pix) * gain_afe * s, offset_pix - gain_pix * s)
+    return np.where(X["afe"], offset_afe + (gain_afe_col - gain_pix) * gain_afe * s, offset_pix - gain_pix * s)
 
 
 EFFECTS = {
@@ -113,8 +116,11 @@ EFFECTS = {
     "charge_injection": ((Param("pixel_level_primary_V", -0.15, 0.15, 1e-2, 0.0),
                           Param("pixel_level_secondary_V", -0.15, 0.15, 1e-2, 0.0),
                           Param("afe_offset_primary_V", -0.03, 0.03, 1e-2, 0.0),
-                          Param("afe_offset_secondary_V", -0.03, 0.03, 1e-2, 0.0)), _charge_injection),
-    "sf_gain": ((Param("loss", -0.3, 0.5, 1e-2, 0.0), Param("k_per_V", -1.0, 1.0, 1e-2, 0.0)), _sf_gain),
+                          Param("afe_offset_secondary_V", -0.03, 0.03, 1e-2, 0.0),
+                          Param("fd_load_primary", -0.05, 0.05, 1e-2, 0.0),
+                          Param("fd_load_secondary", -0.05, 0.05, 1e-2, 0.0)), _charge_injection),
+    "sf_gain": ((Param("loss", -0.3, 0.5, 1e-2, 0.0), Param("k_per_V", -1.0, 1.0, 1e-2, 0.0),
+                 Param("loss_secondary", -0.3, 0.5, 1e-2, 0.0)), _sf_gain),
     "afe_gain": ((Param("eps_extra", -0.05, 1.0, 1e-2, 0.0),), _afe_gain),
     "readout_light": ((Param("afe_V_per_A_m2_s", -1e4, 1e4, 10.0, 0.0),
                        Param("out_V_per_A_m2", -1.0, 1.0, 1e-5, 0.0)), _readout_light),

@@ -36,8 +36,9 @@ RANGES = {
     "fd_leakage": lambda g: [_u(g, 5e-17, 5e-16), _u(g, 6.0, 8.0)],          # ~10 - 100 mV/s on C_FD at 25 C
     "dark_current": lambda g: [_u(g, 2e-16, 2e-15), _u(g, 5.0, 9.0)],        # 1.3 - 13 ke-/s (primary)
     "charge_injection": lambda g: [g.choice([-1, 1]) * _u(g, 0.002, 0.02), g.choice([-1, 1]) * _u(g, 0.002, 0.02),
-                                   g.choice([-1, 1]) * _u(g, 0.001, 0.01), g.choice([-1, 1]) * _u(g, 0.001, 0.01)],
-    "sf_gain": lambda g: [_u(g, 0.03, 0.10), _u(g, 0.0, 0.05)],              # A_SF loss, ~1 % INL
+                                   g.choice([-1, 1]) * _u(g, 0.001, 0.01), g.choice([-1, 1]) * _u(g, 0.001, 0.01),
+                                   _u(g, 0.0, 0.02), _u(g, 0.0, 0.02)],            # + FD loading by the coupling C
+    "sf_gain": lambda g: [_u(g, 0.03, 0.10), _u(g, 0.0, 0.05), _u(g, 0.03, 0.10)],   # A_SF loss per array, ~1 % INL
     "afe_gain": lambda g: [_u(g, 0.01, 0.05)],
     "readout_light": None,                                                   # scaled to the campaign (below)
     "crosstalk": lambda g: [_u(g, 0.003, 0.03)],
