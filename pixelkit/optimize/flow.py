@@ -40,7 +40,8 @@ def verify(design, sized: dict, experiment: dict) -> dict:
     fs = (double_sampled(r, "col_s0", tm["secondary"]) - experiment["secondary"]["dark_signal_V"]) \
         / experiment["secondary"]["swing_V"]
     return {"primary_frac": fp, "secondary_frac": fs, "i_primary_A": i_p, "i_secondary_A": i_s,
-            "t_int_primary_s": sized["t_int_primary_s"], "t_int_secondary_s": sized["t_int_secondary_s"]}
+            "t_int_primary_s": sized["t_int_primary_s"], "t_int_secondary_s": sized["t_int_secondary_s"],
+            "retried": [dict(r.meta["retried"], deck=r.meta["title"])] if r.meta.get("retried") else []}
 
 
 def sized_name(name: str) -> str:
@@ -120,9 +121,11 @@ def size_design(design, out: Path | None = None, with_sensitivity: bool = False,
     result = {k: chosen[k] for k in ("c_m", "mask_open_m2", "t_int_primary_s", "t_int_secondary_s",
                                      "trace_px_at_speed_min", "motion_px_primary", "dark_frac_secondary",
                                      "headlight_frac")}
+    checked = verify(design, chosen, exp)
     result.update(level=chosen["level"], solve_time_s=analytic["solve_time_s"],
-                  verify=verify(design, chosen, exp), levels={"analytic": analytic, "spice": spice},
-                  why_levels_differ=WHY, sized_design=str(out))
+                  verify=checked, levels={"analytic": analytic, "spice": spice},
+                  why_levels_differ=WHY, sized_design=str(out),
+                  retried=exp.get("retried", []) + checked.pop("retried"))
     if with_sensitivity:
         result["sensitivity"] = sensitivity(design, spice, backend)
     return result

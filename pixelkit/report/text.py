@@ -57,9 +57,12 @@ def simulate_text(r: dict) -> str:
              f"  fig. A.1 (currents in ratio C_C): worst difference {r['fig_a1']['max_diff_frac'] * 100:.2f} % of swing",
              f"  analytic model vs SPICE over 10-90 % of swing: worst {m['max_err_frac'] * 100:.2f} %",
              f"  {r['n_runs']} SPICE runs ({r['n_cached']} from cache) in {r['wall_s']:.1f} s"]
-    for x in r.get("retried", []):
-        lines.append(f"  retried with looser tolerances: {x['deck']} ({x['reason'][:120]})")
-    return "\n".join(lines)
+    return "\n".join(lines + _retried_lines(r))
+
+
+def _retried_lines(r: dict) -> list[str]:
+    """Runs the engine re-ran with looser tolerances (their figures are less precise)."""
+    return [f"  retried with looser tolerances: {x['deck']} ({x['reason'][:120]})" for x in r.get("retried", [])]
 
 
 def size_text(r: dict) -> str:
@@ -73,7 +76,7 @@ def size_text(r: dict) -> str:
     for row in r.get("sensitivity", []):
         lines.append(f"  {row['variant']:<22} C_M {row['c_m']:6.1f} ({row['c_m_change_frac'] * 100:+5.1f} %)  "
                      f"t_p {row['t_int_primary_s'] * 1e6:7.1f} us ({row['t_primary_change_frac'] * 100:+5.1f} %)")
-    return "\n".join(lines)
+    return "\n".join(lines + _retried_lines(r))
 
 
 def report_text(r: dict) -> str:
