@@ -1,80 +1,171 @@
-"""Schematics drawn from the generated netlists (schemdraw), and the netlists themselves.
+"""Schematics of the generated circuits, drawn from the generated netlists (schemdraw).
 
-Each subcircuit of a generator is drawn from its ``Subckt`` data: one symbol per
-element (MOSFET, diode, capacitor, current source, subcircuit instance as a box),
-every terminal labelled with its net, so two terminals with the same label are
-connected (net-label style). Nothing is hand-drawn: a changed generator changes the
-picture. The golden-form netlist text of every generator is written under
-``netlists/`` (the revision diff compares it line by line).
+Nothing here is hand-drawn: each subcircuit the generators of ``circuits/registry.py``
+emit is walked element by element (the ``Netlist`` data objects, the same ones the
+decks are written from) and every element is placed on a grid in netlist order with its
+symbol (SPICE letter; ``X`` of a MOS model is drawn as a FET), its name, its model or
+value and every terminal's net name. Connections are by net label (the same name is
+the same node), so a generator change - an element added, removed or reconnected -
+changes the picture and the element table. The golden-form netlist text of every
+generator is written under ``netlists/`` (the revision diff compares it line by line).
 """
 from __future__ import annotations
 
-import matplotlib
+from pathlib import Path
 
-matplotlib.use("Agg")
-import schemdraw  # noqa: E402
-import schemdraw.elements as elm  # noqa: E402
-
-from ..figures import save  # noqa: E402
-from . import Figure, Section, Table  # noqa: E402
+from . import Checked, Figure, Section, Table
 
 TITLE = "Schematics of the generated circuits"
-DRAWN = ("pixel5t_primary", "dual_pixel", "sc_afe")
-PER_ROW = 4
+
+#: Generators whose subcircuits are drawn (each subcircuit once, in this order).
+DRAWN = ("pixel5t_primary", "dual_pixel", "sc_afe", "opamp_ota")
+_COLS, _DX, _DY = 4, 6.5, 5.0
+_NET = "#2856a3"
 
 
-def _symbol(e):
-    k = e.name[0].upper()
-    nodes = e.nodes
-    if k in ("M",) or (k == "X" and isinstance(e.value, str) and e.value.lower().startswith(("nfet", "pfet", "nmos", "pmos"))):
-        pmos = isinstance(e.value, str) and "p" in e.value.lower()[:2]
-        sym = (elm.PFet if pmos else elm.NFet)().label(e.name, "right", fontsize=8)
-        return sym, [("drain", nodes[0]), ("gate", nodes[1]), ("source", nodes[2])]
-    if k == "D":
-        return elm.Diode().up().reverse().label(e.name, fontsize=8), [("start", nodes[1]), ("end", nodes[0])]
-    if k == "C":
-        return elm.Capacitor().up().label(e.name, fontsize=8), [("start", nodes[1]), ("end", nodes[0])]
-    if k == "I":
-        return elm.SourceI().up().label(e.name, fontsize=8), [("start", nodes[1]), ("end", nodes[0])]
-    if k == "V":
-        return elm.SourceV().up().label(e.name, fontsize=8), [("start", nodes[1]), ("end", nodes[0])]
-    box = elm.Ic(pins=[elm.IcPin(name=f"{n}", side="left" if i % 2 == 0 else "right") for i, n in enumerate(nodes)],
-                 size=(2.2, 0.5 * (len(nodes) // 2 + 1))).label(f"{e.name}: {e.value}", "top", fontsize=8)
-    return box, []   # the pins carry the net names
+def _value_text(v) -> str:
+    from ...spice.netlist import Param
+    if v is None:
+        return ""
+    if isinstance(v, Param):
+        return "{" + v.name + "}"
+    if isinstance(v, float):
+        return f"{v:.3g}"
+    if isinstance(v, str):
+        return v
+    return type(v).__name__.lower()   # Pulse / Pwl
 
 
-def draw(subckt, path):
-    with schemdraw.Drawing(show=False) as dw:
-        dw.config(fontsize=8)
-        for i, e in enumerate(subckt.elements):
-            x, y = (i % PER_ROW) * 5.0, -(i // PER_ROW) * 5.0
-            sym, pins = _symbol(e)
-            dw.here = (x, y)
-            placed = dw.add(sym)
-            for anchor, net in pins:
-                pt = getattr(placed, anchor)
-                dw.add(elm.Label().at(pt).label(net, fontsize=7, color="#2856a3"))
-        dw.add(elm.Label().at((0, 2.0)).label(f"{subckt.name}  ports: {' '.join(subckt.ports)}", fontsize=9, loc="right"))
-        fig = dw.draw(show=False).fig
-    return save(fig, path)
+def _is_mos(e) -> bool:
+    return e.name[0] in "Mm" or (e.name[0] in "Xx" and isinstance(e.value, str) and len(e.nodes) == 4
+                                 and e.value.lower()[:4] in ("nfet", "pfet", "nmos", "pmos"))
+
+
+def _kind(e) -> str:
+    if _is_mos(e):
+        return "PMOS" if e.value.lower().startswith("p") else "NMOS"
+    return {"D": "diode", "C": "capacitor", "R": "resistor", "L": "inductor", "V": "voltage source",
+            "I": "current source", "F": "CCCS", "H": "CCVS", "E": "VCVS", "G": "VCCS", "B": "behavioural source",
+            "X": "subcircuit"}.get(e.name[0].upper(), "element")
+
+
+def _size(e) -> str:
+    p = dict(e.params)
+    if isinstance(p.get("w"), float) and isinstance(p.get("l"), float):
+        return f" {p['w'] * 1e6:.3g}/{p['l'] * 1e6:.3g}u"
+    return ""
+
+
+def _net(d, point, net, loc, size=7):
+    import schemdraw.elements as elm
+    d.add(elm.Dot(open=True, radius=0.07).at(point).label(net, loc=loc, fontsize=size, color=_NET))
+
+
+def _draw_element(d, e, xy, ports_of) -> None:
+    """Place element ``e`` around ``xy``; label it and the net of every terminal."""
+    import schemdraw.elements as elm
+    x, y = xy
+    name = f"{e.name}\n{_value_text(e.value)}{_size(e)}"
+    if _is_mos(e):
+        cls = elm.PFet if e.value.lower().startswith("p") else elm.NFet
+        f = d.add(cls().at((x, y)).anchor("center").right())
+        d.add(elm.Label().at((x - 0.4, y)).label(name, fontsize=7, halign="right"))
+        for anchor, net in zip(("drain", "gate", "source"), e.nodes[:3]):
+            p = getattr(f, anchor)   # a PFET has its source on top
+            _net(d, p, net, "right" if anchor == "gate" else ("top" if p[1] > y else "bottom"))
+        d.add(elm.Label().at((x + 1.0, y - 0.9)).label(f"b={e.nodes[3]}", fontsize=6, color=_NET, halign="left"))
+        return
+    two = {"D": elm.Diode, "C": elm.Capacitor, "R": elm.Resistor, "L": elm.Inductor, "V": elm.SourceV,
+           "I": elm.SourceI, "F": elm.SourceControlledI, "G": elm.SourceControlledI, "H": elm.SourceControlledV,
+           "E": elm.SourceControlledV, "B": elm.SourceControlledV}
+    letter = e.name[0].upper()
+    if letter in two and len(e.nodes) >= 2:
+        extra = f"\nctl {' '.join(e.nodes[2:])}" if len(e.nodes) > 2 else ""
+        c = d.add(two[letter]().at((x, y + 1.25)).down(2.5).label(name + extra, loc="bottom", fontsize=7))
+        _net(d, c.start, e.nodes[0], "top")
+        _net(d, c.end, e.nodes[1], "bottom")
+        return
+    ports = ports_of.get(e.value) if isinstance(e.value, str) else None
+    n = len(e.nodes)
+    left = (n + 1) // 2
+    pins = [elm.IcPin(name=(ports[i] if ports and i < len(ports) else str(i + 1)), lblsize=6,
+                      side="left" if i < left else "right",
+                      slot=f"{left - i}/{left}" if i < left else f"{n - i}/{n - left}", anchorname=f"t{i}")
+            for i in range(n)]
+    h = 0.45 * left + 0.4
+    ic = d.add(elm.Ic(pins=pins, size=(2.4, h)).at((x - 1.2, y - h / 2)))
+    d.add(elm.Label().at((x, y + h / 2 + 0.6)).label(name, fontsize=7))
+    for i, net in enumerate(e.nodes):
+        _net(d, getattr(ic, f"t{i}"), net, "left" if i < left else "right", size=6)
+
+
+def draw_subckt(sub, ports_of: dict, path: Path) -> int:
+    """Draw ``sub`` into the PNG ``path``; returns how many elements were drawn."""
+    import schemdraw
+    import schemdraw.elements as elm
+    schemdraw.use("matplotlib")
+    from ..figures import save
+    d = schemdraw.Drawing(show=False, fontsize=8)
+    d.add(elm.Label().at((0, _DY * 0.6)).label(f".subckt {sub.name}   ports: {' '.join(sub.ports)}",
+                                                fontsize=9, halign="left"))
+    for i, e in enumerate(sub.elements):
+        _draw_element(d, e, (1.5 + (i % _COLS) * _DX, -(i // _COLS) * _DY), ports_of)
+    save(d.draw(show=False).fig, path)
+    return len(sub.elements)
+
+
+def subcircuits(design) -> list:
+    """(generator, Subckt) for every subcircuit of the drawn generators, each once."""
+    from ...circuits.registry import GENERATORS
+    seen, out = set(), []
+    for gen in DRAWN:
+        for sub in GENERATORS[gen](design).subckts:
+            if sub.name not in seen:
+                seen.add(sub.name)
+                out.append((gen, sub))
+    return out
+
+
+def _netlist_files(ctx) -> tuple[list, list]:
+    from ...circuits.registry import GENERATORS, golden_text
+    files, rows = [], []
+    for name in GENERATORS:
+        text = golden_text(name, ctx.design)
+        ctx.figure(f"netlists/{name}.cir").write_text(text)
+        files.append(f"netlists/{name}.cir")
+        rows.append([name, len([ln for ln in text.splitlines() if ln and not ln.startswith(("*", "."))])])
+    return files, rows
 
 
 def build(ctx) -> Section:
-    from ...circuits.registry import GENERATORS, golden_text
-    d = ctx.design
-    files, rows, figs = [], [], []
-    for name in GENERATORS:
-        text = golden_text(name, d)
-        p = ctx.figure(f"netlists/{name}.cir")
-        p.write_text(text)
-        files.append(f"netlists/{name}.cir")
-        rows.append([name, len([ln for ln in text.splitlines() if ln and not ln.startswith(("*", "."))])])
-    for name in DRAWN:
-        net = GENERATORS[name](d)
-        sub = net.subckts[-1]
-        path = draw(sub, ctx.figure(f"schematic_{name}.png"))
-        figs.append(Figure(path.name, f"{sub.name} (generator {name}), drawn from the netlist; same net label = connected"))
-    return Section(TITLE, text=["Drawn from the generated netlist data (net-label style); the netlists themselves "
-                                "are beside the report under netlists/ (model folder written as @MODELS)."],
-                   figures=figs, files=files,
-                   tables=[Table("netlists", "Generated netlists", ["generator", "device lines"], rows)])
+    files, netlist_rows = _netlist_files(ctx)
+    subs = subcircuits(ctx.design)
+    ports_of = {sub.name: sub.ports for _, sub in subs}
+    rows, figures, checked, counts = [], [], [], []
+    for i, (gen, sub) in enumerate(subs):
+        ctx.progress("schematics", i, len(subs))
+        fig = ctx.figure(f"schematic_{sub.name}.png")
+        drawn = draw_subckt(sub, ports_of, fig)
+        counts.append([sub.name, gen, len(sub.elements), drawn])
+        figures.append(Figure(fig.name, f"{sub.name} (generator {gen}), drawn from the netlist: "
+                                        f"{len(sub.elements)} elements; the same net label (blue) is the same node"))
+        checked.append(Checked(f"schematics.{sub.name}.elements", float(len(sub.elements)), "count",
+                               note="elements in the generated subcircuit"))
+        rows += [[sub.name, e.name, _kind(e), _value_text(e.value) + _size(e), " ".join(e.nodes)]
+                 for e in sub.elements]
+    return Section(
+        TITLE,
+        text=["Each picture is drawn by walking the subcircuit's elements in the generated netlist (the "
+              "same objects the SPICE decks are written from): every element appears with its name, its "
+              "model or value (W/L in um for MOSFETs) and the net of each terminal (blue; the same name is "
+              "the same node, b= is the MOSFET body). Placement is a grid in netlist order, not a "
+              "hand-drawn layout, so a generator change shows here and in the element table. The netlists "
+              "themselves are beside the report under netlists/ (the revision diff compares them line by line)."],
+        tables=[Table("schematic_counts", "Elements per generated subcircuit (in the netlist and drawn)",
+                      ["subcircuit", "generator", "elements in netlist", "elements drawn"], counts),
+                Table("schematic_elements", "Every element and its nets (terminal order as in the netlist)",
+                      ["subcircuit", "element", "kind", "model / value", "nets"], rows),
+                Table("netlists", "Generated netlists (beside the report under netlists/)",
+                      ["generator", "device lines"], netlist_rows)],
+        figures=figures, files=files, checked=checked,
+        data={"counts": {r[0]: {"generator": r[1], "elements": r[2], "drawn": r[3]} for r in counts}})

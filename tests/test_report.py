@@ -1,0 +1,152 @@
+"""The design report (issue 13, must show): it renders in a real browser, and the revision diff.
+
+The browser check is independent of the code under test: headless Chromium (Debian's
+``chromium``) loads the written ``index.html`` and the page itself reports, from the DOM,
+which images failed to decode (``naturalWidth == 0``), how many rows each table has and
+which script errors happened. The diff is checked against a design change made here
+(the pixel SF width, a field the report never sees except through the design file).
+"""
+import html.parser
+import json
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import pytest
+
+from conftest import REF, run_cli
+
+CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
+
+#: Injected into a copy of the page: collects script errors and, after load, writes what the
+#: browser saw into a <pre id="pk-probe"> that --dump-dom prints.
+PROBE = """<script>
+window.__pkErrors = [];
+window.addEventListener('error', function (e) {
+  window.__pkErrors.push('error: ' + (e.message || (e.target && (e.target.src || e.target.href)) || 'resource'));
+}, true);
+var _ce = console.error;
+console.error = function () { window.__pkErrors.push('console.error: ' + Array.from(arguments).join(' ')); };
+window.addEventListener('load', function () {
+  var imgs = Array.from(document.images);
+  var out = {
+    images: imgs.length,
+    broken: imgs.filter(function (i) { return !i.complete || i.naturalWidth === 0; })
+                .map(function (i) { return i.getAttribute('src'); }),
+    tables: Array.from(document.querySelectorAll('table')).map(function (t) {
+      return {id: t.id, rows: t.querySelectorAll('tbody tr, tr').length,
+              body_rows: Array.from(t.querySelectorAll('tr')).filter(function (r) {
+                return r.querySelector('td'); }).length};
+    }),
+    errors: window.__pkErrors
+  };
+  var pre = document.createElement('pre');
+  pre.id = 'pk-probe';
+  pre.textContent = JSON.stringify(out);
+  document.body.appendChild(pre);
+});
+</script>"""
+
+
+def chromium(*args, timeout=120):
+    profile = Path(__import__("tempfile").mkdtemp(prefix="pk-chromium-"))
+    try:
+        return subprocess.run([CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
+                               "--no-first-run", "--disable-background-networking", "--disable-component-update",
+                               "--disable-sync", f"--user-data-dir={profile}", *args],
+                              capture_output=True, text=True, timeout=timeout)
+    finally:
+        shutil.rmtree(profile, ignore_errors=True)
+
+
+@pytest.fixture(scope="module")
+def quick_report(tmp_path_factory):
+    """The quick report of the reference design, built once for this module."""
+    out = tmp_path_factory.mktemp("report") / "revA"
+    code, stdout, err = run_cli("report", REF, "--quick", "--out", out)
+    assert code == 0, err + stdout
+    return out, stdout
+
+
+class _Srcs(html.parser.HTMLParser):
+    def __init__(self):
+        super().__init__()
+        self.srcs, self.links = [], []
+
+    def handle_starttag(self, tag, attrs):
+        a = dict(attrs)
+        if tag == "img":
+            self.srcs.append(a.get("src"))
+        if tag in ("link", "script") and (a.get("href") or a.get("src")):
+            self.links.append(a.get("href") or a.get("src"))
+
+
+def test_report_prints_where_it_is_and_a_summary(quick_report):
+    out, stdout = quick_report
+    assert str(out / "index.html") in stdout
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["checked"], "summary.json lists no checked figure"
+    # every checked figure in summary.json is a finite number with a unit
+    for name, c in summary["checked"].items():
+        assert isinstance(c["value"], float) and c["value"] == c["value"], name
+
+
+def test_report_renders_in_chromium_images_tables_no_errors(quick_report):
+    out, _ = quick_report
+    page = (out / "index.html").read_text()
+    parser = _Srcs()
+    parser.feed(page)
+    assert parser.srcs, "the report has no picture"
+    assert not parser.links, f"the report loads external resources: {parser.links}"
+    assert not re.search(r"(src|href)=\"https?://", page), "the report refers to the network"
+    missing = [s for s in parser.srcs if not (out / s).is_file()]
+    assert not missing, f"pictures missing beside the HTML: {missing}"
+    probe_page = out / "_probe.html"
+    probe_page.write_text(page.replace("<head>", "<head>" + PROBE, 1))
+    assert PROBE in probe_page.read_text()
+    p = chromium("--enable-logging=stderr", "--v=0", "--virtual-time-budget=10000", "--dump-dom",
+                 probe_page.as_uri())
+    probe_page.unlink()
+    m = re.search(r'<pre id="pk-probe">(.*?)</pre>', p.stdout, re.S)
+    assert m, f"Chromium did not run the page's load handler: {p.stderr[-2000:]}"
+    seen = json.loads(html.unescape(m.group(1)))
+    assert seen["images"] == len(parser.srcs)
+    assert seen["broken"] == [], f"images that did not load: {seen['broken']}"
+    assert seen["tables"], "no table rendered"
+    empty = [t["id"] for t in seen["tables"] if t["body_rows"] == 0]
+    assert not empty, f"tables without rows: {empty}"
+    assert seen["errors"] == [], seen["errors"]
+    console = [ln for ln in p.stderr.splitlines() if ("CONSOLE" in ln and "ERROR" in ln.upper()) or "Uncaught" in ln]
+    assert not console, console
+
+
+def test_revision_diff_names_the_changed_device_and_exits_1(quick_report, tmp_path):
+    """A narrower SF (0.6 um; 1 um in revA, a wider one breaks the layout rule transistors_fit):
+    the diff names pixel.devices.sf_w, the figures it moved and the netlists it changed."""
+    base, _ = quick_report
+    changed = tmp_path / "revB.toml"
+    text = re.sub(r'^sf_w = "1 um"', 'sf_w = "0.6 um"', REF.read_text(), flags=re.M)
+    assert text != REF.read_text()
+    changed.write_text(text)
+    code, stdout, err = run_cli("report", changed, "--quick", "--out", tmp_path / "revB", "--baseline", base)
+    assert code == 1, err + stdout
+    diff = json.loads((tmp_path / "revB" / "diff.json").read_text())
+    assert [c["field"] for c in diff["design_changes"]] == ["pixel.devices.sf_w"]
+    assert diff["moved"] and not diff["passed"]
+    # the SF's gain sets the output-referred conversion gain: it must be among what moved
+    assert any("cg_out" in name for name in diff["moved"]), diff["moved"]
+    assert any(n["status"] == "changed" for n in diff["netlists"]), "no generated netlist changed"
+    assert "pixel.devices.sf_w" in stdout and "moved" in stdout.lower()
+    assert (tmp_path / "revB" / "index.html").is_file()
+
+
+def test_unchanged_revision_exits_0_and_json_gives_the_diff_without_html(quick_report, tmp_path):
+    base, _ = quick_report
+    out = tmp_path / "again"
+    code, stdout, err = run_cli("report", REF, "--quick", "--out", out, "--baseline", base, "--json")
+    assert code == 0, err + stdout
+    r = json.loads(stdout)
+    assert r["html"] is None and not (out / "index.html").exists()
+    assert r["diff"]["passed"] and r["diff"]["moved"] == [] and r["diff"]["design_changes"] == []
+    assert all(c["status"] == "same" for c in r["diff"]["checked"])
