@@ -1,13 +1,18 @@
-"""The 2 x 2 integrated-pixel array read row by row (thesis fig. 3.13), sample phases marked.
+"""2 x 2 array readout (thesis fig. 3.13): the column waveforms of one frame of both arrays with
+the sample phases (S1 signal, RST, S2 reset level) marked, and the subpixel signals.
 
-Each subpixel gets its own photocurrent (as the thesis did) so every one is told
-apart; the columns are plotted after the SF, before the AFE. Shaded: the S1
-(signal) and S2 (reset level) sampling windows of each row, per array.
+Independent path: each subpixel's double-sampled signal against the thesis experiment's
+transfer curve (a different deck: one dual pixel and its column, ``experiments.thesis``) at the
+same photocurrent and exposure window.
 """
 from __future__ import annotations
 
-from ...circuits.array import array_bench, frame_timings
-from ...measure.pixel import double_sampled
+import numpy as np
+
+from ...chip.frame import STEPS_PER_ROW, simulate_frame
+from ...chip.scene import default_map, photocurrents
+from ...circuits.array import KINDS, PREFIX, array_bench, frame_timings
+from ...measure.pixel import levels
 from ...spice import simulate_many
 from ..figures import axes, save
 from . import Checked, Figure, Section, Table
@@ -16,51 +21,95 @@ TITLE = "2 x 2 array readout (fig. 3.13)"
 ROWS = COLS = 2
 
 
-def currents(n: int):
-    """Distinct photocurrents: primary 0.2, 0.4, ... nA; secondary 10, 20, ... pA (as ``pixelkit array``)."""
-    ip = [[0.2e-9 * (1 + r * COLS + c) for c in range(COLS)] for r in range(ROWS)]
-    is_ = [[10e-12 * (1 + r * n * COLS + j) for j in range(n * COLS)] for r in range(ROWS)]
-    return ip, is_
+def _plot(ctx, r, tm, n):
+    fig, axs = axes(1, 10, 3.0)
+    fig.clf()
+    axs = fig.subplots(2, 1)
+    fig.set_size_inches(10, 5.6)
+    for ax, kind in zip(axs, KINDS):
+        t = tm[kind]
+        t0, t1 = t.row(0) - 0.1 * t.t_row, t.row(ROWS) + 0.05 * t.t_row
+        m = (r.time >= t0) & (r.time <= t1)
+        for j in range(COLS if kind == "primary" else n * COLS):
+            node = f"col_{PREFIX[kind]}_{j}"
+            ax.plot(r.time[m] * 1e6, r[node][m], lw=0.9, label=node)
+            ax.plot(r.time[m] * 1e6, r[f"out_{node}"][m], lw=0.7, ls="--", label=f"AFE out {j}")
+        for row in range(ROWS):
+            for (a, b), c, lbl in ((t.s1_window(row), "C0", "S1"), (t.rst_window(row), "C3", "RST"),
+                                   (t.s2_window(row), "C2", "S2")):
+                ax.axvspan(a * 1e6, b * 1e6, color=c, alpha=0.12, lw=0, label=lbl if row == 0 else None)
+        ax.set_ylabel("V")
+        ax.set_title(f"{kind} array: columns (solid) and AFE outputs (dashed), rows read at "
+                     f"{1 / t.t_row / 1e3:g} kHz", fontsize=9)
+        ax.legend(fontsize=6, ncol=6, loc="lower left")
+    axs[-1].set_xlabel("time (us)")
+    path = save(fig, ctx.figure("array_readout.png"))
+    return Figure(path.name, "2 x 2 frame, read-out phase: column voltages and AFE outputs with the sample "
+                             "phases shaded (S1 signal sample, RST pulse, S2 reset sample), cf. thesis fig. 3.13")
 
 
 def build(ctx) -> Section:
     d = ctx.design
     n = d.secondary_per_pixel
-    ip, is_ = currents(n)
-    ctx.progress("array", 0, 1)
-    res = simulate_many([array_bench(d, ip, is_, title="report_array")], backend=ctx.backend, jobs=1)[0]
-    tm = frame_timings(d, d.experiment.t_window, ROWS)
-    groups = {"primary": [f"col_p_{c}" for c in range(COLS)], "secondary": [f"col_s_{j}" for j in range(n * COLS)]}
-    fig, _ = axes(1, 9, 1)
-    fig.clf()
-    axs = fig.subplots(2, 1, sharex=True)
-    fig.set_size_inches(9, 5.6)
-    t_us = res.time * 1e6
-    rows = []
-    for ax, (w, cols) in zip(axs, groups.items()):
-        t = tm[w]
-        for r in range(ROWS):
-            for k, (lo, hi) in enumerate((t.s1_window(r), t.s2_window(r))):
-                ax.axvspan(lo * 1e6, hi * 1e6, color="C2" if k == 0 else "C4", alpha=0.15, lw=0,
-                           label=("S1 (signal)" if k == 0 else "S2 (reset level)") if r == 0 else None)
-        for node in cols:
-            ax.plot(t_us, res[node], lw=0.8, label=node)
-        ax.set_ylabel(f"{w} column (V)")
-        ax.legend(fontsize=6, ncol=5, loc="lower left")
-        for r in range(ROWS):
-            for c, node in enumerate(cols):
-                cur = (ip if w == "primary" else is_)[r][c]
-                rows.append([w, r, c, cur * 1e12, double_sampled(res, node, t, r) * 1e3])
-    axs[0].set_xlim(min(x.t_read for x in tm.values()) * 1e6 - 1, max(x.t_stop for x in tm.values()) * 1e6)
-    axs[-1].set_xlabel("time (us)")
-    axs[0].set_title(f"{d.name}: {ROWS} x {COLS} readout after the SF, before the AFE; shaded: sample phases")
-    path = save(fig, ctx.figure("array_readout.png"))
-    checked = [Checked(f"array.{w}_r{r}c{c}_V", s * 1e-3, "V", 0.0, 2e-3) for w, r, c, _, s in rows]
-    return Section(TITLE, text=[f"Exposure {d.experiment.t_window * 1e6:g} us (global shutter), then row by row: "
-                                f"primary at {d.primary.f_read * 1e-3:g} kHz, secondary at "
-                                f"{d.secondary.f_read * 1e-3:g} kHz. The double-sampled signal of each subpixel "
-                                "(reset level at S2 minus signal level at S1) is in the table."],
-                   figures=[Figure(path.name, "2 x 2 array readout waveforms with the S1 / S2 sample phases (fig. 3.13)")],
-                   tables=[Table("array_signals", "Double-sampled signal per subpixel",
-                                 ["array", "row", "column", "photocurrent (pA)", "signal (mV)"], rows)],
-                   checked=checked)
+    m, unit = default_map(ROWS, n * COLS, "gradient")
+    ph = photocurrents(d, ROWS, COLS, m, unit)
+    t_exp = d.experiment.t_window
+    tm = frame_timings(d, t_exp, ROWS)
+    step = min(t.t_row for t in tm.values()) / STEPS_PER_ROW
+    net = array_bench(d, ph.iph_p, ph.iph_s, None, t_exp, True, None, step, title=f"report_array_{ROWS}x{COLS}")
+    ctx.progress("array: 2 x 2 frame with the AFE (one deck)", 0, 1)
+    (r,) = simulate_many([net], backend=ctx.backend, jobs=ctx.jobs)
+    ctx.progress("array: 2 x 2 frame with the AFE (one deck)", 1, 1)
+    ctx.progress("array: the same frame split into one deck per array and row", 0, 1)
+    split = simulate_frame(d, ph.iph_p, ph.iph_s, with_afe=True, split="rows", t_exp=t_exp,
+                           backend=ctx.backend, jobs=ctx.jobs)
+    ctx.progress("array: the same frame split into one deck per array and row", 1, 1)
+    exp = ctx.experiment()
+    rows, checked, worst, worst_split = [], [], 0.0, 0.0
+    for kind in KINDS:
+        cur = ph.iph_p if kind == "primary" else ph.iph_s
+        e = exp[kind]
+        o = np.argsort(e["sweep_A"])
+        i_curve, s_curve = np.asarray(e["sweep_A"])[o], np.asarray(e["signal_V"])[o]
+        for row in range(ROWS):
+            for j in range(cur.shape[1]):
+                node = f"col_{PREFIX[kind]}_{j}"
+                sig, rst = levels(r, node, tm[kind], row)
+                afe = float(r.at(f"out_{node}", tm[kind].t_reset_level(row)))
+                i = float(cur[row][j])
+                s1a, s1b = tm[kind].s1_window(row)
+                creep = (float(r.at(node, (s1a + s1b) / 2)) - sig) * 1e3   # still moving in S1 (mV)
+                dsplit = (rst - sig - float(split.signal[kind][row, j])) * 1e3
+                worst_split = max(worst_split, abs(dsplit))
+                inside = i_curve[0] <= i <= i_curve[-1]
+                ref = float(np.interp(i, i_curve, s_curve)) if inside else None
+                diff = (rst - sig - ref) * 1e3 if inside else None
+                if diff is not None:
+                    worst = max(worst, abs(diff))
+                rows.append([kind, row, j, i * 1e12, rst, sig, (rst - sig) * 1e3, afe, creep, dsplit,
+                             "-" if ref is None else ref * 1e3, "-" if diff is None else diff])
+                # 2 mV: the sampling-instant and settling resolution of one row (the experiment's
+                # transfer interpolation adds less); a moved device size moves these by tens of mV
+                checked.append(Checked(f"array.{kind}.r{row}c{j}.signal_V", rst - sig, "V", tol_abs=2e-3))
+    checked.append(Checked("array.worst_split_vs_whole_mV", worst_split, "mV", tol_abs=0.5,
+                           note="one deck vs one deck per array and row"))
+    fig = _plot(ctx, r, tm, n)
+    text = [f"One {ROWS} x {COLS} frame of both arrays ({n} secondaries per dual pixel, so {n * COLS} secondary "
+            f"columns) under a left-to-right gradient (5 - 80 % of the primary's full scale), simulated as one "
+            f"deck with each column's load, S1X/S2X samplers and SC AFE, exposure {t_exp * 1e6:g} us, EC holding "
+            "the PDs in reset while the rows wait. Each row: RS on, S1 samples the signal, RST resets FD, S2 "
+            "samples the reset level (non-correlated double sampling, fig. 3.3).",
+            f"Checks: the same frame split into one deck per array and row (the frame engine's fast path) agrees "
+            f"with the one deck within {worst_split:.3f} mV. Against the thesis experiment's transfer curve "
+            f"(one dual pixel and its column, another bench and timing) at the same photocurrent the frame's "
+            f"signals are smaller, by up to {worst:.0f} mV (the bright primary columns). The columns are still "
+            "moving during S1 (the creep column: the change from mid to end of S1), most for the bright "
+            "primaries, so part of the gap is read-out settling at this row time; the rest (row-to-row "
+            "differences, the secondaries' 9 - 22 mV) is not diagnosed here. It is shown, not checked."]
+    return Section(
+        TITLE, text=text, figures=[fig], checked=checked,
+        tables=[Table("array_signals", "Subpixel signals of the 2 x 2 frame",
+                      ["array", "row", "column", "photocurrent (pA)", "reset level (V)", "signal level (V)",
+                       "signal (mV)", "AFE out (V)", "S1 creep, mid to end of S1 (mV)", "whole - split decks (mV)",
+                       "experiment transfer (mV)", "difference to experiment (mV)"], rows)],
+        data={"photocurrents": ph.as_dict(), "t_exp_s": t_exp})
