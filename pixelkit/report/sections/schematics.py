@@ -49,6 +49,16 @@ def _kind(e) -> str:
             "X": "subcircuit"}.get(e.name[0].upper(), "element")
 
 
+def _nets(e) -> tuple:
+    """The nets of ``e``; a current-controlled source's last 'node' is its controlling V source."""
+    return e.nodes[:2] if e.name[0].upper() in "FH" else e.nodes
+
+
+def _value_full(e) -> str:
+    ctl = f"ctl I({e.nodes[2]}) x " if e.name[0].upper() in "FH" and len(e.nodes) > 2 else ""
+    return ctl + _value_text(e.value) + _size(e)
+
+
 def _size(e) -> str:
     p = dict(e.params)
     if isinstance(p.get("w"), float) and isinstance(p.get("l"), float):
@@ -80,8 +90,10 @@ def _draw_element(d, e, xy, ports_of) -> None:
            "E": elm.SourceControlledV, "B": elm.SourceControlledV}
     letter = e.name[0].upper()
     if letter in two and len(e.nodes) >= 2:
-        extra = f"\nctl {' '.join(e.nodes[2:])}" if len(e.nodes) > 2 else ""
-        c = d.add(two[letter]().at((x, y + 1.25)).down(2.5).label(name + extra, loc="bottom", fontsize=7))
+        extra = f"\nctl {' '.join(e.nodes[2:])}" if letter in "EG" else ""
+        label = f"{e.name}\n{_value_full(e)}{extra}"
+        sym = two[letter]().at((x, y + 1.25)).down(2.5).label(label, loc="bottom", fontsize=7)
+        c = d.add(sym.reverse() if letter in "VEH" else sym)   # '+' at the first node, as SPICE reads it
         _net(d, c.start, e.nodes[0], "top")
         _net(d, c.end, e.nodes[1], "bottom")
         return
@@ -151,7 +163,7 @@ def build(ctx) -> Section:
                                         f"{len(sub.elements)} elements; the same net label (blue) is the same node"))
         checked.append(Checked(f"schematics.{sub.name}.elements", float(len(sub.elements)), "count",
                                note="elements in the generated subcircuit"))
-        rows += [[sub.name, e.name, _kind(e), _value_text(e.value) + _size(e), " ".join(e.nodes)]
+        rows += [[sub.name, e.name, _kind(e), _value_full(e), " ".join(_nets(e))]
                  for e in sub.elements]
     return Section(
         TITLE,
