@@ -117,7 +117,8 @@ def test_report_renders_in_chromium_images_tables_no_errors(quick_report):
     empty = [t["id"] for t in seen["tables"] if t["body_rows"] == 0]
     assert not empty, f"tables without rows: {empty}"
     assert seen["errors"] == [], seen["errors"]
-    console = [ln for ln in p.stderr.splitlines() if ("CONSOLE" in ln and "ERROR" in ln.upper()) or "Uncaught" in ln]
+    # the report has no script of its own: any console line Chromium logs is a fault
+    console = [ln for ln in p.stderr.splitlines() if "CONSOLE" in ln or "Uncaught" in ln]
     assert not console, console
 
 
