@@ -42,7 +42,10 @@ def design_hash(design) -> str:
     """Content hash of a loaded design: every field, its technology and its model files."""
     from ..tech.modellib import files_fingerprint
     files = tuple(sorted(str(i.file) for i in design.tech.models.includes(design.corner or None)))
-    h = hashlib.sha256(repr(design).encode())
+    text = repr(design)
+    if getattr(design, "source", None):   # the same file however its path is spelled
+        text = text.replace(f"source={design.source!r})", f"source={str(Path(design.source).resolve())!r})")
+    h = hashlib.sha256(text.encode())
     h.update(files_fingerprint(files).encode() if files else b"")
     return h.hexdigest()[:16]
 
