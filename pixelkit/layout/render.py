@@ -60,7 +60,9 @@ def _rectangles(points):
 
 def view_3d(cell, tech, path: Path) -> Path:
     import pyvista as pv
+    import vtk
     pv.OFF_SCREEN = True
+    vtk.vtkLogger.SetStderrVerbosity(vtk.vtkLogger.VERBOSITY_OFF)  # "bad X server connection": we render off-screen
     plotter = pv.Plotter(off_screen=True, window_size=(900, 700))
     for name, pts_list in _by_layer(cell, tech).items():
         colour, z0, z1 = STACK[name]
