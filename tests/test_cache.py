@@ -104,3 +104,17 @@ def test_retried_run_is_cached_under_its_own_key():
     again = simulate(net, options=opts)
     assert again.meta["cached"] and again.meta["retried"] and _right(again, 1e3)
     assert not simulate(net).meta.get("retried")  # the strict deck of the same circuit is not served it
+
+
+@pytest.mark.parametrize("backend", ["batch", "shared"])
+def test_the_report_counter_sees_every_deck(backend):
+    """The report's SPICE counter (an engine observer) counts what was asked of it: three
+    different decks run, then the same three served from the cache, on either backend."""
+    from pixelkit.report.spicecount import SpiceCounter
+    nets = [_rc(r) for r in (1e3, 2e3, 3e3)]
+    with SpiceCounter(lambda text: None) as counter:
+        first = engine.simulate_many(nets, backend=backend, jobs=2)
+        again = engine.simulate_many(nets, backend=backend, jobs=2)
+    assert all(_right(res, r) for res, r in zip(first + again, (1e3, 2e3, 3e3) * 2))
+    assert (counter.runs, counter.cached, counter.done, counter.total) == (3, 3, 6, 6)
+    assert not engine._OBSERVERS  # the observer is gone once the block ends

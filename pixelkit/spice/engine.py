@@ -16,6 +16,7 @@ import atexit
 import multiprocessing as mp
 import os
 from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
+from contextlib import contextmanager
 from dataclasses import replace
 
 import numpy as np
@@ -103,6 +104,32 @@ def _message(lines) -> str:
     return "; ".join(dict.fromkeys(bad))[:800] or "no output"
 
 
+_OBSERVERS: list = []
+
+
+@contextmanager
+def observe(callback):
+    """Call ``callback(event, n)`` while the block runs: ``"cached"`` (n decks served from the
+    cache), ``"queued"`` (n decks handed to ngspice, retries included) and ``"finished"`` (one
+    deck done), from whichever thread runs the batch. The report's progress line uses it."""
+    _OBSERVERS.append(callback)
+    try:
+        yield
+    finally:
+        _OBSERVERS.remove(callback)
+
+
+def _notify(event: str, n: int = 1) -> None:
+    for callback in list(_OBSERVERS):
+        callback(event, n)
+
+
+def _finishing(runs):
+    for out in runs:
+        _notify("finished")
+        yield out
+
+
 def simulate_many(netlists, backend: str = "batch", jobs: int | None = None, options=None,
                   use_cache: bool = True) -> list[Result]:
     """Run every netlist (in parallel), each through the cache and the retry policy."""
@@ -119,6 +146,8 @@ def simulate_many(netlists, backend: str = "batch", jobs: int | None = None, opt
         if use_cache:
             results[i] = cache_mod.load(k)
     todo = [i for i, r in enumerate(results) if r is None]
+    if len(todo) < len(nets):
+        _notify("cached", len(nets) - len(todo))
     failures: dict[int, str] = {}
     logs: dict[int, list] = {}  # every attempt's ngspice output, kept with a failed deck
     for round_, loosen in enumerate((None, *RETRIES)):
@@ -126,6 +155,7 @@ def simulate_many(netlists, backend: str = "batch", jobs: int | None = None, opt
             break
         decks = [nets[i] if loosen is None else replace(nets[i], options=merged(nets[i].options, loosen))
                  for i in todo]
+        _notify("queued", len(decks))
         try:
             outs = _run(decks, backend, jobs)
         except BaseException:
@@ -176,16 +206,16 @@ def _run(decks, backend, jobs):
     bar = dict(total=len(texts), desc=f"ngspice ({decks[0].title}...)") if len(texts) > 1 else None
     if backend == "batch":
         if jobs == 1 or len(texts) == 1:
-            return [run_batch(*t) for t in (progress(texts, **bar) if bar else texts)]
+            return list(_finishing(run_batch(*t) for t in (progress(texts, **bar) if bar else texts)))
         ex = ThreadPoolExecutor(max_workers=jobs)
         try:  # no 'with': on an interrupt, queued runs are dropped, not waited for
-            runs = ex.map(lambda t: run_batch(*t), texts)
+            runs = _finishing(ex.map(lambda t: run_batch(*t), texts))
             return list(progress(runs, **bar) if bar else runs)
         finally:
             ex.shutdown(wait=False, cancel_futures=True)
     pool = _pool(jobs)  # submit, not map: map cancels pending futures on an interrupt, which races
     futures = [pool.submit(_shared_worker, t) for t in texts]  # the broken-pool handling (3.11)
-    runs = (f.result() for f in futures)
+    runs = _finishing(f.result() for f in futures)
     return list(progress(runs, **bar) if bar else runs)
 
 
