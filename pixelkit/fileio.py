@@ -53,6 +53,15 @@ def check_output(path: str | os.PathLike) -> Path:
         probe = probe.parent
     if probe != path and path_kind(probe) != "dir":
         raise PixelkitError(f"{path}: cannot write here: {probe} is a file, not a folder")
+    if probe != path:
+        try:
+            name_max = os.pathconf(probe, "PC_NAME_MAX")
+        except (OSError, ValueError):
+            name_max = 255
+        for part in path.relative_to(probe).parts:
+            if len(os.fsencode(part)) > name_max:
+                raise PixelkitError(f"{path}: cannot write here: the name {part[:40]!r}... is longer than the "
+                                    f"{name_max} bytes this file system allows")
     if not os.access(probe, os.W_OK | (os.X_OK if path_kind(probe) == "dir" else 0)):
         raise PixelkitError(f"{path}: cannot write here: {probe} is not writable")
     return path

@@ -94,3 +94,25 @@ def test_design_reference_lists_every_field_of_the_reference_design():
                 assert f"| `{k}` |" in doc, path + k
     walk(raw, "")
     assert "**required**" in doc and ">= 1" in doc
+
+
+def test_names_too_long_for_the_file_system_are_one_line_user_errors(tmp_path):
+    """A path component over the file system's NAME_MAX makes the OS raise ENAMETOOLONG,
+    which Path.is_file() passes on: every user path the kit tests, read or written, must
+    turn it into a PixelkitError naming the path, never an internal error."""
+    from pixelkit.camera.emva_export import check_target
+    from pixelkit.chip.scene import load_map
+    from pixelkit.design import load_design
+    from pixelkit.errors import PixelkitError
+    from pixelkit.fileio import check_output, path_kind
+    from pixelkit.gap.data import read_table
+    from pixelkit.gap.emva import analyse
+    long = tmp_path / ("9" * 300)
+    assert path_kind(long) is None
+    design = load_design(REF)
+    for call in (lambda: check_output(long / "out.json"), lambda: check_target(long),
+                 lambda: load_map(f"{long}.csv"), lambda: analyse(long),
+                 lambda: read_table(f"{long}.csv", design, measured=True)):
+        with pytest.raises(PixelkitError) as err:
+            call()
+        assert "999" in str(err.value) and "\n" not in str(err.value)

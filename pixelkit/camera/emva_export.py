@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import PixelkitError
+from ..fileio import check_output, path_kind
 from .png16 import png_bytes
 from .ptc import frame
 
@@ -33,8 +34,8 @@ def _spatial_step(cam, s) -> int:
 
 def check_target(folder) -> Path:
     """A dataset folder may be new or a previous dataset (replaced); anything else is refused."""
-    folder = Path(folder)
-    if folder.exists() and not (folder / "EMVA1288_Data.txt").is_file():
+    folder = check_output(folder)
+    if path_kind(folder) is not None and path_kind(folder / "EMVA1288_Data.txt") != "file":
         raise PixelkitError(f"{folder}: exists and is not an EMVA 1288 dataset; choose a new folder")
     return folder
 
@@ -70,7 +71,7 @@ def write_dataset(folder, cam, s, mm, seed: int, stack: int = 16) -> Path:
         (tmp / "EMVA1288_Data.txt").write_text("\n".join(lines) + "\n")
         os.chmod(tmp, 0o755)
         old = None
-        if folder.exists():
+        if path_kind(folder) is not None:
             old = folder.with_name(f".{folder.name}.old")
             shutil.rmtree(old, ignore_errors=True)
             folder.rename(old)

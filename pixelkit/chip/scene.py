@@ -32,6 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ConfigError
+from ..fileio import path_kind
 
 UNITS = ("lx", "W/m2", "A/m2", "rel", "fs")
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff")
@@ -55,7 +56,7 @@ def load_map(path) -> tuple[np.ndarray, str]:
     """A 2-D map from ``.csv`` (numbers; one header line allowed), ``.npy`` or an image;
     returns (map, default unit)."""
     p = Path(path)
-    if not p.is_file():
+    if path_kind(p) != "file":
         raise ConfigError(str(p), "scene", str(p), "an existing .csv, .npy or image file")
     suffix = p.suffix.lower()
     try:

@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import PixelkitError
+from ..fileio import path_kind
 
 REQUIRED = ("array", "row", "col", "i_ph_A", "t_int_s", "t_wait_s", "temp_C", "probe")
 OPTIONAL = ("v_std_V", "n_avg", "vdd_V", "f_read_Hz", "i_ph_prev_A")
@@ -66,7 +67,7 @@ class Table:
 
 def read_table(path: str | Path, design, measured: bool) -> Table:
     path = Path(path)
-    if not path.is_file():
+    if path_kind(path) != "file":
         raise DataError(str(path), ["file not found"])
     try:
         with open(path, newline="", encoding="utf-8-sig") as fh:

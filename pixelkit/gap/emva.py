@@ -50,6 +50,7 @@ from scipy.optimize import least_squares
 from scipy.stats import norm
 
 from ..errors import PixelkitError
+from ..fileio import path_kind
 
 UNITS = {"ns": 1e-9, "us": 1e-6, "µs": 1e-6, "ms": 1e-3, "s": 1.0}
 _UNIT_RE = re.compile(r"exposure[^\n]*?\bin\s+(ns|us|µs|ms|s)\b", re.I)
@@ -73,8 +74,8 @@ def _num(tok, line_no, path, what, integer=False):
 
 def read_descriptor(folder: str | Path) -> dict:
     folder = Path(folder)
-    path = folder / "EMVA1288_Data.txt" if folder.is_dir() else folder
-    if not path.is_file():
+    path = folder / "EMVA1288_Data.txt" if path_kind(folder) == "dir" else folder
+    if path_kind(path) != "file":
         raise EmvaError(str(path), "not found (an EMVA 1288 dataset is a folder with EMVA1288_Data.txt)")
     raw = path.read_bytes()
     if b"\0" in raw:
@@ -123,7 +124,7 @@ def read_descriptor(folder: str | Path) -> dict:
             p = (base / Path(*f[1].replace("\\", "/").split("/"))).resolve()
             if not p.is_relative_to(base):
                 raise EmvaError(f"{path}:{k}", f"image path '{f[1]}' leaves the dataset folder")
-            if not p.is_file():
+            if path_kind(p) != "file":
                 raise EmvaError(f"{path}:{k}", f"image '{f[1]}' not found")
             cur["imgs"].append(p)
         else:

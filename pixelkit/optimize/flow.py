@@ -8,7 +8,7 @@ from pathlib import Path
 from ..circuits.testbench import dual_pixel_bench, timings
 from ..experiments.thesis import run_experiment
 from ..errors import PixelkitError
-from ..fileio import check_output, write_atomic
+from ..fileio import check_output, path_kind, write_atomic
 from ..measure.pixel import double_sampled
 from ..schema import to_toml
 from ..spice import simulate
@@ -111,7 +111,7 @@ def sensitivity(design, nominal: dict, backend="batch") -> list[dict]:
 def size_design(design, out: Path | None = None, with_sensitivity: bool = False, backend="batch") -> dict:
     out = Path(out) if out else Path(design.source).with_name(f"{Path(design.source).stem}_sized.toml")
     check_output(out)  # before the simulations, not after them
-    if out.is_dir():
+    if path_kind(out) == "dir":
         raise PixelkitError(f"{out}: cannot write the sized design here: it is a folder (give a file name)")
     exp = run_experiment(design, backend=backend)
     analytic = solve(design, analytic_curves(design))

@@ -17,7 +17,7 @@ import traceback
 from pathlib import Path
 
 from ..errors import ConfigError, PixelkitError
-from ..fileio import json_default
+from ..fileio import json_default, path_kind
 from . import cache
 from .diff import diff_reports, load_report
 from .html import render
@@ -98,8 +98,8 @@ def _write_outputs(stage: Path, design, sections, meta: dict) -> dict:
 
 def _swap_into_place(stage: Path, out: Path) -> None:
     old = None
-    if out.exists():
-        if not (out / "summary.json").exists() and any(out.iterdir()):
+    if path_kind(out) is not None:
+        if path_kind(out / "summary.json") is None and any(out.iterdir()):
             raise ConfigError("", "--out", str(out), "a new folder or an earlier report folder (it has no summary.json)")
         old = out.with_name(f".{out.name}.old-{os.getpid()}")
         os.replace(out, old)
@@ -116,7 +116,7 @@ def build_report(design, out: Path, *, quick: bool = False, backend: str = "batc
     t0 = time.perf_counter()
     out = Path(out)
     base = load_report(Path(baseline)) if baseline else None
-    if measured is not None and not Path(measured).is_file():
+    if measured is not None and path_kind(measured) != "file":
         raise ConfigError("", "--measured", str(measured), "an existing CSV file of measured rows")
     out.parent.mkdir(parents=True, exist_ok=True)
     stage = Path(tempfile.mkdtemp(prefix=f".{out.name}.new-", dir=out.parent))
