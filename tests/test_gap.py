@@ -125,7 +125,7 @@ def test_afe_gain_and_charge_injection_are_separated(ref_design, nominal, cli, t
 
 
 def test_diagnose_json_and_html(tmp_path, ref_design, nominal, cli):
-    _, meas, _ = _dataset(ref_design, nominal, tmp_path, "readout_light", seed=11, params=[-200.0, 0.0])
+    _, meas, _ = _dataset(ref_design, nominal, tmp_path, "readout_light", seed=11, params=[-2e-10, 0.0])
     code, out, err = cli("gap", "diagnose", REF, "--measured", meas, "--json", "--out", tmp_path / "rep")
     assert code == 0, err
     r = json.loads(out)

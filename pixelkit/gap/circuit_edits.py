@@ -85,4 +85,11 @@ def fd_current(design, array: str, charge: float, which: str, tag: str) -> Eleme
     return Element(f"I{tag}", ("fd", "0"), pulse(t0, t1, charge / (t1 - t0 - EDGE)))
 
 
+def vm_current(design, array: str, value: float) -> Element:
+    """A current ``value`` (A; + draws charge out of the node) on an AFE's virtual-ground node ``vm``,
+    flowing from the start of the row to the end of the deck (the AFE is clocked only during its row)."""
+    t = timings(design, design.experiment.t_window)[array]
+    return Element("Ilt", ("vm", "0"), pulse(t.row(0), t.t_stop - EDGE, value))
+
+
 DIODE = Model("dfault", "d", (("is", 1e-15), ("n", 1.0)))

@@ -14,9 +14,13 @@ Domains (the term each effect feeds):
   injection, per array: a pixel-probe level shift, and an AFE output offset,
   since the feedthrough before the transfer is shared with the PD and the one
   before the reset sample is not, double sampling leaves their difference);
-- readout light ``readout_light``: junction photocurrent on the AFE's held
-  nodes, proportional to the irradiance and to the hold time (AFE probe), and on
-  the output stage (both probes), either sign;
+- readout light ``readout_light``: a junction photocurrent on the AFE's
+  virtual-ground node, junction area x the irradiance, either sign; its
+  response (``Nominal.vm_light``, derived in ``nominal``'s docstring) is the
+  charge-balance term I t_float / C13 on the AFE probe (t_float: p1 opening to
+  the output sample), plus the column kick and the op-amp clamp in the
+  non-overlap gap, both measured on the nominal circuit; and on the output
+  stage (both probes), either sign;
 - columns, per stage: ``column_pixel`` (column load / SF mismatch: a per-column
   offset of the pixel probe, cancelled by double sampling, and a per-column
   signal gain from the load current's slewing, seen by both probes) and ``column_afe``
@@ -81,8 +85,8 @@ def _afe_gain(X, p):       # SC stage gain lower than designed (C13 larger, fini
     return {"deps": p[0]}
 
 
-def _readout_light(X, p):  # junction photocurrent on the AFE's held nodes (x hold time) and the output stage
-    return {"dv_afe": p[0] * X["J"] * X["t_hold"] * X["afe"], "dv_out": p[1] * X["J"]}
+def _readout_light(X, p):  # junction photocurrent on the AFE's vm (area x irradiance) and the output stage
+    return {"i_vm": p[0] * X["J"], "dv_out": p[1] * X["J"]}
 
 
 def _crosstalk(X, p):      # light under the secondary's mask: irradiance x the masked area
@@ -122,7 +126,7 @@ EFFECTS = {
     "sf_gain": ((Param("loss", -0.3, 0.5, 1e-2, 0.0), Param("k_per_V", -1.0, 1.0, 1e-2, 0.0),
                  Param("loss_secondary", -0.3, 0.5, 1e-2, 0.0)), _sf_gain),
     "afe_gain": ((Param("eps_extra", -0.05, 1.0, 1e-2, 0.0),), _afe_gain),
-    "readout_light": ((Param("afe_V_per_A_m2_s", -1e4, 1e4, 10.0, 0.0),
+    "readout_light": ((Param("a_junction_m2", -3e-9, 3e-9, 1e-11, 0.0),
                        Param("out_V_per_A_m2", -1.0, 1.0, 1e-5, 0.0)), _readout_light),
     "crosstalk": ((Param("k_xt", 0.0, 0.5, 1e-3, 1e-4),), _crosstalk),
     "column_pixel": ((), None),   # per-column terms: built from the data (fit.py)

@@ -50,10 +50,11 @@ RANGES = {
 }
 
 
-def readout_light_params(X, g):
-    """AFE and output-stage terms of 1 - 10 mV at the campaign's brightest AFE row, random sign and site."""
+def readout_light_params(X, g, c13):
+    """AFE and output-stage terms of 1 - 10 mV at the campaign's brightest AFE row, random sign and site
+    (the AFE's by its charge-balance term I t_float / C13, I = junction area x irradiance)."""
     site = g.choice(["afe", "out", "both"])
-    x_afe = np.quantile((X["J"] * X["t_hold"])[X["afe"]], 0.9)
+    x_afe = np.quantile((X["J"] * X["t_float"])[X["afe"]], 0.9) / c13
     x_out = np.quantile(X["J"], 0.9)
     k_afe = g.choice([-1, 1]) * _u(g, 1e-3, 1e-2) / x_afe if site != "out" else 0.0
     k_out = g.choice([-1, 1]) * _u(g, 1e-3, 1e-2) / x_out if site != "afe" else 0.0
@@ -117,7 +118,7 @@ def measure(design, nom, table: Table, effect: str | None, rng, params=None) -> 
         if params is not None:
             p = np.array(params)
         elif effect == "readout_light":
-            p = np.array(readout_light_params(X, rng))
+            p = np.array(readout_light_params(X, rng, nom.c13))
         elif effect == "settling":
             p = np.array(settling_params(X, rng))
         else:

@@ -208,9 +208,7 @@ def deck(design, nom, op, effect, p, colp, title):
         elif effect == "afe_gain":
             net = ce.add_to_subckt(net, afe, Element("Cdc13", ("vm", "c"), p["dc13_F"]))
         elif effect == "readout_light":
-            t = timings(design, design.experiment.t_window)[arr]   # the AFE is clocked only while its row is read
-            net = ce.add_to_subckt(net, afe, Element("Ilt", ("vm", "0"),
-                                                     ce.pulse(t.row(0), t.t_stop - ce.EDGE, p["a_junction_m2"] * J)))
+            net = ce.add_to_subckt(net, afe, ce.vm_current(design, arr, p["a_junction_m2"] * J))
         elif effect == "column_afe":
             c = colp[(arr, _col_label(s, op))]
             net = _scale_c11(ce.add_to_subckt(net, afe, Element("Ccc", (c["line"], "vm"), max(c["cc"], 1e-18))),
