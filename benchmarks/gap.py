@@ -37,7 +37,7 @@ def main(rows: int = 2000):
     r = measure(reference_design(), rows)
     base, t_nom, t_diag = r["spice_s"], r["nominal_s"], r["diagnosis_s"]
     print(f"baseline: one SPICE experiment run (16 decks)        {base:7.2f} s")
-    print(f"nominal surrogate (30 full-chain decks, uncached)    {t_nom:7.2f} s  {t_nom / base:5.2f} x baseline")
+    print(f"nominal surrogate (54 full-chain decks, uncached)    {t_nom:7.2f} s  {t_nom / base:5.2f} x baseline")
     print(f"diagnosis of {rows} rows, {r['models']} models incl. none  {t_diag:7.2f} s  "
           f"{t_diag / base:5.2f} x baseline")
     print(f"total {t_nom + t_diag:.1f} s (limit 60 s); found {r['found']} (truth {r['truth']})")

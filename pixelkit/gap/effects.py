@@ -49,6 +49,7 @@ class Param:
     hi: float
     scale: float
     x0: float
+    starts: tuple = ()     # extra starting values, where the response is not monotone in the parameter
 
 
 def _t_law(X, td):
@@ -126,7 +127,8 @@ EFFECTS = {
     "sf_gain": ((Param("loss", -0.3, 0.5, 1e-2, 0.0), Param("k_per_V", -1.0, 1.0, 1e-2, 0.0),
                  Param("loss_secondary", -0.3, 0.5, 1e-2, 0.0)), _sf_gain),
     "afe_gain": ((Param("eps_extra", -0.05, 1.0, 1e-2, 0.0),), _afe_gain),
-    "readout_light": ((Param("a_junction_m2", -3e-9, 3e-9, 1e-11, 0.0),
+    # the vm response has the op-amp clamp's steps in the current: a decade grid of starts over the bounds
+    "readout_light": ((Param("a_junction_m2", -3e-9, 3e-9, 1e-11, 0.0, (-1e-9, -1e-10, -1e-11, 1e-11, 1e-10, 1e-9)),
                        Param("out_V_per_A_m2", -1.0, 1.0, 1e-5, 0.0)), _readout_light),
     "crosstalk": ((Param("k_xt", 0.0, 0.5, 1e-3, 1e-4),), _crosstalk),
     "column_pixel": ((), None),   # per-column terms: built from the data (fit.py)

@@ -106,6 +106,11 @@ def fit(name, nom, X_train, y_train, sigma, cols=None, setup: SetupBounds = Setu
         sign = np.where(np.array([sp[1] for sp in specs]) < 0, -1.0, 1.0)
         s[2:] = np.clip(sign * np.array([sp[3] for sp in specs]) / scales[2:], lo[2:] + 1e-9, hi[2:] - 1e-9)
         starts.append(s)
+        for j, prm in enumerate(EFFECTS[name][0]):
+            for v in prm.starts:
+                s = x0.copy()
+                s[2 + j] = np.clip(v / scales[2 + j], lo[2 + j] + 1e-9, hi[2 + j] - 1e-9)
+                starts.append(s)
     best = None
     for s in starts:
         r = least_squares(resid, s, bounds=(lo, hi), x_scale=1.0, method="trf", max_nfev=150)
