@@ -80,12 +80,9 @@ def test_spice_cases_blind(committed, ref_design, nominal):
 
 @pytest.mark.slow
 def test_spice_selftest_full(committed, ref_design, nominal):
-    """All committed cases (README gives the measured figures, including the target not met:
-    readout light *named* in >= 90 %)."""
+    """All committed cases against the issue's targets (README gives the measured figures)."""
     r = silicon.run_committed(ref_design, nominal)
     assert r["top1_accuracy"] >= 0.9
     assert r["none_on_clean"] >= 0.9
     assert r["not_explained_on_out_of_library"] >= 0.8
-    light = [c for c in r["cases"] if c["truth"] == "readout_light"]
-    # never a silent miss: named, or the gap is said to be unexplained
-    assert np.mean([c["found"] == "readout_light" or c["explained"] is False for c in light]) >= 0.9
+    assert r["per_effect_top1"]["readout_light"] >= 0.9     # the documented failure, named

@@ -54,7 +54,8 @@ output rail; a real output stage stops at the supply and would leave the
 closed form alone). Both are measured rather than assumed, like the FD
 response: ``LIGHT_DECKS`` full-chain decks with known currents on every AFE's
 vm at six charges give, per array, the pixel-probe shift and the AFE shift
-beyond I t_f / C13, tabulated against signal and current.
+beyond I t_f / C13, tabulated against signal and current (at the design's read
+rates: rows at another ``f_read_Hz`` get t_f from their own rate, the table as is).
 """
 from __future__ import annotations
 
