@@ -284,9 +284,11 @@ def simulate_case(design, nom, effect: str | None, seed: int, backend="batch", j
     return rows, truth
 
 
-def plan_cases(n_per_effect=9, n_readout_light=12, n_ool_per_kind=7, n_clean=20,
+def plan_cases(n_per_effect=9, n_readout_light=12, n_ool_per_kind=7, n_clean=20, n_more_readout_light=8,
                seed0=1000) -> list[tuple[str | None, int]]:
-    """(effect, seed) of every committed case, interleaved round-robin over the kinds."""
+    """(effect, seed) of every committed case, interleaved round-robin over the kinds; then
+    ``n_more_readout_light`` readout-light cases (added later, for a finer figure of the documented
+    failure; same ranges and campaign, the seeds continue)."""
     queues = [[e] * (n_readout_light if e == "readout_light" else n_per_effect) for e in IN_LIBRARY]
     queues += [[e] * n_ool_per_kind for e in OUT_OF_LIBRARY] + [[None] * n_clean]
     out = []
@@ -294,6 +296,7 @@ def plan_cases(n_per_effect=9, n_readout_light=12, n_ool_per_kind=7, n_clean=20,
         for q in queues:
             if q:
                 out.append((q.pop(), seed0 + len(out)))
+    out += [("readout_light", seed0 + len(out) + k) for k in range(n_more_readout_light)]
     return out
 
 
@@ -301,22 +304,31 @@ def _fmt(v):
     return f"{v:.9g}" if isinstance(v, float) else str(v)
 
 
-def write_cases(design, nom, folder: Path = CASES_DIR, plan=None, progress=None, jobs=None) -> dict:
+def write_cases(design, nom, folder: Path = CASES_DIR, plan=None, progress=None, jobs=None,
+                keep: bool = False) -> dict:
     """Simulate every planned case; write ``cases.csv`` (all rows, ``case`` column) and ``truth.json``.
 
     Both files are rewritten (atomically) after every case, so an interrupted run
-    leaves the cases done so far, consistent.
+    leaves the cases done so far, consistent. ``keep``: the folder's cases stay as
+    they are and only planned cases it does not hold are simulated and added.
     """
     plan = plan or plan_cases()
     buf = io.StringIO()
     w = csv.writer(buf)
-    w.writerow(HEADER)
     truths = {}
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
+    if keep and (folder / "truth.json").exists():
+        truths = json.loads((folder / "truth.json").read_text())
+        with open(folder / "cases.csv", newline="") as fh:   # as written (csv's \r\n rows)
+            buf.write(fh.read())
+    else:
+        w.writerow(HEADER)
     for k, (effect, seed) in enumerate(plan):
-        rows, truth = simulate_case(design, nom, effect, seed, jobs=jobs)
         cid = f"c{seed}"
+        if cid in truths:
+            continue
+        rows, truth = simulate_case(design, nom, effect, seed, jobs=jobs)
         truths[cid] = truth
         for r in rows:
             w.writerow([cid] + [_fmt(r[h]) for h in HEADER[1:]])
