@@ -11,7 +11,10 @@ parameter whose interval spans more than its own value, or which sits on a
 bound, is flagged as not identifiable. Per-column terms (``column_pixel``,
 ``column_afe``) are mismatch drawn around zero: they carry a Gaussian prior
 (``COLUMN_PRIOR``), so a column seen in one or two training rows is not given
-a wild value that no held-out row supports.
+a wild value that no held-out row supports. Each fit starts from the parameters'
+``x0`` and one typical size away, and from a parameter's ``starts`` where its
+response is not monotone (readout light: the op-amp clamp's steps); the lowest
+cost wins.
 """
 from __future__ import annotations
 

@@ -37,7 +37,7 @@ stage (``circuits.afe``; C11 in-vm, C12 vm-x, C13 vm-c):
   whatever the signal.
 
 Full-chain SPICE bears this out to 1 - 2 % on the island's charge at every
-signal (``tests/test_gap.py``). Two things the closed form does not hold, both
+signal (``tests/test_gap_light.py``). Two things the closed form does not hold, both
 of this circuit: (a) before p1 the in node floats too, the current pulls it
 (through C11) and S1X dumps that charge on the column, which has not recovered
 at the signal sample: a pixel-probe shift of about -0.06 mV per nA on the
