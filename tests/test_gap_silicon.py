@@ -86,3 +86,15 @@ def test_spice_selftest_full(committed, ref_design, nominal):
     assert r["none_on_clean"] >= 0.9
     assert r["not_explained_on_out_of_library"] >= 0.8
     assert r["per_effect_top1"]["readout_light"] >= 0.9     # the documented failure, named
+
+
+def test_adding_cases_keeps_the_committed_ones(tmp_path, ref_design):
+    """``write_cases(keep=True)`` simulates only planned cases the folder lacks: with the committed plan
+    nothing is run (no surrogate given) and both files come back with the same content."""
+    import shutil
+    for f in ("cases.csv", "truth.json"):
+        shutil.copy(silicon.CASES_DIR / f, tmp_path / f)
+    r = silicon.write_cases(ref_design, None, tmp_path, silicon.plan_cases()[-3:], keep=True)
+    assert r["n_cases"] == len(silicon.plan_cases())
+    assert (tmp_path / "cases.csv").read_bytes() == (silicon.CASES_DIR / "cases.csv").read_bytes()
+    assert silicon.load_cases(tmp_path)[1] == silicon.load_cases()[1]
