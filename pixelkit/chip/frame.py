@@ -11,7 +11,22 @@ What is independent (and why the split is exact up to the simulator's numerics):
 - during exposure every pixel is on its own; during read-out only the selected row
   drives a column (the other rows' RS switches are off and their lines static).
 
-So a frame splits into one deck per array and row (``split="rows"``), each holding
+Two splits, each checked against the undivided deck (``tests/test_frame.py``):
+
+``split="columns"`` (the default with the AFE): one chain of decks per array and group of
+columns (``GROUP`` dual-pixel columns: 3 primary or 3 secondary columns a deck), one deck
+per row. The columns of an array share only ideal row lines and supplies (each has its
+own bias generator), so a group simulates as it does in the whole array. A row's deck
+holds that row's subpixels, the other rows' RS switches (off) as one device, the columns'
+loads, samplers and AFEs, and the row's own controls at its time in the frame; the column
+state the previous rows leave (column line, C11's input node, the AFE's floating nodes and
+op-amp state: a row-to-row memory, see below) is handed over: the previous row's deck
+gives each state node's voltage at the row's start, and the deck holds its nodes there
+through switches that open at that instant (:class:`~pixelkit.circuits.array.Handoff`).
+A row then costs one row read, instead of two with a lead row, and decks stay small (cost
+per time point grows faster than the column count in a deck).
+
+``split="rows"``: one deck per array and row (``split="rows"``), each holding
 that row's subpixels, all their columns (load, and with the AFE: S1X/S2X and the SC
 AFE) and the row's own controls at the row's own time in the frame; the deck stops
 when its row has been read. With the AFE the previous row is simulated too (``lead``): the
@@ -24,15 +39,18 @@ and ``pixelkit array --check`` compare both.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..circuits.array import KINDS, PREFIX, Tile, array_bench, frame_shape, frame_timings
+from ..circuits.array import (KINDS, PREFIX, Handoff, Tile, array_bench, frame_shape, frame_timings,
+                              state_nodes)
 from ..errors import ConfigError, SimulationError
 from ..sweep.executors import run_tasks
 
-SPLITS = ("rows", "none")
+SPLITS = ("columns", "rows", "none")
+#: Dual-pixel columns per deck of a column chain: 3 primary, or 1 (3 secondary columns).
+GROUP = {"primary": 3, "secondary": 1}
 #: Largest time step of a frame deck: 1/20 of the shorter row time (50 ns for 1 MHz). PWL
 #: edges are breakpoints, so switching is still resolved; the flat exposure and storage
 #: are stepped by the error control. (Measured against 20 ns in the README.)
@@ -71,31 +89,106 @@ def _listed(a: np.ndarray) -> list:
 
 
 def tiles(rows: int, cols: int, split: str, with_afe: bool = False, kinds=KINDS) -> list[Tile]:
+    """The decks of a frame; for ``columns`` the first row's deck of each chain."""
     if split not in SPLITS:
         raise ConfigError("", "split", split, f"one of {', '.join(SPLITS)}")
+    if split == "columns":
+        return [Tile((k,), (0,), tuple(range(c, min(c + GROUP[k], cols)))) for k in kinds
+                for c in range(0, cols, GROUP[k])]
     if split == "none":
         return [Tile(tuple(kinds), tuple(range(rows)), tuple(range(cols)))]
     lead = (lambda r: (r - 1,) if with_afe and r > 0 else ())
     return [Tile((k,), (r,), tuple(range(cols)), lead(r)) for k in kinds for r in range(rows)]
 
 
-def _probe(task):
-    """Simulate one tile (through the engine and its cache) and read its samples."""
+def _probes(design, tile: Tile, tm: dict, with_afe: bool) -> list:
+    n = design.secondary_per_pixel
+    return [((k, r, j), f"col_{PREFIX[k]}_{j}", tm[k], r, f"out_col_{PREFIX[k]}_{j}" if with_afe else None)
+            for k in tile.kinds for r in tile.rows for j in tile.columns(k, n)]
+
+
+def _read(res, probes) -> dict:
     from ..measure.pixel import levels
-    from ..spice import simulate_many
-    net, backend, jobs, options, probes = task
-    try:
-        res = simulate_many([net], backend=backend, jobs=jobs, options=options)[0]
-    except SimulationError as exc:
-        return {"error": exc.message, "deck": net.title}
-    out = {"retried": res.meta["retried"]["reason"] if res.meta.get("retried") else None, "deck": net.title}
+    out = {}
     for key, node, timing, row, afe_node in probes:
         sig, rst = levels(res, node, timing, row)
         out[key] = (rst - sig, rst, float(res.at(afe_node, timing.t_reset_level(row))) if afe_node else None)
     return out
 
 
-def simulate_frame(design, iph_p, iph_s, with_afe: bool = False, split: str = "rows",
+def _retried(res):
+    return res.meta["retried"]["reason"] if res.meta.get("retried") else None
+
+
+def _probe(task):
+    """Simulate one tile (through the engine and its cache) and read its samples."""
+    from ..spice import simulate_many
+    net, backend, jobs, options, probes = task
+    try:
+        res = simulate_many([net], backend=backend, jobs=jobs, options=options)[0]
+    except SimulationError as exc:
+        return {"failures": [{"deck": net.title, "message": exc.message}], "retried": [], "values": {}}
+    why = _retried(res)
+    return {"failures": [], "retried": [{"deck": net.title, "message": why}] if why else [], "values": _read(res, probes)}
+
+
+def _chain(task):
+    """Simulate a column chain: row 0, then each row from the state the previous row's deck
+    left at the row's start (see the module docstring). A failed deck ends the chain: its
+    later rows are listed as failed too (they have no state to start from)."""
+    from ..spice import simulate_many
+    design, ip, is_, tile, t_exp, with_afe, seed, max_step, backend, options, rows, title = task
+    tm = frame_timings(design, t_exp, rows)
+    kind = tile.kinds[0]
+    nodes = [m for j in tile.columns(kind, design.secondary_per_pixel)
+             for m in state_nodes(design, kind, j, with_afe, rows > 1)]
+    lines = [f"col_{PREFIX[kind]}_{j}" for j in tile.columns(kind, design.secondary_per_pixel)]
+    t_rise = tm[kind].rs(0)[0][0]  # the first row's RS closes: the lines leave rest
+    out = {"failures": [], "retried": [], "values": {}}
+    hand, rest = None, {}
+    for r in range(rows):
+        t = replace(tile, rows=(r,))
+        net = array_bench(design, ip, is_, t, t_exp, with_afe, seed, max_step, title=f"{title}_r{r}", handoff=hand)
+        try:
+            res = simulate_many([net], backend=backend, jobs=1, options=options)[0]
+        except SimulationError as exc:
+            out["failures"].append({"deck": net.title, "message": exc.message})
+            out["failures"] += [{"deck": f"{title}_r{q}", "message": f"not simulated: row {r} of its chain failed"}
+                                for q in range(r + 1, rows)]
+            return out
+        why = _retried(res)
+        if why:
+            out["retried"].append({"deck": net.title, "message": why})
+        out["values"].update(_read(res, _probes(design, t, tm, with_afe)))
+        if r == 0:
+            rest = {c: float(res.at(f"v({c})", t_rise)) for c in lines}
+        if r + 1 < rows:
+            t_h = tm[kind].row(r + 1)
+            hand = Handoff(t_h, tuple((m, _held(m, float(res.at(f"v({m})", t_h)), rest, t_rise, tm[kind].edge))
+                                      for m in nodes))
+    return out
+
+
+def _held(node: str, v: float, rest: dict, t_rise: float, edge: float):
+    """What a handed-over node is held at: its value at the hand-over; a column line follows
+    the line's history instead (at rest, pulled down by its load, until the first row
+    selects it, then at the hand-over value), because the next row's pixel, though not
+    selected, sees the line through its RS switch: the switch's leakage sets where the
+    pixel's source-follower output rests, whose charge then reaches FD when RS closes
+    (a line held at the hand-over value from t = 0 moved that output by 31 mV and a
+    dim pixel's signal by 2 mV)."""
+    if node not in rest:
+        return v
+    return ((0.0, rest[node]), (t_rise, rest[node]), (t_rise + edge, v))
+
+
+def default_split(with_afe: bool) -> str:
+    """``columns`` with the AFE (its row-to-row memory is handed over, not re-simulated);
+    ``rows`` without (no memory: one deck per row with all columns, fewer decks)."""
+    return "columns" if with_afe else "rows"
+
+
+def simulate_frame(design, iph_p, iph_s, with_afe: bool = False, split: str | None = None,
                    t_exp: float | None = None, mismatch_seed: int | None = None, backend: str = "batch",
                    jobs: int | None = None, scheduler=None, options=None, max_step: float | None = None,
                    kinds=KINDS) -> Frame:
@@ -104,33 +197,35 @@ def simulate_frame(design, iph_p, iph_s, with_afe: bool = False, split: str = "r
     (the others' results stay NaN)."""
     rows, cols = frame_shape(design, iph_p, iph_s)
     n = design.secondary_per_pixel
+    split = default_split(with_afe) if split is None else split
     t_exp = design.experiment.t_window if t_exp is None else t_exp
     tm = frame_timings(design, t_exp, rows)
     if max_step is None:
         max_step = min(t.t_row for t in tm.values()) / STEPS_PER_ROW
     tasks = []
     for tile in tiles(rows, cols, split, with_afe, kinds):
-        tag = "_".join(PREFIX[k] for k in tile.kinds) + (f"_r{tile.rows[0]}" if len(tile.rows) == 1 else "")
+        tag = "_".join(PREFIX[k] for k in tile.kinds)
+        if split == "columns":
+            tasks.append((design, iph_p, iph_s, tile, t_exp, with_afe, mismatch_seed, max_step, backend, options,
+                          rows, f"frame_{rows}x{cols}_{tag}_c{tile.cols[0]}"))
+            continue
+        tag += f"_r{tile.rows[0]}" if len(tile.rows) == 1 else ""
         net = array_bench(design, iph_p, iph_s, tile, t_exp, with_afe, mismatch_seed, max_step,
                           title=f"frame_{rows}x{cols}_{tag}")
-        probes = [((k, r, j), f"col_{PREFIX[k]}_{j}", tm[k], r, f"out_col_{PREFIX[k]}_{j}" if with_afe else None)
-                  for k in tile.kinds for r in tile.rows for j in tile.columns(k, n)]
-        tasks.append((net, backend, 1 if scheduler is not None else jobs, options, probes))
+        tasks.append((net, backend, 1 if scheduler is not None else jobs, options, _probes(design, tile, tm, with_afe)))
     shape = {"primary": (rows, cols), "secondary": (rows, n * cols)}
     sig = {k: np.full(shape[k], np.nan) for k in KINDS}
     rst = {k: np.full(shape[k], np.nan) for k in KINDS}
     afe = {k: np.full(shape[k], np.nan) for k in KINDS} if with_afe else {}
     failures, retried = [], []
     t0 = time.perf_counter()
-    for i, out in run_tasks(_probe, tasks, jobs=jobs, scheduler=scheduler, desc="frame tiles"):
-        if "error" in out:
-            failures.append({"deck": out["deck"], "message": out["error"]})
-            continue
-        deck, why = out.pop("deck"), out.pop("retried")
-        if why:
-            retried.append({"deck": deck, "message": why})
-        for (k, r, j), (s, lv, a) in out.items():
+    fn, desc = (_chain, "frame column chains") if split == "columns" else (_probe, "frame tiles")
+    for i, out in run_tasks(fn, tasks, jobs=jobs, scheduler=scheduler, desc=desc):
+        failures += out["failures"]
+        retried += out["retried"]
+        for (k, r, j), (s, lv, a) in out["values"].items():
             sig[k][r, j], rst[k][r, j] = s, lv
             if with_afe:
                 afe[k][r, j] = a
-    return Frame(rows, cols, sig, rst, afe, len(tasks), time.perf_counter() - t0, split, failures, retried)
+    decks = len(tasks) * (rows if split == "columns" else 1)
+    return Frame(rows, cols, sig, rst, afe, decks, time.perf_counter() - t0, split, failures, retried)

@@ -11,6 +11,14 @@ Two forms:
   AFE. Every subpixel is instantiated directly, so a tile is the same circuit as the
   corresponding part of the whole frame: row ``r`` is read at its own time of the
   frame (the full-frame timing), and a tile stops when its last row is read.
+- ``handoff``: a tile of one row that starts from the column state another deck left at
+  the row's start (:class:`Handoff`, see ``chip/frame.py``: the column chains).
+
+Each column has its own load bias generator (an ideal reference current into a
+diode-connected NMOS): columns then share only ideal supplies and row lines, so any
+group of columns simulates as it does in the whole array. (One bias node per array
+couples the columns through the loads' Cgd while they slew: 0.1 - 0.16 mV between two
+arrays sharing one, measured under issue 14.)
 
 Photocurrents are per subpixel: ``iph_p[r][c]`` (rows x cols) and ``iph_s[r][j]``
 (rows x N cols), in A.
@@ -24,7 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ConfigError
-from ..spice.netlist import Element, Param, Subckt
+from ..spice.netlist import Element, Model, Param, Pwl, Subckt
 from ..tech.modellib import Include
 from . import column
 from .devices import mosfet
@@ -80,6 +88,49 @@ class Tile:
         return list(self.cols) if kind == "primary" else [n * c + k for c in self.cols for k in range(n)]
 
 
+#: The hold switches of a hand-over: 1 Ohm closed, 1e18 Ohm open (leaks < 4e-18 A at 3.3 V,
+#: < 1e-11 V on C11 over a row); no hysteresis.
+HOLD_SWITCH = Model("hold_sw", "sw", (("vt", 0.5), ("vh", 0.0), ("ron", 1.0), ("roff", 1e18)))
+#: The hold releases over this ramp, ending at ``Handoff.t`` (the switch opens mid-ramp).
+HOLD_RELEASE = 1e-12
+
+
+@dataclass(frozen=True)
+class Handoff:
+    """Column state handed from one deck to the next: until ``t`` each node in ``values``
+    ((node, V) or (node, ((t, V), ...)), ...) is held at its value (or waveform) through a
+    switch, which then opens; from ``t`` on the deck runs free from the state the previous
+    deck had at ``t``."""
+    t: float
+    values: tuple
+
+    def elements(self) -> list:
+        ctl = Pwl(((0.0, 1.0), (self.t - HOLD_RELEASE, 1.0), (self.t, 0.0)))
+        out = [Element("Vhold", ("hold_ctl", "0"), ctl)]
+        for i, (node, v) in enumerate(self.values):
+            out += [Element(f"Vheld{i}", (f"held_{i}", "0"), Pwl(v) if isinstance(v, tuple) else float(v)),
+                    Element(f"Shold{i}", (node, f"held_{i}", "hold_ctl", "0"), "hold_sw")]
+        return out
+
+
+def state_nodes(design, kind: str, j: int, with_afe: bool, absent_rows: bool = True) -> list[str]:
+    """The nodes of column ``j`` of ``kind`` that carry its state from one row to the next:
+    the column line, its bias and off-switch nodes and, with the AFE, the sampler output and
+    the AFE's floating and op-amp state nodes (the macromodel's output is its pole node's
+    ideal copy, so that node, not the output, is held). ``absent_rows``: the deck stands the
+    other rows' RS switches in as one device (its floating drain node is held too)."""
+    col = f"col_{PREFIX[kind]}_{j}"
+    nodes = [col, f"nbias_{col}", *([f"sfo_off_{col}"] if absent_rows else [])]
+    if with_afe:
+        afe = f"xafe_{col}"
+        nodes += [f"in_{col}", f"{afe}.vm", f"{afe}.x", f"{afe}.c"]
+        if design.afe.opamp == "macro":
+            nodes.append(f"{afe}.xop.n1")
+        else:
+            nodes += [f"out_{col}", *(f"{afe}.xop.{n}" for n in ("n1", "n2", "tail", "nb", "nz"))]
+    return nodes
+
+
 def frame_shape(design, iph_p, iph_s) -> tuple[int, int]:
     """(rows, cols) of the photocurrent maps; a ConfigError when they do not fit the chip."""
     ip, is_ = np.asarray(iph_p, float), np.asarray(iph_s, float)
@@ -132,7 +183,7 @@ def frame_timings(design, t_exp: float, rows: int) -> dict:
 
 def array_bench(design, iph_p, iph_s, tile: Tile | None = None, t_exp: float | None = None,
                 with_afe: bool = False, mismatch_seed: int | None = None, max_step: float | None = None,
-                title: str = "array_bench"):
+                title: str = "array_bench", handoff: Handoff | None = None):
     """A frame (or a tile of it) read row by row; see the module docstring."""
     from .opamp import opamp
     from .afe import sc_afe
@@ -153,7 +204,6 @@ def array_bench(design, iph_p, iph_s, tile: Tile | None = None, t_exp: float | N
     for kind in tile.kinds:
         s, cur = PREFIX[kind], (ip if kind == "primary" else is_)
         subckts.append(pixel5t(design, kind))
-        el += column.bias(design, f"nbias_{s}")
         if with_afe:
             el += sample_clocks(design, tm[kind], s, sim_rows)
         for j in tile.columns(kind, n):
@@ -167,7 +217,7 @@ def array_bench(design, iph_p, iph_s, tile: Tile | None = None, t_exp: float | N
                 dev = design.pixel.devices
                 rs = mosfet(f"rsoff_{col}", f"sfo_off_{col}", "0", col, "0", dev.rs_w, dev.rs_l, design.tech)
                 el.append(replace(rs, params=(*rs.params, ("m", absent))))
-            el += column.load(design, col, f"nbias_{s}")
+            el += [*column.bias(design, f"nbias_{col}"), *column.load(design, col, f"nbias_{col}")]
             if with_afe:
                 el += column.sampler(design, col, f"in_{col}", f"s1_{s}", f"s2_{s}")
                 caps = afe_caps(design, mismatch_seed, kind, j)
@@ -180,6 +230,8 @@ def array_bench(design, iph_p, iph_s, tile: Tile | None = None, t_exp: float | N
     if max_step is not None:
         tran = replace(tran, max_step=max_step)
     net = _deck(design, title, el, subckts, tran, options=_options(tm))
+    if handoff is not None:
+        net = replace(net, elements=(*net.elements, *handoff.elements()), models=(*net.models, HOLD_SWITCH))
     if mismatch_seed is not None:
         net = replace(net, includes=(*net.includes, MISMATCH_INCLUDE),
                       options=(*net.options, ("seed", tile_seed(mismatch_seed, tile))))

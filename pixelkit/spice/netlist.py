@@ -19,7 +19,8 @@ from dataclasses import dataclass, field
 from ..errors import ConfigError
 
 _NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,63}$")
-_NODE = re.compile(r"^[A-Za-z0-9_]{1,64}$")
+#: A node, or a node inside a subcircuit instance (``xafe_col_p_0.vm``, kit-made hand-overs).
+_NODE = re.compile(r"^[A-Za-z0-9_]{1,64}(?:\.[A-Za-z0-9_]{1,64}){0,3}$")
 _DECK_BAD = re.compile(r"[^\x20-\x7e\n]")
 _SAVE = re.compile(r"^(?:[vi]\()?[A-Za-z0-9_.#]{1,128}\)?$")
 
@@ -40,7 +41,8 @@ def check_name(value, what: str = "name") -> str:
 
 def check_node(value, what: str = "node") -> str:
     if not isinstance(value, str) or not _NODE.match(value):
-        raise ConfigError("netlist", what, value, "a node name of letters, digits or '_'")
+        raise ConfigError("netlist", what, value, "a node name of letters, digits or '_' "
+                          "(or instance.node inside a subcircuit)")
     return value
 
 
