@@ -1,40 +1,42 @@
-"""One frame of the pixel arrays, simulated whole or split into independent tiles.
+"""One frame of the pixel arrays, simulated whole or split into independent decks.
 
-What is independent (and why the split is exact up to the simulator's numerics):
+What is independent (and why a split is exact up to the simulator's numerics):
 
-- the two arrays have their own control lines, column buses and column-load bias (an ideal
-  current into a diode-connected NMOS per array, as each array's own bias generator): they
-  share only ideal sources. (One bias node shared by both arrays couples them through the
-  loads' Cgd while the columns slew, ~0.1 mV with the AFE, and no split could keep that);
-- the columns of an array share row lines (ideal sources), supplies and the array's bias
-  node, so a row's deck keeps all the array's columns;
+- the two arrays have their own control lines and column buses, and every column its
+  own load bias generator (an ideal current into a diode-connected NMOS): arrays and
+  columns share only ideal sources (supplies, row lines, clocks). (One bias node per
+  array couples its columns through the loads' Cgd while they slew, 0.1 - 0.16 mV, which
+  no split could keep);
 - during exposure every pixel is on its own; during read-out only the selected row
-  drives a column (the other rows' RS switches are off and their lines static).
+  drives a column (the other rows' RS switches are off: one device per column stands in
+  for them, ``m`` = their count).
 
-Two splits, each checked against the undivided deck (``tests/test_frame.py``):
+What is not: a column remembers its earlier rows. With the AFE, C11's input keeps the
+previous row's reset level until S1X closes, and for large signals the column does not
+settle within S1, so a row's signal depends on it; and the next row's pixel, though not
+selected, sees the line through its RS switch, whose leakage sets where that pixel's
+source-follower output rests, charge that reaches FD when RS closes.
 
 ``split="columns"`` (the default with the AFE): one chain of decks per array and group of
-columns (``GROUP`` dual-pixel columns: 3 primary or 3 secondary columns a deck), one deck
-per row. The columns of an array share only ideal row lines and supplies (each has its
-own bias generator), so a group simulates as it does in the whole array. A row's deck
-holds that row's subpixels, the other rows' RS switches (off) as one device, the columns'
-loads, samplers and AFEs, and the row's own controls at its time in the frame; the column
-state the previous rows leave (column line, C11's input node, the AFE's floating nodes and
-op-amp state: a row-to-row memory, see below) is handed over: the previous row's deck
-gives each state node's voltage at the row's start, and the deck holds its nodes there
-through switches that open at that instant (:class:`~pixelkit.circuits.array.Handoff`).
-A row then costs one row read, instead of two with a lead row, and decks stay small (cost
-per time point grows faster than the column count in a deck).
+columns (``GROUP``: 3 primary or 3 secondary columns a deck), one deck per row. A row's
+deck holds that row's subpixels, the off-row device, the columns' loads, samplers and
+AFEs, and the row's own controls at its time in the frame. The state the earlier rows
+leave is handed over (:class:`~pixelkit.circuits.array.Handoff`): the previous row's deck
+gives each state node's voltage at the row's start (column line, C11's input, the AFE's
+floating nodes and op-amp state, the bias and off-row nodes), the deck holds its nodes
+there through switches that open at that instant, and the column line is held at its own
+history before (at rest until the first row selects it). A row costs one row read, and
+chains run in parallel. Checked against the undivided deck: every row of a 27-row
+column within 0.013 mV (primary) / 0.038 mV (secondary); holding the line at the
+hand-over value from t = 0 instead left a dim pixel 2.2 mV off, re-simulating the
+previous row as a lead (the former row split) 0.39 mV off from the third row on.
 
-``split="rows"``: one deck per array and row (``split="rows"``), each holding
-that row's subpixels, all their columns (load, and with the AFE: S1X/S2X and the SC
-AFE) and the row's own controls at the row's own time in the frame; the deck stops
-when its row has been read. With the AFE the previous row is simulated too (``lead``): the
-column and C11 enter a row holding the previous row's reset level, and for large signals
-the column does not settle within S1, so the row's signal depends on it. Cost then grows
-as rows x columns instead of the whole deck's ~rows^1.8 (a whole-column deck re-solves every row's pixels at every row's
-edges). ``split="none"`` simulates the frame as one deck (the reference); the test
-and ``pixelkit array --check`` compare both.
+``split="rows"`` (the default without the AFE): one deck per array and row with all its
+columns (no AFE, no memory beyond the line, which the row's own RS resets; 27-row column
+within 0.011 mV of the undivided deck). Refused with the AFE.
+
+``split="none"``: the frame as one deck (the reference); ``tests/test_frame.py`` and
+``pixelkit array --check`` compare the splits with it.
 """
 from __future__ import annotations
 
@@ -51,10 +53,12 @@ from ..sweep.executors import run_tasks
 SPLITS = ("columns", "rows", "none")
 #: Dual-pixel columns per deck of a column chain: 3 primary, or 1 (3 secondary columns).
 GROUP = {"primary": 3, "secondary": 1}
-#: Largest time step of a frame deck: 1/20 of the shorter row time (50 ns for 1 MHz). PWL
-#: edges are breakpoints, so switching is still resolved; the flat exposure and storage
-#: are stepped by the error control. (Measured against 20 ns in the README.)
-STEPS_PER_ROW = 20
+#: Largest time step of a frame deck: half the shorter row time (0.5 us for 1 MHz), as the
+#: long benches. PWL edges are breakpoints, so switching is still resolved; between them the
+#: error control steps. On a 27-row primary column with its AFE (default tolerances) against
+#: the converged undivided deck: largest error 0.13 mV at t_row / 2, 0.24 mV at t_row / 20
+#: (the error is the tolerances', not the step's), in 0.7x the time (README).
+STEPS_PER_ROW = 2
 
 
 @dataclass
@@ -97,14 +101,22 @@ def tiles(rows: int, cols: int, split: str, with_afe: bool = False, kinds=KINDS)
                 for c in range(0, cols, GROUP[k])]
     if split == "none":
         return [Tile(tuple(kinds), tuple(range(rows)), tuple(range(cols)))]
-    lead = (lambda r: (r - 1,) if with_afe and r > 0 else ())
-    return [Tile((k,), (r,), tuple(range(cols)), lead(r)) for k in kinds for r in range(rows)]
+    if with_afe:
+        raise ConfigError("", "split", split, "columns or none with the AFE (a deck per row cannot carry "
+                          "the column's memory of the earlier rows)")
+    return [Tile((k,), (r,), tuple(range(cols))) for k in kinds for r in range(rows)]
 
 
 def _probes(design, tile: Tile, tm: dict, with_afe: bool) -> list:
     n = design.secondary_per_pixel
     return [((k, r, j), f"col_{PREFIX[k]}_{j}", tm[k], r, f"out_col_{PREFIX[k]}_{j}" if with_afe else None)
             for k in tile.kinds for r in tile.rows for j in tile.columns(k, n)]
+
+
+def _saved(net, probes, nodes=()):
+    """Only the vectors the frame reads (probes, hand-over nodes) go to the raw file and cache."""
+    keep = dict.fromkeys([*(p[1] for p in probes), *(p[4] for p in probes if p[4]), *nodes])
+    return replace(net, saves=tuple(keep))
 
 
 def _read(res, probes) -> dict:
@@ -148,7 +160,9 @@ def _chain(task):
     hand, rest = None, {}
     for r in range(rows):
         t = replace(tile, rows=(r,))
-        net = array_bench(design, ip, is_, t, t_exp, with_afe, seed, max_step, title=f"{title}_r{r}", handoff=hand)
+        probes = _probes(design, t, tm, with_afe)
+        net = _saved(array_bench(design, ip, is_, t, t_exp, with_afe, seed, max_step, title=f"{title}_r{r}",
+                                 handoff=hand), probes, nodes)
         try:
             res = simulate_many([net], backend=backend, jobs=1, options=options)[0]
         except SimulationError as exc:
@@ -159,7 +173,7 @@ def _chain(task):
         why = _retried(res)
         if why:
             out["retried"].append({"deck": net.title, "message": why})
-        out["values"].update(_read(res, _probes(design, t, tm, with_afe)))
+        out["values"].update(_read(res, probes))
         if r == 0:
             rest = {c: float(res.at(f"v({c})", t_rise)) for c in lines}
         if r + 1 < rows:
@@ -182,10 +196,11 @@ def _held(node: str, v: float, rest: dict, t_rise: float, edge: float):
     return ((0.0, rest[node]), (t_rise, rest[node]), (t_rise + edge, v))
 
 
-def default_split(with_afe: bool) -> str:
-    """``columns`` with the AFE (its row-to-row memory is handed over, not re-simulated);
-    ``rows`` without (no memory: one deck per row with all columns, fewer decks)."""
-    return "columns" if with_afe else "rows"
+def default_split(with_afe: bool, seeded: bool = False) -> str:
+    """``none`` for a Monte Carlo frame (one deck draws every device once, so a column's
+    circuits are the same chip for all its rows); else ``columns`` with the AFE (its
+    row-to-row memory is handed over, not re-simulated), ``rows`` without (fewer decks)."""
+    return "none" if seeded else "columns" if with_afe else "rows"
 
 
 def simulate_frame(design, iph_p, iph_s, with_afe: bool = False, split: str | None = None,
@@ -197,7 +212,10 @@ def simulate_frame(design, iph_p, iph_s, with_afe: bool = False, split: str | No
     (the others' results stay NaN)."""
     rows, cols = frame_shape(design, iph_p, iph_s)
     n = design.secondary_per_pixel
-    split = default_split(with_afe) if split is None else split
+    split = default_split(with_afe, mismatch_seed is not None) if split is None else split
+    if mismatch_seed is not None and split != "none":
+        raise ConfigError("", "split", split, "none with a Monte Carlo seed (a split frame would draw a "
+                          "column's devices again in every deck)")
     t_exp = design.experiment.t_window if t_exp is None else t_exp
     tm = frame_timings(design, t_exp, rows)
     if max_step is None:
@@ -210,9 +228,10 @@ def simulate_frame(design, iph_p, iph_s, with_afe: bool = False, split: str | No
                           rows, f"frame_{rows}x{cols}_{tag}_c{tile.cols[0]}"))
             continue
         tag += f"_r{tile.rows[0]}" if len(tile.rows) == 1 else ""
-        net = array_bench(design, iph_p, iph_s, tile, t_exp, with_afe, mismatch_seed, max_step,
-                          title=f"frame_{rows}x{cols}_{tag}")
-        tasks.append((net, backend, 1 if scheduler is not None else jobs, options, _probes(design, tile, tm, with_afe)))
+        probes = _probes(design, tile, tm, with_afe)
+        net = _saved(array_bench(design, iph_p, iph_s, tile, t_exp, with_afe, mismatch_seed, max_step,
+                                 title=f"frame_{rows}x{cols}_{tag}"), probes)
+        tasks.append((net, backend, 1 if scheduler is not None else jobs, options, probes))
     shape = {"primary": (rows, cols), "secondary": (rows, n * cols)}
     sig = {k: np.full(shape[k], np.nan) for k in KINDS}
     rst = {k: np.full(shape[k], np.nan) for k in KINDS}

@@ -72,17 +72,10 @@ def pixel_array(design, rows: int, cols: int) -> Subckt:
 @dataclass(frozen=True)
 class Tile:
     """A part of a frame: the arrays ``kinds``, the rows ``rows`` and the dual-pixel columns
-    ``cols`` (secondary columns N c .. N c + N - 1 of each). ``lead``: rows read before
-    ``rows`` only to leave the column circuits as the frame leaves them (the AFE input
-    keeps the previous row's reset level until S1X closes: a row-to-row memory)."""
+    ``cols`` (secondary columns N c .. N c + N - 1 of each)."""
     kinds: tuple
     rows: tuple
     cols: tuple
-    lead: tuple = ()
-
-    @property
-    def simulated_rows(self) -> tuple:
-        return tuple(sorted(set(self.lead) | set(self.rows)))
 
     def columns(self, kind: str, n: int) -> list[int]:
         return list(self.cols) if kind == "primary" else [n * c + k for c in self.cols for k in range(n)]
@@ -154,7 +147,7 @@ def whole(rows: int, cols: int) -> Tile:
 
 def tile_seed(seed: int, tile: Tile) -> int:
     """The ngspice seed of one tile of a Monte Carlo frame: each tile draws its own devices."""
-    return zlib.crc32(f"{seed}:{tile.kinds}:{tile.simulated_rows}:{tile.cols}".encode()) % 2_000_000_000 + 1
+    return zlib.crc32(f"{seed}:{tile.kinds}:{tile.rows}:{tile.cols}".encode()) % 2_000_000_000 + 1
 
 
 def afe_caps(design, seed: int | None, kind: str, j: int) -> tuple:
@@ -195,7 +188,7 @@ def array_bench(design, iph_p, iph_s, tile: Tile | None = None, t_exp: float | N
     n = design.secondary_per_pixel
     t_exp = design.experiment.t_window if t_exp is None else t_exp
     tm = frame_timings(design, t_exp, rows)
-    sim_rows = tile.simulated_rows
+    sim_rows = tile.rows
     el = [*supplies(design), *controls(design, tm, sim_rows, True, tile.kinds)]
     subckts = []
     if with_afe:

@@ -17,8 +17,10 @@ from .common import design_arg, emit, json_opt, load, main, out_opt, output_path
               help="unit of the scene map (default: lx for .csv/.npy, rel for images, fs for the "
                    "built-in scenes); see pixelkit.chip.scene")
 @click.option("--afe", "with_afe", is_flag=True, help="add each column's S1X/S2X samplers and SC AFE")
-@click.option("--split", type=click.Choice(["rows", "none"]), default="rows", show_default=True,
-              help="rows: one deck per array and row (fast, exact up to numerics); none: one deck")
+@click.option("--split", type=click.Choice(["columns", "rows", "none"]), default=None,
+              help="columns: a chain of decks per group of columns, one per row, the column state handed "
+                   "over (default with --afe); rows: one deck per array and row (default without; refused "
+                   "with --afe); none: one deck (default with --seed). See pixelkit.chip.frame")
 @click.option("--check", is_flag=True, help="also simulate undivided and report the largest difference")
 @click.option("--seed", type=int, default=None, help="Monte Carlo mismatch draw (GF180 statistical models)")
 @click.option("--t-exp", "t_exp", type=float, default=None,
@@ -30,10 +32,13 @@ from .common import design_arg, emit, json_opt, load, main, out_opt, output_path
 def array_cmd(design, rows, cols, scene, unit, with_afe, split, check, seed, t_exp, scheduler, out,
               backend, jobs, as_json):
     """Simulate one frame of both arrays (with column circuits) under a scene."""
-    from ..chip.frame import simulate_frame
+    from ..chip.frame import default_split, simulate_frame
     from ..chip.report import frame_table, plot_frame
     from ..chip.scene import default_map, load_map, photocurrents
     from ..fileio import write_atomic
+    if check and seed is not None:
+        raise click.UsageError("--check compares a split frame with the undivided deck; a Monte Carlo frame "
+                               "(--seed) is simulated as one deck already")
     d = load(design)
     m, default_unit = default_map(rows, d.secondary_per_pixel * cols, scene) if scene in ("gradient", "uniform") else load_map(scene)
     ph = photocurrents(d, rows, cols, m, unit or default_unit, t_exp)
@@ -46,7 +51,8 @@ def array_cmd(design, rows, cols, scene, unit, with_afe, split, check, seed, t_e
     data = {**f.as_dict(), **ph.as_dict(), "csv": str(folder / "frame.csv"),
             "plot": str(plot_frame(f, folder / "frame.png", f"{d.name}: {rows} x {cols} frame"))}
     if check:
-        ref = simulate_frame(d, ph.iph_p, ph.iph_s, split="rows" if split == "none" else "none", **kw)
+        undivided = f.split == "none"
+        ref = simulate_frame(d, ph.iph_p, ph.iph_s, split=default_split(with_afe) if undivided else "none", **kw)
         data["check_max_diff_V"] = max(float(abs(f.signal[k] - ref.signal[k]).max()) for k in f.signal)
         data["check_wall_s"] = ref.wall_s
     if f.failures:

@@ -2,7 +2,9 @@
 
 One seed = one chip: every MOSFET of the array, its column loads, samplers and AFEs
 draws its threshold and current factor from the model library's own statistics
-(``sw_stat_mismatch = 1``, ngspice ``.options seed`` per tile), every AFE capacitor from
+(``sw_stat_mismatch = 1``, ngspice ``.options seed``), once: the frame is one deck, so a
+column's load, samplers and AFE are the same devices for all its rows (a split frame
+would draw them again in every deck and blur column FPN into pixel FPN); every AFE capacitor from
 the technology's capacitor matching. The same chip is simulated dark and under a
 uniform flat field (50 % of the primary's full scale), and per array:
 
@@ -42,7 +44,7 @@ def run_monte_carlo(design, rows: int, cols: int, seed: int, with_afe: bool = Fa
     dark = np.zeros((rows, cols)), np.zeros((rows, n * cols))
     m, unit = default_map(rows, n * cols, "uniform")
     ph = photocurrents(design, rows, cols, m, unit)
-    kw = dict(with_afe=with_afe, mismatch_seed=seed, backend=backend, jobs=jobs, scheduler=scheduler)
+    kw = dict(with_afe=with_afe, mismatch_seed=seed, split="none", backend=backend, jobs=jobs, scheduler=scheduler)
     fd = simulate_frame(design, *dark, **kw)
     fl = simulate_frame(design, ph.iph_p, ph.iph_s, **kw)
     out = {"seed": seed, "rows": rows, "cols": cols, "with_afe": with_afe, "corner": design.corner_name,
