@@ -10,10 +10,13 @@ Figures (run on a quiet machine: the wall times scale with the load, the ratios 
 - ``parallel_speedup``: a 16-point sweep (``run_sweep``, dual-pixel bench with its AFEs,
   ~1 s a point) on 1 worker over the same on every core (2 here), each from an empty
   cache. Limit 1.9 on 2 cores.
-- array frames (``simulate_frame``, split by rows, with column loads): 2 x 2, 4 x 4,
-  8 x 8 and the whole chip 27 x 50 (both arrays; ``whole_array_s``; skipped by
-  ``--quick``); ``scaling_exponent`` k of t ~ pixels^k over those sizes; one full
-  27-row primary column with its AFE (``column_afe_s``, limit 60 s).
+- array frames (``simulate_frame``, both arrays, column loads): 2 x 2, 4 x 4, 8 x 8 without
+  the AFE (one deck per array and row), ``scaling_exponent`` k of t ~ pixels^k over them;
+  one full 27-row primary column with its S1X/S2X and AFE (``column_afe_s``, limit 60 s)
+  and the whole chip, 27 x 50 dual pixels with every column's load, samplers and AFE
+  (``whole_array_s``, limit 900 s; skipped by ``--quick``), both as column chains (one
+  deck per row and group of columns, the column state handed over), each with
+  ``*_decks`` and ``*_per_deck_s`` (wall time x workers / decks).
 - ``analytic_points_per_s``: the analytic C(V) discharge model's evaluations per second.
 - ``sizing_solve_s`` / ``sizing_vs_spice``: the casadi sizing solve against one SPICE run.
 - ``gap_diagnosis_s`` / ``gap_vs_spice``: gap diagnosis of 2000 rows against one SPICE
@@ -84,23 +87,24 @@ def parallel_speedup(d) -> dict:
 def _frame(d, rows, cols, with_afe=False, kinds=("primary", "secondary")):
     from pixelkit.chip.frame import simulate_frame
     from pixelkit.chip.scene import default_map, photocurrents
+    from pixelkit.spice.engine import default_jobs
     m, unit = default_map(rows, d.secondary_per_pixel * cols)
     ph = photocurrents(d, rows, cols, m, unit)
     _fresh_cache()
     f = simulate_frame(d, ph.iph_p, ph.iph_s, with_afe=with_afe, kinds=kinds)
     assert not f.failures, f.failures
-    return f.wall_s
+    return f.wall_s, f.decks, f.wall_s * default_jobs() / f.decks
 
 
 def array_scaling(d, quick: bool) -> dict:
-    sizes = [(2, 2), (4, 4), (8, 8)] + ([] if quick else [(27, 50)])
-    times = {f"{r}x{c}": _frame(d, r, c) for r, c in sizes}
+    sizes = [(2, 2), (4, 4), (8, 8)]
+    times = {f"{r}x{c}": _frame(d, r, c)[0] for r, c in sizes}
     px = np.array([r * c for r, c in sizes], float)
     k = float(np.polyfit(np.log(px), np.log(list(times.values())), 1)[0])
-    out = {"frame_s": times, "scaling_exponent": k,
-           "column_afe_s": _frame(d, 27, 1, with_afe=True, kinds=("primary",))}
-    if not quick:
-        out["whole_array_s"] = times["27x50"]
+    out = {"frame_s": times, "scaling_exponent": k}
+    runs = {"column_afe": (27, 1, ("primary",))} | ({} if quick else {"whole_array": (27, 50, ("primary", "secondary"))})
+    for name, (rows, cols, kinds) in runs.items():
+        out[f"{name}_s"], out[f"{name}_decks"], out[f"{name}_per_deck_s"] = _frame(d, rows, cols, True, kinds)
     return out
 
 
