@@ -122,3 +122,15 @@ def test_array_command_with_a_scene(cli, tmp_path):
     head = (tmp_path / "o" / "frame.csv").read_text().splitlines()[0]
     assert head == "kind,row,col,iph_A,signal_V,reset_level_V"
     assert (tmp_path / "o" / "frame.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_array_check_reports_the_split_against_the_undivided_decks(cli, tmp_path):
+    """``--check`` reruns the split and each array's undivided deck at converged tolerances:
+    a 3 x 1 frame with the AFE (column chains, hand-overs at rows 1 and 2) within 0.1 mV."""
+    code, out, err = cli("array", "designs/dual_pixel_revA.toml", "--rows", "3", "--cols", "1", "--afe", "--check",
+                         "--out", tmp_path / "o", "--json")
+    assert code == 0, err
+    c = json.loads(out)["check"]
+    assert c["split"] == "columns" and not c["void"]
+    assert set(c) >= {"max_diff_signal_V", "max_diff_reset_level_V", "max_diff_afe_V"}
+    assert 0 < max(v for k, v in c.items() if k.startswith("max_diff")) < 1e-4

@@ -248,3 +248,25 @@ def simulate_frame(design, iph_p, iph_s, with_afe: bool = False, split: str | No
                 afe[k][r, j] = a
     decks = len(tasks) * (rows if split == "columns" else 1)
     return Frame(rows, cols, sig, rst, afe, decks, time.perf_counter() - t0, split, failures, retried)
+
+
+#: Tolerances at which a split is judged against the undivided deck: at the defaults two decks
+#: with different step sequences already scatter by 0.2 - 0.4 mV (README), which would hide
+#: what the split itself changes; at reltol 1e-6, abstol 1e-12 the undivided deck moves by
+#: < 0.08 mV with trtol or the maximum step (abstol 1e-14 stops ngspice there).
+CONVERGED = (("reltol", 1e-6), ("abstol", 1e-12))
+
+
+def check_split(design, iph_p, iph_s, split: str | None = None, **kw) -> dict:
+    """The split frame against the undivided deck of each array, both at ``CONVERGED``
+    tolerances: largest differences (V) of the signal, reset level and AFE output, and any
+    failed or retried deck (a retried deck ran at looser options, so the check is void)."""
+    kw = dict(kw, options=CONVERGED)
+    f = simulate_frame(design, iph_p, iph_s, split=split, **kw)
+    refs = {k: simulate_frame(design, iph_p, iph_s, split="none", kinds=(k,), **kw) for k in KINDS}
+    out = {"split": f.split, "wall_s": f.wall_s + sum(r.wall_s for r in refs.values()),
+           "void": [e["deck"] for r in (f, *refs.values()) for e in r.failures + r.retried]}
+    for name, get in (("signal", lambda x: x.signal), ("reset_level", lambda x: x.reset_level), ("afe", lambda x: x.afe)):
+        if get(f):
+            out[f"max_diff_{name}_V"] = max(float(np.max(np.abs(get(f)[k] - get(refs[k])[k]))) for k in KINDS)
+    return out
