@@ -16,7 +16,7 @@ Figures (run on a quiet machine: the wall times scale with the load, the ratios 
   and the whole chip, 27 x 50 dual pixels with every column's load, samplers and AFE
   (``whole_array_s``, limit 900 s; skipped by ``--quick``), both as column chains (one
   deck per row and group of columns, the column state handed over), each with
-  ``*_decks`` and ``*_per_deck_s`` (wall time x workers / decks).
+  ``*_decks`` and ``*_per_deck_s`` (wall time x busy workers / decks).
 - ``analytic_points_per_s``: the analytic C(V) discharge model's evaluations per second.
 - ``sizing_solve_s`` / ``sizing_vs_spice``: the casadi sizing solve against one SPICE run.
 - ``gap_diagnosis_s`` / ``gap_vs_spice``: gap diagnosis of 2000 rows against one SPICE
@@ -93,7 +93,8 @@ def _frame(d, rows, cols, with_afe=False, kinds=("primary", "secondary")):
     _fresh_cache()
     f = simulate_frame(d, ph.iph_p, ph.iph_s, with_afe=with_afe, kinds=kinds)
     assert not f.failures, f.failures
-    return f.wall_s, f.decks, f.wall_s * default_jobs() / f.decks
+    tasks = f.decks // rows if f.split == "columns" else f.decks  # chains run their rows in turn
+    return f.wall_s, f.decks, f.wall_s * min(default_jobs(), tasks) / f.decks
 
 
 def array_scaling(d, quick: bool) -> dict:

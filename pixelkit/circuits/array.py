@@ -84,7 +84,8 @@ class Tile:
 #: The hold switches of a hand-over: 1 Ohm closed, 1e18 Ohm open (leaks < 4e-18 A at 3.3 V,
 #: < 1e-11 V on C11 over a row); no hysteresis.
 HOLD_SWITCH = Model("hold_sw", "sw", (("vt", 0.5), ("vh", 0.0), ("ron", 1.0), ("roff", 1e18)))
-#: The hold releases over this ramp, ending at ``Handoff.t`` (the switch opens mid-ramp).
+#: The hold releases over this ramp, ending at ``Handoff.t`` (the switch opens mid-ramp); at
+#: least 1e-10 of ``t`` so that the deck's 12 significant digits keep the two corners apart.
 HOLD_RELEASE = 1e-12
 
 
@@ -98,7 +99,7 @@ class Handoff:
     values: tuple
 
     def elements(self) -> list:
-        ctl = Pwl(((0.0, 1.0), (self.t - HOLD_RELEASE, 1.0), (self.t, 0.0)))
+        ctl = Pwl(((0.0, 1.0), (self.t - max(HOLD_RELEASE, 1e-10 * self.t), 1.0), (self.t, 0.0)))
         out = [Element("Vhold", ("hold_ctl", "0"), ctl)]
         for i, (node, v) in enumerate(self.values):
             out += [Element(f"Vheld{i}", (f"held_{i}", "0"), Pwl(v) if isinstance(v, tuple) else float(v)),
@@ -146,7 +147,8 @@ def whole(rows: int, cols: int) -> Tile:
 
 
 def tile_seed(seed: int, tile: Tile) -> int:
-    """The ngspice seed of one tile of a Monte Carlo frame: each tile draws its own devices."""
+    """The ngspice seed of one deck of a Monte Carlo frame (a frame is one deck per array, so
+    each array's devices are drawn once, from their own seed)."""
     return zlib.crc32(f"{seed}:{tile.kinds}:{tile.rows}:{tile.cols}".encode()) % 2_000_000_000 + 1
 
 

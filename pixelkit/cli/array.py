@@ -20,9 +20,9 @@ from .common import design_arg, emit, json_opt, load, main, out_opt, output_path
 @click.option("--split", type=click.Choice(["columns", "rows", "none"]), default=None,
               help="columns: a chain of decks per group of columns, one per row, the column state handed "
                    "over (default with --afe); rows: one deck per array and row (default without; refused "
-                   "with --afe); none: one deck (default with --seed). See pixelkit.chip.frame")
+                   "with --afe); none: one deck per array (default with --seed). See pixelkit.chip.frame")
 @click.option("--check", is_flag=True, help="also run the split and the undivided deck of each array at converged "
-              "tolerances (reltol 1e-6) and report the largest difference (limit 0.1 mV)")
+              "tolerances (reltol 1e-6) and report the largest difference; exit 1 above 0.1 mV or when void")
 @click.option("--seed", type=int, default=None, help="Monte Carlo mismatch draw (GF180 statistical models)")
 @click.option("--t-exp", "t_exp", type=float, default=None,
               help="simulated exposure in s (default: the experiment window); charge of t_int kept")
@@ -54,7 +54,8 @@ def array_cmd(design, rows, cols, scene, unit, with_afe, split, check, seed, t_e
     if check:
         c = check_split(d, ph.iph_p, ph.iph_s, default_split(with_afe) if f.split == "none" else f.split, **kw)
         data["check"] = c
-        data["check_max_diff_V"] = max(v for k, v in c.items() if k.startswith("max_diff"))
+        diffs = [v for k, v in c.items() if k.startswith("max_diff") and v is not None]
+        data["check_max_diff_V"] = max(diffs) if diffs else None
     if f.failures:
         data["error"] = "some decks failed"
 
@@ -63,9 +64,11 @@ def array_cmd(design, rows, cols, scene, unit, with_afe, split, check, seed, t_e
                  f"clipped (saturated): {x['clipped']}", f"table: {x['csv']}", f"plot: {x['plot']}"]
         if "check" in x:
             c = x["check"]
+            worst = "-" if x["check_max_diff_V"] is None else f"{x['check_max_diff_V'] * 1e3:.3f}"
             lines.append(f"{c['split']} split vs the undivided deck of each array, at reltol 1e-6 / abstol 1e-12: "
-                         f"largest difference {x['check_max_diff_V'] * 1e3:.3f} mV (signal, reset level"
-                         f"{', AFE output' if 'max_diff_afe_V' in c else ''}; limit 0.1 mV)")
+                         f"largest difference {worst} mV (signal, reset level"
+                         f"{', AFE output' if 'max_diff_afe_V' in c else ''}; limit {c['limit_V'] * 1e3:g} mV): "
+                         f"{'ok' if c['ok'] else 'FAILED'}")
             if c["void"]:
                 lines.append(f"check void: decks failed or ran at looser options: {', '.join(c['void'][:5])}")
         lines += [f"FAILED {e['deck']}: {e['message']}" for e in x["failures"]]
@@ -74,3 +77,5 @@ def array_cmd(design, rows, cols, scene, unit, with_afe, split, check, seed, t_e
     emit(data, as_json, text)
     if f.failures:
         raise SystemExit(4)
+    if check and not data["check"]["ok"]:
+        raise SystemExit(1)
