@@ -23,7 +23,7 @@ import numpy as np
 
 from ..errors import SimulationError
 from . import cache as cache_mod
-from . import scratch
+from . import flatlib, scratch
 from .batch import abort_runs, ngspice_version, run_batch
 from .netlist import Netlist
 from .options import DEFAULTS, RETRIES, failure_lines, merged
@@ -202,7 +202,7 @@ def _key(net: Netlist, version: str, backend: str) -> str:
 
 def _run(decks, backend, jobs):
     from ..progress import progress
-    texts = [(d.text(), d.model_links()) for d in decks]
+    texts = [flatlib.run_deck(d.text(), d.model_links(), d.includes, scratch.root()) for d in decks]
     bar = dict(total=len(texts), desc=f"ngspice ({decks[0].title}...)") if len(texts) > 1 else None
     if backend == "batch":
         if jobs == 1 or len(texts) == 1:
