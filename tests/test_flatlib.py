@@ -5,6 +5,7 @@ Independent path: ngspice reading the library itself. The comparison fails when 
 section is dropped (the deck no longer runs) or a reference is expanded to the
 wrong section (checked by hand: nfet_03v3_t -> nfet_03v3_f changes every vector).
 """
+import os
 from dataclasses import replace
 
 import numpy as np
@@ -78,6 +79,19 @@ def test_nested_files_resolve_from_the_including_file_and_names_ignore_case(tmp_
     })
     own, flat = _both_ways(*_deck(folder, "a.lib", "top"))
     assert _node_a(own) == _node_a(flat) == 12.0
+    # a nested file edited later in the same process is read again
+    c = folder / "sub" / "c.lib"
+    c.write_text(".lib y\n.param pc=8\n.endl\n")
+    os.utime(c, ns=(c.stat().st_mtime_ns + 10**9,) * 2)
+    own, flat = _both_ways(*_deck(folder, "a.lib", "top"))
+    assert _node_a(own) == _node_a(flat) == 18.0
+
+
+def test_empty_section_is_flattened(tmp_path):
+    folder = _lib(tmp_path, {"a.lib": ".lib top\n.lib 'a.lib' empty\n.param pa=3 pb=1\n.endl\n"
+                                      ".lib empty\n.endl\n"})
+    own, flat = _both_ways(*_deck(folder, "a.lib", "top"))
+    assert _node_a(own) == _node_a(flat) == pytest.approx(3.0, rel=1e-12)
 
 
 def test_section_referenced_twice_is_expanded_twice(tmp_path):

@@ -33,6 +33,7 @@ with the flattened include and with ngspice's own ``.lib`` processing.
 from __future__ import annotations
 
 import hashlib
+import os
 import re
 import threading
 from functools import lru_cache
@@ -75,38 +76,60 @@ def run_deck(text: str, links: dict, includes, root: Path) -> tuple[str, dict]:
 
 def _flat_file(inc: Include, root: Path) -> str | None:
     """The flattened section's file name in ``root/flatlib`` (written once), or None."""
-    try:
-        st = inc.file.stat()
-    except OSError:
-        return None
-    body = flat_section(str(inc.file), inc.section, st.st_size, st.st_mtime_ns, str(inc.folder))
+    body = flat_section(str(inc.file), inc.section, str(inc.folder))
     if body is None:
         return None
-    name = hashlib.sha256(body.encode("latin-1")).hexdigest()[:20] + ".lib"
+    data = body.encode("latin-1")
+    name = hashlib.sha256(data).hexdigest()[:20] + ".lib"
     target = root / LINK / name
     with _LOCK:
         if path_kind(target) != "file":
             target.parent.mkdir(exist_ok=True)
-            write_atomic(target, body.encode("latin-1"))
+            write_atomic(target, data)
     return name
 
 
-@lru_cache(maxsize=32)
-def flat_section(path: str, section: str, _size: int, _mtime_ns: int, folder: str) -> str | None:
+_FLAT: dict = {}  # (file, section, folder) -> (stamps of every file read, body or None)
+
+
+def flat_section(path: str, section: str, folder: str) -> str | None:
     """The lines of ``section`` of the library file ``path`` with every nested reference
-    expanded as ngspice does, or None when it holds anything not reproduced exactly."""
+    expanded as ngspice does, or None when it holds anything not reproduced exactly.
+    Kept per process while none of the files it read has changed (size, mtime)."""
+    key = (path, section.lower(), folder)
+    hit = _FLAT.get(key)
+    if hit is not None and hit[0] == _stamps(f for f, *_ in hit[0]):
+        return hit[1]
+    read: list = []
     try:
-        lines = _expand(Path(path), section, Path(folder).resolve(), 0)
+        lines = _expand(Path(path), section, Path(folder).resolve(), 0, read)
+        body = f"* {Path(path).name} section {section}, flattened by pixelkit\n" + "\n".join(lines) + "\n"
     except _NotFlat:
-        return None
-    return f"* {Path(path).name} section {section}, flattened by pixelkit\n" + "\n".join(lines) + "\n"
+        body = None
+    _FLAT[key] = (_stamps(dict.fromkeys([path, *read])), body)
+    return body
 
 
-def _expand(file: Path, section: str, root: Path, depth: int) -> list[str]:
+def _stamps(files) -> tuple:
+    out = []
+    for f in files:
+        try:
+            st = os.stat(f)
+            out.append((f, st.st_size, st.st_mtime_ns))
+        except OSError:
+            out.append((f, -1, -1))
+    return tuple(out)
+
+
+def _expand(file: Path, section: str, root: Path, depth: int, read: list) -> list[str]:
     if depth > _DEPTH:
         raise _NotFlat("reference cycle")
+    read.append(str(file))
+    sections = _sections(file)
+    if section.lower() not in sections:
+        raise _NotFlat("no such section")
     out = []
-    for line in _sections(file).get(section.lower(), None) or _missing():
+    for line in sections[section.lower()]:
         if _INCLUDE.match(line):
             raise _NotFlat("include inside a section")
         ref = _REFERENCE.match(line)
@@ -117,14 +140,10 @@ def _expand(file: Path, section: str, root: Path, depth: int) -> list[str]:
             nested = (file.parent / name).resolve()
             if not nested.is_relative_to(root) or path_kind(nested) != "file":
                 raise _NotFlat("reference outside the model folder")
-            out += _expand(nested, ref.group(4), root, depth + 1)
+            out += _expand(nested, ref.group(4), root, depth + 1, read)
         else:
             out.append(line)
     return out
-
-
-def _missing():
-    raise _NotFlat("no such section")
 
 
 @lru_cache(maxsize=16)
@@ -150,5 +169,8 @@ def _sections_of(path: str, _size: int, _mtime_ns: int) -> dict:
 
 
 def _sections(file: Path) -> dict:
-    st = file.stat()
-    return _sections_of(str(file), st.st_size, st.st_mtime_ns)
+    try:
+        st = file.stat()
+        return _sections_of(str(file), st.st_size, st.st_mtime_ns)
+    except OSError:
+        raise _NotFlat("unreadable file") from None
