@@ -7,7 +7,7 @@ back - fresh, cached or re-simulated after damage - is checked against it.
 import numpy as np
 import pytest
 
-from pixelkit.spice import Element, Netlist, Tran, simulate
+from pixelkit.spice import Element, Netlist, Param, Tran, simulate
 from pixelkit.spice import cache as cache_mod
 from pixelkit.spice import engine
 from pixelkit.spice.batch import ngspice_version
@@ -118,3 +118,28 @@ def test_the_report_counter_sees_every_deck(backend):
     assert all(_right(res, r) for res, r in zip(first + again, (1e3, 2e3, 3e3) * 2))
     assert (counter.runs, counter.cached, counter.done, counter.total) == (3, 3, 6, 6)
     assert not engine._OBSERVERS  # the observer is gone once the block ends
+
+
+@pytest.mark.parametrize("edited", ["a.lib", "b.lib"])
+def test_an_edited_model_file_is_simulated_again(tmp_path, edited):
+    """The key covers every file the library reads (the nested b.lib too), as it is now:
+    an edit during the session gives the new numbers, not the cached ones. Reference: the
+    RC derivation with the edited resistance."""
+    import os
+    from pixelkit.tech.modellib import Include
+    folder = tmp_path / "models"
+    folder.mkdir()
+    (folder / "a.lib").write_text(".lib top\n.param rscale=1\n.lib 'b.lib' x\n.endl\n")
+    (folder / "b.lib").write_text(".lib x\n.param rr='1000*rscale'\n.endl\n")
+    inc = Include("lib", folder.resolve(), "a.lib", "top")
+
+    def net():
+        return Netlist("rclib", (Element("V1", ("a", "0"), 1.0), Element("R1", ("a", "b"), Param("rr")),
+                                 Element("C1", ("b", "0"), 1e-9)), Tran(1e-8, 5e-6, 0, 1e-8, uic=True),
+                       includes=(inc,))
+    assert _right(simulate(net()), 1000.0)
+    f = folder / edited
+    f.write_text(f.read_text().replace("rscale=1", "rscale=2") if edited == "a.lib"
+                 else f.read_text().replace("1000*", "2000*"))
+    os.utime(f, ns=(f.stat().st_mtime_ns + 10**9,) * 2)
+    assert _right(simulate(net()), 2000.0)

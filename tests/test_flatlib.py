@@ -7,6 +7,7 @@ wrong section (checked by hand: nfet_03v3_t -> nfet_03v3_f changes every vector)
 """
 import os
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -52,10 +53,15 @@ def test_afe_and_monte_carlo_decks_bit_identical(ref_design):
 
 
 def _lib(tmp_path, files):
+    """A model folder: str or bytes file bodies, ("link", target) for a symlink."""
     folder = tmp_path / "lib"
     for name, body in files.items():
-        (folder / name).parent.mkdir(parents=True, exist_ok=True)
-        (folder / name).write_text(body)
+        f = folder / name
+        f.parent.mkdir(parents=True, exist_ok=True)
+        if isinstance(body, tuple):
+            f.symlink_to(body[1])
+        else:
+            f.write_bytes(body if isinstance(body, bytes) else body.encode())
     return folder
 
 
@@ -121,3 +127,74 @@ def test_section_referenced_twice_is_expanded_twice(tmp_path):
 def test_what_is_not_reproduced_exactly_is_left_to_ngspice(tmp_path, files, why):
     text, links, incs = _deck(_lib(tmp_path, files), "a.lib", "top")
     assert flatlib.run_deck(text, links, incs, scratch.root()) == (text, links), why
+
+
+_B = ".lib x\n.param pa=7\n.endl\n"
+
+
+@pytest.mark.parametrize("files, flattened", [
+    # read as ngspice reads it: flattened, same numbers
+    ({"a.lib": b".LIB top\r\n.lib 'b.lib' X\r\n\r\n.param pb=3\r\n.ENDL top\r\n",
+      "b.lib": b".Lib x\r\n\t.param pa=7\r\n.endl\r\n"}, True),
+    ({"a.lib": "title line\n.lib 'b.lib' x\n.lib top\n.param pb=2\n.lib 'b.lib' x\n.endl\n", "b.lib": _B}, True),
+    ({"a.lib": ".lib top\n* tox 41 \u00c5 oxide\n.param pa=7 pb=2 $ \u00c5\n.endl\n"}, True),
+    # nested files resolve from the real folder of a linked file (sub/b.lib, not b.lib)
+    ({"sub/real.lib": ".lib top\n.param pb=2\n.lib 'b.lib' x\n.endl\n", "sub/b.lib": _B,
+      "b.lib": ".lib x\n.param pa=1000\n.endl\n", "a.lib": ("link", "sub/real.lib")}, True),
+    # read differently by ngspice, or not reproduced: left to ngspice
+    ({"a.lib": ".lib top\n.param pb=3\n.lib 'b.lib' x\n+ pa=100\n.endl\n", "b.lib": _B}, False),
+    ({"a.lib": ".include 'defs.inc'\n.lib top\n.param pa=1 pb=1\n.endl\n",
+      "defs.inc": ".lib top\n.param pa=9 pb=1\n.endl\n"}, False),
+    ({"a.lib": ".lib top\n.lib 'B.lib' x\n.lib 'b.lib' y\n.endl\n", "B.lib": ".lib x\n.param pa=7\n.endl\n",
+      "b.lib": ".lib x\n.param pa=1\n.endl\n.lib y\n.param pb=2\n.endl\n"}, False),
+    ({"a.lib": ".lib top\n.param pa=2 pb=3\n.endlxyz\n.param pa=5\n.endl\n"}, False),
+    ({"a.lib": ".lib top\n.param pb=3\n.library 'b.lib' x\n.endl\n", "b.lib": _B}, False),
+    ({"a.lib": b".lib top\n.param pa=7 pb=2 $ note\rpb=9\n.endl\n"}, False),
+    ({"a.lib": b".lib top\n.param pb=2\n.lib 'a.lib' \xe4x\n.endl\n.lib \xc4x\n.param pa=7\n.endl\n"}, False),
+    ({"a.lib": ".lib top\n.param pb=2\n.lib \"b c.lib\" x\n.endl\n", "b c.lib": _B}, False),
+    ({"a.lib": ".lib top $ typical\n.param pa=1 pb=1\n.endl\n.lib TOP\n.param pa=2 pb=1\n.endl\n"}, False),
+])
+def test_library_quirks_read_as_ngspice_reads_them(tmp_path, files, flattened):
+    """Each case from an independent review against ngspice 39: flattened when it can be
+    read exactly, left to ngspice otherwise; either way the deck gives ngspice's numbers."""
+    text, links, incs = _deck(_lib(tmp_path, files), "a.lib", "top")
+    flat_text, flat_links = flatlib.run_deck(text, links, incs, scratch.root())
+    assert (flat_text != text) is flattened
+    own, flat = run_batch(text, links)[0], run_batch(flat_text, flat_links)[0]
+    assert bool(own) == bool(flat)
+    if own:
+        assert _node_a(own) == _node_a(flat)
+
+
+def test_no_control_block_reaches_ngspice_through_a_linked_file(tmp_path):
+    # the real file's folder holds a harmless x.lib; the link's folder an x.lib with a
+    # control block that the kit's scan (which follows real paths, as ngspice) never sees
+    marker = tmp_path / "ran"
+    folder = _lib(tmp_path, {
+        "sub/real.lib": ".lib top\n.param pa=1 pb=1\n.lib 'x.lib' s\n.endl\n",
+        "sub/x.lib": ".lib s\n.param q=1\n.endl\n",
+        "x.lib": f".lib s\n.control\nshell touch {marker}\n.endc\n.endl\n",
+        "a.lib": ("link", "sub/real.lib")})
+    text, links, incs = _deck(folder, "a.lib", "top")
+    flat_text, flat_links = flatlib.run_deck(text, links, incs, scratch.root())
+    assert run_batch(flat_text, flat_links)[0] and not marker.exists()
+
+
+def test_gf180_diode_sections_bit_identical():
+    folder = Path(flatlib.__file__).resolve().parents[1] / "tech" / "models" / "gf180mcu"
+    for corner in ("diode_typical", "diode_ss", "diode_ff"):
+        incs = (Include("lib", folder, "sm141064.ngspice", "typical"),
+                Include("lib", folder, "sm141064.ngspice", corner), Include("include", folder, "design.ngspice", ""))
+        text = ("* t\n" + "\n".join(i.line("models") for i in incs) + "\nv1 a 0 dc 0\n"
+                "d1 0 a diode_nd2ps_03v3 area=1e-10 pj=4e-5\nd2 0 a diode_pd2nw_03v3 area=1e-10 pj=4e-5\n"
+                ".dc v1 -1 0.8 0.01\n.end\n")
+        _identical(*_both_ways(text, {"models": folder}, incs))
+
+
+def test_the_engine_hands_ngspice_the_flattened_deck(ref_design, monkeypatch):
+    from pixelkit.spice import engine, simulate
+    seen = []
+    real = engine.run_batch
+    monkeypatch.setattr(engine, "run_batch", lambda text, links: seen.append(text) or real(text, links))
+    simulate(bench_netlist(ref_design, "bench_dual_pixel"), use_cache=False)
+    assert seen and all(f'.include "{flatlib.LINK}/' in t and ".lib " not in t for t in seen)

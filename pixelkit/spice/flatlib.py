@@ -1,4 +1,4 @@
-"""Model-library sections flattened once per process, so a run does not re-read the library.
+"""Model-library sections flattened once per process, so ngspice does not pre-process the whole library per deck.
 
 A deck names its corner as ``.lib "models/sm141064.ngspice" typical``. ngspice
 then reads and pre-processes the whole 1.3 MB, 47,000-line GF180 file (it opens it
@@ -18,18 +18,24 @@ The expansion follows ngspice's semantics, measured on ngspice 39 rather than
 assumed: a reference is replaced by the named section's lines in place, each
 time it appears (a section referenced twice is expanded twice: a device line in
 it is then reported as a duplicate), recursively; the file of a reference is
-resolved from the folder of the file that holds it; section names compare
-without case; a section ends at the first ``.endl`` (its name is not checked:
-GF180's ``.LIB dio`` ends with ``.endl diode``). Anything this module does not
-reproduce exactly - an ``.include`` inside a section (its path would be resolved
-from another folder), a reference leaving the model folder, a missing file or
-section, a reference cycle, a section defined twice, a ``.lib`` line
-with more than a file and a section - leaves the deck's own ``.lib`` line in place, so
-ngspice reads the library itself as before (and reports what is wrong with it).
+resolved from the real folder of the file that holds it (a linked file's
+target); section names compare without (ASCII) case; a section ends at its
+``.endl`` (whose name is not checked: GF180's ``.LIB dio`` ends with ``.endl
+diode``); files are split at newlines only. The module flattens only what it
+reads exactly as ngspice does and leaves the deck's own ``.lib`` line to ngspice
+for anything else: an ``.include``, ``.control``, ``@`` line, ``\\`` line end or
+stray carriage return anywhere in a file it reads, a continuation of a ``.lib``
+or ``.endl`` line, a ``.lib`` / ``.endl`` line of any other shape (ngspice matches
+them as prefixes: ``.library``, ``.endlx``; comments after them; quoted names with
+spaces), a reference leaving the model folder, two files whose names differ only
+in case (ngspice takes them as one), a non-ASCII section name, a missing file or
+section, a cycle, a section defined twice.
 
-Independent check (``tests/test_flatlib.py``): decks of every corner, of the
-Monte Carlo mismatch include and of the AFE give bit-identical raw vectors
-with the flattened include and with ngspice's own ``.lib`` processing.
+Independent check (``tests/test_flatlib.py``, ngspice's own ``.lib`` processing):
+decks of every corner, the GF180 diode sections, the Monte Carlo mismatch include
+and the AFE give bit-identical vectors both ways; 13 quirk cases from an
+independent review each give ngspice's numbers, flattened or left to ngspice as
+listed; no control block reaches ngspice through a linked file.
 """
 from __future__ import annotations
 
@@ -44,11 +50,14 @@ from ..fileio import path_kind, write_atomic
 from ..tech.modellib import Include
 
 LINK = "flatlib"
-_DEFINE = re.compile(r"^[ \t]*\.lib[ \t]+([^\s'\"]+)[ \t]*$", re.I)
-_REFERENCE = re.compile(r"""^[ \t]*\.lib[ \t]+(?:'([^']+)'|"([^"]+)"|(\S+))[ \t]+(\S+)[ \t]*$""", re.I)
-_ENDL = re.compile(r"^[ \t]*\.endl\b", re.I)
-_INCLUDE = re.compile(r"^[ \t]*\.inc", re.I)
-_ANY_LIB = re.compile(r"^[ \t]*\.lib\b", re.I)
+_TOKEN = r"[^'\"\s]+"  # ngspice ends a file or section token at white space or a quote
+_DEFINE = re.compile(rf"^[ \t]*\.lib[ \t]+({_TOKEN})[ \t]*$", re.I)
+_REFERENCE = re.compile(rf"""^[ \t]*\.lib[ \t]+(?:'({_TOKEN})'|"({_TOKEN})"|({_TOKEN}))[ \t]+({_TOKEN})[ \t]*$""", re.I)
+_ENDL = re.compile(r"^[ \t]*\.endl([ \t].*)?$", re.I)
+_LIB_OR_ENDL = re.compile(r"^[ \t]*\.(lib|endl)", re.I)  # ngspice matches these as prefixes
+_REFUSED = re.compile(r"^[ \t]*(\.inc|\.control|\.endc|@)", re.I)
+_CONTINUATION = re.compile(r"^[ \t]*\+")
+_COMMENT_OR_BLANK = re.compile(r"^[ \t]*([*$]|$)")
 _DEPTH = 50
 _LOCK = threading.Lock()
 
@@ -96,52 +105,56 @@ _FLAT: dict = {}  # (file, section, folder) -> (stamps of every file read, body 
 def flat_section(path: str, section: str, folder: str) -> str | None:
     """The lines of ``section`` of the library file ``path`` with every nested reference
     expanded as ngspice does, or None when it holds anything not reproduced exactly.
-    Kept per process while none of the files it read has changed (size, mtime)."""
-    key = (path, section.lower(), folder)
+    Kept per process while none of the files it read has changed (size, mtime, as
+    stated before each was read)."""
+    key = (path, section, folder)
     hit = _FLAT.get(key)
-    if hit is not None and hit[0] == _stamps(f for f, *_ in hit[0]):
+    if hit is not None and hit[0] == tuple(_stamp(f) for f, *_ in hit[0]):
         return hit[1]
-    read: list = []
+    first, read = _stamp(path), {}
     try:
-        lines = _expand(Path(path), section, Path(folder).resolve(), 0, read)
+        lines = _expand(Path(path).resolve(), section, Path(folder).resolve(), 0, read)
+        names = [f.lower() for f in read]
+        if len(set(names)) != len(names):
+            raise _NotFlat("two files whose names differ only in case (ngspice takes them as one)")
         body = f"* {Path(path).name} section {section}, flattened by pixelkit\n" + "\n".join(lines) + "\n"
     except _NotFlat:
         body = None
-    _FLAT[key] = (_stamps(dict.fromkeys([path, *read])), body)
+    _FLAT[key] = ((first, *read.values()), body)  # the name as given too: a link may be repointed
     return body
 
 
-def _stamps(files) -> tuple:
-    out = []
-    for f in files:
-        try:
-            st = os.stat(f)
-            out.append((f, st.st_size, st.st_mtime_ns))
-        except OSError:
-            out.append((f, -1, -1))
-    return tuple(out)
+def _stamp(f: str) -> tuple:
+    try:
+        st = os.stat(f)
+        return f, st.st_size, st.st_mtime_ns
+    except OSError:
+        return f, -1, -1
 
 
-def _expand(file: Path, section: str, root: Path, depth: int, read: list) -> list[str]:
+def _fold(name: str) -> str:
+    if not name.isascii():
+        raise _NotFlat("a section name outside ASCII (ngspice folds only ASCII case)")
+    return name.lower()
+
+
+def _expand(file: Path, section: str, root: Path, depth: int, read: dict) -> list[str]:
     if depth > _DEPTH:
         raise _NotFlat("reference cycle")
-    read.append(str(file))
-    sections = _sections(file)
-    if section.lower() not in sections:
+    if not file.is_relative_to(root) or path_kind(file) != "file":
+        raise _NotFlat("a file outside the model folder, or missing")
+    stamp = read.setdefault(str(file), _stamp(str(file)))  # stated before the read
+    sections = _sections_of(*stamp)
+    if _fold(section) not in sections:
         raise _NotFlat("no such section")
     out = []
-    for line in sections[section.lower()]:
-        if _INCLUDE.match(line):
-            raise _NotFlat("include inside a section")
+    for line in sections[_fold(section)]:
         ref = _REFERENCE.match(line)
-        if _ANY_LIB.match(line) and not ref:
-            raise _NotFlat("a .lib line that is not 'FILE SECTION'")
         if ref:
             name = next(g for g in ref.groups()[:3] if g)
-            nested = (file.parent / name).resolve()
-            if not nested.is_relative_to(root) or path_kind(nested) != "file":
-                raise _NotFlat("reference outside the model folder")
-            out += _expand(nested, ref.group(4), root, depth + 1, read)
+            out += _expand((file.parent / name).resolve(), ref.group(4), root, depth + 1, read)
+        elif _LIB_OR_ENDL.match(line):
+            raise _NotFlat("a .lib line that is not 'FILE SECTION'")
         else:
             out.append(line)
     return out
@@ -149,12 +162,32 @@ def _expand(file: Path, section: str, root: Path, depth: int, read: list) -> lis
 
 @lru_cache(maxsize=16)
 def _sections_of(path: str, _size: int, _mtime_ns: int) -> dict:
-    sections, name, body = {}, None, []
-    for line in Path(path).read_text(encoding="latin-1").splitlines():
+    """Section name -> its lines, read as bytes and split at newlines only (as ngspice
+    does). Refused (None for the caller): anything whose reading ngspice does differently
+    or that the kit does not run - an include, a control block, a ``@`` line, a ``\\``
+    line ending, a stray carriage return, a continuation of a ``.lib`` or ``.endl`` line,
+    a ``.lib`` / ``.endl`` line of another shape."""
+    if _size < 0:
+        raise _NotFlat("unreadable file")
+    try:
+        raw = Path(path).read_bytes().decode("latin-1")
+    except OSError:
+        raise _NotFlat("unreadable file") from None
+    sections, name, body, after_lib = {}, None, [], False
+    for line in raw.split("\n"):
+        line = line[:-1] if line.endswith("\r") else line
+        if _REFUSED.match(line) or "\r" in line or line.rstrip(" \t").endswith("\\\\"):
+            raise _NotFlat("an include, control block, '@', '\\\\' or carriage return")
+        if _CONTINUATION.match(line) and after_lib:
+            raise _NotFlat("a continuation of a .lib or .endl line")
+        if not _COMMENT_OR_BLANK.match(line):
+            after_lib = bool(_LIB_OR_ENDL.match(line))
         if name is None:
-            m = _DEFINE.match(line)
-            if m:
-                name, body = m.group(1).lower(), []
+            define = _DEFINE.match(line)
+            if define:
+                name, body = _fold(define.group(1)), []
+            elif _LIB_OR_ENDL.match(line) and not _REFERENCE.match(line):
+                raise _NotFlat("a .lib or .endl line of another shape")
         elif _ENDL.match(line):
             if name in sections:
                 raise _NotFlat("a section defined twice")
@@ -167,11 +200,3 @@ def _sections_of(path: str, _size: int, _mtime_ns: int) -> dict:
     if name is not None:
         raise _NotFlat("section without .endl")
     return sections
-
-
-def _sections(file: Path) -> dict:
-    try:
-        st = file.stat()
-        return _sections_of(str(file), st.st_size, st.st_mtime_ns)
-    except OSError:
-        raise _NotFlat("unreadable file") from None

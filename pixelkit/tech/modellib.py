@@ -58,12 +58,39 @@ class ModelLibrary:
         return self.corners[corner]
 
 
-@lru_cache(maxsize=16)
 def files_fingerprint(files: tuple[str, ...]) -> str:
+    """Hash of the model files and of every file they include or reference (followed as
+    ngspice follows them, wherever they lie), recomputed whenever one of them changed
+    (size, mtime): an edit of a nested file, or of any file during a session, changes it."""
+    return _fingerprint(tuple(files), _closure(tuple(files)))
+
+
+def _closure(files: tuple[str, ...]) -> tuple:
+    """(path, size, mtime) of the files and of the files they include, stated before reading."""
+    out, todo, seen = [], [Path(f) for f in files], set()
+    while todo and len(seen) < 200:
+        f = todo.pop(0).resolve()
+        if f in seen:
+            continue
+        seen.add(f)
+        try:
+            st = f.stat()
+        except OSError:
+            out.append((str(f), -1, -1))
+            continue
+        out.append((str(f), st.st_size, st.st_mtime_ns))
+        todo += [Path(n) for n in _scan(str(f), st.st_size, st.st_mtime_ns, "/")[1]]
+    return tuple(out)
+
+
+@lru_cache(maxsize=64)
+def _fingerprint(names: tuple[str, ...], stamps: tuple) -> str:
     h = hashlib.sha256()
-    for f in files:
+    for f in names:
         h.update(f.encode())
-        h.update(Path(f).read_bytes())
+    for path, size, _ in stamps:
+        h.update(path.encode())
+        h.update(Path(path).read_bytes() if size >= 0 else b"(missing)")
     return h.hexdigest()[:16]
 
 
