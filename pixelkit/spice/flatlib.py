@@ -40,14 +40,13 @@ listed; no control block reaches ngspice through a linked file.
 from __future__ import annotations
 
 import hashlib
-import os
 import re
 import threading
 from functools import lru_cache
 from pathlib import Path
 
 from ..fileio import path_kind, write_atomic
-from ..tech.modellib import Include
+from ..tech.modellib import Include, file_stamp
 
 LINK = "flatlib"
 _TOKEN = r"[^'\"\s]+"  # ngspice ends a file or section token at white space or a quote
@@ -89,14 +88,19 @@ def _flat_file(inc: Include, root: Path) -> str | None:
     body = flat_section(str(inc.file), inc.section, str(inc.folder))
     if body is None:
         return None
-    data = body.encode("latin-1")
-    name = hashlib.sha256(data).hexdigest()[:20] + ".lib"
+    name = _file_name(body)
     target = root / LINK / name
     with _LOCK:
         if path_kind(target) != "file":
             target.parent.mkdir(exist_ok=True)
-            write_atomic(target, data)
+            write_atomic(target, body.encode("latin-1"))
     return name
+
+
+@lru_cache(maxsize=32)
+def _file_name(body: str) -> str:
+    """The flattened file's name: its content's hash (hashed once per body, not per deck)."""
+    return hashlib.sha256(body.encode("latin-1")).hexdigest()[:20] + ".lib"
 
 
 _FLAT: dict = {}  # (file, section, folder) -> (stamps of every file read, body or None)
@@ -109,9 +113,9 @@ def flat_section(path: str, section: str, folder: str) -> str | None:
     stated before each was read)."""
     key = (path, section, folder)
     hit = _FLAT.get(key)
-    if hit is not None and hit[0] == tuple(_stamp(f) for f, *_ in hit[0]):
+    if hit is not None and hit[0] == tuple(file_stamp(f) for f, *_ in hit[0]):
         return hit[1]
-    first, read = _stamp(path), {}
+    first, read = file_stamp(path), {}
     try:
         lines = _expand(Path(path).resolve(), section, Path(folder).resolve(), 0, read)
         names = [f.lower() for f in read]
@@ -122,14 +126,6 @@ def flat_section(path: str, section: str, folder: str) -> str | None:
         body = None
     _FLAT[key] = ((first, *read.values()), body)  # the name as given too: a link may be repointed
     return body
-
-
-def _stamp(f: str) -> tuple:
-    try:
-        st = os.stat(f)
-        return f, st.st_size, st.st_mtime_ns
-    except OSError:
-        return f, -1, -1
 
 
 def _fold(name: str) -> str:
@@ -143,12 +139,12 @@ def _expand(file: Path, section: str, root: Path, depth: int, read: dict) -> lis
         raise _NotFlat("reference cycle")
     if not file.is_relative_to(root) or path_kind(file) != "file":
         raise _NotFlat("a file outside the model folder, or missing")
-    stamp = read.setdefault(str(file), _stamp(str(file)))  # stated before the read
-    sections = _sections_of(*stamp)
-    if _fold(section) not in sections:
+    stamp = read.setdefault(str(file), file_stamp(str(file)))  # stated before the read
+    body = _sections_of(*stamp).get(_fold(section))
+    if body is None:
         raise _NotFlat("no such section")
     out = []
-    for line in sections[_fold(section)]:
+    for line in body:
         ref = _REFERENCE.match(line)
         if ref:
             name = next(g for g in ref.groups()[:3] if g)

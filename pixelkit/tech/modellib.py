@@ -12,6 +12,7 @@ libraries you would run yourself.
 from __future__ import annotations
 
 import hashlib
+import os
 import re
 from dataclasses import dataclass
 from functools import lru_cache
@@ -67,20 +68,37 @@ def files_fingerprint(files: tuple[str, ...]) -> str:
 
 def _closure(files: tuple[str, ...]) -> tuple:
     """(path, size, mtime) of the files and of the files they include, stated before reading."""
-    out, todo, seen = [], [Path(f) for f in files], set()
+    return tuple((str(f), -1, -1) if isinstance(st, OSError) else (str(f), st.st_size, st.st_mtime_ns)
+                 for f, st, _ in _walk(files, "/"))
+
+
+def file_stamp(path: str) -> tuple:
+    """(path, size, mtime in ns) of a file; size and mtime -1 when it cannot be stated."""
+    try:
+        st = os.stat(path)
+        return path, st.st_size, st.st_mtime_ns
+    except OSError:
+        return path, -1, -1
+
+
+def _walk(paths, root: str):
+    """Each file of the include closure of ``paths`` (the files their ``.include``/``.lib``
+    lines name, inside ``root``), once: (resolved path, its stat or the OSError that stopped
+    reading it, holds a .control line)."""
+    seen, todo = set(), [Path(p).resolve() for p in paths]
     while todo and len(seen) < 200:
-        f = todo.pop(0).resolve()
+        f = todo.pop(0)
         if f in seen:
             continue
         seen.add(f)
         try:
             st = f.stat()
-        except OSError:
-            out.append((str(f), -1, -1))
+            has_control, nested = _scan(str(f), st.st_size, st.st_mtime_ns, root)
+        except OSError as exc:
+            yield f, exc, False
             continue
-        out.append((str(f), st.st_size, st.st_mtime_ns))
-        todo += [Path(n) for n in _scan(str(f), st.st_size, st.st_mtime_ns, "/")[1]]
-    return tuple(out)
+        yield f, st, has_control
+        todo += [Path(n) for n in nested]
 
 
 @lru_cache(maxsize=64)
@@ -160,23 +178,13 @@ _NESTED = re.compile(rb"""^[ \t]*\.(?:include|inc|lib)[ \t]+['"]?([^'"\s]+)""", 
 
 def _refuse_control_blocks(path: Path, folder: Path, source: str, where: str) -> None:
     """Refuse a model file holding a ``.control`` block, following its includes inside the folder."""
-    root = folder.resolve()
-    seen, todo = set(), [path.resolve()]
-    while todo and len(seen) < 200:
-        f = todo.pop()
-        if f in seen:
-            continue
-        seen.add(f)
-        try:
-            st = f.stat()
-            has_control, nested = _scan(str(f), st.st_size, st.st_mtime_ns, str(root))
-        except OSError as exc:
-            raise ConfigError(source, where, str(f), f"a readable model file ({exc.strerror})") from None
+    for f, st, has_control in _walk([path], str(folder.resolve())):
+        if isinstance(st, OSError):
+            raise ConfigError(source, where, str(f), f"a readable model file ({st.strerror})")
         if has_control:
             raise ConfigError(source, where, str(f),
                               "a model file without a .control block (model files are code; "
                               "the kit does not run simulator commands from them)")
-        todo += [Path(n) for n in nested if Path(n) not in seen]
 
 
 @lru_cache(maxsize=256)
