@@ -6,11 +6,17 @@ Figures (run on a quiet machine: the wall times scale with the load, the ratios 
 
 - ``overhead_vs_raw``: the kit's batch backend (deck writing, scratch folder, model
   links, raw read, result typing, cache key) over raw ``ngspice -b -r`` on the same
-  decks as the kit hands them to ngspice (8 dual-pixel benches with their AFEs, serial,
-  uncached, each deck's fastest of 3 runs of each kind). Limit 1.05.
+  decks as the kit hands them to ngspice (6 dual-pixel benches with their AFEs, serial,
+  uncached, each deck's fastest of 5 runs of each kind). Limit 1.05.
   ``kit_vs_raw_lib``: the kit over raw ngspice on the decks as written, reading the
   model library through ``.lib`` (below 1: the flattened sections save more than the
   kit costs; the one-off flattening, ~40 ms per process, is outside the timing).
+  ``kit_outside_ngspice``: the share of the kit runs' time spent outside their own ngspice
+  process (deck, links, raw read, result), measured within each run, so not subject to
+  the load drifting between runs that limits the two ratios above (+-4 % here).
+- ``flattened_vs_lib``: raw ngspice on short decks (dual-pixel bench without AFE) with
+  the model sections flattened over the same decks reading the library through ``.lib``
+  (fastest of 5 each), with ``flattened_deck_s`` / ``lib_deck_s``.
 - ``parallel_speedup``: a 16-point sweep (``run_sweep``, dual-pixel bench with its AFEs,
   ~1 s a point) on 1 worker over the same on every core (2 here), each from an empty
   cache. Limit 1.9 on 2 cores.
@@ -46,9 +52,44 @@ def _fresh_cache():
     os.environ["PIXELKIT_CACHE"] = tempfile.mkdtemp(prefix="pk-bench-")
 
 
-def overhead_vs_raw(d, n: int = 8, repeats: int = 3) -> dict:
+def _write_decks(nets, tmp: str) -> None:
+    """Each deck in ``tmp`` as written (``l{k}.cir``, ngspice reads the library through
+    ``.lib``) and as the kit hands it to ngspice (``d{k}.cir``, sections flattened), with
+    the kit's ``.spiceinit`` and model links."""
+    from pixelkit.spice import flatlib, scratch
+    from pixelkit.spice.engine import _prepare
+    Path(tmp, ".spiceinit").write_text(scratch.SPICEINIT)
+    for k, net in enumerate(nets):
+        text, links = _prepare(net, None).text(), net.model_links()
+        flat, flat_links = flatlib.run_deck(text, links, net.includes, scratch.root())
+        if flat == text:
+            raise SystemExit("benchmark: the model library was not flattened; flattened and .lib runs would agree")
+        Path(tmp, f"l{k}.cir").write_text(text)
+        Path(tmp, f"d{k}.cir").write_text(flat)
+    for name, folder in flat_links.items():
+        Path(tmp, name).symlink_to(folder)
+
+
+def _ngspice(tmp: str, deck: str, out: str) -> float:
+    t0 = time.perf_counter()
+    subprocess.run(["ngspice", "-b", "-r", out, deck], cwd=tmp, capture_output=True, check=True)
+    return time.perf_counter() - t0
+
+
+def _fastest(runs: list, k: int, repeats: int) -> list[float]:
+    """Each run's fastest of ``repeats`` (a load spike only slows a run down), the order
+    rotating with ``k`` and the repeat, so that no kind of run always goes first."""
+    times = [[] for _ in runs]
+    for r in range(repeats):
+        for j in range(len(runs)):
+            i = (j + k + r) % len(runs)
+            times[i].append(runs[i]())
+    return [min(t) for t in times]
+
+
+def overhead_vs_raw(d, n: int = 6, repeats: int = 5) -> dict:
     """Raw and kit runs interleaved deck by deck, so a change of machine load hits both alike;
-    each deck's fastest of ``repeats`` runs of each kind (a load spike only slows a run down).
+    each deck's fastest of ``repeats`` runs of each kind.
 
     ``overhead_vs_raw`` runs raw ngspice on the decks exactly as the kit hands them over
     (model sections flattened, ``spice/flatlib.py``); ``kit_vs_raw_lib`` runs it on the
@@ -56,42 +97,43 @@ def overhead_vs_raw(d, n: int = 8, repeats: int = 3) -> dict:
     script does): the kit's gain from the flattening, net of its overhead.
     """
     from pixelkit.circuits.testbench import dual_pixel_bench
-    from pixelkit.spice import flatlib, scratch, simulate
-    from pixelkit.spice.engine import _prepare
+    from pixelkit.spice import simulate
     nets = [dual_pixel_bench(d, 1e-10 * (k + 1), 5e-12 * (k + 1), with_afe=True, title=f"ovh{k}") for k in range(n)]
     raw = raw_lib = kit = 0.0
     with tempfile.TemporaryDirectory() as tmp:
-        Path(tmp, ".spiceinit").write_text(scratch.SPICEINIT)
-        for k, net in enumerate(nets):
-            text, links = _prepare(net, None).text(), net.model_links()
-            flat, flat_links = flatlib.run_deck(text, links, net.includes, scratch.root())
-            if flat == text:
-                raise SystemExit("overhead_vs_raw: the model library was not flattened; the two ratios would be one")
-            Path(tmp, f"l{k}.cir").write_text(text)
-            Path(tmp, f"d{k}.cir").write_text(flat)
-        for name, folder in flat_links.items():
-            Path(tmp, name).symlink_to(folder)
+        _write_decks(nets, tmp)
         simulate(nets[0], use_cache=False)  # imports and first-use set-up outside the timing
 
-        def ngspice(deck, out):
-            t0 = time.perf_counter()
-            subprocess.run(["ngspice", "-b", "-r", out, deck], cwd=tmp, capture_output=True, check=True)
-            return time.perf_counter() - t0
+        inside = []  # (kit wall, its ngspice process's wall) of every kit run
+
         def kit_run(net):
             t0 = time.perf_counter()
-            simulate(net, use_cache=False)
-            return time.perf_counter() - t0
-        for k, net in enumerate(nets):  # the order rotates: no kind of run always goes first
-            runs = [lambda: ngspice(f"d{k}.cir", f"o{k}.raw"), lambda: ngspice(f"l{k}.cir", f"p{k}.raw"),
-                    lambda: kit_run(net)]
-            times = {0: [], 1: [], 2: []}
-            for r in range(repeats):
-                for j in range(3):
-                    i = (j + k + r) % 3
-                    times[i].append(runs[i]())
-            raw, raw_lib, kit = raw + min(times[0]), raw_lib + min(times[1]), kit + min(times[2])
-    return {"overhead_vs_raw": kit / raw, "kit_vs_raw_lib": kit / raw_lib, "raw_s": raw,
-            "raw_lib_s": raw_lib, "kit_s": kit, "decks": n, "repeats": repeats}
+            res = simulate(net, use_cache=False)
+            inside.append((time.perf_counter() - t0, res.meta["wall_s"]))
+            return inside[-1][0]
+        for k, net in enumerate(nets):
+            a, b, c = _fastest([lambda: _ngspice(tmp, f"d{k}.cir", f"o{k}.raw"),
+                                lambda: _ngspice(tmp, f"l{k}.cir", f"p{k}.raw"), lambda: kit_run(net)], k, repeats)
+            raw, raw_lib, kit = raw + a, raw_lib + b, kit + c
+    total, spice = np.sum(inside, axis=0)
+    return {"overhead_vs_raw": kit / raw, "kit_vs_raw_lib": kit / raw_lib, "kit_outside_ngspice": total / spice - 1,
+            "raw_s": raw, "raw_lib_s": raw_lib, "kit_s": kit, "decks": n, "repeats": repeats}
+
+
+def flattened_vs_lib(d, n: int = 4, repeats: int = 5) -> dict:
+    """Raw ngspice on short decks (the dual-pixel bench without its AFE, ~0.2 s) as the kit
+    hands them over (model sections flattened) over the same decks reading the library
+    through ``.lib``: what the flattening saves where start-up weighs most."""
+    from pixelkit.circuits.testbench import dual_pixel_bench
+    nets = [dual_pixel_bench(d, 1e-10 * (k + 1), 5e-12 * (k + 1), title=f"flat{k}") for k in range(n)]
+    flat = lib = 0.0
+    with tempfile.TemporaryDirectory() as tmp:
+        _write_decks(nets, tmp)
+        for k in range(n):
+            a, b = _fastest([lambda: _ngspice(tmp, f"d{k}.cir", f"o{k}.raw"),
+                             lambda: _ngspice(tmp, f"l{k}.cir", f"p{k}.raw")], k, repeats)
+            flat, lib = flat + a, lib + b
+    return {"flattened_vs_lib": flat / lib, "flattened_deck_s": flat / n, "lib_deck_s": lib / n}
 
 
 def parallel_speedup(d) -> dict:
@@ -161,7 +203,7 @@ def gap(d) -> dict:
     return {"gap_diagnosis_s": r["diagnosis_s"], "gap_vs_spice": r["diagnosis_s"] / r["spice_s"]}
 
 
-STEPS = {"overhead": overhead_vs_raw, "parallel": parallel_speedup, "arrays": None,
+STEPS = {"overhead": overhead_vs_raw, "flatlib": flattened_vs_lib, "parallel": parallel_speedup, "arrays": None,
          "analytic": analytic_points_per_s, "sizing": sizing, "gap": gap}
 
 

@@ -3,9 +3,9 @@
 A deck names its corner as ``.lib "models/sm141064.ngspice" typical``. ngspice
 then reads and pre-processes the whole 1.3 MB, 47,000-line GF180 file (it opens it
 once), not only the ~8,000 lines the corner's nested references select: 0.04 -
-0.08 s of each deck's start-up, measured here on ngspice 39 (0.24 vs 0.32 s for the
-dual-pixel bench), some 10 % of a whole-chip frame's CPU time and more of a small
-deck's.
+0.08 s of each deck's start-up, measured here on ngspice 39 (``benchmarks/run.py``
+``flattened_vs_lib``: the dual-pixel bench runs in 0.80 - 0.85 of its ``.lib`` time),
+some 10 % of a whole-chip frame's CPU time.
 
 The runner therefore hands ngspice the section already expanded: this module
 reads the library once, expands the references itself and writes the result
