@@ -12,7 +12,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-EMVA = Path(__file__).resolve().parents[2] / "shared" / "data" / "emva1288" / "EMVA1288_ReferenceSet_002_CMOS_08Bit"
+# real camera data, a 64 x 64 crop (CC BY-SA 3.0; source and crop: tests/data/emva1288/README.md)
+EMVA = Path(__file__).resolve().parent / "data" / "emva1288" / "EMVA1288_ReferenceSet_002_CMOS_08Bit"
 
 # kit figure -> emva1288 Results1288 attribute
 PAIRS = {"K_DN_per_e": "K", "R_DN_per_photon": "R", "QE_percent": "QE", "sigma_y_dark_DN": "sigma_y_dark",
@@ -52,7 +53,7 @@ def _requantise(tmp_path, bits, scale, dither):
             a = a + rng.integers(0, dither, a.shape)
         Image.fromarray(a.astype(np.uint16)).save(dst / "images" / png.name)
     text = (EMVA / "EMVA1288_Data.txt").read_text()
-    (dst / "EMVA1288_Data.txt").write_text(text.replace("n 8 128 128", f"n {bits} 128 128"))
+    (dst / "EMVA1288_Data.txt").write_text(text.replace("n 8 64 64", f"n {bits} 64 64"))
     return dst
 
 
@@ -100,13 +101,13 @@ def _break(folder: Path, how: str) -> str:
         return "b_001_snap_001.png"
     if how == "size":
         from PIL import Image
-        Image.fromarray(np.zeros((64, 128), np.uint8)).save(first)
+        Image.fromarray(np.zeros((32, 64), np.uint8)).save(first)
         return "differs from the descriptor"
     if how == "missing":
         first.unlink()
         return "not found"
     if how == "bad_n":
-        d.write_text(text.replace("n 8 128 128", "n 8 128"))
+        d.write_text(text.replace("n 8 64 64", "n 8 64"))
         return "n bits width height"
     if how == "bad_b":
         d.write_text(text.replace("b 040.00 018.25", "b 040.00 eighteen"))

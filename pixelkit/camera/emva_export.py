@@ -1,6 +1,6 @@
 """Write the virtual camera's exposure series as an EMVA 1288 descriptor dataset.
 
-The layout of ``../shared/data/emva1288/`` and of the emva1288 reference
+The layout of the EMVA 1288 datasets (``tests/data/emva1288/``) and of the emva1288 reference
 implementation: ``EMVA1288_Data.txt`` (``v 3.0``; ``n bits width height``; ``b
 exposure photons`` / ``d exposure`` each followed by ``i images/<file>.png``: two
 images per temporal step, a stack of ``stack`` images for the spatial steps) and

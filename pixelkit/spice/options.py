@@ -1,11 +1,11 @@
 """Simulator options: defaults that keep charge on fF nodes accurate, and the retry policy.
 
-Defaults (measured in ../shared/spec/NGSPICE_NOTES.md on an 8x8 array + SC AFE):
+Defaults (measured with ngspice 39 on an 8x8 array + SC AFE):
 - ``gmin = 1e-15``: the default 1e-12 S across every junction drains a floating
   pixel node (2.7 V -> 0 V in 10 ms); 1e-15 leaves 20 mV. Integration-time
   simulations need it.
 - ``chgtol = 1e-18`` and ``reltol = 1e-5``: the default CHGTOL (1e-14 C) is
-  larger than the charge on a fF node. NGSPICE_NOTES found 1e-16 / 1e-4 enough
+  larger than the charge on a fF node. Those measurements found 1e-16 / 1e-4 enough
   for 0.09 mV on an SC output, but on the pixel's 5 % point (a ~19 mV secondary
   signal) 1e-16 / 1e-4 left 1.5 mV of error and a signal-vs-current curve that
   wandered by +-5 %; 1e-18 / 1e-5 made it linear to 0.1 % for +14 % run time
