@@ -10,6 +10,7 @@ from pathlib import Path
 
 from .errors import ConfigError
 from .fileio import write_atomic
+from .readfile import FileRefused, read_text
 
 #: figure name -> (relative tolerance, absolute tolerance in the figure's SI unit)
 TOLERANCES = {
@@ -51,10 +52,12 @@ def make_baseline(design_name: str, result: dict) -> dict:
 
 def load_baseline(path: Path) -> dict:
     try:
-        data = json.loads(Path(path).read_text())
+        data = json.loads(read_text(path, "baseline", "json"))
         figs = data["figures"]
         assert all({"value", "tol_rel", "tol_abs"} <= set(f) for f in figs.values())
-    except FileNotFoundError:
+    except FileRefused as exc:
+        if not exc.missing:
+            raise
         raise ConfigError(str(path), "baseline", str(path), "an existing baseline (create it with --update)") from None
     except (ValueError, KeyError, AssertionError, TypeError):
         raise ConfigError(str(path), "baseline", "(unreadable)", "a baseline JSON written by 'pixelkit regress --update'") from None

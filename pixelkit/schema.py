@@ -168,30 +168,13 @@ def _describe(meta) -> str:
             "bool": "true or false", "table": "a table"}[kind]
 
 
-#: Larger files are not design or technology files (a guard against reading a disk image).
-MAX_TOML_BYTES = 4 << 20
-
-
 def read_toml(path: Path, what: str) -> dict:
     """Read a TOML file (UTF-8, a byte-order mark allowed), turning every I/O, decode and
-    syntax failure into one line naming the file and what is wrong."""
-    path = Path(path)
-    try:
-        if path.is_file() and path.stat().st_size > MAX_TOML_BYTES:
-            raise ConfigError(str(path), what, f"{path.stat().st_size} bytes",
-                              f"a TOML file of at most {MAX_TOML_BYTES >> 20} MB")
-        blob = path.read_bytes()
-    except FileNotFoundError:
-        raise ConfigError(str(path), what, str(path), "an existing TOML file") from None
-    except IsADirectoryError:
-        raise ConfigError(str(path), what, str(path), "a TOML file, not a folder") from None
-    except OSError as exc:
-        raise ConfigError(str(path), what, str(path), f"a readable file ({exc.strerror or exc})") from None
-    try:
-        text_ = blob.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        raise ConfigError(str(path), what, f"byte {exc.start}: {blob[exc.start:exc.start + 4]!r}",
-                          "a UTF-8 text file") from None
+    syntax failure into one line naming the file and what is wrong. The file is read with a
+    bound (:mod:`pixelkit.readfile`): a pipe, a device or a file larger than any design is
+    refused before it is read."""
+    from .readfile import read_text
+    text_ = read_text(Path(path), what, "technology" if what == "technology" else "design")
     try:
         return tomllib.loads(text_)
     except tomllib.TOMLDecodeError as exc:

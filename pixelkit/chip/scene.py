@@ -55,25 +55,30 @@ class Photocurrents:
 def load_map(path) -> tuple[np.ndarray, str]:
     """A 2-D map from ``.csv`` (numbers; one header line allowed), ``.npy`` or an image;
     returns (map, default unit)."""
+    from PIL import Image
+
+    from ..readfile import open_file, read_text
     p = Path(path)
-    if path_kind(p) != "file":
+    if path_kind(p) is None:
         raise ConfigError(str(p), "scene", str(p), "an existing .csv, .npy or image file")
     suffix = p.suffix.lower()
     try:
         if suffix == ".npy":
-            m, unit = np.load(p, allow_pickle=False), "lx"
+            with open_file(p, "scene", "scene") as fh:
+                m, unit = np.load(fh, allow_pickle=False), "lx"
         elif suffix == ".csv":
-            m = _read_csv(p)
+            m = _read_csv(p, read_text(p, "scene", "scene"))
             unit = "lx"
         elif suffix in IMAGE_SUFFIXES:
             import matplotlib.image as mpimg
-            img = np.asarray(mpimg.imread(p), float)
+            with open_file(p, "scene", "scene") as fh:
+                img = np.asarray(mpimg.imread(fh, format=suffix[1:]), float)
             if img.ndim == 3:  # RGB(A): Rec. 709 luma of the colour channels
                 img = img[..., :3] @ np.array([0.2126, 0.7152, 0.0722])
             m, unit = img / (img.max() if img.max() > 1 else 1.0), "rel"
         else:
             raise ConfigError(str(p), "scene", suffix, f"one of .csv, .npy, {', '.join(IMAGE_SUFFIXES)}")
-    except (OSError, ValueError) as exc:
+    except (OSError, ValueError, Image.DecompressionBombError) as exc:
         raise ConfigError(str(p), "scene", p.name, f"a readable scene file ({exc})") from None
     m = np.asarray(m, float)
     if m.ndim != 2 or min(m.shape) < 1:
@@ -83,8 +88,8 @@ def load_map(path) -> tuple[np.ndarray, str]:
     return m, unit
 
 
-def _read_csv(p: Path) -> np.ndarray:
-    lines = [ln for ln in p.read_text().splitlines() if ln.strip()]
+def _read_csv(p: Path, text: str) -> np.ndarray:
+    lines = [ln for ln in text.splitlines() if ln.strip()]
     try:
         float(lines[0].split(",")[0])
     except (ValueError, IndexError):

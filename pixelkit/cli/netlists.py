@@ -57,6 +57,7 @@ def regress(design, baseline, update, backend, jobs, as_json):
     from ..family import DEFAULT, family_of, run_family
     from ..regress import compare, load_baseline, make_baseline, save_baseline
     fam = family_of(design)
+    base = None if update else load_baseline(Path(baseline))   # a bad baseline is found before the runs
     if fam == DEFAULT:
         result = experiment(load(design), backend=backend, jobs=jobs)
     else:  # another pixel family: its own experiment and figures
@@ -66,7 +67,7 @@ def regress(design, baseline, update, backend, jobs, as_json):
         save_baseline(Path(baseline), make_baseline(name, result))
         emit({"baseline": baseline, "written": True}, as_json, lambda x: f"baseline written: {x['baseline']}")
         return
-    rows = compare(load_baseline(Path(baseline)), result)
+    rows = compare(base, result)
     changed = [r for r in rows if r["changed"]]
     emit({"design": name, "baseline": baseline, "changed": changed, "figures": rows}, as_json, _regress_text)
     if changed:

@@ -20,6 +20,7 @@ times, a level outside the supply rails).
 from __future__ import annotations
 
 import csv
+import io
 import math
 import re
 from dataclasses import dataclass
@@ -28,7 +29,6 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import PixelkitError
-from ..fileio import path_kind
 
 REQUIRED = ("array", "row", "col", "i_ph_A", "t_int_s", "t_wait_s", "temp_C", "probe")
 OPTIONAL = ("v_std_V", "n_avg", "vdd_V", "f_read_Hz", "i_ph_prev_A")
@@ -66,16 +66,17 @@ class Table:
 
 
 def read_table(path: str | Path, design, measured: bool) -> Table:
+    from ..readfile import FileRefused, read_bytes
     path = Path(path)
-    if path_kind(path) != "file":
-        raise DataError(str(path), ["file not found"])
     try:
-        with open(path, newline="", encoding="utf-8-sig") as fh:
-            reader = csv.reader(fh)
-            lines = list(reader)
+        blob = read_bytes(path, "--measured" if measured else "--conditions", "csv")
+    except FileRefused as e:
+        raise DataError(str(path), [f"{e.value} (expected {e.allowed})"]) from None
+    try:
+        lines = list(csv.reader(io.StringIO(blob.decode("utf-8-sig"), newline="")))
     except UnicodeDecodeError as e:
         raise DataError(str(path), [f"not UTF-8 text (byte {e.start}: {e.reason})"]) from None
-    except (OSError, csv.Error) as e:
+    except csv.Error as e:
         raise DataError(str(path), [f"cannot be read as CSV: {e}"]) from None
     if not lines:
         raise DataError(str(path), ["empty file (no header)"])
@@ -209,8 +210,6 @@ def check_degenerate(table: Table, X, nom, candidates) -> None:
 
 def write_table(table: Table, path: str | Path, extra: dict) -> Path:
     """Write ``table`` plus ``extra`` columns to CSV, atomically."""
-    import io
-
     from ..fileio import write_atomic
     cols = dict(table.columns)
     cols.update(extra)

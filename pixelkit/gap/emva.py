@@ -51,6 +51,7 @@ from scipy.stats import norm
 
 from ..errors import PixelkitError
 from ..fileio import path_kind
+from ..readfile import FileRefused, read_bytes
 
 UNITS = {"ns": 1e-9, "us": 1e-6, "µs": 1e-6, "ms": 1e-3, "s": 1.0}
 _UNIT_RE = re.compile(r"exposure[^\n]*?\bin\s+(ns|us|µs|ms|s)\b", re.I)
@@ -75,9 +76,12 @@ def _num(tok, line_no, path, what, integer=False):
 def read_descriptor(folder: str | Path) -> dict:
     folder = Path(folder)
     path = folder / "EMVA1288_Data.txt" if path_kind(folder) == "dir" else folder
-    if path_kind(path) != "file":
-        raise EmvaError(str(path), "not found (an EMVA 1288 dataset is a folder with EMVA1288_Data.txt)")
-    raw = path.read_bytes()
+    try:
+        raw = read_bytes(path, "descriptor", "descriptor")
+    except FileRefused as exc:
+        if exc.missing:
+            raise EmvaError(str(path), "not found (an EMVA 1288 dataset is a folder with EMVA1288_Data.txt)") from None
+        raise
     if b"\0" in raw:
         raise EmvaError(str(path), "binary file (NUL bytes), not an EMVA 1288 descriptor")
     try:

@@ -30,16 +30,16 @@ from __future__ import annotations
 import math
 import re
 from functools import lru_cache
-from pathlib import Path
 
 from ..errors import ConfigError
+from ..readfile import read_bytes
 
 _COEFS = ("par_vth", "par_k", "par_l", "par_w")
 
 
 @lru_cache(maxsize=8)
 def _coefficients(model_file: str, device: str) -> dict:
-    text = Path(model_file).read_text(errors="replace")
+    text = read_bytes(model_file, "model file", "model").decode("utf-8", errors="replace")
     start = text.find(".lib fets_mm")
     head = text.find(f".subckt {device} ", start)
     if start < 0 or head < 0:

@@ -51,7 +51,8 @@ def design_hash(design) -> str:
 
 
 def file_hash(path) -> str:
-    return hashlib.sha256(Path(path).read_bytes()).hexdigest()[:16]
+    from ..readfile import sha256_file
+    return sha256_file(path, "--measured", "csv")[:16]
 
 
 def section_key(key: str, design, options: dict) -> str:

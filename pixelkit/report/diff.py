@@ -13,12 +13,12 @@
 from __future__ import annotations
 
 import difflib
-import hashlib
 import json
 import math
 from pathlib import Path
 
 from ..errors import ConfigError
+from ..readfile import FileRefused, read_text, sha256_file
 
 PICTURES = (".png", ".svg", ".jpg")
 
@@ -26,9 +26,11 @@ PICTURES = (".png", ".svg", ".jpg")
 def load_report(folder: Path) -> dict:
     folder = Path(folder)
     try:
-        summary = json.loads((folder / "summary.json").read_text())
+        summary = json.loads(read_text(folder / "summary.json", "--baseline", "report"))
         summary["checked"]  # noqa: B018 - must exist
-    except FileNotFoundError:
+    except FileRefused as exc:
+        if not exc.missing:   # there, but a pipe, a device, too large...
+            raise
         raise ConfigError("", "--baseline", str(folder), "a report folder written by 'pixelkit report' "
                           "(it has no summary.json)") from None
     except (ValueError, KeyError, TypeError):
@@ -36,15 +38,20 @@ def load_report(folder: Path) -> dict:
                           "a summary.json written by 'pixelkit report'") from None
     return {"folder": str(folder), "summary": summary,
             "tables": _json(folder / "tables.json"), "design": _json(folder / "design.json"),
-            "netlists": {p.name: p.read_text() for p in sorted((folder / "netlists").glob("*.cir"))},
-            "pictures": {p.name: hashlib.sha256(p.read_bytes()).hexdigest()
+            "netlists": {p.name: read_text(p, "--baseline", "report")
+                         for p in sorted((folder / "netlists").glob("*.cir"))},
+            "pictures": {p.name: sha256_file(p, "--baseline", "report")
                          for p in sorted(folder.iterdir()) if p.suffix in PICTURES}}
 
 
 def _json(path: Path) -> dict:
     try:
-        return json.loads(path.read_text())
-    except (OSError, ValueError):
+        return json.loads(read_text(path, "--baseline", "report"))
+    except FileRefused as exc:
+        if not exc.missing:   # there, but a pipe, a device, too large...
+            raise
+        return {}   # absent: an older report without it
+    except ValueError:
         return {}
 
 

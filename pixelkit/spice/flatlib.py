@@ -46,6 +46,7 @@ from functools import lru_cache
 from pathlib import Path
 
 from ..fileio import path_kind, write_atomic
+from ..readfile import FileRefused, read_bytes
 from ..tech.modellib import Include, file_stamp
 
 LINK = "flatlib"
@@ -166,8 +167,8 @@ def _sections_of(path: str, _size: int, _mtime_ns: int) -> dict:
     if _size < 0:
         raise _NotFlat("unreadable file")
     try:
-        raw = Path(path).read_bytes().decode("latin-1")
-    except OSError:
+        raw = read_bytes(path, "model file", "model").decode("latin-1")
+    except (OSError, FileRefused):
         raise _NotFlat("unreadable file") from None
     sections, name, body, after_lib = {}, None, [], False
     for line in raw.split("\n"):

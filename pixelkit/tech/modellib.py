@@ -21,6 +21,7 @@ from pathlib import Path
 
 from ..errors import ConfigError
 from ..fileio import path_kind
+from ..readfile import FileRefused, check_file, read_bytes
 
 _SECTION = re.compile(r"^[A-Za-z_][A-Za-z0-9_]{0,63}$")
 _FILE = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.\-/]{0,200}$")
@@ -68,7 +69,7 @@ def files_fingerprint(files: tuple[str, ...]) -> str:
 
 def _closure(files: tuple[str, ...]) -> tuple:
     """(path, size, mtime) of the files and of the files they include, stated before reading."""
-    return tuple((str(f), -1, -1) if isinstance(st, OSError) else (str(f), st.st_size, st.st_mtime_ns)
+    return tuple((str(f), -1, -1) if isinstance(st, (OSError, FileRefused)) else (str(f), st.st_size, st.st_mtime_ns)
                  for f, st, _ in _walk(files, "/"))
 
 
@@ -92,9 +93,9 @@ def _walk(paths, root: str):
             continue
         seen.add(f)
         try:
-            st = f.stat()
+            st = check_file(f, "model file", "model")
             has_control, nested = _scan(str(f), st.st_size, st.st_mtime_ns, root)
-        except OSError as exc:
+        except (OSError, FileRefused) as exc:
             yield f, exc, False
             continue
         yield f, st, has_control
@@ -108,7 +109,7 @@ def _fingerprint(names: tuple[str, ...], stamps: tuple) -> str:
         h.update(f.encode())
     for path, size, _ in stamps:
         h.update(path.encode())
-        h.update(Path(path).read_bytes() if size >= 0 else b"(missing)")
+        h.update(read_bytes(path, "model file", "model") if size >= 0 else b"(missing)")
     return h.hexdigest()[:16]
 
 
@@ -166,8 +167,12 @@ def _parse_include(line: str, folder: Path, source: str, where: str) -> Include:
     if parts[0] == "lib" and not _SECTION.match(parts[2]):
         raise ConfigError(source, where, line, "a section name of letters, digits and '_'")
     path = folder / parts[1]
-    if path_kind(path) != "file":
-        raise ConfigError(source, where, line, f"a file that exists in {folder}")
+    try:
+        check_file(path, where, "model")
+    except FileRefused as exc:
+        found = "" if exc.missing else f" (found {exc.value})"
+        raise ConfigError(source, where, line, f"a model file that exists in {folder}{found}; "
+                                               f"allowed: {exc.allowed}") from None
     _refuse_control_blocks(path, folder, source, where)
     return Include(parts[0], folder, parts[1], parts[2] if parts[0] == "lib" else "")
 
@@ -179,6 +184,9 @@ _NESTED = re.compile(rb"""^[ \t]*\.(?:include|inc|lib)[ \t]+['"]?([^'"\s]+)""", 
 def _refuse_control_blocks(path: Path, folder: Path, source: str, where: str) -> None:
     """Refuse a model file holding a ``.control`` block, following its includes inside the folder."""
     for f, st, has_control in _walk([path], str(folder.resolve())):
+        if isinstance(st, FileRefused):
+            raise ConfigError(source, where, str(f), f"a readable model file (found {st.value}; "
+                                                     f"expected {st.allowed})")
         if isinstance(st, OSError):
             raise ConfigError(source, where, str(f), f"a readable model file ({st.strerror})")
         if has_control:
@@ -191,7 +199,7 @@ def _refuse_control_blocks(path: Path, folder: Path, source: str, where: str) ->
 def _scan(path: str, _size: int, _mtime_ns: int, root: str) -> tuple[bool, tuple[str, ...]]:
     """(holds a .control/.endc line, the files inside ``root`` it includes); cached per file version."""
     f = Path(path)
-    blob = f.read_bytes()
+    blob = read_bytes(f, "model file", "model")
     low = blob.lower()
     has_control = (b".control" in low or b".endc" in low) and bool(_CONTROL.search(blob))
     names = {m.group(1).decode("latin-1") for m in _NESTED.finditer(blob)}

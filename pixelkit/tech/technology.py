@@ -171,7 +171,7 @@ def load_technology(name_or_path: str | Path, relative_to: Path | None = None, s
         path = Path(text_)
         if not path.is_absolute() and relative_to is not None:
             path = relative_to / path
-        if path_kind(path) != "file":
+        if path_kind(path) is None:
             raise ConfigError(source, "technology", text_, f"an existing technology file (looked for {path})")
     else:
         raise ConfigError(source, "technology", text_,
