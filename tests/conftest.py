@@ -26,6 +26,16 @@ def cli():
     return run_cli
 
 
+def wait_for(condition, what: str, within: float = 600.0):
+    """Poll an observable state until ``condition()`` holds; fail naming ``what`` after ``within`` s
+    (a generous bound for a loaded machine, never a guess at how long the work takes)."""
+    import time
+    deadline = time.monotonic() + within
+    while not condition():
+        assert time.monotonic() < deadline, f"waited {within:g} s for {what}"
+        time.sleep(0.02)
+
+
 # Simulation results are cached per test session only (real runs every session).
 import os  # noqa: E402
 import tempfile  # noqa: E402

@@ -79,24 +79,33 @@ def test_slope_and_settling_of_an_rc():
 
 
 def _start_simulation(backend, tmp_path):
-    """`pixelkit simulate` on a fresh cache; returns (process, its scratch roots' glob) once it simulates."""
+    """`pixelkit simulate` on a fresh cache; returns (process, its scratch roots' glob, the pids
+    simulating) once ngspice simulates: the engine marks each run in flight with a file
+    ``running`` in its scratch folder holding the pid that simulates (spice/scratch.py)."""
     import glob
     import os
     import subprocess
     import sys
-    import time
 
-    from conftest import REF, ROOT
+    from conftest import REF, ROOT, wait_for
     env = dict(os.environ, PIXELKIT_CACHE=str(tmp_path / "cache"), PIXELKIT_REPORTS=str(tmp_path / "rep"))
     p = subprocess.Popen([sys.executable, "-m", "pixelkit", "simulate", str(REF), "--backend", backend],
                          cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                          start_new_session=True)
     pattern = f"/tmp/pixelkit-{p.pid}-*"
-    t0 = time.time()
-    while not glob.glob(pattern) and time.time() - t0 < 60 and p.poll() is None:
-        time.sleep(0.1)
-    time.sleep(1.5)  # well inside the sweep (tens of runs)
-    return p, pattern
+    marks = f"{pattern}/*/running"
+    running = []
+
+    def in_flight():
+        assert p.poll() is None, p.communicate()[1][-500:]
+        for m in glob.glob(marks):
+            try:
+                running.append(open(m).read())
+            except FileNotFoundError:  # that run has just ended
+                pass
+        return bool(running)
+    wait_for(in_flight, "a simulation in flight")
+    return p, pattern, running
 
 
 def _children(pid):
@@ -104,41 +113,43 @@ def _children(pid):
     return subprocess.run(["pgrep", "-P", str(pid)], capture_output=True, text=True).stdout.split()
 
 
-def _gone(pids, pattern, within=8.0):
+def _gone(pids, pattern):
+    """Wait until every pid has ended and no scratch root is left (workers notice their parent's
+    end within 0.5 s, the watchdog removes the root once the parent's pipe closes)."""
     import glob
     import os
-    import time
-    t0 = time.time()
-    while time.time() - t0 < within:
+
+    from conftest import wait_for
+
+    def ended():
         alive = [k for k in pids if os.path.exists(f"/proc/{k}") and "zombie" not in open(f"/proc/{k}/status").read()]
-        if not alive and not glob.glob(pattern):
-            return True
-        time.sleep(0.2)
-    return False
+        return not alive and not glob.glob(pattern)
+    wait_for(ended, f"processes {pids} and {pattern} to go", within=120)
+    return True
 
 
 @pytest.mark.parametrize("backend", ["batch", "shared"])
 def test_ctrl_c_ends_cleanly(backend, tmp_path):
-    """SIGINT mid-sweep: one line, exit 130, no worker or ngspice left, no scratch folder left."""
+    """SIGINT while ngspice simulates: one line, exit 130, no worker or ngspice left, no scratch folder left."""
     import signal
-    p, pattern = _start_simulation(backend, tmp_path)
+    p, pattern, running = _start_simulation(backend, tmp_path)
     kids = _children(p.pid)
     p.send_signal(signal.SIGINT)
-    out, err = p.communicate(timeout=60)
+    out, err = p.communicate(timeout=600)
     assert p.returncode == 130 and err.strip() == "pixelkit: error: interrupted", err[-500:]
-    assert kids and _gone(kids, pattern)
+    assert running and kids and _gone(set(kids) | set(running), pattern)
 
 
 @pytest.mark.parametrize("backend", ["batch", "shared"])
 def test_sigkill_leaves_no_workers_or_scratch(backend, tmp_path):
-    """SIGKILL of the main process: its ngspice children (parent-death signal), shared-backend
-    workers (they watch their parent) and scratch root (the watchdog) all go within seconds."""
+    """SIGKILL of the main process while ngspice simulates: its ngspice children (parent-death
+    signal), shared-backend workers (they watch their parent) and scratch root (the watchdog) all go."""
     import signal
-    p, pattern = _start_simulation(backend, tmp_path)
+    p, pattern, running = _start_simulation(backend, tmp_path)
     kids = _children(p.pid)
     p.send_signal(signal.SIGKILL)
-    p.communicate(timeout=60)
-    assert kids and _gone(kids, pattern)
+    p.communicate(timeout=600)
+    assert running and kids and _gone(set(kids) | set(running), pattern)
 
 
 @pytest.mark.parametrize("blob,what", [

@@ -88,7 +88,7 @@ def test_analytic_level_matches_its_closed_form(ref_design):
     t_p = q_mid / (j * ref_design.primary.area)
     assert r["t_int_primary_s"] == pytest.approx(t_p, rel=1e-6)
     assert r["mask_open_m2"] == pytest.approx(q_low / (j * 12 * t_p), rel=1e-6)
-    assert r["solve_time_s"] < 1.0
+    # its speed is measured in benchmarks/run.py (sizing_solve_s, against one SPICE run), not timed here
 
 
 @pytest.mark.parametrize("field,value,names", [

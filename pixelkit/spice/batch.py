@@ -67,6 +67,7 @@ def run_batch(deck_text: str, links: dict | None = None,
             if _ABORTED.is_set():
                 p.kill()
         try:
+            scratch.mark_running(tmp, p.pid)  # the folder goes when the run ends, and the mark with it
             out, err = p.communicate(timeout=timeout)
         except subprocess.TimeoutExpired:
             p.kill()

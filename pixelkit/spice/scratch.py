@@ -12,6 +12,12 @@ and sees it close, removes the root; batch ngspice processes carry a
 parent-death signal and shared-backend workers watch their parent and exit.
 Roots left by a process that died before its watchdog could act (power loss)
 are swept at the next start.
+
+A run in flight is visible from outside: its folder holds a file ``running``
+(the pid of the process that simulates: the batch ngspice, or the shared-backend
+worker) from the moment ngspice starts until the run ends, so a test or a
+monitor waits for ``/tmp/pixelkit-<pid>-*/*/running`` instead of guessing with
+a sleep.
 """
 from __future__ import annotations
 
@@ -107,6 +113,27 @@ def worker_folder() -> Path:
     if Path.cwd() != d:
         os.chdir(d)
     return d
+
+
+RUNNING = "running"
+
+
+def mark_running(folder: Path, pid: int) -> None:
+    """Say that ``pid`` simulates in ``folder`` now (written whole, so a reader never sees it
+    empty). Only a signal for observers: a mark that cannot be written does not stop the run."""
+    tmp = folder / f".{RUNNING}"
+    try:
+        tmp.write_text(str(pid))
+        os.replace(tmp, folder / RUNNING)
+    except OSError:
+        pass
+
+
+def clear_running(folder: Path) -> None:
+    try:
+        (folder / RUNNING).unlink()
+    except FileNotFoundError:
+        pass
 
 
 def set_links(folder: Path, links: dict) -> None:

@@ -88,16 +88,21 @@ def run_shared(deck_text: str, links: dict | None = None) -> tuple[list[dict], l
     """Run one deck in this process's ngspice; same return shape as ``run_batch``."""
     from PySpice.Spice.NgSpice.Shared import FFI, ffi
     ng = _engine()
-    scratch.set_links(scratch.worker_folder(), links or {})
+    folder = scratch.worker_folder()
+    scratch.set_links(folder, links or {})
     ng._stdout, ng._stderr = [], []
     before = set(ng.plot_names)
     t0 = time.perf_counter()
     keep = [ffi.new("char[]", ln.encode("ascii")) for ln in deck_text.split("\n") if ln.strip()]
     keep.append(ffi.new("char[]", b""))
     lib = ng._ngspice_shared
-    rc = lib.ngSpice_Circ(ffi.new("char *[]", [*keep, FFI.NULL]))
-    if rc == 0:
-        lib.ngSpice_Command(b"run")
+    scratch.mark_running(folder, os.getpid())
+    try:
+        rc = lib.ngSpice_Circ(ffi.new("char *[]", [*keep, FFI.NULL]))
+        if rc == 0:
+            lib.ngSpice_Command(b"run")
+    finally:
+        scratch.clear_running(folder)
     wall = time.perf_counter() - t0
     new = [p for p in ng.plot_names if p not in before and p != "const"]
     plots = [{"plotname": p, "data": _vectors(ng, p)} for p in new] if rc == 0 else []
