@@ -188,6 +188,17 @@ def _on_sigint(_signum, _frame):
     raise Interrupted()
 
 
+def finishing() -> None:
+    """The command has computed everything; what is left is writing its output and the summary
+    (milliseconds). Ctrl-C from here on is ignored, so a finished run is never reported as
+    interrupted; before this call an interrupt leaves no output (the writers are atomic). Only
+    where the console script installed its handler (a caller's own Ctrl-C is left alone)."""
+    import signal
+    import threading
+    if threading.current_thread() is threading.main_thread() and signal.getsignal(signal.SIGINT) is _on_sigint:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
 def entry(argv=None):
     """Console entry point: one-line (or JSON) errors with distinct exit statuses, no tracebacks."""
     import signal

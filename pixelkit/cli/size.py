@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import click
 
-from .common import design_arg, emit, json_opt, load, main, out_opt, output_path, spice_opts
+from .common import design_arg, emit, finishing, json_opt, load, main, out_opt, output_path, spice_opts
 
 
 @main.command()
@@ -15,8 +15,11 @@ from .common import design_arg, emit, json_opt, load, main, out_opt, output_path
 @json_opt
 def size(design, out, with_sens, backend, jobs, as_json):
     """Size the secondary mask opening and the integration times (5 % / mid-scale criterion)."""
-    from ..optimize.flow import size_design
+    from ..fileio import write_atomic
+    from ..optimize.flow import size_result
     from ..report.text import size_text
     d = load(design)
-    emit(size_design(d, output_path(out, d, f"{d.name}_sized.toml"), with_sens, backend=backend),
-         as_json, size_text)
+    result, text = size_result(d, output_path(out, d, f"{d.name}_sized.toml"), with_sens, backend=backend)
+    finishing()  # all computed: a Ctrl-C from here no longer stops the file or the summary
+    write_atomic(result["sized_design"], text)
+    emit(result, as_json, size_text)

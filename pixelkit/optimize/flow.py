@@ -108,7 +108,11 @@ def sensitivity(design, nominal: dict, backend="batch") -> list[dict]:
     return rows
 
 
-def size_design(design, out: Path | None = None, with_sensitivity: bool = False, backend="batch") -> dict:
+def size_result(design, out: Path | None = None, with_sensitivity: bool = False,
+                backend="batch") -> tuple[dict, str]:
+    """Everything ``pixelkit size`` computes (both levels, the SPICE verification, the sensitivity
+    table) and the sized design file's text, nothing written: the file is written last, so a run
+    interrupted before the end leaves no file and a run that wrote it has finished."""
     out = Path(out) if out else Path(design.source).with_name(f"{Path(design.source).stem}_sized.toml")
     check_output(out)  # before the simulations, not after them
     if path_kind(out) == "dir":
@@ -117,7 +121,6 @@ def size_design(design, out: Path | None = None, with_sensitivity: bool = False,
     analytic = solve(design, analytic_curves(design))
     spice = solve(design, spice_curves(design, exp))
     chosen = spice if design.sizing.level == "spice" else analytic
-    write_atomic(out, sized_design_text(design, chosen, out))
     result = {k: chosen[k] for k in ("c_m", "mask_open_m2", "t_int_primary_s", "t_int_secondary_s",
                                      "trace_px_at_speed_min", "motion_px_primary", "dark_frac_secondary",
                                      "headlight_frac")}
@@ -128,4 +131,11 @@ def size_design(design, out: Path | None = None, with_sensitivity: bool = False,
                   retried=exp.get("retried", []) + checked.pop("retried"))
     if with_sensitivity:
         result["sensitivity"] = sensitivity(design, spice, backend)
+    return result, sized_design_text(design, chosen, out)
+
+
+def size_design(design, out: Path | None = None, with_sensitivity: bool = False, backend="batch") -> dict:
+    """``size_result``, then the sized design file written (atomically) where it says."""
+    result, text = size_result(design, out, with_sensitivity, backend)
+    write_atomic(result["sized_design"], text)
     return result
