@@ -89,9 +89,12 @@ def export_deck(design, name: str, path, models: str = "absolute", **kw) -> Path
     """Write a deck that runs as it is in ``ngspice -b`` (options, models, stimulus).
 
     ``models``: ``absolute`` model paths, or ``link`` (``models/<file>`` and a
-    ``models`` link written beside the deck).
+    ``models`` link written beside the deck). ``name``: one of ``circuits.registry.BENCHES``
+    (a cell library alone is refused: ngspice has nothing to simulate in it).
     """
+    from .circuits.registry import require_bench
     from .spice.export import export_deck as _export
+    require_bench(name)
     return _export(bench(design, name, **kw), Path(path), models=models)
 
 

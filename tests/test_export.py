@@ -1,4 +1,5 @@
-"""Exported and golden decks run as they are in raw ngspice and give the kit's figures.
+"""Exported and golden decks run as they are in raw ngspice and give the kit's figures;
+every name `pixelkit netlist --bench` accepts runs there as printed, cell libraries are refused.
 
 Independent path: the deck file is run by ``ngspice -b -r`` in a subprocess
 (no kit code: no scratch folder, no .spiceinit, no options added, no links
@@ -16,6 +17,7 @@ import pytest
 
 import pixelkit as pk
 from conftest import REF, ROOT
+from pixelkit.circuits.registry import BENCHES
 from pixelkit.spice.raw import read_raw
 from pixelkit.spice.result import Result, vector_key
 
@@ -93,3 +95,64 @@ def test_link_export_writes_the_models_link_beside_the_deck(tmp_path, cli):
     link = tmp_path / "d" / "models"
     assert link.is_symlink() and (link / "sm141064.ngspice").is_file()
     assert '.lib "models/sm141064.ngspice"' in (tmp_path / "d" / "b.cir").read_text()
+
+
+def _printed_tables(stdout: str) -> dict:
+    """ngspice -b's own printout: {vector: [(time, value), ...]} from every 'Index time ...' table."""
+    vectors, columns = {}, None
+    for line in stdout.splitlines():
+        tok = line.split()
+        if tok[:2] == ["Index", "time"]:
+            columns = tok[2:]
+        elif columns and tok and tok[0].isdigit() and len(tok) == len(columns) + 2:
+            for name, value in zip(columns, tok[2:]):
+                vectors.setdefault(name, []).append((float(tok[1]), float(value)))
+    return vectors
+
+
+@pytest.mark.parametrize("name", BENCHES)
+def test_every_bench_runs_in_ngspice_as_printed(tmp_path, cli, name):
+    """Independent path: ngspice itself, running the command `pixelkit netlist` prints, from another
+    folder: it exits 0 and its own printout holds every vector of the deck's .print line over the
+    whole transient (a cell library in its place aborts with status 134)."""
+    import json
+    import math
+    import shlex
+    code, out, err = cli("netlist", REF, "--bench", name, "--out", tmp_path / "deck" / f"{name}.cir", "--json")
+    assert code == 0, err
+    cmd = shlex.split(json.loads(out)["run_with"])
+    assert cmd[:2] == ["ngspice", "-b"]
+    text = (tmp_path / "deck" / f"{name}.cir").read_text()
+    wanted = [v for ln in text.splitlines() if ln.startswith(".print tran ") for v in ln.split()[2:]]
+    stop = next(float(ln.split()[2]) for ln in text.splitlines() if ln.startswith(".tran "))
+    run = tmp_path / "elsewhere"
+    run.mkdir()
+    p = subprocess.run(cmd, cwd=run, env={**os.environ, "OMP_NUM_THREADS": "1"}, capture_output=True, text=True,
+                       timeout=600)
+    assert p.returncode == 0, (p.returncode, p.stdout[-1500:], p.stderr[-1500:])
+    printed = _printed_tables(p.stdout)
+    assert wanted and set(wanted) <= set(printed), (wanted, list(printed))
+    for v in wanted:
+        assert printed[v][-1][0] == pytest.approx(stop, rel=1e-6) and all(math.isfinite(x) for _, x in printed[v])
+
+
+def test_only_benches_stand_alone():
+    """The registry's split, from the netlists themselves: a bench has top-level elements and a
+    transient; a cell library only .subckt definitions (nothing for ngspice to simulate)."""
+    from pixelkit.circuits.registry import GENERATORS
+    from pixelkit.design import load_design
+    d = load_design(REF)
+    for name, make in GENERATORS.items():
+        net = make(d)
+        runs = bool(net.elements) and net.analysis.kind == "tran"
+        assert runs == (name in BENCHES), name
+
+
+@pytest.mark.parametrize("name", ["dual_pixel", "sc_afe", "wdr_pixel"])
+def test_a_cell_library_is_refused_with_the_benches(tmp_path, cli, name):
+    import json
+    code, out, err = cli("netlist", REF, "--bench", name, "--out", tmp_path / "x.cir", "--json")
+    e = json.loads(out)
+    assert code == 2 and e["field"] == "bench" and e["value"] == name and "Traceback" not in err
+    assert all(b in e["allowed"] for b in BENCHES) and "cell library" in e["allowed"]
+    assert not (tmp_path / "x.cir").exists()

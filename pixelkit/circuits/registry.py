@@ -50,6 +50,20 @@ GENERATORS = {
 }
 GENERATORS.update(FAMILY_GENERATORS)  # the WDR and ratio pixels (pixelkit/families)
 
+#: The generators whose netlist is a whole deck (stimulus, analysis, outputs): each runs alone in
+#: ``ngspice -b`` (``pixelkit netlist --bench NAME``). The others are cell libraries (``.subckt``
+#: definitions only, golden copies in ``netlists/``) to include in a bench of one's own.
+BENCHES = ("bench_dual_pixel", "bench_dual_pixel_afe", "bench_array_2x2", "bench_afe", "bench_pd_pair",
+           "wdr_sweep", "ratio_sweep")
+
+
+def require_bench(name: str) -> None:
+    """Refuse a name that is not a deck running alone, listing those that are."""
+    from ..errors import ConfigError
+    if name not in BENCHES:
+        what = " (a cell library: .subckt definitions only, netlists/" + name + ".cir)" if name in GENERATORS else ""
+        raise ConfigError("", "bench", name, f"a deck that runs alone in ngspice -b{what}: one of {', '.join(BENCHES)}")
+
 
 def bench_netlist(design, name: str, i_primary: float | None = None, i_secondary: float | None = None,
                   with_afe: bool | None = None) -> Netlist:

@@ -15,7 +15,7 @@ REFERENCE = "designs/dual_pixel_revA.toml"
 @main.command()
 @design_arg
 @click.option("--bench", "bench_name", default="bench_dual_pixel", show_default=True,
-              help="registry name (pixelkit netlists lists them)")
+              help="a deck that runs alone (pixelkit netlists lists them as 'bench')")
 @out_opt("deck file (default: reports/<design>/<bench>.cir)")
 @click.option("--models", "models_mode", type=click.Choice(["absolute", "link"]), default="absolute",
               show_default=True, help="absolute model paths, or 'models/<file>' with a 'models' link "
@@ -37,12 +37,14 @@ def netlist(design, bench_name, out, models_mode, as_json):
 @json_opt
 def netlists(design, write, out, as_json):
     """List the generators, or regenerate their golden netlists (DESIGN: the reference design)."""
-    from ..circuits.registry import GENERATORS, write_all
+    from ..circuits.registry import BENCHES, GENERATORS, write_all
     if write:
         paths = [str(p) for p in write_all(load(design), Path(out or "netlists"))]
         emit({"written": paths}, as_json, lambda x: "\n".join(f"wrote {p}" for p in x["written"]))
     else:
-        emit({"generators": list(GENERATORS)}, as_json, lambda x: "\n".join(x["generators"]))
+        emit({"generators": list(GENERATORS), "benches": list(BENCHES)}, as_json,
+             lambda x: "\n".join(f"{g:<22}{'bench (runs alone: netlist --bench)' if g in x['benches'] else 'cells'}"
+                                  for g in x["generators"]))
 
 
 @main.command()
