@@ -100,8 +100,9 @@ def export_deck(design, name: str, path, models: str = "absolute", **kw) -> Path
 
 def models(design) -> dict:
     """The analytic model table: C_jdep, conversion gain, full well, C_A, C_C."""
+    from .camera.spicenoise import sf_gain
     from .physics.subpixel import model_table
-    return model_table(design)
+    return model_table(design, sf_gain(design))
 
 
 def experiment(design, backend: str = "batch", jobs=None) -> dict:

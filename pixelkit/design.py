@@ -244,7 +244,8 @@ def _check_layout_rules(design: Design) -> None:
     """The geometry and layer rules that the design file alone decides, for every command
     (not only ``layout``): a PD too large for its cell, transistors that do not fit, an
     opening the grid cannot draw, two layers on one GDS layer."""
-    from .layout.rules import RuleError, check_at_load
+    from .layout.cells import check_at_load
+    from .layout.rules import RuleError
     try:
         check_at_load(design)
     except RuleError as exc:

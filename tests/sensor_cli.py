@@ -1,8 +1,8 @@
 """In-process CLI runner for the sensor tests (no interpreter start-up per call)."""
 
 def run_inprocess(capsys, *args):
-    """The command line in this process (``pixelkit.cli.common.entry``): (exit status, stdout, stderr)."""
-    from pixelkit.cli.common import entry
+    """The command line in this process (``pixelkit.cli.entry``): (exit status, stdout, stderr)."""
+    from pixelkit.cli import entry
     try:
         entry([str(a) for a in args])
         code = 0

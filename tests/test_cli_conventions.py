@@ -83,7 +83,7 @@ def test_list_commands_emit_json(cli):
 
 
 def _in_process(argv, capsys):
-    from pixelkit.cli.common import entry
+    from pixelkit.cli import entry
     with pytest.raises(SystemExit) as ex:
         entry(argv)
     return ex.value.code, capsys.readouterr()

@@ -137,7 +137,7 @@ def _must_refuse(name: str, meta: dict) -> bool:
 
 def test_fuzz_every_field(tmp_path):
     from pixelkit.optimize.flow import sized_design_text
-    from pixelkit.physics.subpixel import model_table
+    from pixelkit.api import models as model_table   # the physics table at the SPICE SF gain
     problems, n_loaded, n_refused, files = [], 0, 0, []
     other = tmp_path / "elsewhere" / "deeper"
     other.mkdir(parents=True)

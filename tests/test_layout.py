@@ -90,7 +90,7 @@ def test_rules_refuse_with_the_rule_named(ref_design, changes, rule):
 
 def test_models_and_netlists_use_the_extracted_geometry(tmp_path, ref_design):
     from pixelkit.circuits.pixel5t import pixel5t
-    from pixelkit.physics.subpixel import model_table
+    from pixelkit.api import models as model_table
     drawn = replace(ref_design, secondary=replace(ref_design.secondary, pd_width=5.1e-6, pd_height=5.1e-6))
     gds = write_gds(build_library(drawn), tmp_path / "six.gds")
     d = with_layout(ref_design, gds)          # the design says 5 x 5 um; the layout says 5.1 x 5.1 um

@@ -3,7 +3,7 @@ import json
 
 import pytest
 
-from pixelkit.physics.subpixel import model_table
+from pixelkit.api import models as model_table   # the physics table at the SPICE SF gain
 
 # Reference numbers of the thesis (SEEDS_BRIEF section 2) and their tolerances.
 THESIS = {"cg_primary": (6.03e-6, 0.02), "cg_secondary": (21.7e-6, 0.02),

@@ -123,7 +123,7 @@ def test_cli_infeasible_is_one_line(tmp_path, cli):
 _CTRL_C_AT = """
 import os, signal, sys
 import pixelkit.optimize.flow as flow
-from pixelkit.cli.common import entry
+from pixelkit.cli import entry
 where = sys.argv.pop(1)
 def ctrl_c_then(fn):
     def wrapped(*a, **k):

@@ -15,7 +15,19 @@ from .afe import sc_afe
 from .devices import mosfet, photodiode, photodiode_model
 from .dual_pixel import dual_pixel
 from .opamp import opamp
-from .timing import GsTiming, waveform
+from .timing import GsTiming, timings  # noqa: F401 (timings: callers import it from here)
+
+
+def waveform(intervals, high: float, edge: float, invert: bool = False) -> Pwl:
+    """PWL that is ``high`` inside each (on, off) interval and 0 outside (or the reverse)."""
+    lo, hi = (high, 0.0) if invert else (0.0, high)
+    ivs = sorted(intervals)
+    pts = [(0.0, hi if ivs and ivs[0][0] <= 0 else lo)]
+    for on, off in ivs:
+        if on > 0:
+            pts += [(on, lo), (on + edge, hi)]
+        pts += [(off, hi), (off + edge, lo)]
+    return Pwl(tuple(pts))
 
 
 def _deck(design, title, elements, subckts=(), analysis=None, ic=(), saves=(), options=()):
@@ -24,21 +36,6 @@ def _deck(design, title, elements, subckts=(), analysis=None, ic=(), saves=(), o
                    models=photodiode_model(t, design.temperature), includes=t.models.includes(design.corner or None),
                    ic=tuple(ic), temperature_C=design.temperature - 273.15, saves=tuple(saves),
                    options=tuple(options))
-
-
-def timings(design, t_exp: float, rows: int = 1, t_exp_secondary: float | None = None,
-            t_store: float = 0.0, ec_hold: bool = False) -> dict:
-    """Per-array GS timing, each array with its own row time.
-
-    ``t_exp`` is the primary exposure; the secondary's is ``t_exp_secondary``
-    (default: the same window). The shorter exposure starts later (EC held) so
-    both arrays transfer together; ``t_store`` delays the first row's read.
-    """
-    t_s = t_exp if t_exp_secondary is None else t_exp_secondary
-    longest = max(t_exp, t_s)
-    common = dict(rows=rows, t_store=t_store, ec_hold=ec_hold)
-    return {"primary": GsTiming(t_exp, 1.0 / design.primary.f_read, t_hold=longest - t_exp, **common),
-            "secondary": GsTiming(t_s, 1.0 / design.secondary.f_read, t_hold=longest - t_s, **common)}
 
 
 def real_timings(design, t_store: float = 0.0, ec_hold: bool = False) -> dict:

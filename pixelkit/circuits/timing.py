@@ -1,4 +1,5 @@
-"""The global-shutter sequence as control waveforms (PWL), and its sample instants.
+"""The global-shutter sequence: its switch intervals and sample instants (pure arithmetic: the
+models use it too; ``testbench.waveform`` draws the intervals as PWL sources).
 
     0 .. t_reset + t_hold   EC on (PD reset), RST on (FD reset)
     t_reset + t_hold        EC opens: exposure starts (all pixels of the array)
@@ -23,8 +24,6 @@ first row: the wait of row ``r`` of a frame is ``t_pre + r t_row``.
 from __future__ import annotations
 
 from dataclasses import dataclass
-
-from ..spice.netlist import Pwl
 
 
 @dataclass(frozen=True)
@@ -86,7 +85,7 @@ class GsTiming:
     def t_stop(self) -> float:
         return self.row(self.rows) + 0.05 * self.t_row
 
-    # waveforms -------------------------------------------------------------
+    # switch intervals ------------------------------------------------------
     def ec(self):
         on = [(0.0, self.t_start)]
         if self.ec_hold:
@@ -116,13 +115,16 @@ class GsTiming:
         return [self.s2_window(r) for r in self.row_list(rows)]
 
 
-def waveform(intervals, high: float, edge: float, invert: bool = False) -> Pwl:
-    """PWL that is ``high`` inside each (on, off) interval and 0 outside (or the reverse)."""
-    lo, hi = (high, 0.0) if invert else (0.0, high)
-    ivs = sorted(intervals)
-    pts = [(0.0, hi if ivs and ivs[0][0] <= 0 else lo)]
-    for on, off in ivs:
-        if on > 0:
-            pts += [(on, lo), (on + edge, hi)]
-        pts += [(off, hi), (off + edge, lo)]
-    return Pwl(tuple(pts))
+def timings(design, t_exp: float, rows: int = 1, t_exp_secondary: float | None = None,
+            t_store: float = 0.0, ec_hold: bool = False) -> dict:
+    """Per-array GS timing, each array with its own row time.
+
+    ``t_exp`` is the primary exposure; the secondary's is ``t_exp_secondary``
+    (default: the same window). The shorter exposure starts later (EC held) so
+    both arrays transfer together; ``t_store`` delays the first row's read.
+    """
+    t_s = t_exp if t_exp_secondary is None else t_exp_secondary
+    longest = max(t_exp, t_s)
+    common = dict(rows=rows, t_store=t_store, ec_hold=ec_hold)
+    return {"primary": GsTiming(t_exp, 1.0 / design.primary.f_read, t_hold=longest - t_exp, **common),
+            "secondary": GsTiming(t_s, 1.0 / design.secondary.f_read, t_hold=longest - t_s, **common)}

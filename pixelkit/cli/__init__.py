@@ -17,6 +17,9 @@ def register_all() -> None:
         importlib.import_module(f"{__name__}.{name}")
 
 
-def entry():
-    from .common import entry as _entry
-    _entry()
+def entry(argv=None):
+    """The command line: every command registered, then ``common.run`` (``argv``: in-process use;
+    None: the console script, which also installs the Ctrl-C handler)."""
+    register_all()
+    from .common import run
+    run(argv)

@@ -1,4 +1,4 @@
-"""The ``pixelkit`` command: the group, the shared options, output and the entry point.
+"""The ``pixelkit`` command: the group, the shared options, output and ``run`` (errors, exit statuses).
 
 The convention every command follows (README, "Command line and Python API"):
 
@@ -199,11 +199,10 @@ def finishing() -> None:
         signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
-def entry(argv=None):
-    """Console entry point: one-line (or JSON) errors with distinct exit statuses, no tracebacks."""
+def run(argv=None):
+    """Run the registered commands (``pixelkit.cli.entry`` registers them first): one-line (or JSON)
+    errors with distinct exit statuses, no tracebacks."""
     import signal
-    from . import register_all
-    register_all()
     args = list(sys.argv[1:] if argv is None else argv)
     as_json = "--json" in args
     if argv is None:  # the console script: Ctrl-C ends with one line and status 130

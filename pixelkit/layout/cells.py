@@ -21,7 +21,7 @@ import math
 
 import gdstk
 
-from .rules import RuleError, check
+from .rules import RuleError, check, check_layers
 
 UM = 1e6  # metres -> um
 EPS = 1e-6  # um: tolerance of fit checks against rounding
@@ -128,3 +128,17 @@ def build_library(design, rows: int = 0, cols: int = 0) -> gdstk.Library:
         arr.add(gdstk.Reference(dual, (0, 0), columns=cols, rows=rows, spacing=(pp, pp + sp)))
         lib.add(arr)
     return lib
+
+
+def check_at_load(design) -> None:
+    """Every rule the design file alone decides: :func:`check`, the layer map, and that the
+    pixel's transistors fit beside each PD (a dry run of the cell generator, nothing written)."""
+    check_layers(design.tech)
+    check(design)
+    for which in ("primary", "secondary"):
+        try:
+            subpixel_cell(design, which)
+        except RuleError as exc:
+            if not exc.field:
+                exc.field, exc.value = f"{which}.pitch", getattr(design, which).pitch
+            raise

@@ -1,9 +1,9 @@
 """The layout rules the kit knows, checked on a design before anything is drawn.
 
 Each violation raises :class:`RuleError` naming the rule, the place (cell) and
-the numbers involved. :func:`check_at_load` runs every rule the design file
-alone decides - including the layer map and the grid - when a design is
-loaded, so every command refuses what ``layout`` would refuse.
+the numbers involved. ``cells.check_at_load`` runs every rule the design file
+alone decides - including the layer map, the grid and a dry run of the cells -
+when a design is loaded, so every command refuses what ``layout`` would refuse.
 """
 from __future__ import annotations
 
@@ -70,18 +70,3 @@ def check_layers(tech) -> None:
                             f"layers.{name} and layers.{seen[key]} are both GDS {key[0]}/{key[1]}",
                             f"layers.{name}", f"{key[0]}/{key[1]}")
         seen[key] = name
-
-
-def check_at_load(design) -> None:
-    """Every rule the design file alone decides: :func:`check`, the layer map, and that the
-    pixel's transistors fit beside each PD (a dry run of the cell generator, nothing written)."""
-    check_layers(design.tech)
-    check(design)
-    from .cells import subpixel_cell
-    for which in ("primary", "secondary"):
-        try:
-            subpixel_cell(design, which)
-        except RuleError as exc:
-            if not exc.field:
-                exc.field, exc.value = f"{which}.pitch", getattr(design, which).pitch
-            raise

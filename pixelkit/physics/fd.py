@@ -17,7 +17,7 @@ below the diffusion) and the full ``cgsl W`` above; it is taken at the node's bi
 Without it the FD is 10 % short of what SPICE's devices put on it (0.16 fF of 2.0).
 
 Charge sharing: TG conducts in its linear region during the transfer, so the PD
-node (PD junction + EC/TG diffusions, ``subpixel.pd_node(parasitics=True)``) and
+node (PD junction + EC/TG diffusions, ``nodes.pd_node(parasitics=True)``) and
 FD settle to one voltage; a photo-charge dQ moves both by dQ / (C_PD + C_FD), and
 FD keeps that voltage when TG opens. The column signal (reset level - signal
 level, NCDS) moves by ``A_sf`` times that. Hence
@@ -27,7 +27,7 @@ level, NCDS) moves by ``A_sf`` times that. Hence
     CG_out = A_sf q / (C_PD,node + C_FD)    (column, V/e-)
 
 ``A_sf``, the small-signal gain of the SF with its column load, comes from the
-BSIM4 device models at the read operating point (``circuits.testbench.sf_gain``):
+BSIM4 device models at the read operating point (``camera.spicenoise.sf_gain``, a SPICE run the caller makes):
 the kit has no closed form for those models. Everything else is closed form.
 
 Storage: FD leaks through its diffusions by the device models' junction law
@@ -40,27 +40,8 @@ from ..circuits.geometry import diffusion
 import numpy as np
 
 from ..constants import K_B, Q
-from .junction import Junction, Node
-
-
-def mos_junctions(tech) -> tuple[Junction, Junction]:
-    """(bottom + field sidewall, gate-edge sidewall) junctions of the technology's MOS diffusions."""
-    mos = tech.mos
-    return (Junction(mos.cj, mos.mj, mos.pb, mos.cjsw, mos.mjsw, mos.pbsw),
-            Junction(0.0, 0.5, 1.0, mos.cjswg, mos.mjswg, mos.pbswg))
-
-
-def overlap(w: float, v_ov: float, mos) -> float:
-    """Gate overlap capacitance (F) of width ``w`` at overlap voltage ``v_ov`` = V_gate - V_diffusion."""
-    ldd = 1.0 if v_ov >= 0 else 1.0 - 1.0 / np.sqrt(1.0 - 4.0 * v_ov / mos.ckappa)
-    return w * (mos.cgso + mos.cgsl * ldd)
-
-
-def switch_side(w: float, tech, v_ov: float = 0.0) -> tuple[tuple, float]:
-    """Junction terms and overlap C (F) one source/drain of width ``w`` adds to a node."""
-    body, edge = mos_junctions(tech)
-    a, p = diffusion(w, tech.mos.diff_ext)
-    return ((a, p - w, body), (0.0, w, edge)), overlap(w, v_ov, tech.mos)
+from .junction import Node
+from .nodes import overlap, pd_node, switch_side
 
 
 def sf_gate(design, a_sf: float, v_fd: float | None = None) -> float:
@@ -133,7 +114,6 @@ def response(design, which: str, a_sf: float, v_bias: float | None = None) -> di
     ``v_bias`` (default: the design's PD reset level) is the reverse bias of the PD node
     and FD at which the small-signal capacitances are taken.
     """
-    from .subpixel import pd_node
     v = design.pixel.v_pd_reset if v_bias is None else v_bias
     c_pd = float(pd_node(design, which).capacitance(v))
     c_node = float(pd_node(design, which, parasitics=True).capacitance(v))
@@ -169,9 +149,3 @@ def storage_signal(design, which: str, a_sf: float, i_ph: float, t_wait: float,
     r = response(design, which, a_sf, v_fd)
     i = leakage(design, temperature_K) + pls_current(design, i_ph)
     return a_sf * i * t_wait / r["c_fd_F"]
-
-
-def output_conversion_gain(design, which: str) -> float:
-    """Output-referred CG (V/e-) at the design's reset bias, A_sf from the SF's operating point."""
-    from ..camera.spicenoise import sf_gain
-    return response(design, which, sf_gain(design))["cg_out_V_per_e"]

@@ -84,7 +84,7 @@ def sf_flicker(design, a_sf: float, dt: float, c_col: float, points_per_decade: 
 
 def ncds_interval(design, which: str) -> float:
     """Time from the signal sample to the (new reset's) reset-level sample of the first row."""
-    from ..circuits.testbench import timings
+    from ..circuits.timing import timings
     tm = timings(design, design.experiment.t_window)[which]
     return tm.t_reset_level(0) - tm.t_signal(0)
 

@@ -8,28 +8,12 @@ the column sees (charge sharing with FD, the SF gain) is ``fd.response``.
 """
 from __future__ import annotations
 
-from ..physics import conversion
+from . import conversion
 from .dark import dark_current
-from .fd import response, switch_side
-from .junction import Junction, Node
+from .fd import response
+from .nodes import pd_node  # noqa: F401 (callers import the PD node from here)
 
 SUBPIXELS = ("primary", "secondary")
-
-
-def pd_node(design, which: str, parasitics: bool = False) -> Node:
-    """C(V) of the photodiode of ``which`` subpixel, optionally with its switch parasitics
-    (EC and TG source diffusions and overlaps, gates at 0 V, overlaps at the PD reset level)."""
-    sub = getattr(design, which)
-    tech = design.tech
-    terms = [(sub.area, sub.perimeter, Junction.of(tech.photodiode))]
-    c_fixed = 0.0
-    if parasitics:
-        dev = design.pixel.devices
-        for w in (dev.ec_w, dev.tg_w):
-            t, c = switch_side(w, tech, -design.pixel.v_pd_reset)
-            terms += t
-            c_fixed += c
-    return Node(tuple(terms), c_fixed)
 
 
 def figures(design, which: str) -> dict:
@@ -50,17 +34,15 @@ def figures(design, which: str) -> dict:
     }
 
 
-def model_table(design, a_sf: float | None = None) -> dict:
+def model_table(design, a_sf: float) -> dict:
     """The figures ``pixelkit models`` prints; ratios as eq. 3.10 and 3.13 define them.
 
     Besides the thesis's table at its 2.5 V, each subpixel gets ``at_reset``: the
     PD-referred and output-referred conversion gain side by side at the design's own
-    PD reset level (``fd.response``). ``a_sf``: the SF gain, default from a SPICE
-    operating point of the SF and its column load (``camera.spicenoise.sf_gain``).
+    PD reset level (``fd.response``). ``a_sf``: the SF gain; ``pixelkit.api.models`` takes
+    it from a SPICE operating point of the SF and its column load (``camera.spicenoise.sf_gain``):
+    the models stay importable and testable without the simulator above them.
     """
-    if a_sf is None:
-        from ..camera.spicenoise import sf_gain
-        a_sf = sf_gain(design)
     p, s = figures(design, "primary"), figures(design, "secondary")
     p["at_reset"], s["at_reset"] = (response(design, w, a_sf) for w in SUBPIXELS)
     return {

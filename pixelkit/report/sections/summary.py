@@ -1,19 +1,17 @@
 """Design summary in the form of the thesis's table 3.2, the kit's values beside the thesis's.
 
 Kit values: the analytic PD-referred figures (``physics.subpixel``), the
-output-referred conversion gain from the physics when it provides one
-(``output_conversion_gain(design, which)`` in any ``pixelkit.physics`` module;
-"pending" until then), and the output-referred gain *measured in SPICE*: the slope
+output-referred conversion gain from the physics (``physics.fd.response`` at the
+design's reset bias, A_sf from the SF's SPICE operating point), and the
+output-referred gain *measured in SPICE*: the slope
 of the double-sampled column signal against the collected charge I t_window over
 the linear part of the experiment's sweep (below 30 % of the column swing).
 """
 from __future__ import annotations
 
-import importlib
-import pkgutil
-
 import numpy as np
 
+from ...camera.spicenoise import sf_gain
 from ...constants import Q
 from ...physics.subpixel import model_table
 from . import Checked, Section, Table
@@ -30,17 +28,6 @@ THESIS = {
 }
 
 
-def physics_output_cg(design, which: str):
-    """Output-referred conversion gain (V/e-) from ``pixelkit.physics``, or None while it has none."""
-    from ... import physics
-    for info in pkgutil.iter_modules(physics.__path__):
-        mod = importlib.import_module(f"{physics.__name__}.{info.name}")
-        fn = getattr(mod, "output_conversion_gain", None)
-        if callable(fn):
-            return float(fn(design, which)), f"pixelkit.physics.{info.name}.output_conversion_gain"
-    return None, None
-
-
 def spice_output_cg(sweep_A, signal_V, dark_V: float, swing_V: float, t_window: float) -> float:
     """Slope of the column signal against the collected charge (V/e-) below 30 % of swing."""
     i, s = np.asarray(sweep_A), np.asarray(signal_V)
@@ -51,20 +38,20 @@ def spice_output_cg(sweep_A, signal_V, dark_V: float, swing_V: float, t_window: 
 
 def build(ctx) -> Section:
     d = ctx.design
-    mt = model_table(d)
+    mt = model_table(d, sf_gain(d))
     exp = ctx.experiment()
-    kit, out_cg, out_src, spice_cg = {}, {}, None, {}
+    kit, out_cg, spice_cg = {}, {}, {}
+    out_src = "pixelkit.physics.fd.response (A_sf: camera.spicenoise.sf_gain)"
     for w, key in (("primary", "i_mid_A"), ("secondary", "i_5pct_A")):
         kit[w] = mt[w]
-        out_cg[w], src = physics_output_cg(d, w)
-        out_src = out_src or src
+        out_cg[w] = mt[w]["at_reset"]["cg_out_V_per_e"]
         e = exp[w]
         spice_cg[w] = spice_output_cg(e["sweep_A"], e["signal_V"], e["dark_signal_V"], e["swing_V"], exp["t_window_s"])
     th = THESIS
     p, s = d.primary, d.secondary
 
     def cg_out(w):
-        return round(out_cg[w] * 1e6, 3) if out_cg[w] is not None else "pending (issue 11 physics)"
+        return round(out_cg[w] * 1e6, 3)
 
     rows = [
         ["array (rows x cols)", th["primary"]["array"], f"{p.rows} x {p.cols}", th["secondary"]["array"],
@@ -101,8 +88,7 @@ def build(ctx) -> Section:
             "(eq. 3.5, 3.6), the output-referred gain measured in SPICE is the slope of the double-sampled column "
             "signal against the collected charge over the linear part of the experiment's sweep (independent of "
             "the analytic model: it includes FD charge sharing and the SF gain).",
-            "The output-referred gain from the physics model is "
-            + (f"from {out_src}." if out_src else "pending: the noise / virtual-camera work (issue 11) adds it.")]
+            f"The output-referred gain from the physics model is from {out_src}."]
     checked = []
     for w in ("primary", "secondary"):
         checked += [
@@ -111,8 +97,7 @@ def build(ctx) -> Section:
                     "SPICE column signal per electron"),
             Checked(f"summary.{w}.fwc_ke", kit[w]["fwc_e"] * 1e-3, "ke-", 0.005, 0.0, "swing x C_jdep / q"),
         ]
-        if out_cg[w] is not None:
-            checked.append(Checked(f"summary.{w}.cg_out_physics_uV_per_e", out_cg[w] * 1e6, "uV/e-", 0.01, 0.0))
+        checked.append(Checked(f"summary.{w}.cg_out_physics_uV_per_e", out_cg[w] * 1e6, "uV/e-", 0.01, 0.0))
     checked += [Checked("summary.c_a", mt["c_a"], "1", 0.002), Checked("summary.c_c", mt["c_c"], "1", 0.005)]
     return Section(TITLE, text=text,
                    tables=[Table("design_summary", "Table 3.2 form: thesis vs kit",
