@@ -1,22 +1,90 @@
 #!/usr/bin/env bash
 # Installs everything pixelkit needs on a fresh Debian machine; safe to re-run.
 #  - ngspice, its shared library and headers, and chromium (the report test renders
-#    the HTML report headless) from Debian's packages (apt-get)
-#  - pixelkit and its Python dependencies (pip, editable install); the open
-#    GF180MCU model files ship inside the package (pixelkit/tech/models/)
+#    the HTML report headless) from Debian's packages (apt-get; as root or with sudo)
+#  - a virtual environment, .venv in this clone (python3 -m venv; python3-venv from
+#    apt-get where the interpreter lacks it), or the one named with --venv DIR or
+#    PIXELKIT_VENV=DIR (made if absent; .venv then links to it). pixelkit (editable)
+#    and its Python dependencies go into it with pip: never into the system's Python,
+#    which Debian marks externally managed (PEP 668). Run the kit and the tests with
+#    .venv/bin/python. PYTHON=... picks the interpreter the environment is made from.
+#  - the open GF180MCU model files ship inside the package (pixelkit/tech/models/)
 set -euo pipefail
 cd "$(dirname "$0")"
+CLONE="$PWD"
+VENV="${PIXELKIT_VENV:-}"
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --venv) VENV="${2:?setup: --venv needs a folder}"; shift 2 ;;
+    --venv=*) VENV="${1#--venv=}"; shift ;;
+    -h|--help) sed -n '2,11p' "$0"; exit 0 ;;
+    *) echo "setup: unknown argument '$1' (allowed: --venv DIR)" >&2; exit 2 ;;
+  esac
+done
+PY="${PYTHON:-python3}"
 SUDO=""
 if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+
 missing=()
 for pkg in ngspice libngspice0 libngspice0-dev chromium; do
   dpkg -s "$pkg" >/dev/null 2>&1 || missing+=("$pkg")
 done
+# the interpreter the environment is made from, with its venv module (Debian splits it off)
+if ! command -v "$PY" >/dev/null 2>&1; then
+  [ "$PY" = python3 ] || { echo "setup: PYTHON=$PY not found" >&2; exit 2; }
+  missing+=(python3 python3-venv)
+elif ! "$PY" -c 'import ensurepip, venv' >/dev/null 2>&1; then
+  missing+=(python3-venv)
+fi
 if [ "${#missing[@]}" -gt 0 ]; then
   echo "setup: installing ${missing[*]} (apt-get)" >&2
   $SUDO apt-get update -qq
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq "${missing[@]}" >/dev/null
 fi
-PY="${PYTHON:-python3}"
-"$PY" -m pip install -q --disable-pip-version-check --root-user-action=ignore -e '.[test]'
-echo "setup: done ($(ngspice --version 2>/dev/null | grep -o 'ngspice-[0-9]*' | head -1))" >&2
+if ! "$PY" -c 'import sys; sys.exit(sys.version_info < (3, 11))'; then
+  echo "setup: pixelkit needs Python >= 3.11; $PY is $("$PY" -V 2>&1) (choose one with PYTHON=...)" >&2
+  exit 2
+fi
+if ! "$PY" -c 'import ensurepip, venv' >/dev/null 2>&1; then
+  echo "setup: $PY cannot make a virtual environment (no venv/ensurepip module); choose another with PYTHON=..." >&2
+  exit 2
+fi
+
+# the environment: the named one, else .venv in the clone
+if [ -n "$VENV" ]; then
+  VENV="$(realpath -m "$VENV")"
+  if [ -e "$VENV" ] && [ ! -x "$VENV/bin/python" ]; then
+    echo "setup: $VENV exists but is not a virtual environment (no bin/python)" >&2; exit 2
+  fi
+  [ -x "$VENV/bin/python" ] || "$PY" -m venv "$VENV"
+  if [ "$VENV" != "$CLONE/.venv" ]; then
+    if [ -e .venv ] && [ ! -L .venv ]; then
+      echo "setup: $CLONE/.venv is a folder of its own; remove it to link it to $VENV" >&2; exit 2
+    fi
+    ln -sfn "$VENV" .venv
+  fi
+else
+  VENV="$CLONE/.venv"
+  if [ -L .venv ] && [ ! -e .venv ]; then
+    rm .venv                   # a link to a named environment that is gone
+  elif [ -L .venv ]; then
+    VENV="$(realpath .venv)"   # named at an earlier set-up
+  elif [ -e .venv ] && ! .venv/bin/python -m pip --version >/dev/null 2>&1; then
+    echo "setup: .venv does not work (moved clone or interpreter?): making it again" >&2
+    "$PY" -m venv --clear .venv
+  fi
+  [ -x .venv/bin/python ] || "$PY" -m venv .venv
+fi
+VPY="$VENV/bin/python"
+
+# pip only when pyproject.toml changed or the environment does not import this clone's kit
+stamp="$VENV/.pixelkit-setup"
+want="$(sha256sum pyproject.toml | cut -d' ' -f1) $CLONE"
+if [ "$(cat "$stamp" 2>/dev/null)" != "$want" ] || ! (cd / && "$VPY" -c \
+    "import emva1288, pytest, pixelkit, sys; sys.exit(not pixelkit.__file__.startswith('$CLONE/'))" 2>/dev/null); then
+  echo "setup: installing pixelkit and its dependencies into $VENV (pip)" >&2
+  "$VPY" -m pip install -q --disable-pip-version-check -e '.[test]'
+  echo "$want" > "$stamp"
+fi
+echo "setup: done ($(ngspice --version 2>/dev/null | grep -o 'ngspice-[0-9]*' | head -1), $("$VPY" -V)" \
+     "in $VENV); run the kit with .venv/bin/python -m pixelkit" >&2
