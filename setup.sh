@@ -21,6 +21,15 @@ while [ $# -gt 0 ]; do
     *) echo "setup: unknown argument '$1' (allowed: --venv DIR)" >&2; exit 2 ;;
   esac
 done
+if [ -n "$VENV" ]; then   # a named environment is checked before anything is installed
+  VENV="$(realpath -m "$VENV")"
+  if [ -e "$VENV" ] && [ ! -x "$VENV/bin/python" ]; then
+    echo "setup: $VENV exists but is not a virtual environment (no bin/python)" >&2; exit 2
+  fi
+  if [ "$VENV" != "$CLONE/.venv" ] && [ -e .venv ] && [ ! -L .venv ]; then
+    echo "setup: $CLONE/.venv is a folder of its own; remove it to link it to $VENV" >&2; exit 2
+  fi
+fi
 PY="${PYTHON:-python3}"
 SUDO=""
 if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
@@ -52,17 +61,8 @@ fi
 
 # the environment: the named one, else .venv in the clone
 if [ -n "$VENV" ]; then
-  VENV="$(realpath -m "$VENV")"
-  if [ -e "$VENV" ] && [ ! -x "$VENV/bin/python" ]; then
-    echo "setup: $VENV exists but is not a virtual environment (no bin/python)" >&2; exit 2
-  fi
   [ -x "$VENV/bin/python" ] || "$PY" -m venv "$VENV"
-  if [ "$VENV" != "$CLONE/.venv" ]; then
-    if [ -e .venv ] && [ ! -L .venv ]; then
-      echo "setup: $CLONE/.venv is a folder of its own; remove it to link it to $VENV" >&2; exit 2
-    fi
-    ln -sfn "$VENV" .venv
-  fi
+  [ "$VENV" = "$CLONE/.venv" ] || ln -sfn "$VENV" .venv
 else
   VENV="$CLONE/.venv"
   if [ -L .venv ] && [ ! -e .venv ]; then
@@ -81,7 +81,8 @@ VPY="$VENV/bin/python"
 stamp="$VENV/.pixelkit-setup"
 want="$(sha256sum pyproject.toml | cut -d' ' -f1) $CLONE"
 if [ "$(cat "$stamp" 2>/dev/null)" != "$want" ] || ! (cd / && "$VPY" -c \
-    "import emva1288, pytest, pixelkit, sys; sys.exit(not pixelkit.__file__.startswith('$CLONE/'))" 2>/dev/null); then
+    "import emva1288, pytest, pixelkit, sys; sys.exit(not pixelkit.__file__.startswith(sys.argv[1]))" \
+    "$CLONE/" 2>/dev/null); then
   echo "setup: installing pixelkit and its dependencies into $VENV (pip)" >&2
   "$VPY" -m pip install -q --disable-pip-version-check -e '.[test]'
   echo "$want" > "$stamp"
