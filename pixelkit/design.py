@@ -14,6 +14,7 @@ from pathlib import Path
 
 from .errors import ConfigError
 from .physics.conversion import photoactive_area, rectangle
+from .readout_timing import Timing
 from .schema import as_written, ident, integer, load, num, qty, read_toml, table, text
 from .tech import Technology, load_technology
 
@@ -29,6 +30,7 @@ class Subpixel:
     f_read: float = qty("Hz", gt=0, le=1e9, plausible=(1.0, 1e9))
     mask_opening: float | None = qty("m2", None, gt=0, plausible=(1e-14, 1e-6),
                                      doc="metal-mask opening; absent = unmasked")
+    timing: Timing = table(Timing, default=Timing, doc="global-shutter sequence and row read of this array")
     extracted: dict | None = field(default=None, metadata=dict(kind="skip"), compare=False)
 
     @property
@@ -204,6 +206,13 @@ class Design:
             raise ConfigError(source, "secondary.pitch", as_written(raw, "secondary.pitch", self.secondary.pitch),
                               f"primary.pitch / secondary_per_pixel = {self.primary.pitch / n * 1e6:g} um "
                               "(subpixels are integrated side by side)")
+        for kind in ("primary", "secondary"):
+            sub, table_raw = getattr(self, kind), raw.get(kind, {})
+            sub.timing.check(1.0 / sub.f_read, self.afe.nonoverlap, kind, source, table_raw)
+            for key, t_exp, node in ((f"{kind}.t_int", sub.t_int, table_raw),
+                                     ("experiment.t_window", self.experiment.t_window, raw.get("experiment", {}))):
+                sub.timing.check_exposure(t_exp, kind, source, key,
+                                          as_written(node, key.split(".")[1], t_exp))
 
     @property
     def corner_name(self) -> str:

@@ -314,3 +314,51 @@ def test_report_section_lists_values_near_a_range_edge(tmp_path):
     s = inputs.build(ctx)
     assert "design: pixel.swing" in s.data["near_edge"]
     assert s.tables[0].rows[0][5] == "near the edge"
+
+
+def test_fuzz_timing_tables(tmp_path):
+    """Seeded random [primary.timing] / [secondary.timing] tables and read clocks: each design
+    either loads, and then its phases are in order with room for their edges and both decks
+    write strictly increasing waveforms, or is refused naming a timing key (or the clock or
+    exposure it does not fit) in one line. The order rule is written here, independently of
+    the loader's."""
+    from pixelkit.circuits.array import array_bench
+    from pixelkit.circuits.testbench import dual_pixel_bench, timings
+    from pixelkit.readout_timing import ROW_FRACTIONS
+    rng = random.Random(SEED)
+    order = [k for k, _ in ROW_FRACTIONS]
+    loaded = refused = 0
+    for k in range(160):
+        raw = tomllib.loads(REF.read_text())
+        kind = rng.choice(["primary", "secondary"])
+        f_read = rng.choice([1e5, 5e5, 1e6, 2e6, 1e7])
+        raw[kind]["f_read"] = f"{f_read:g} Hz"
+        t_row = 1 / f_read
+        table = {}
+        for key in rng.sample(order, rng.randint(0, len(order))):
+            table[key] = f"{rng.uniform(0, 1.1) * t_row * 1e6:.4g} us"
+        for key in rng.sample(["t_reset", "t_tg", "t_gap", "t_pre", "edge", "t_hold"], rng.randint(0, 3)):
+            table[key] = f"{10 ** rng.uniform(-9, -5):.3g} s"
+        raw[kind]["timing"] = table
+        p = tmp_path / f"t{k}.toml"
+        p.write_text(to_toml(raw))
+        try:
+            d = load_design(p)
+        except PixelkitError as exc:
+            refused += 1
+            assert "\n" not in str(exc)
+            assert exc.field.startswith(f"{kind}.timing.") or exc.field in ("experiment.t_window", f"{kind}.t_int"), \
+                (table, str(exc))
+            continue
+        loaded += 1
+        t = timings(d, d.experiment.t_window, 2)[kind]
+        edge = t.edge
+        ph = [t.phase(n) for n in order]
+        assert all(0 <= x <= t.t_row for x in ph), (table, ph)
+        for (a, b), (na, nb) in zip(zip(ph, ph[1:]), zip(order, order[1:])):
+            assert b - a >= (0 if na == "rs_on" else edge), (table, na, nb, a, b)
+        assert t.phase("rs_off") + edge <= t.t_row + t.phase("rs_on") * (1 + 1e-12), table
+        dual_pixel_bench(d, 1e-9, 1e-11, with_afe=True).text()
+        ip = [[1e-9]]
+        array_bench(d, ip, [[1e-11] * d.secondary_per_pixel], t_exp=None, with_afe=True).text()
+    assert loaded > 10 and refused > 10, (loaded, refused)

@@ -10,7 +10,7 @@ One ``ArrayCamera`` per array (primary, secondary), from the design:
 - temporal noise: the read-noise chain of ``physics.noise`` (pixel probe: NCDS at
   the column, without the dark shot noise, which the camera draws itself), signal
   and dark shot noise (Poisson), quantization;
-- storage: row r waits t_pre + (r + 0.4) t_row on FD, picking up the FD leakage and
+- storage: row r waits t_pre + r t_row + s1_off on FD, picking up the FD leakage and
   1/gse of the PD's photocurrent (``fd``);
 - QE (EMVA eta): the technology's QE at ``wavelength`` times the photoactive
   area over the pixel area (pitch^2): the secondary's mask opening is its fill factor;
@@ -23,7 +23,6 @@ from functools import cached_property
 
 import numpy as np
 
-from ..circuits.timing import GsTiming
 from ..constants import Q
 from ..physics import fd
 from ..physics.dark import dark_current
@@ -66,7 +65,8 @@ class ArrayCamera:
     fd_leak_V_per_s: float     # FD leakage, at the column
     pls_V_per_e: float         # column V per PD photo-electron per second of FD wait (1/gse)
     t_row: float
-    t_pre: float
+    t_pre: float               # end of transfer to the first row (t_pre + t_store of the design)
+    t_s1: float                # signal sample within a row (the design's s1_off)
     t_int: float
     temperature_K: float
     adc: Adc
@@ -107,7 +107,7 @@ class ArrayCamera:
     def t_wait(self, rows=None):
         """Storage wait (s) of each row's signal sample."""
         r = np.arange(self.rows if rows is None else rows)
-        return self.t_pre + (r + 0.4) * self.t_row
+        return self.t_pre + r * self.t_row + self.t_s1
 
     def electrons_for_fraction(self, frac: float) -> float:
         """Electrons that take the column to ``frac`` of its clip level."""
@@ -142,5 +142,6 @@ def array_camera(design, which: str, a_sf: float, clip_V: float | None = None, w
                       + fd.pd_switch_leakage(design)) / Q,
         fd_leak_V_per_s=a_sf * fd.leakage(design) / r["c_fd_F"],
         pls_V_per_e=a_sf * Q / (design.pixel.gse * r["c_fd_F"]),
-        t_row=1.0 / sub.f_read, t_pre=GsTiming(0.0, 1.0).t_pre, t_int=sub.t_int, temperature_K=design.temperature,
+        t_row=1.0 / sub.f_read, t_pre=sub.timing.t_pre + sub.timing.t_store,
+        t_s1=sub.timing.row(1.0 / sub.f_read)["s1_off"], t_int=sub.t_int, temperature_K=design.temperature,
         adc=Adc(bits, 1.2 * clip), chain=ch)

@@ -38,7 +38,7 @@ def _deck(design, title, elements, subckts=(), analysis=None, ic=(), saves=(), o
                    options=tuple(options))
 
 
-def real_timings(design, t_store: float = 0.0, ec_hold: bool = False) -> dict:
+def real_timings(design, t_store: float = 0.0, ec_hold: bool | None = None) -> dict:
     """The design's own integration times (``primary.t_int``, ``secondary.t_int``)."""
     return timings(design, design.primary.t_int, 1, design.secondary.t_int, t_store, ec_hold)
 
@@ -196,7 +196,7 @@ def dark_bench(design, which: str, t_int: float, title: str = "dark_bench") -> N
     temperature); the EC/TG junctions add what the BSIM4 models leak. gmin 1e-18.
     """
     sub, dev, t, px = getattr(design, which), design.pixel.devices, design.tech, design.pixel
-    t_reset, edge = 1e-6, 10e-9
+    t_reset, edge = sub.timing.t_reset, sub.timing.edge
     el = (Element("Vpdr", ("vpdr", "0"), px.v_pd_reset), Element("Vfd", ("fd", "0"), px.v_fd_reset),
           Element("Vec", ("ec", "0"), waveform([(0.0, t_reset)], t.supply, edge)), Element("Vtg", ("tg", "0"), 0.0),
           photodiode("pd", "pd", sub.area, sub.perimeter, t),

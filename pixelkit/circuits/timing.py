@@ -11,7 +11,10 @@ models use it too; ``testbench.waveform`` draws the intervals as PWL sources).
                             integrating and can overflow
     t_read + r t_row        row r: RS on; S1 samples the signal; RST pulses (FD
                             reset); S2 samples the reset level (non-correlated
-                            double sampling, thesis fig. 3.3); RS off
+                            double sampling, thesis fig. 3.3); RS off. The phases
+                            are the design's ``[<array>.timing]`` keys
+                            (``pixelkit.readout_timing``), times from the row's
+                            start; absent ones are fractions of the row time.
 
 Each array has its own row time 1/f_read (defaults 500 kHz primary, 1 MHz
 secondary). Edges take ``edge`` seconds; levels are 0 and the supply.
@@ -25,6 +28,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from ..readout_timing import ROW_FRACTIONS
+
+_FRACTION = dict(ROW_FRACTIONS)
 
 @dataclass(frozen=True)
 class GsTiming:
@@ -39,6 +45,16 @@ class GsTiming:
     t_hold: float = 0.0    # EC held on after t_reset: the exposure starts later
     t_store: float = 0.0   # extra storage on FD before the first row is read
     ec_hold: bool = False  # EC resets the PD again during storage
+    #: ((phase, s from the row's start), ...) of the row read; a phase not given is its
+    #: fraction of ``t_row`` (``readout_timing.ROW_FRACTIONS``)
+    phases: tuple = ()
+
+    def phase(self, name: str) -> float:
+        """Time of row phase ``name`` (``s1_off``, ...) from the row's start (s)."""
+        for k, v in self.phases:
+            if k == name:
+                return v
+        return _FRACTION[name] * self.t_row
 
     @property
     def t_start(self) -> float:
@@ -61,17 +77,18 @@ class GsTiming:
     def row(self, r: int) -> float:
         return self.t_read + r * self.t_row
 
-    def s1_window(self, r: int):
+    def _window(self, r: int, on: str, off: str):
         t0 = self.row(r)
-        return t0 + 0.1 * self.t_row, t0 + 0.4 * self.t_row
+        return t0 + self.phase(on), t0 + self.phase(off)
+
+    def s1_window(self, r: int):
+        return self._window(r, "s1_on", "s1_off")
 
     def rst_window(self, r: int):
-        t0 = self.row(r)
-        return t0 + 0.45 * self.t_row, t0 + 0.55 * self.t_row
+        return self._window(r, "rst_on", "rst_off")
 
     def s2_window(self, r: int):
-        t0 = self.row(r)
-        return t0 + 0.6 * self.t_row, t0 + 0.9 * self.t_row
+        return self._window(r, "s2_on", "s2_off")
 
     def t_signal(self, r: int) -> float:
         """Instant the signal level is taken (end of S1)."""
@@ -99,8 +116,7 @@ class GsTiming:
         return [(0.0, self.t_tx - self.t_tg - self.t_gap), self.rst_window(r)]
 
     def rs(self, r: int):
-        t0 = self.row(r)
-        return [(t0 + 0.02 * self.t_row, t0 + 0.98 * self.t_row)]
+        return [self._window(r, "rs_on", "rs_off")]
 
     def row_list(self, rows=None) -> list:
         """Rows to clock: all (None), the first ``rows`` (an int), or the given row indices."""
@@ -116,15 +132,35 @@ class GsTiming:
 
 
 def timings(design, t_exp: float, rows: int = 1, t_exp_secondary: float | None = None,
-            t_store: float = 0.0, ec_hold: bool = False) -> dict:
-    """Per-array GS timing, each array with its own row time.
+            t_store: float = 0.0, ec_hold: bool | None = None) -> dict:
+    """Per-array GS timing from the design's ``[<array>.timing]`` keys, each array with its
+    own row time.
 
     ``t_exp`` is the primary exposure; the secondary's is ``t_exp_secondary``
     (default: the same window). The shorter exposure starts later (EC held) so
-    both arrays transfer together; ``t_store`` delays the first row's read.
+    both arrays transfer together; ``t_store`` adds storage before the first row
+    (to the design's ``t_store``). ``ec_hold``: the caller's default when the design
+    does not set ``timing.ec_hold`` (benches: off).
     """
-    t_s = t_exp if t_exp_secondary is None else t_exp_secondary
-    longest = max(t_exp, t_s)
-    common = dict(rows=rows, t_store=t_store, ec_hold=ec_hold)
-    return {"primary": GsTiming(t_exp, 1.0 / design.primary.f_read, t_hold=longest - t_exp, **common),
-            "secondary": GsTiming(t_s, 1.0 / design.secondary.f_read, t_hold=longest - t_s, **common)}
+    exp = {"primary": t_exp, "secondary": t_exp if t_exp_secondary is None else t_exp_secondary}
+    keys = {k: getattr(design, k).timing for k in exp}
+    for k, t in exp.items():
+        keys[k].check_exposure(t, k, design.source, "t_exp", t)
+    # the arrays transfer together: the one whose exposure ends first holds EC longer
+    base = {k: keys[k].t_reset + keys[k].t_hold for k in exp}
+    if len(set(base.values())) == 1:
+        late = {k: max(exp.values()) - exp[k] for k in exp}
+    else:
+        late = {k: max(base[j] + exp[j] for j in exp) - (base[k] + exp[k]) for k in exp}
+    out = {}
+    for k, key in keys.items():
+        hold = ec_hold if key.ec_hold is None else key.ec_hold
+        out[k] = GsTiming(exp[k], 1.0 / getattr(design, k).f_read, rows=rows, t_reset=key.t_reset,
+                          t_tg=key.t_tg, t_gap=key.t_gap, edge=key.edge, t_pre=key.t_pre,
+                          t_hold=key.t_hold + late[k], t_store=key.t_store + t_store,
+                          ec_hold=bool(hold), phases=_given_phases(key))
+    return out
+
+
+def _given_phases(key) -> tuple:
+    return tuple((k, getattr(key, k)) for k, _ in ROW_FRACTIONS if getattr(key, k) is not None)
