@@ -3,45 +3,85 @@ import json
 
 import pytest
 
+from pixelkit.circuits.testbench import dual_pixel_bench, timings
+from pixelkit.spice import simulate_many
+
+
+#: Pinned figures of the reference design (ngspice 39, c35_thesis, revA timing), measured
+#: with ``pixelkit simulate designs/dual_pixel_revA.toml --json``. Tolerance 3 %: the
+#: interpolation between sweep points is good to 0.2 % of swing (the SPICE run at the reported
+#: currents below), so a move beyond 3 % is a change of the bench, its timing or the models
+#: that must be looked at and re-pinned, not noise.
+PINNED = {"i_mid_A": 1.1012e-9, "i_5pct_A": 37.27e-12}
+PIN_REL = 0.03
+
 
 def test_ratio_of_target_currents_within_thesis_band(experiment):
-    # thesis: 1400 pA / 52 pA = 26.9; the issue allows 22 - 36
+    """Published reference: the thesis's 1400 pA / 52 pA = 26.9; the issue allows 22 - 36
+    (the kit's c35_thesis stand-in is calibrated on the PD junction, not on the SF chain)."""
     assert 22 <= experiment["ratio"] <= 36
     assert experiment["ratio"] == pytest.approx(experiment["primary"]["i_mid_A"]
                                                 / experiment["secondary"]["i_5pct_A"])
 
 
-def test_targets_are_where_they_should_be(experiment):
-    import numpy as np
-    for sub, key in (("primary", "i_mid_A"), ("secondary", "i_5pct_A")):
-        s = experiment[sub]
-        want = s["dark_signal_V"] + s["target_frac"] * s["swing_V"]
-        got = np.interp(s[key], sorted(s["sweep_A"]), [x for _, x in sorted(zip(s["sweep_A"], s["signal_V"]))])
-        assert got == pytest.approx(want, abs=0.002 * s["swing_V"])
+def test_i_mid_and_i_5pct_unchanged(experiment):
+    """Change detector: i_mid and i_5pct against the pinned values within 3 %."""
+    assert experiment["primary"]["i_mid_A"] == pytest.approx(PINNED["i_mid_A"], rel=PIN_REL)
+    assert experiment["secondary"]["i_5pct_A"] == pytest.approx(PINNED["i_5pct_A"], rel=PIN_REL)
+
+
+def test_spice_at_the_reported_currents_lands_on_the_targets(ref_design, experiment):
+    """Independent reference: SPICE runs of the dual-pixel bench at the reported i_mid / i_5pct
+    (not the sweep they were interpolated from), a dark run and a run at the sweep's top
+    current (the PD node taken through the design swing: the column clips at ground), with the
+    column read here at the sample instants: (signal - dark) / (top - dark) must be 0.5 within
+    0.2 % of swing and 0.05 within 1 % of itself."""
+    d = ref_design
+    i_p, i_s = experiment["primary"]["i_mid_A"], experiment["secondary"]["i_5pct_A"]
+    top_p, top_s = max(experiment["primary"]["sweep_A"]), max(experiment["secondary"]["sweep_A"])
+    runs = simulate_many([dual_pixel_bench(d, 0.0, 0.0, title="pin_dark"),
+                          dual_pixel_bench(d, i_p, i_s, title="pin_at_targets"),
+                          dual_pixel_bench(d, top_p, top_s, title="pin_top")])
+    tm = timings(d, d.experiment.t_window)
+    frac = {}
+    for which, col in (("primary", "col_p"), ("secondary", "col_s0")):
+        t = tm[which]
+        dark, at, top = (float(r.at(col, t.t_reset_level(0)) - r.at(col, t.t_signal(0))) for r in runs)
+        frac[which] = (at - dark) / (top - dark)
+    assert frac["primary"] == pytest.approx(d.experiment.mid_fraction, abs=0.002)
+    assert frac["secondary"] == pytest.approx(d.experiment.low_fraction, rel=0.01)
 
 
 def test_three_secondary_subpixels_agree(experiment):
+    """Reference: symmetry; the three secondaries are identical circuits at the same current."""
     assert experiment["secondary"]["subpixel_spread_V"] < 1e-3
 
 
 def test_fig_a1_pds_discharge_together(experiment):
+    """Independent reference: SPICE bare PDs driven in the analytic C_C ratio (fig. A.1)."""
     assert experiment["fig_a1"]["max_diff_frac"] <= 0.02
 
 
 def test_analytic_model_vs_spice_within_5_percent(experiment):
+    """Independent reference: SPICE's V(pd) against the analytic C(V) discharge (other level)."""
     assert experiment["model_vs_spice"]["primary"] <= 0.05
     assert experiment["model_vs_spice"]["secondary"] <= 0.05
 
 
-def test_simulate_json(cli):
+def test_simulate_json(cli, experiment):
+    """The command prints the experiment's figures (checked above against SPICE runs at the
+    reported currents and the pinned values)."""
     code, out, err = cli("simulate", "designs/dual_pixel_revA.toml", "--json")
     assert code == 0, err
     d = json.loads(out)
-    assert d["t_window_s"] > 0 and d["primary"]["i_mid_A"] > 0 and d["secondary"]["i_5pct_A"] > 0
+    assert d["t_window_s"] == experiment["t_window_s"]
+    assert d["primary"]["i_mid_A"] == pytest.approx(experiment["primary"]["i_mid_A"], rel=1e-9)
+    assert d["secondary"]["i_5pct_A"] == pytest.approx(experiment["secondary"]["i_5pct_A"], rel=1e-9)
     assert 0 <= d["model_vs_spice"]["max_err_frac"] <= 0.05
 
 
 def test_shared_backend_gives_the_same_experiment(ref_design, experiment):
+    """Reference: the same decks in libngspice (PySpice shared) instead of ngspice -b."""
     from pixelkit.experiments.thesis import run_experiment
     shared = run_experiment(ref_design, backend="shared")
     assert shared["ratio"] == pytest.approx(experiment["ratio"], rel=1e-3)

@@ -123,17 +123,22 @@ def test_interrupted_sweep_resumes_without_recomputing(tmp_path):
 
 
 def test_dask_cluster_gives_the_local_numbers(ref_design, tmp_path, monkeypatch):
-    """A Dask LocalCluster (2 worker processes) started here runs the sweep; the local
-    executor then finds every point in the cache and the numbers are the same."""
+    """Independent reference: the same points simulated by the local executor from a second,
+    empty cache of its own (the Dask workers write only to the first, so neither run can read
+    the other's results). A Dask LocalCluster (2 worker processes) started here runs the sweep."""
     from dask.distributed import LocalCluster
-    monkeypatch.setenv("PIXELKIT_CACHE", str(tmp_path / "cache"))
+    dask_cache, local_cache = tmp_path / "dask_cache", tmp_path / "local_cache"
+    monkeypatch.setenv("PIXELKIT_CACHE", str(dask_cache))       # the workers inherit it at start
     axes = [parse_axis("iph_p=150p,600p"), parse_axis("iph_s=20p,60p")]
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
         remote = run_sweep(ref_design, axes, scheduler=cluster.scheduler_address)
     assert not remote.failures and not any(p["cached"] for p in remote.points)
+    assert len(list((dask_cache / "sim").glob("*/*.npz"))) == 4      # the workers did the work
+    monkeypatch.setenv("PIXELKIT_CACHE", str(local_cache))
     local = run_sweep(ref_design, axes, jobs=2)
-    assert all(p["cached"] for p in local.points)
-    for f in ("signal_primary_V", "signal_secondary_V"):
-        assert np.array_equal(remote.dataset[f].values, local.dataset[f].values)
+    assert not local.failures and not any(p["cached"] for p in local.points)  # computed again, here
+    assert len(list((local_cache / "sim").glob("*/*.npz"))) == 4
+    for f in ("signal_primary_V", "signal_secondary_V", "reset_primary_V"):
+        assert np.allclose(remote.dataset[f].values, local.dataset[f].values, rtol=0, atol=1e-9), f
     assert float(local.dataset["signal_secondary_V"].sel(iph_p=150e-12, iph_s=60e-12)) > \
         float(local.dataset["signal_secondary_V"].sel(iph_p=150e-12, iph_s=20e-12))
