@@ -10,7 +10,7 @@ The main commands of the command line are thin layers over these functions::
     pk.write_waveforms(res, "out.csv", ["col_p", "x1.xp.pd"])  # CSV (or .raw)
     pk.export_deck(d, "bench_dual_pixel", "bench.cir")       # a deck that runs in ngspice -b
     table = pk.models(d)                                     # analytic model table
-    exp = pk.experiment(d)                                   # the thesis experiment (i_mid, i_5pct)
+    exp = pk.experiment(d)                                   # the thesis [Thesis2019] experiment (i_mid, i_5pct)
     sized = pk.size(d)                                       # mask opening, integration times
     lay = pk.layout_design(d, "layouts")                     # GDS, extraction, pictures
     gap = pk.diagnose(d, "measured.csv")                     # sim-to-real gap of measured data

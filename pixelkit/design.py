@@ -4,7 +4,7 @@ A design is a TOML file (``designs/dual_pixel_revA.toml``). Every dimensional
 value carries a unit; the loaded :class:`Design` holds SI floats and its
 technology. Sections: ``[primary]``, ``[secondary]`` (subpixel geometry, array,
 timing), ``[pixel]`` (swing, SF bias, device sizes), ``[afe]``, ``[experiment]``
-(the thesis's simulation experiment), and for sizing ``[optics]``, ``[scene]``,
+(the thesis's [Thesis2019] simulation experiment), and for sizing ``[optics]``, ``[scene]``,
 ``[sizing]``.
 """
 from __future__ import annotations
@@ -21,13 +21,18 @@ from .tech import Technology, load_technology
 
 @dataclass(frozen=True)
 class Subpixel:
-    pd_width: float = qty("m", gt=0, plausible=(0.1e-6, 1e-3))
-    pd_height: float = qty("m", gt=0, plausible=(0.1e-6, 1e-3))
-    pitch: float = qty("m", gt=0, plausible=(0.2e-6, 2e-3))
-    rows: int = integer(ge=1, le=100000)
-    cols: int = integer(ge=1, le=100000)
-    t_int: float = qty("s", gt=0, le=10.0, plausible=(1e-9, 10.0))
-    f_read: float = qty("Hz", gt=0, le=1e9, plausible=(1.0, 1e9))
+    pd_width: float = qty("m", gt=0, plausible=(0.1e-6, 1e-3),
+                          doc="drawn width of the photodiode (n-well) junction; with pd_height it sets the junction "
+                              "area and perimeter of C_jdep")
+    pd_height: float = qty("m", gt=0, plausible=(0.1e-6, 1e-3), doc="drawn height of the photodiode junction")
+    pitch: float = qty("m", gt=0, plausible=(0.2e-6, 2e-3),
+                       doc="subpixel cell side (square cells); the PD must fit inside it")
+    rows: int = integer(ge=1, le=100000, doc="rows of the array (frame simulations, row timing, the virtual camera)")
+    cols: int = integer(ge=1, le=100000, doc="columns of the array (one column line, load and AFE each)")
+    t_int: float = qty("s", gt=0, le=10.0, plausible=(1e-9, 10.0),
+                       doc="integration (exposure) time of this array: EC opening to the end of the TG transfer")
+    f_read: float = qty("Hz", gt=0, le=1e9, plausible=(1.0, 1e9),
+                        doc="row readout rate: one row is read in 1 / f_read")
     mask_opening: float | None = qty("m2", None, gt=0, plausible=(1e-14, 1e-6),
                                      doc="metal-mask opening; absent = unmasked")
     timing: Timing = table(Timing, default=Timing, doc="global-shutter sequence and row read of this array")
@@ -69,26 +74,27 @@ _WL = (0.1e-6, 1e-3)
 
 @dataclass(frozen=True)
 class Devices:
-    """Transistor sizes of the 5T pixel and its column (W, L in m)."""
-    ec_w: float = qty("m", 0.6e-6, gt=0, plausible=_WL)
-    ec_l: float = qty("m", 0.5e-6, gt=0, plausible=_WL)
-    tg_w: float = qty("m", 0.6e-6, gt=0, plausible=_WL)
-    tg_l: float = qty("m", 0.5e-6, gt=0, plausible=_WL)
-    rst_w: float = qty("m", 0.6e-6, gt=0, plausible=_WL)
-    rst_l: float = qty("m", 0.5e-6, gt=0, plausible=_WL)
-    sf_w: float = qty("m", 1.0e-6, gt=0, plausible=_WL)
-    sf_l: float = qty("m", 0.5e-6, gt=0, plausible=_WL)
-    rs_w: float = qty("m", 0.6e-6, gt=0, plausible=_WL)
-    rs_l: float = qty("m", 0.5e-6, gt=0, plausible=_WL)
-    sw_w: float = qty("m", 1.0e-6, gt=0, plausible=_WL, doc="S1X/S2X column sampling switches")
-    sw_l: float = qty("m", 0.35e-6, gt=0, plausible=_WL)
-    load_w: float = qty("m", 1.0e-6, gt=0, plausible=_WL, doc="column current-source load")
-    load_l: float = qty("m", 2.0e-6, gt=0, plausible=_WL)
+    """Transistor sizes of the 5T pixel and its column (W, L in m); both arrays use the same sizes."""
+    ec_w: float = qty("m", 0.6e-6, gt=0, plausible=_WL, doc="EC (exposure control) gate width: resets the PD")
+    ec_l: float = qty("m", 0.5e-6, gt=0, plausible=_WL, doc="EC gate length")
+    tg_w: float = qty("m", 0.6e-6, gt=0, plausible=_WL, doc="TG (transfer gate) width: PD to FD")
+    tg_l: float = qty("m", 0.5e-6, gt=0, plausible=_WL, doc="TG length")
+    rst_w: float = qty("m", 0.6e-6, gt=0, plausible=_WL, doc="RST (FD reset) width")
+    rst_l: float = qty("m", 0.5e-6, gt=0, plausible=_WL, doc="RST length")
+    sf_w: float = qty("m", 1.0e-6, gt=0, plausible=_WL, doc="source-follower width (its gate is FD)")
+    sf_l: float = qty("m", 0.5e-6, gt=0, plausible=_WL, doc="source-follower length")
+    rs_w: float = qty("m", 0.6e-6, gt=0, plausible=_WL, doc="RS (row select) width")
+    rs_l: float = qty("m", 0.5e-6, gt=0, plausible=_WL, doc="RS length")
+    sw_w: float = qty("m", 1.0e-6, gt=0, plausible=_WL, doc="S1X/S2X column sampling switches: width")
+    sw_l: float = qty("m", 0.35e-6, gt=0, plausible=_WL, doc="S1X/S2X length")
+    load_w: float = qty("m", 1.0e-6, gt=0, plausible=_WL, doc="column current-source load: width")
+    load_l: float = qty("m", 2.0e-6, gt=0, plausible=_WL, doc="column current-source load: length")
 
 
 @dataclass(frozen=True)
 class Pixel:
-    swing: float = qty("V", gt=0, plausible=(0.05, 5.0), doc="pixel swing (table 3.2: 1.5 V)")
+    swing: float = qty("V", gt=0, plausible=(0.05, 5.0),
+                       doc="pixel swing: the PD / FD voltage range of a full signal (1.5 V in [Thesis2019] table 3.2)")
     sf_bias: float = qty("A", gt=0, le=1e-3, plausible=(1e-9, 1e-3), doc="column current-source load of the SF")
     column_cap: float = qty("F", 200e-15, ge=0, plausible=(0.0, 1e-8), doc="column-line parasitic capacitance")
     v_pd_reset: float = qty("V", 2.0, gt=0, plausible=(0.1, 40.0),
@@ -96,7 +102,7 @@ class Pixel:
     v_fd_reset: float = qty("V", 2.0, gt=0, plausible=(0.1, 40.0), doc="RST drain: FD reset level")
     gse: float = num(1000.0, ge=1, le=1e9, plausible=(10.0, 1e7), doc="FD shielding: the storage node collects 1/gse of the PD's "
                      "photocurrent (charge ratio eta_pd / eta_FD)")
-    devices: Devices = table(Devices, default=Devices)
+    devices: Devices = table(Devices, default=Devices, doc="transistor sizes of the pixel and its column")
 
 
 @dataclass(frozen=True)
@@ -104,8 +110,10 @@ class Afe:
     c11: float = qty("F", gt=0, plausible=(1e-18, 1e-9), doc="input capacitor")
     c12: float = qty("F", gt=0, plausible=(1e-18, 1e-9), doc="offset-storage capacitor")
     c13: float = qty("F", gt=0, plausible=(1e-18, 1e-9), doc="feedback capacitor")
-    vref: float = qty("V", gt=0, plausible=(0.05, 40.0))
-    opamp: str = text("macro", choices=("macro", "ota"))
+    vref: float = qty("V", gt=0, plausible=(0.05, 40.0),
+                      doc="AFE reference: the output at zero signal, V_out = V_ref - (C11/C13)(V_rst - V_sig)")
+    opamp: str = text("macro", choices=("macro", "ota"),
+                      doc="macro: the Gm-R macromodel (gain, gbw, noise_r, noise_corner); ota: the transistor OTA")
     gain: float = num(1000.0, gt=1, plausible=(1.0, 1e7), unit_required=True,
                       doc="macromodel DC gain with its unit ('60 dB' or '1000 V/V')")
     gbw: float = qty("Hz", 50e6, gt=0, plausible=(1e3, 1e11), doc="macromodel gain-bandwidth")
@@ -121,7 +129,7 @@ class Afe:
 
 @dataclass(frozen=True)
 class Experiment:
-    """The thesis's same-window simulation experiment (fig. A.1 - A.3)."""
+    """The same-window simulation experiment of [Thesis2019] (fig. A.1 - A.3)."""
     t_window: float = qty("s", 16e-6, gt=0, le=1e-3, plausible=(1e-8, 1e-3), doc="exposure window of the experiment")
     mid_fraction: float = num(0.5, gt=0, lt=1, plausible=(0.01, 0.99), doc="primary target: fraction of swing")
     low_fraction: float = num(0.05, gt=0, lt=1, plausible=(0.001, 0.99), doc="secondary target: fraction of swing")
@@ -129,22 +137,26 @@ class Experiment:
 
 @dataclass(frozen=True)
 class Optics:
-    focal_length: float = qty("m", gt=0, le=1.0, plausible=(1e-4, 1.0))
-    f_number: float = num(gt=0.5, le=64)
-    transmission: float = num(0.9, gt=0, le=1, plausible=(0.01, 1.0))
+    focal_length: float = qty("m", gt=0, le=1.0, plausible=(1e-4, 1.0),
+                              doc="lens focal length (field of view and the image of the scene)")
+    f_number: float = num(gt=0.5, le=64, doc="lens f-number N: sensor irradiance ~ scene radiance / (4 N^2)")
+    transmission: float = num(0.9, gt=0, le=1, plausible=(0.01, 1.0), doc="lens transmission (fraction of light through)")
 
 
 @dataclass(frozen=True)
 class Scene:
-    """Measurement geometry (thesis fig. 2.3) and light levels for sizing."""
+    """Measurement geometry ([Thesis2019] fig. 2.3) and light levels for sizing."""
     distance: float = qty("m", gt=0, plausible=(0.01, 1e5), doc="distance from the camera to the lane")
-    speed_min: float = qty("m/s", gt=0, plausible=(0.01, 1000.0))
-    speed_max: float = qty("m/s", gt=0, plausible=(0.01, 1000.0))
+    speed_min: float = qty("m/s", gt=0, plausible=(0.01, 1000.0),
+                           doc="slowest vehicle to measure: its trace must still be min_trace_px long")
+    speed_max: float = qty("m/s", gt=0, plausible=(0.01, 1000.0),
+                           doc="fastest vehicle: its trace must fit the field of view, the primary image stay sharp")
     background: float = qty("lx", gt=0, plausible=(1e-6, 2e5),
                             doc="scene illuminance at which the primary sits at mid-scale")
     headlight: float = qty("W/m2", gt=0, plausible=(1e-9, 1e5),
                            doc="headlight irradiance at the sensor (the spot's image)")
-    reflectance: float = num(0.2, gt=0, le=1, plausible=(1e-3, 1.0))
+    reflectance: float = num(0.2, gt=0, le=1, plausible=(1e-3, 1.0),
+                             doc="diffuse reflectance of the scene (background radiance from its illuminance)")
     spectrum_temperature: float = qty("K", 2856.0, gt=1000, plausible=(1000.0, 20000.0),
                                       doc="black-body colour temperature of the light")
     max_temperature: float = qty("K", 358.15, gt=0, lt=500, plausible=(213.15, 473.15), doc="maximum die temperature")
@@ -158,7 +170,8 @@ class Scene:
 @dataclass(frozen=True)
 class Sizing:
     t_ratio: float = num(0.0, ge=0, plausible=(0.0, 1e6), doc="fixed t_secondary / t_primary; 0 = free")
-    level: str = text("spice", choices=("analytic", "spice"))
+    level: str = text("spice", choices=("analytic", "spice"),
+                      doc="which model level's solution is the sized design: the PD node's C(V) or the SPICE curves")
     objective: str = text("trace", choices=("trace", "margin"), doc="trace: longest trace; margin: centre the bounds")
     min_trace_px: float = num(5.0, gt=0, plausible=(0.1, 1e5), doc="shortest usable trace at speed_min (speed accuracy)")
     fov_fraction: float = num(0.8, gt=0, le=1, plausible=(0.01, 1.0), doc="longest trace at speed_max, as a fraction of the width")
@@ -176,23 +189,26 @@ class LayoutRef:
 
 @dataclass(frozen=True)
 class Design:
-    name: str = ident()
-    revision: str = text()
+    name: str = ident(doc="design name: the report folder, netlist and GDS cell names (reaches netlists, so "
+                          "letters, digits and _ only)")
+    revision: str = text(doc="chip revision label, shown in the report and compared by the revision diff")
     technology: str = text(doc="a built-in technology name or a path to a .toml file")
-    primary: Subpixel = table(Subpixel)
-    secondary: Subpixel = table(Subpixel)
-    pixel: Pixel = table(Pixel)
-    afe: Afe = table(Afe)
+    primary: Subpixel = table(Subpixel, doc="the primary subpixel and its array (records the scene)")
+    secondary: Subpixel = table(Subpixel, doc="the secondary subpixel and its array (records the bright trace)")
+    pixel: Pixel = table(Pixel, doc="what both subpixels share: swing, SF bias, reset levels, devices")
+    afe: Afe = table(Afe, doc="the switched-capacitor double-sampling column AFE")
     family: str = text("dual_pixel", choices=("dual_pixel",),
                        doc="pixel family; the others (wdr, ratio) load through pixelkit/family.py")
     corner: str = ident("", doc="model corner; empty = the technology's default")
-    temperature: float = qty("K", 300.15, gt=0, lt=500, plausible=(213.15, 473.15))
-    secondary_per_pixel: int = integer(3, ge=1, le=16)
-    experiment: Experiment = table(Experiment, default=Experiment)
-    optics: Optics | None = table(Optics, None)
-    scene: Scene | None = table(Scene, None)
-    sizing: Sizing = table(Sizing, default=Sizing)
-    layout: LayoutRef | None = table(LayoutRef, None)
+    temperature: float = qty("K", 300.15, gt=0, lt=500, plausible=(213.15, 473.15),
+                             doc="die temperature of every simulation and model (dark current, kT/C, devices)")
+    secondary_per_pixel: int = integer(3, ge=1, le=16,
+                                       doc="secondary subpixels per integrated pixel (side by side under one primary)")
+    experiment: Experiment = table(Experiment, default=Experiment, doc="the same-window simulation experiment")
+    optics: Optics | None = table(Optics, None, doc="the lens (sizing and frame models)")
+    scene: Scene | None = table(Scene, None, doc="the measurement scene (sizing and frame models)")
+    sizing: Sizing = table(Sizing, default=Sizing, doc="the sizing criteria and bounds")
+    layout: LayoutRef | None = table(LayoutRef, None, doc="a GDS whose extracted geometry replaces the drawn one")
     tech: Technology = field(default=None, metadata=dict(kind="skip"))
     source: str = field(default="", metadata=dict(kind="skip"))
     raw: dict = field(default=None, metadata=dict(kind="skip"), repr=False, compare=False)

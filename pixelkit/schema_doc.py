@@ -13,7 +13,7 @@ import dataclasses
 import sys
 from pathlib import Path
 
-_KNOWN = {"kind", "doc", "dim", "gt", "ge", "le", "lt", "choices", "cls"}
+_KNOWN = {"kind", "doc", "dim", "gt", "ge", "le", "lt", "choices", "cls", "plausible", "unit_required"}
 _PREFIX = [(1e9, "G"), (1e6, "M"), (1e3, "k"), (1.0, ""), (1e-3, "m"), (1e-6, "u"), (1e-9, "n"),
            (1e-12, "p"), (1e-15, "f"), (1e-18, "a")]
 _PREFIXABLE = {"m", "s", "Hz", "V", "A", "F"}
@@ -78,11 +78,11 @@ def _default(f) -> str:
     return "**required**"
 
 
-def _table(cls, path: str, out: list) -> None:
+def _table(cls, path: str, out: list, family: str = "") -> None:
     fields = [f for f in dataclasses.fields(cls) if f.metadata.get("kind", "skip") != "skip"]
     rows = [f for f in fields if f.metadata["kind"] != "table"]
     title = f"`[{path}]`" if path else "top level"
-    out += ["", f"## {title}", ""]
+    out += ["", f"## {family + ': ' if family else ''}{title}", ""]
     if cls.__doc__ and not cls.__doc__.startswith(cls.__name__ + "("):
         out += [cls.__doc__.strip().splitlines()[0], ""]
     if rows:
@@ -92,11 +92,35 @@ def _table(cls, path: str, out: list) -> None:
             out.append(f"| `{f.name}` | {_kind(m)} | {_default(f)} | {_range(m)} | {m.get('doc', '') or ''} |")
     subs = [f for f in fields if f.metadata["kind"] == "table"]
     if subs:
-        out += ["", "Tables: " + ", ".join(
-            f"`[{path + '.' if path else ''}{f.name}]` ({'required' if _default(f) == '**required**' else 'optional'})"
-            for f in subs)]
+        out += ["", "Tables:", ""] + [
+            f"- `[{path + '.' if path else ''}{f.name}]` ({'required' if _default(f) == '**required**' else 'optional'})"
+            + (f": {f.metadata['doc']}" if f.metadata.get("doc") else "") for f in subs]
     for f in subs:
-        _table(f.metadata["cls"], f"{path}.{f.name}" if path else f.name, out)
+        _table(f.metadata["cls"], f"{path}.{f.name}" if path else f.name, out, family)
+
+
+def undocumented(*classes) -> list[str]:
+    """Fields without a meaning (``doc``) in ``classes`` (default: every design-file schema): what the
+    reference would leave empty."""
+    if not classes:
+        from .design import Design
+        from .families.ratio.design import RatioDesign
+        from .families.wdr.design import WdrDesign
+        classes = (Design, WdrDesign, RatioDesign)
+    missing = []
+
+    def walk(cls, path):
+        for f in dataclasses.fields(cls):
+            kind = f.metadata.get("kind", "skip")
+            if kind == "skip":
+                continue
+            if not f.metadata.get("doc"):
+                missing.append(f"{cls.__module__}.{cls.__name__}: {path}{f.name}")
+            if kind == "table":
+                walk(f.metadata["cls"], f"{path}{f.name}.")
+    for cls in classes:
+        walk(cls, "")
+    return missing
 
 
 def generate() -> str:
@@ -116,6 +140,14 @@ def generate() -> str:
            "values inside these ranges can still be outside the circuit's working range, which is warned "
            "about (`pixelkit/working_range.py`)."]
     _table(Design, "", out)
+    from .families.ratio.design import RatioDesign
+    from .families.wdr.design import WdrDesign
+    for fam, cls, example in (("wdr", WdrDesign, "designs/wdr_pixel.toml"), ("ratio", RatioDesign,
+                                                                             "designs/ratio_pixel.toml")):
+        out += ["", f"# Design files of the `{fam}` family", "",
+                f"A file with `family = \"{fam}\"` (example: `{example}`) is read by this schema instead; the "
+                "rules above (units, ranges, unknown fields refused) are the same."]
+        _table(cls, "", out, fam)
     return "\n".join(out) + "\n"
 
 

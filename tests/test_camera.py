@@ -64,7 +64,7 @@ def test_gap_emva_recovers_the_figures(exported, which):
 
 def test_emva_k_sits_below_the_zero_signal_gain(exported):
     """C(V): the PD and FD capacitances grow as the node discharges, so the PTC slope over
-    0 - 70 % of saturation is below q A_sf / C at the reset bias (EFFECTS.md row 7)."""
+    0 - 70 % of saturation is below q A_sf / C at the reset bias."""
     r, _ = exported
     for which in ("primary", "secondary"):
         f = r[which]["figures"]

@@ -1,4 +1,4 @@
-"""The thesis's simulation experiment (fig. A.1 - A.3) and the model-vs-SPICE cross-check."""
+"""The thesis's [Thesis2019] simulation experiment (fig. A.1 - A.3) and the model-vs-SPICE cross-check."""
 import json
 
 import pytest

@@ -24,7 +24,7 @@ from pixelkit.spice.result import Result, vector_key
 
 def _raw_ngspice(deck, cwd):
     # one OpenMP thread, as the kit's .spiceinit sets (parallel OpenMP runs slow each other down
-    # by 10x, NGSPICE_NOTES.md); the deck itself is run as it is
+    # by 10x on ngspice 39); the deck itself is run as it is
     env = {**os.environ, "OMP_NUM_THREADS": "1"}
     p = subprocess.run(["ngspice", "-b", "-r", str(cwd / "out.raw"), str(deck)], cwd=cwd, env=env,
                        capture_output=True, text=True, timeout=300)

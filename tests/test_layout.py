@@ -27,7 +27,7 @@ def test_extracted_geometry_equals_drawn(gds, ref_design):
         sub = getattr(ref_design, which)
         assert ex[which]["pd_area_m2"] == pytest.approx(sub.pd_width * sub.pd_height, rel=1e-9)
         assert ex[which]["pd_perimeter_m"] == pytest.approx(2 * (sub.pd_width + sub.pd_height), rel=1e-9)
-    # C_A = 8.18 (thesis eq. 3.10) within 1 %
+    # C_A = 8.18 ([Thesis2019] eq. 3.10) within 1 %
     assert ex["primary"]["pd_area_m2"] / ex["secondary"]["pd_area_m2"] == pytest.approx(8.18, rel=0.01)
     # the unmasked primary collects over its whole PD; the masked secondary over the opening only
     assert ex["primary"]["photoactive_area_m2"] == pytest.approx(ex["primary"]["pd_area_m2"], rel=1e-9)

@@ -1,11 +1,11 @@
-"""Table 3.2 and eq. 3.10 - 3.13 of the thesis, computed by the analytic models."""
+"""Table 3.2 and eq. 3.10 - 3.13 of the thesis [Thesis2019], computed by the analytic models."""
 import json
 
 import pytest
 
 from pixelkit.api import models as model_table   # the physics table at the SPICE SF gain
 
-# Reference numbers of the thesis (SEEDS_BRIEF section 2) and their tolerances.
+# Reference numbers of the thesis (table 3.2 and the sizing text of chapter 3) and their tolerances.
 THESIS = {"cg_primary": (6.03e-6, 0.02), "cg_secondary": (21.7e-6, 0.02),
           "fwc_primary": (248e3, 0.03), "fwc_secondary": (69e3, 0.03),
           "c_a": (8.18, 0.02), "c_c": (3.6, 0.02)}

@@ -29,7 +29,7 @@ def test_ktc_on_a_bare_capacitor_is_kt_over_c(ref_design, c):
 
 
 def test_sf_gain_is_below_one_by_the_body_effect(a_sf):
-    """EFFECTS.md row 6: A_sf = 1/(1 + eta), 0.82 - 0.86 for gamma ~0.58; a 3.3 V NMOS SF lands near."""
+    """Body effect: A_sf ~ 1/(1 + eta), eta = gamma / (2 sqrt(2 phi_F + V_SB)): 0.82 - 0.86 for gamma ~0.58; a 3.3 V NMOS SF lands near."""
     assert 0.7 <= a_sf <= 0.9
 
 
@@ -65,7 +65,7 @@ def test_output_cg_vs_spice_charge_step(ref_design, a_sf):
     for which in ("primary", "secondary"):
         r = fd.response(ref_design, which, a_sf)
         assert r["cg_out_V_per_e"] == pytest.approx(spice[which], rel=0.05)
-        # the PD-referred CG of the thesis is far from what the column sees
+        # the PD-referred CG of the thesis [Thesis2019] is far from what the column sees
         assert r["cg_pd_V_per_e"] > 1.3 * spice[which]
 
 

@@ -96,6 +96,26 @@ def test_design_reference_lists_every_field_of_the_reference_design():
     assert "**required**" in doc and ">= 1" in doc
 
 
+def test_every_design_file_field_has_a_meaning():
+    """Each field of the dual-pixel, WDR and ratio design files (and their tables) carries a ``doc``, so
+    the generated reference has no empty meaning; a planted field without one is found."""
+    from dataclasses import dataclass
+
+    from pixelkit.schema import qty, table
+    from pixelkit.schema_doc import undocumented
+    assert undocumented() == []
+
+    @dataclass(frozen=True)
+    class Inner:
+        x: float = qty("m", 1.0, doc="documented")
+        y: float = qty("m", 1.0)
+
+    @dataclass(frozen=True)
+    class Outer:
+        inner: Inner = table(Inner, default=Inner, doc="a table")
+    assert [m.split(": ")[1] for m in undocumented(Outer)] == ["inner.y"]
+
+
 def test_names_too_long_for_the_file_system_are_one_line_user_errors(tmp_path):
     """A path component over the file system's NAME_MAX makes the OS raise ENAMETOOLONG,
     which Path.is_file() passes on: every user path the kit tests, read or written, must

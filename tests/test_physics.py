@@ -35,7 +35,7 @@ def test_fig_3_6_saturation_time_scales_as_one_over_opening(ref_design):
     i, lin, cv = saturation_times(node, 2.5, e, photo.Spectrum.monochromatic(850e-9), tech.qe, openings)
     assert lin * openings == pytest.approx(np.full(6, lin[0] * openings[0]), rel=1e-9)
     assert cv * openings == pytest.approx(np.full(6, cv[0] * openings[0]), rel=1e-9)
-    # the thesis's linear form: t = 2.5 V C_jdep / I_ph
+    # the thesis's [Thesis2019] linear form: t = 2.5 V C_jdep / I_ph
     assert lin == pytest.approx(2.5 * node.capacitance(2.5) / i, rel=1e-12)
     # with C(V) discharge to 0 V takes longer: C at lower bias is larger. The
     # amount is the mean of C over 0..2.5 V over C(2.5 V), computed independently:
@@ -75,7 +75,7 @@ def test_dark_current_doubles_per_doubling_step(ref_design):
 def test_ktc_noise():
     c = 26.54e-15
     assert noise.ktc_voltage(c, 300) == pytest.approx(np.sqrt(K_B * 300 / c))
-    # EFFECTS.md table 0: about 395 uV and 65 e- for the primary
+    # sqrt(kT/C) at 26.54 fF, 300 K: about 395 uV and 65 e- for the primary
     assert noise.ktc_voltage(c, 300) == pytest.approx(395e-6, rel=0.01)
     assert noise.ktc_electrons(c, 300) == pytest.approx(65, rel=0.02)
     assert noise.shot_electrons(10000) == pytest.approx(100)

@@ -1,4 +1,4 @@
-"""Ratio pixel (SEEDS_BRIEF section 5): the SPICE loop and PWM readout vs the derived law.
+"""Ratio pixel [Sun2016]: the SPICE loop and PWM readout vs the derived law.
 
 Independent paths: the loop's photocurrents are the current sources of the
 transistor-level deck (GF180 nfet_03v3 in weak inversion); the interval law

@@ -6,7 +6,7 @@ Independent paths, one per check:
 - AFE: the SPICE bench's gain error against -eps/(1+eps), eps = (C11 + C13)/(A C13), written here;
 - array: signals rise along the scene's gradient (physics), and the one-deck frame agrees with
   the frame engine's split decks;
-- layout: C_A extracted from the GDS against the thesis's 15.1 x 13.55 um / 5 x 5 um;
+- layout: C_A extracted from the GDS against the thesis's [Thesis2019] 15.1 x 13.55 um / 5 x 5 um;
 - gap: a committed SPICE-generated silicon case, whose true effect (truth.json) the section's
   diagnosis must name.
 """

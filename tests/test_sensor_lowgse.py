@@ -1,8 +1,8 @@
 """Low-GSE emulation of the double exposure on a conventional global-shutter sensor.
 
-Independent paths: the thesis's printed example (eq. 2.18), EFFECTS.md's worked
-row-gradient example (480 rows x 10 us, t_exp = 100 us, GSE 300 -> 16 %), and the
-time-stepped image (``pixelkit.sensor.exposure``) for the balance.
+Independent paths: the thesis's [Thesis2019] printed example (eq. 2.18), a worked
+row-gradient example of 1 + t_wait / (GSE t_exp) (480 rows x 10 us, t_exp = 100 us, GSE 300 -> 16 %),
+and the time-stepped image (``pixelkit.sensor.exposure``) for the balance.
 """
 import json
 

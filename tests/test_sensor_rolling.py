@@ -4,7 +4,7 @@ Independent path: ``pixelkit.sensor.exposure``, a row-by-row, time-stepped
 exposure of the moving rectangle (no closed form inside). The closed forms of
 ``pixelkit.sensor.rolling`` (derived in its docstring) and the compensation of
 ``pixelkit.sensor.compensation`` must agree with those images within one pixel;
-the published forms of documents 001/003 are shown to fail where the README says.
+the published forms of [Rychazhnikov2008a] / [Rychazhnikov2008b] are shown to fail where the README says.
 """
 import itertools
 import json
@@ -37,16 +37,16 @@ def test_vertical_closed_forms_match_image_within_one_pixel(direction):
 
 
 def test_published_forms_fail_where_the_readme_says():
-    # 001 eq. 1 (edges for H > h) misses the scan's own travel: the image edge is h/(1-s), not s h/(1-s)
+    # [Rychazhnikov2008a] eq. 1 (edges for H > h) misses the scan's own travel: the image edge is h/(1-s), not s h/(1-s)
     s, window = 0.5, 60.0
     m = measure_vertical(simulate(H_OBJ, window, s, "down"))
     pub = rolling.published_vertical(H_OBJ, window, s, "down")
     assert m["edge_rows"] - pub["edge_rows"] > 5
-    # 003's L_up = s(H+h)/(1+s) + h is too long by 2 s h / (1 + s)
+    # [Rychazhnikov2008b]'s L_up = s(H+h)/(1+s) + h is too long by 2 s h / (1 + s)
     m = measure_vertical(simulate(H_OBJ, window, s, "up"))
     pub = rolling.published_vertical(H_OBJ, window, s, "up")
     assert pub["total_rows"] - m["total_rows"] == pytest.approx(2 * s * H_OBJ / (1 + s), abs=1.0)
-    # 001's base angle atan(h / (s H)) depends on H; the image's lean does not
+    # [Rychazhnikov2008a]'s base angle atan(h / (s H)) depends on H; the image's lean does not
     mh = measure_horizontal(simulate(H_OBJ, window, s, "right", l=10))
     assert mh["base_angle_deg"] == pytest.approx(math.degrees(math.atan(1 / s)), abs=0.5)
     assert abs(rolling.published_horizontal(H_OBJ, 10, window, s)["base_angle_deg"] - mh["base_angle_deg"]) > 20

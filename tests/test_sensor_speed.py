@@ -1,4 +1,4 @@
-"""Speed from a trace and its error budget (thesis eq. 2.1 - 2.11).
+"""Speed from a trace and its error budget ([Thesis2019] eq. 2.1 - 2.11).
 
 Independent paths: the thesis's printed test-point results (section 2.2.2.4),
 finite differences of the speed formula for the partial derivatives, and a

@@ -27,7 +27,7 @@ def cli_module():
 
 def test_thesis_choices_land_in_band(sized):
     r, _ = sized
-    # thesis: C_M = 39, opening 0.64 um2; the bands for ratio 12, SPICE level, c35_thesis
+    # thesis [Thesis2019]: C_M = 39, opening 0.64 um2; the bands for ratio 12, SPICE level, c35_thesis
     assert r["level"] == "spice"
     assert 30 <= r["c_m"] <= 48
     assert 0.52e-12 <= r["mask_open_m2"] <= 0.83e-12

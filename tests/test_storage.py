@@ -105,7 +105,7 @@ def test_parasitic_light_during_storage(storage_runs):
 
 def test_pd_overflow_after_the_exposure_needs_ec_held(storage_runs, ref_design):
     """With EC open during a long storage the bright primary PD fills, forward-biases and spills
-    into FD (EFFECTS.md row 2): far more than the parasitic light. With EC holding the PD in
+    into FD: far more than the parasitic light. With EC holding the PD in
     reset only the parasitic light remains (10 %)."""
     _, store, tms, runs = storage_runs
     d = ref_design

@@ -38,7 +38,7 @@ def _rises(points, vdd=3.3):
 
 def test_defaults_are_the_former_fractions_of_the_row(ref_design):
     """No timing table: S1 0.1 - 0.4, RST 0.45 - 0.55, S2 0.6 - 0.9, RS 0.02 - 0.98 of the row
-    (the thesis bench's read), read back from the deck's sources."""
+    (the thesis [Thesis2019] bench's read), read back from the deck's sources."""
     from pixelkit.circuits.testbench import dual_pixel_bench, timings
     deck = dual_pixel_bench(ref_design, 1e-9, 1e-11, with_afe=True).text()
     t = timings(ref_design, ref_design.experiment.t_window)["primary"]

@@ -1,4 +1,4 @@
-"""WDR pixel (SEEDS_BRIEF section 4): SPICE circuit vs the decoder and the closed-form model.
+"""WDR pixel [Zhou2017]: SPICE circuit vs the decoder and the closed-form model.
 
 Independent paths: the truth is the photocurrent each pixel's current source
 carries in the transistor-level deck; the decoder only sees the stored voltages

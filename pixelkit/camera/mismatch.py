@@ -14,8 +14,8 @@ A simple model (the Monte Carlo of the scale issue replaces it):
   (``[mismatch] cap_pelgrom``; ``A_C`` below when the technology has none).
 - **Dark current** spreads by ``DARK_SPREAD`` (lognormal sigma) from pixel to pixel.
 
-The two constants below are typical values for the 0.35 um class (EFFECTS.md row 15),
-assumptions [A].
+The two constants below are typical values for the 0.35 um class,
+assumptions (not measured).
 """
 from __future__ import annotations
 

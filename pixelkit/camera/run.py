@@ -16,7 +16,7 @@ from .spicenoise import output_cg, pixel_noise, sf_gain
 
 
 def measured_swings(design, backend: str = "batch") -> dict:
-    """Column swing of each array from the thesis experiment (SPICE, cached)."""
+    """Column swing of each array from the thesis [Thesis2019] experiment (SPICE, cached)."""
     from ..experiments.thesis import run_experiment
     e = run_experiment(design, backend=backend)
     return {"primary": e["primary"]["swing_V"], "secondary": e["secondary"]["swing_V"]}

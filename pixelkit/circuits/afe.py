@@ -1,4 +1,4 @@
-"""Switched-capacitor double-sampling AFE (thesis fig. 3.3, eq. 3.1).
+"""Switched-capacitor double-sampling AFE ([Thesis2019] fig. 3.3, eq. 3.1).
 
 Offset-compensated gain stage with input offset storage; ports
 ``in out vref p1 p1b p2 p2b vdd``:

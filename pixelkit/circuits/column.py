@@ -1,7 +1,7 @@
 """Column circuitry: current-source loads of the source followers, and S1X/S2X samplers.
 
 The load is an NMOS mirror of one bias current (the SF bias, ~400 nA in the
-thesis); each column line carries its parasitic capacitance. S1X and S2X are
+simulations of [Thesis2019]); each column line carries its parasitic capacitance. S1X and S2X are
 transmission gates from the column to the AFE input, closed by the S1 (signal)
 and S2 (reset) pulses of double sampling.
 """

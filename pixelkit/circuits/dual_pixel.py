@@ -1,6 +1,6 @@
 """The integrated dual pixel: one primary and N secondary 5T subpixels side by side.
 
-The two arrays have separate control inputs and output buses (thesis 3.2):
+The two arrays have separate control inputs and output buses ([Thesis2019] section 3.2):
 ports ``vdd vpdr vrst ec_p tg_p rst_p rs_p col_p ec_s tg_s rst_s rs_s col_s0 .. col_s{N-1}``,
 parameters ``iph_p`` and ``iph_s0 ..``: one photocurrent per subpixel.
 """

@@ -4,8 +4,9 @@ Both are subcircuits with ports ``inp inn out vdd``.
 
 Macromodel (``opamp_macro``): a transconductance into R || C (one pole) and an
 ideal output buffer: DC gain A = gm R, gain-bandwidth GBW = gm / (2 pi C), an
-input offset ``vos`` in series with ``inp``. NGSPICE_NOTES: a Gm-R model runs
-faster than the OTA; avoid infinite-bandwidth sources.
+input offset ``vos`` in series with ``inp``. A Gm-R model runs
+faster than the transistor OTA; it has no infinite-bandwidth source (which makes
+ngspice's time step collapse at the switch edges).
 
 Its input-referred noise, e_n^2(f) = 4 k T R_n (1 + f_c / f) V^2/Hz, is made of
 elements ngspice's ``.noise`` (and nothing else) sees, in series with ``inp``:

@@ -1,4 +1,4 @@
-"""The 5T global-shutter pixel (thesis fig. 3.2) as a subcircuit.
+"""The 5T global-shutter pixel ([Thesis2019] fig. 3.2) as a subcircuit.
 
 Ports: ``vdd`` (SF drain), ``vpdr`` (EC drain: the PD reset level, which the
 thesis made adjustable from outside), ``vrst`` (RST drain: the FD reset level),

@@ -11,7 +11,7 @@ models use it too; ``testbench.waveform`` draws the intervals as PWL sources).
                             integrating and can overflow
     t_read + r t_row        row r: RS on; S1 samples the signal; RST pulses (FD
                             reset); S2 samples the reset level (non-correlated
-                            double sampling, thesis fig. 3.3); RS off. The phases
+                            double sampling, [Thesis2019] fig. 3.3); RS off. The phases
                             are the design's ``[<array>.timing]`` keys
                             (``pixelkit.readout_timing``), times from the row's
                             start; absent ones are fractions of the row time.

@@ -25,7 +25,7 @@ def _test_point_options(f):
     for name, default, _dim, help_text in reversed(_TEST_POINT):
         f = click.option(f"--{name}", default=default, show_default=True, help=help_text)(f)
     return click.option("--pixel-error-px", type=click.FloatRange(0, 100), default=1.0, show_default=True,
-                        help="angle uncertainty in pixels (the thesis: 1)")(f)
+                        help="angle uncertainty in pixels (the thesis [Thesis2019]: 1)")(f)
 
 
 @main.group()

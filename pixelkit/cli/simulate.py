@@ -1,4 +1,4 @@
-"""``pixelkit models | simulate | run``: the analytic table and the thesis experiment."""
+"""``pixelkit models | simulate | run``: the analytic table and the thesis [Thesis2019] experiment."""
 from __future__ import annotations
 
 import click
@@ -34,11 +34,12 @@ def _waveforms(d, result, path, backend):
 @waveforms_opt
 @json_opt
 def simulate(design, backend, jobs, waveforms, as_json):
-    """The thesis's simulation experiment: i_mid, i_5pct, model vs SPICE.
+    """The simulation experiment of [Thesis2019] (fig. A.1 - A.3): i_mid, i_5pct, model vs SPICE.
 
     --waveforms writes the dual-pixel bench at (i_mid, i_5pct).
     """
     from ..api import experiment
+    from ..experiments.reference import is_reference
     from ..family import DEFAULT, family_of, family_text, family_waveforms, run_family
     from ..report.text import simulate_text
     fam = family_of(design)
@@ -51,7 +52,8 @@ def simulate(design, backend, jobs, waveforms, as_json):
     r = experiment(d, backend=backend, jobs=jobs)
     if waveforms:
         r["waveforms"] = _waveforms(d, r, waveforms, backend)
-    emit(r, as_json, lambda x: simulate_text(x) + (f"\nwaveforms: {x['waveforms']}" if waveforms else ""))
+    ref = is_reference(d)
+    emit(r, as_json, lambda x: simulate_text(x, ref) + (f"\nwaveforms: {x['waveforms']}" if waveforms else ""))
 
 
 @main.command()
@@ -62,10 +64,12 @@ def simulate(design, backend, jobs, waveforms, as_json):
 def run(design, backend, jobs, waveforms, as_json):
     """The main job on a design: model table and simulation summary."""
     from ..api import experiment, models as model_table
+    from ..experiments.reference import is_reference
     from ..report.text import model_text, simulate_text
     d = load(design)
     r = {"models": model_table(d), "simulate": experiment(d, backend=backend, jobs=jobs)}
     if waveforms:
         r["waveforms"] = _waveforms(d, r["simulate"], waveforms, backend)
-    emit(r, as_json, lambda x: "\n".join([model_text(x["models"]), "", simulate_text(x["simulate"])]
+    ref = is_reference(d)
+    emit(r, as_json, lambda x: "\n".join([model_text(x["models"]), "", simulate_text(x["simulate"], ref)]
                                          + ([f"waveforms: {x['waveforms']}"] if waveforms else [])))

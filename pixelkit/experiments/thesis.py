@@ -1,4 +1,4 @@
-"""The thesis's simulation experiment (fig. A.1 - A.3), run on a design.
+"""The thesis's [Thesis2019] simulation experiment (fig. A.1 - A.3), run on a design.
 
 Both subpixels are exposed over the same short window (the design's
 ``experiment.t_window``; the thesis's plots span ~20 us) with a sweep of

@@ -11,12 +11,12 @@ from ..tech import Technology, load_technology
 
 @dataclass(frozen=True)
 class FamilyDesign:
-    name: str = ident()
-    revision: str = text()
-    family: str = text()
+    name: str = ident(doc="design name: the report folder and netlist names (letters, digits and _ only)")
+    revision: str = text(doc="chip revision label")
+    family: str = text(doc="the pixel family of this file")
     technology: str = text("gf180mcu_3v3", doc="a built-in technology name or a path to a .toml file")
     corner: str = ident("", doc="model corner; empty = the technology's default")
-    temperature: float = qty("K", 300.15, gt=0, lt=500)
+    temperature: float = qty("K", 300.15, gt=0, lt=500, doc="die temperature of every simulation")
     tech: Technology = field(default=None, metadata=dict(kind="skip"))
     source: str = field(default="", metadata=dict(kind="skip"))
 

@@ -1,4 +1,4 @@
-"""Candidate effects, each in its physical domain (EFFECTS.md), as terms of ``nominal.predict``.
+"""Candidate effects, each in its physical domain, as terms of ``nominal.predict``.
 
 Domains (the term each effect feeds):
 

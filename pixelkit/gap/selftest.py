@@ -4,7 +4,7 @@
 design (both arrays and probes, eight columns per array, integration times,
 readout delays, three temperatures, previous frames, three supply levels and
 read rates), ONE effect added through the effect library with parameters drawn
-from ``RANGES`` (EFFECTS.md magnitudes, from barely visible to strong), a test
+from ``RANGES`` (typical magnitudes of a 0.35 um 3.3 V pixel, from barely visible to strong), a test
 set-up gain (1 +- 2 %) and offset (+- 20 mV) and measurement noise stated in
 ``v_std_V`` / ``n_avg``. These check the fitter's arithmetic and identifiability
 only: the data come from the same effect functions.
@@ -30,7 +30,7 @@ def _u(g, lo, hi):
     return g.uniform(lo, hi)
 
 
-# effect -> function(rng) -> parameter vector (SI), drawn from physical ranges (EFFECTS.md)
+# effect -> function(rng) -> parameter vector (SI), drawn from physical ranges (typical 0.35 um magnitudes)
 RANGES = {
     "gse": lambda g: [1.0 / _u(g, 300, 10000)],                             # GSE 300:1 .. 1e4:1
     "fd_leakage": lambda g: [_u(g, 5e-17, 5e-16), _u(g, 6.0, 8.0)],          # ~10 - 100 mV/s on C_FD at 25 C

@@ -8,7 +8,7 @@ subpixel, the signal as a fraction of swing against Q:
   diffusions, C(V) exact): f(Q) = drop(Q) / swing, drop from the reset level,
   swing the design's ``pixel.swing``.
 - ``spice``: the double-sampled column signal of the generated pixel measured
-  by the thesis experiment (``experiments.thesis``): f(Q) = (signal - dark) /
+  by the thesis [Thesis2019] experiment (``experiments.thesis``): f(Q) = (signal - dark) /
   swing at Q = I t_window. This carries the SF gain and offset, FD charge
   sharing, C(V) and the real sampling chain.
 

@@ -1,4 +1,4 @@
-"""Size the secondary mask opening and both integration times (thesis fig. 3.7) with casadi.
+"""Size the secondary mask opening and both integration times ([Thesis2019] fig. 3.7) with casadi.
 
 Decision variables (log-scaled): the opening A_open, t_primary, t_secondary.
 With j = R_eff E the photocurrent density (A/m^2) of the background light at the

@@ -1,7 +1,7 @@
 """Temporal noise of the offset-compensated SC AFE (``circuits.afe``): kT/C and the op-amp.
 
-Sampled-noise theory for the two-phase amplifier (EFFECTS.md section 2; Enz & Temes,
-Proc. IEEE 84 (1996), autozero and CDS). Voltages are deviations from the nominal.
+Sampled-noise theory for the two-phase amplifier ([EnzTemes1996]: autozero and CDS). Voltages
+are deviations from the nominal.
 
 **What phase 2 makes of phase 1.** p1 opens and leaves x (op-amp inverting input,
 through C12) and c (C13's far plate) floating with sampled values x1, c1; vm is left

@@ -1,4 +1,4 @@
-"""Conversion gain, full well and photoactive area (thesis eq. 3.6, table 3.2)."""
+"""Conversion gain, full well and photoactive area ([Thesis2019] eq. 3.6, table 3.2)."""
 from __future__ import annotations
 
 from ..constants import Q

@@ -1,6 +1,6 @@
 """Photodiode dark current: area and perimeter terms, doubling with temperature.
 
-    I_d(T) = (J_A A + J_P P) 2^((T - T_ref) / T_d)     (EFFECTS.md row 3)
+    I_d(T) = (J_A A + J_P P) 2^((T - T_ref) / T_d)     (J_A, J_P: area and perimeter densities)
 
 This is the kit's one dark-current law: the SPICE diode card writes its
 saturation currents from ``dark_scale`` at the deck temperature (see

@@ -2,7 +2,7 @@
 
 Charge balance on the node: dQ(V)/dt = -I, so Q(V(t)) = Q(V0) - I t, and V(t) is
 the inverse of the closed-form depletion charge (see ``junction``). The linear
-approximation of the thesis (eq. 3.9, fig. 3.6) takes C fixed at the reset
+approximation of the thesis [Thesis2019] (eq. 3.9, fig. 3.6) takes C fixed at the reset
 bias: V(t) = V0 - I t / C(V0), t_sat = V C / I.
 """
 from __future__ import annotations

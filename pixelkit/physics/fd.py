@@ -22,7 +22,7 @@ FD settle to one voltage; a photo-charge dQ moves both by dQ / (C_PD + C_FD), an
 FD keeps that voltage when TG opens. The column signal (reset level - signal
 level, NCDS) moves by ``A_sf`` times that. Hence
 
-    CG_PD  = q / C_PD                       (the thesis's eq. 3.6)
+    CG_PD  = q / C_PD                       (the thesis's [Thesis2019] eq. 3.6)
     CG_FD  = q / (C_PD,node + C_FD)         (charge sharing)
     CG_out = A_sf q / (C_PD,node + C_FD)    (column, V/e-)
 
@@ -128,7 +128,7 @@ def pls_current(design, i_ph: float) -> float:
     """Parasitic photocurrent (A) on FD for a PD photocurrent ``i_ph``: i_ph / gse.
 
     ``pixel.gse`` is the charge ratio eta_pd / eta_FD the shielding gives. The
-    signal GSE a camera measures (dS/dt_exp over dS/dt_wait, EFFECTS.md row 1) is
+    signal GSE a camera measures (dS/dt_exp over dS/dt_wait) is
     smaller by C_FD / C_total: a charge on the small FD moves it more (``signal_gse``).
     """
     return i_ph / design.pixel.gse

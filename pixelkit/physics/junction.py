@@ -1,4 +1,4 @@
-"""Depletion capacitance of a junction with area and perimeter (thesis eq. 3.5).
+"""Depletion capacitance of a junction with area and perimeter ([Thesis2019] eq. 3.5).
 
     C_jdep(V_R) = C_j0B A / (1 + V_R/phi_B)^m_j + C_j0SW P / (1 + V_R/phi_SW)^m_jsw
 

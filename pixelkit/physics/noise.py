@@ -1,6 +1,6 @@
 """Temporal noise: kTC, shot noise, and the read-noise chain of the 5T pixel with NCDS.
 
-The chain (thesis fig. 3.3 sequence; all variances at the column, V^2):
+The chain ([Thesis2019] fig. 3.3 sequence; all variances at the column, V^2):
 
 - **Resets and transfer.** EC resets the PD node (kT C_PD in charge) and RST resets
   FD (kT C_FD) before the transfer: the common mode of the two carries charge
@@ -11,7 +11,7 @@ The chain (thesis fig. 3.3 sequence; all variances at the column, V^2):
       var(V_FD, signal sample) = kT / C_total + kT C_PD / (C_FD C_total) = kT / C_FD.
 
 - **NCDS.** The reset level comes from a *new* RST reset (non-correlated double
-  sampling, EFFECTS.md row 4): another kT / C_FD, uncorrelated. So 2 kT / C_FD at
+  sampling): another kT / C_FD, uncorrelated. So 2 kT / C_FD at
   FD, times A_sf^2 at the column.
 - **SF + column load (thermal).** Both transistors carry the same current; in weak
   inversion each has current noise 2 q I and the follower's output conductance is

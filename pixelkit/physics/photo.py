@@ -1,4 +1,4 @@
-"""Photocurrent from irradiance and spectrum (thesis eq. 3.2, 3.3); radiometry <-> photometry.
+"""Photocurrent from irradiance and spectrum ([Thesis2019] eq. 3.2, 3.3); radiometry <-> photometry.
 
     I_ph = integral eta(lambda) E(lambda) A_eff q lambda / (h c) dlambda
          = integral R(lambda) E(lambda) A_eff dlambda,   R = eta q lambda / (h c)

@@ -1,4 +1,4 @@
-"""Saturation time against mask opening (thesis fig. 3.6).
+"""Saturation time against mask opening ([Thesis2019] fig. 3.6).
 
 A PD of fixed junction (its C does not depend on the opening) is discharged by
 I = R(lambda) E A_open from the reset bias to zero bias. The thesis's linear

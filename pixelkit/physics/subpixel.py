@@ -1,6 +1,6 @@
 """Analytic figures of a design's primary and secondary subpixels.
 
-The photodiode alone gives the thesis's C_jdep, conversion gain and full well
+The photodiode alone gives the thesis's [Thesis2019] C_jdep, conversion gain and full well
 (table 3.2, eq. 3.10 - 3.13). The in-pixel PD *node* adds what the netlist hangs
 on it: the EC and TG source diffusions (junction C with the technology's MOS
 parameters) and their gate overlaps; this is what a SPICE discharge sees. What

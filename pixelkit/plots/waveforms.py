@@ -1,4 +1,4 @@
-"""Readout waveforms of an array simulation (cf. thesis fig. 3.13)."""
+"""Readout waveforms of an array simulation (cf. [Thesis2019] fig. 3.13)."""
 from __future__ import annotations
 
 from pathlib import Path

@@ -44,15 +44,18 @@ def model_text(t: dict) -> str:
     return "\n".join(lines)
 
 
-def simulate_text(r: dict) -> str:
+def simulate_text(r: dict, reference: bool = False) -> str:
+    """``reference``: the design is the test chip of [Thesis2019] (``experiments.reference``), whose
+    printed currents the ratio is then set beside; for any other design they would mean nothing."""
     p, s, m = r["primary"], r["secondary"], r["model_vs_spice"]
+    thesis = "thesis 1400 / 52 = 26.9; " if reference else ""
     lines = [f"Simulation experiment (fig. A.1 - A.3): exposure window {r['t_window_s'] * 1e6:g} us, "
              f"backend {r['backend']}, ngspice {r['ngspice_version']}",
              _row("", "primary", "secondary"),
              _row("output swing at the column (mV)", f"{p['swing_V'] * 1e3:.0f}", f"{s['swing_V'] * 1e3:.0f}"),
              _row("target (fraction of swing)", f"{p['target_frac']:.2f}", f"{s['target_frac']:.2f}"),
              _row("photocurrent at target (pA)", f"{p['i_mid_A'] * 1e12:.1f}", f"{s['i_5pct_A'] * 1e12:.1f}"),
-             f"  i_mid / i_5pct = {r['ratio']:.1f} (thesis 1400 / 52 = 26.9; linear ideal "
+             f"  i_mid / i_5pct = {r['ratio']:.1f} ({thesis}linear ideal (mid / low fraction) x C_C = "
              f"{r['ratio_ideal']:.1f})",
              f"  fig. A.1 (currents in ratio C_C): worst difference {r['fig_a1']['max_diff_frac'] * 100:.2f} % of swing",
              f"  analytic model vs SPICE over 10-90 % of swing: worst {m['max_err_frac'] * 100:.2f} %",

@@ -7,9 +7,9 @@ One concept per module:
 - ``exposure``: the independent image path: a time-stepped exposure of moving
   rectangles, pixel by pixel and row by row (no closed form inside).
 - ``rolling``: closed-form rolling-shutter sizes, edges and skew (the kit's
-  derivation, and the published forms of documents 001/003 for comparison).
+  derivation, and the published forms of [Rychazhnikov2008a] / [Rychazhnikov2008b] for comparison).
 - ``compensation``: two opposite-scanning sensors undo the distortion.
-- ``speed``: speed from a trace (thesis eq. 2.1 - 2.5) and its error budget
+- ``speed``: speed from a trace ([Thesis2019] eq. 2.1 - 2.5) and its error budget
   (eq. 2.6 - 2.11).
 - ``double_exposure``: primary and secondary images of the dual pixel.
 - ``lowgse``: the double exposure emulated on a conventional global-shutter

@@ -1,4 +1,4 @@
-"""Two sensors scanning in opposite directions undo the rolling-shutter distortion (document 003).
+"""Two sensors scanning in opposite directions undo the rolling-shutter distortion ([Rychazhnikov2008b]).
 
 Vertical motion. One sensor sees the object move with its scan, the other against
 it; their images have heights (``rolling``, units rows and line times, s = v/v_H)

@@ -1,4 +1,4 @@
-"""Double-exposure images of a passing car with the dual pixel (thesis chapters 2 - 3).
+"""Double-exposure images of a passing car with the dual pixel ([Thesis2019] chapters 2 - 3).
 
 The scene, on the focal plane of the design's optics: a static background whose
 photocurrent density is the sizing's background level (``optimize.sizing.light``),

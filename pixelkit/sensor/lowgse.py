@@ -1,4 +1,4 @@
-"""The double exposure emulated on a conventional global-shutter sensor (thesis section 2.3).
+"""The double exposure emulated on a conventional global-shutter sensor ([Thesis2019] section 2.3).
 
 After the global transfer the charge waits on the storage node until its row is
 read; a storage node with finite global shutter efficiency GSE = eta_pd / eta_mem
@@ -6,7 +6,7 @@ keeps collecting light at 1/GSE of the photodiode's rate. Row r holds
 
     S(r) = eta_pd [ integral_0^t_int E dt + (1/GSE) integral_t_int^t_read(r) E dt ]
 
-(EFFECTS.md section 4): a sharp exposure plus a second, attenuated exposure as
+: a sharp exposure plus a second, attenuated exposure as
 long as the row's wait t_wait(r) = t0 + r Row_length / f_pixclk (eq. 2.14). A
 bright moving source draws its trace during the wait, so v = d / t_wait (2.15).
 The thesis's rule for a good balance (2.16 - 2.18) is equal weight in the two
@@ -57,7 +57,7 @@ def rule_of_thumb(camera: Camera, row: int) -> float:
 
 
 def row_profile(camera: Camera, t_int: float) -> np.ndarray:
-    """S(r) / S(0) of every row under constant light (EFFECTS.md: 1 + t_wait(r) / (GSE t_int))."""
+    """S(r) / S(0) of every row under constant light (1 + t_wait(r) / (GSE t_int))."""
     rows = Cells.grid(camera.n_rows)
     cols = Cells.grid(1)
     img = expose([Rect(-1.0, -1.0, 3.0, camera.n_rows + 2.0)], rows, cols, _windows(camera, t_int, 0, camera.n_rows),

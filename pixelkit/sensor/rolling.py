@@ -1,4 +1,4 @@
-"""Closed-form rolling-shutter distortion of a moving rectangle (documents 001 and 003).
+"""Closed-form rolling-shutter distortion of a moving rectangle ([Rychazhnikov2008a], [Rychazhnikov2008b]).
 
 Units: rows and columns (dy = dx = 1) and line times (T_c = 1), so the scan speed
 v_H = 1 and the object's speed is s = v / v_H (0 <= s < 1). H = n rows is the
@@ -72,19 +72,19 @@ def sizes(h: float, window: float, s: float, direction: str, l: float = 20.0) ->
 
 
 def published_vertical(h: float, window: float, s: float, direction: str) -> dict:
-    """Document 001 eq. 1 - 8 (edges, flat part) and document 003's total sizes, as printed."""
+    """[Rychazhnikov2008a] eq. 1 - 8 (edges, flat part) and [Rychazhnikov2008b]'s total sizes, as printed."""
     H = window
     k = 1 - s if direction == "down" else 1 + s
     edge = s * (h if H > h else H) / k
     if direction == "down":
         flat = s * abs(H - h) / k + h
     else:
-        flat = s * abs(H - h) / k          # 001 eq. 6 / 8: no "+ h" for upward motion
+        flat = s * abs(H - h) / k          # [Rychazhnikov2008a] eq. 6 / 8: no "+ h" for upward motion
     return {"edge_rows": edge, "flat_rows": flat, "total_rows": s * (H + h) / k + h}
 
 
 def published_horizontal(h: float, l: float, window: float, s: float) -> dict:
-    """Document 001 eq. 9 - 12 and the base angle alpha = atan(h / (L1 + L2))."""
+    """[Rychazhnikov2008a] eq. 9 - 12 and the base angle alpha = atan(h / (L1 + L2))."""
     H = window
     edge = s * (h if H > h else H)
     return {"edge_cols": edge, "flat_cols": s * abs(H - h) + l, "border_shift_cols": s * H,

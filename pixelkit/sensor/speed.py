@@ -1,4 +1,4 @@
-"""Speed from a trace (thesis eq. 2.1 - 2.5) and its error budget (eq. 2.6 - 2.11).
+"""Speed from a trace ([Thesis2019] eq. 2.1 - 2.5) and its error budget (eq. 2.6 - 2.11).
 
 Geometry (pinhole camera, fig. 2.3). The source moves on a straight line at
 lateral distance c from the camera; a point of the line seen at angle theta from

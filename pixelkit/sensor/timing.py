@@ -1,4 +1,4 @@
-"""Shutter timing: per-row reset, exposure and read times (EFFECTS.md section 4, thesis eq. 2.14).
+"""Shutter timing: per-row reset, exposure and read times ([Thesis2019] eq. 2.14).
 
 A row takes ``T_row = row_length / f_pixclk`` to read (row_length counts the
 horizontal blanking pixels); a frame ``T_readout = (N_row + v_blank) T_row``

@@ -3,7 +3,7 @@
 Each run gets its own folder (``scratch.run_folder``) holding the kit's
 ``.spiceinit`` - which sets ``num_threads=1`` (Debian's ngspice is built with
 OpenMP and two parallel runs otherwise slow each other down by more than 10x,
-NGSPICE_NOTES.md) and keeps any user ``.spiceinit`` from being read - and the
+measured with ngspice 39 on this kit's decks) and keeps any user ``.spiceinit`` from being read - and the
 links to the model folders the deck names.
 """
 from __future__ import annotations

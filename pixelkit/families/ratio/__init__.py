@@ -1,2 +1,2 @@
-"""The ratio-based HDR pixel (SEEDS_BRIEF section 5): a weak-inversion translinear
+"""The ratio-based HDR pixel [Sun2016]: a weak-inversion translinear
 loop per photodiode pair, a PWM readout and a column counter."""

@@ -17,15 +17,15 @@ class Loop:
     l: float = qty("m", 1e-6, gt=0, doc="loop NMOS length")
     v_source: float = qty("V", 0.4, ge=0, le=1.5, doc="source level of M3/M4 (tail headroom)")
     tail_w: float = qty("m", 4e-6, gt=0, doc="tail current-source NMOS (and its column mirror)")
-    tail_l: float = qty("m", 4e-6, gt=0)
+    tail_l: float = qty("m", 4e-6, gt=0, doc="tail current-source NMOS length")
     sel_w: float = qty("m", 1e-6, gt=0, doc="row-select switches")
-    sel_l: float = qty("m", 0.5e-6, gt=0)
+    sel_l: float = qty("m", 0.5e-6, gt=0, doc="row-select switches: length")
 
 
 @dataclass(frozen=True)
 class Photodiodes:
-    pd_width: float = qty("m", 7e-6, gt=0)
-    pd_height: float = qty("m", 7e-6, gt=0)
+    pd_width: float = qty("m", 7e-6, gt=0, doc="width of each photodiode of a pair")
+    pd_height: float = qty("m", 7e-6, gt=0, doc="height of each photodiode of a pair")
     pd_model: str = ident("diode_pd2nw_03v3",
                           doc="p+/n-well junction: its anode feeds the diode-connected M3/M4")
 
@@ -43,17 +43,17 @@ class Readout:
     i_bias: float = qty("A", 20e-9, gt=0, le=10e-6, doc="loop bias (paper: ~20 nA nominal)")
     i_bias_high: float = qty("A", 100e-9, gt=0, le=10e-6, doc="the paper's 'too high' bias (~100 nA)")
     c_par: float = qty("F", 30e-15, gt=0, le=10e-12, doc="column parasitic capacitance (each of C_par+/-)")
-    counter_bits: int = integer(5, ge=1, le=16)
+    counter_bits: int = integer(5, ge=1, le=16, doc="bits of the column counter (the paper's 5)")
     lsb_per_tau: float = num(1.0, ge=1.0, le=100, doc="lambda in T_LSB = lambda tau (paper: 1 is optimal)")
-    inv_wn: float = qty("m", 1e-6, gt=0)
-    inv_wp: float = qty("m", 2e-6, gt=0)
-    inv_l: float = qty("m", 0.5e-6, gt=0)
+    inv_wn: float = qty("m", 1e-6, gt=0, doc="column inverter NMOS width (trips at V_th)")
+    inv_wp: float = qty("m", 2e-6, gt=0, doc="column inverter PMOS width")
+    inv_l: float = qty("m", 0.5e-6, gt=0, doc="column inverter length")
     v_select: float = qty("V", 1.4, gt=0, le=5, doc="row-select high level: the select NMOS cascodes the loop outputs")
     v_clamp_gate: float = qty("V", 1.6, ge=0, le=5, doc="gate of the column clamp (holds a tripped column)")
-    clamp_w: float = qty("m", 1e-6, gt=0)
-    clamp_l: float = qty("m", 0.5e-6, gt=0)
+    clamp_w: float = qty("m", 1e-6, gt=0, doc="column clamp width")
+    clamp_l: float = qty("m", 0.5e-6, gt=0, doc="column clamp length")
     pre_w: float = qty("m", 2e-6, gt=0, doc="precharge PMOS")
-    pre_l: float = qty("m", 0.5e-6, gt=0)
+    pre_l: float = qty("m", 0.5e-6, gt=0, doc="precharge PMOS length")
 
     def validate(self, path, source):
         if self.i_bias_high <= self.i_bias:
@@ -68,11 +68,11 @@ class Experiment:
 
 @dataclass(frozen=True)
 class RatioDesign(FamilyDesign):
-    family: str = text(choices=("ratio",))
-    loop: Loop = table(Loop, default=Loop)
-    photodiodes: Photodiodes = table(Photodiodes, default=Photodiodes)
-    readout: Readout = table(Readout, default=Readout)
-    experiment: Experiment = table(Experiment, default=Experiment)
+    family: str = text(choices=("ratio",), doc="the ratio-based HDR pixel [Sun2016]")
+    loop: Loop = table(Loop, default=Loop, doc="the translinear loop of each photodiode pair")
+    photodiodes: Photodiodes = table(Photodiodes, default=Photodiodes, doc="the photodiodes")
+    readout: Readout = table(Readout, default=Readout, doc="bias, column capacitance, counter and column devices")
+    experiment: Experiment = table(Experiment, default=Experiment, doc="the family's experiment")
 
 
 def load_ratio_design(path: str | Path) -> RatioDesign:

@@ -25,7 +25,7 @@ The comparator is transistor level (not behavioural) because its delay and its
 input-referred offset are exactly the "analog delay" the paper blames for its
 distorted high-light range; a behavioural switch would hide them. C_int, C1, C2
 and the delay R are ideal elements: the open GF180 wheel ships no MIM-capacitor
-model (NGSPICE_NOTES).
+model.
 """
 from __future__ import annotations
 

@@ -8,7 +8,7 @@ voltages is
     dQ(V_a -> V_b) = C_lin (V_a - V_b) + Q_pd(V_a) - Q_pd(V_b)
 
 with C_lin = C_int + the (bias-independent, estimated) MOS parasitics and Q_pd the
-depletion charge of the PD junction (thesis eq. 3.5, ``physics.junction``).
+depletion charge of the PD junction ([Thesis2019] eq. 3.5, ``physics.junction``).
 
 Exposure. A constant current I reaches V0 at t = dQ(V_start -> V0) / I. The
 comparator acts when that is shorter than the frame, 2^N T:

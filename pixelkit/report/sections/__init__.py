@@ -25,7 +25,7 @@ How to add a section
      no long sweeps; every table and figure must still appear); ``ctx.backend`` / ``ctx.jobs``:
      pass them to ``simulate_many``; ``ctx.progress(stage, done, total)``: tell the terminal
      where you are; ``ctx.shared(name, fn)``: a result other sections reuse, computed once
-     (``ctx.experiment()`` is the thesis experiment, ``ctx.measured`` the ``--measured`` CSV
+     (``ctx.experiment()`` is the thesis [Thesis2019] experiment, ``ctx.measured`` the ``--measured`` CSV
      or None).
    - Every ``Table`` is written as ``<name>.csv`` beside the HTML and every ``data`` dict as
      ``data_<key>.json``: the data behind each figure and table. Table cells are numbers or text.

@@ -1,4 +1,4 @@
-"""2 x 2 array readout (thesis fig. 3.13): the column waveforms of one frame of both arrays with
+"""2 x 2 array readout ([Thesis2019] fig. 3.13): the column waveforms of one frame of both arrays with
 the sample phases (S1 signal, RST, S2 reset level) marked, and the subpixel signals.
 
 Independent path: each subpixel's double-sampled signal against the thesis experiment's

@@ -1,7 +1,7 @@
 """Frame-level models: speed budget, dual-pixel double exposure, low-GSE balance, rolling shutter.
 
 Independent paths: the time-stepped exposure of ``pixelkit.sensor.exposure``
-(every image here), the scene's true speed, and the thesis's printed test point.
+(every image here), the scene's true speed, and the thesis's [Thesis2019] printed test point.
 The speed budget and the rolling-shutter cases do not depend on the design; the
 passing car uses the design's optics, scene, apertures and pixelkit's sizing.
 """
@@ -69,7 +69,7 @@ def build(ctx) -> Section:
             f"(MT9M021, 1650 clocks per row, 22 MHz, GSE 310); on the simulated image the product of scene sharpness "
             f"and trace contrast peaks at t_int = {bal['best_ratio']:g} x the rule.",
             "Rolling shutter: every image is a time-stepped exposure; the kit's closed forms follow it within one "
-            "pixel, the published forms of documents 001/003 fail where the table's last columns differ (README, "
+            "pixel, the published forms of [Rychazhnikov2008a] / [Rychazhnikov2008b] fail where the table's last columns differ (README, "
             "'Frame-level models')."]
     if ctx.design.optics is not None and ctx.design.scene is not None:
         ctx.progress("frame: passing car")

@@ -3,7 +3,7 @@ view, and the geometry extracted back from the GDS.
 
 Independent path: the areas and perimeters are extracted from the written GDS polygons
 (``layout.extract``, klayout/gdstk), not taken from the design file; the table sets them beside
-the design file's values and the thesis's C_A.
+the design file's values and the thesis's [Thesis2019] C_A.
 """
 from __future__ import annotations
 

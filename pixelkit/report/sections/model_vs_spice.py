@@ -1,4 +1,4 @@
-"""Analytic model vs SPICE: the thesis experiment (fig. A.1 - A.3) on the design.
+"""Analytic model vs SPICE: the thesis [Thesis2019] experiment (fig. A.1 - A.3) on the design.
 
 Independent paths side by side: SPICE circuit elements (the generated pixel, its
 column and the GS sequence in ngspice) against the analytic C(V) discharge of the

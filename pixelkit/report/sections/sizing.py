@@ -116,7 +116,7 @@ def build(ctx) -> Section:
     data = {"levels": levels, "verify": v, "constraints": slack_rows}
     if ctx.quick:
         sens_note = "The sensitivity table (re-sizing at +-10 % C_j, +-20 % SF bias, each corner, +-10 K) " \
-                    "is skipped in the quick profile: it re-runs the thesis experiment for every variant."
+                    "is skipped in the quick profile: it re-runs the thesis [Thesis2019] experiment for every variant."
         tables.append(Table("sizing_sensitivity", "Sensitivity: skipped in the quick profile",
                             ["variant", "note"], [["all", "skipped (--quick)"]]))
     else:

@@ -1,4 +1,4 @@
-"""Design summary in the form of the thesis's table 3.2, the kit's values beside the thesis's.
+"""Design summary in the form of the table 3.2 of [Thesis2019], the kit's values beside the thesis's.
 
 Kit values: the analytic PD-referred figures (``physics.subpixel``), the
 output-referred conversion gain from the physics (``physics.fd.response`` at the
@@ -13,19 +13,11 @@ import numpy as np
 
 from ...camera.spicenoise import sf_gain
 from ...constants import Q
+from ...experiments.reference import THESIS
 from ...physics.subpixel import model_table
 from . import Checked, Section, Table
 
 TITLE = "Design summary (thesis table 3.2)"
-
-#: The thesis's values (SEEDS_BRIEF section 2: table 3.2 and the sizing text).
-THESIS = {
-    "primary": {"array": "27 x 50", "pitch_um": 24.0, "pd": "15.1 x 13.55", "c_jdep_fF": 26.54, "cg_uV": 6.03,
-                "fwc_ke": 248.0, "swing_V": 1.5, "f_read_kHz": 500.0},
-    "secondary": {"array": "27 x 150", "pitch_um": 8.0, "pd": "5 x 5", "c_jdep_fF": 7.38, "cg_uV": 21.7,
-                  "fwc_ke": 69.0, "swing_V": 1.5, "f_read_kHz": 1000.0, "mask_um2": 0.64},
-    "c_a": 8.18, "c_c": 3.6, "i_mid_pA": 1400.0, "i_5pct_pA": 52.0, "c_m": 39.0,
-}
 
 
 def spice_output_cg(sweep_A, signal_V, dark_V: float, swing_V: float, t_window: float) -> float:

@@ -1,0 +1,30 @@
+"""The comparison with [Thesis2019] is made for its test chip only.
+
+Independent path: the values the dissertation prints (table 3.2, chapter 3, appendix A),
+written here from the document, not from the code's table; a design that differs from the
+chip in one stated value is not the reference, and its ``simulate`` text does not set the
+dissertation's currents beside its own.
+"""
+from dataclasses import replace
+
+from pixelkit.experiments.reference import differences, is_reference
+from pixelkit.report.text import simulate_text
+
+
+def test_the_shipped_reference_design_is_the_thesis_chip(ref_design):
+    assert is_reference(ref_design), differences(ref_design)
+    p, s = ref_design.primary, ref_design.secondary
+    assert (p.rows, p.cols, s.rows, s.cols) == (27, 50, 27, 150)                  # table 3.2
+    assert round(p.pd_width * 1e6, 2) == 15.1 and round(p.pd_height * 1e6, 2) == 13.55
+
+
+def test_one_stated_value_changed_is_another_design(ref_design):
+    other = replace(ref_design, pixel=replace(ref_design.pixel, sf_bias=500e-9))
+    assert not is_reference(other) and differences(other) == ["pixel.sf_bias 5e-07"]
+    devices = replace(ref_design.pixel.devices, sf_w=2e-6)  # the thesis prints no device sizes
+    assert is_reference(replace(ref_design, pixel=replace(ref_design.pixel, devices=devices)))
+
+
+def test_simulate_sets_the_thesis_currents_beside_the_reference_only(experiment):
+    assert "thesis 1400 / 52 = 26.9" in simulate_text(experiment, reference=True)
+    assert "thesis" not in simulate_text(experiment, reference=False)
