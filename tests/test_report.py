@@ -83,6 +83,8 @@ class _Srcs(html.parser.HTMLParser):
 
 
 def test_report_prints_where_it_is_and_a_summary(quick_report):
+    """Format only: the CG pair is checked below, the AFE error, sizing, array and layout figures in
+    test_report_sections.py, each against its reference."""
     out, stdout = quick_report
     assert str(out / "index.html") in stdout
     summary = json.loads((out / "summary.json").read_text())
@@ -90,6 +92,25 @@ def test_report_prints_where_it_is_and_a_summary(quick_report):
     # every checked figure in summary.json is a finite number with a unit
     for name, c in summary["checked"].items():
         assert isinstance(c["value"], float) and c["value"] == c["value"], name
+
+
+def test_report_output_cg_pair_against_the_analytic_level(quick_report):
+    """Independent reference: the other level. The report's SPICE output-referred CG (slope of
+    the column signal against I t_window below 30 % of swing) against the analytic A_sf q / C
+    of the PD node + FD at the reset bias (C(V) junctions; A_sf from two SPICE operating points,
+    no transient). C rises as the node discharges, so the SPICE slope sits below the
+    zero-signal figure, by at most 3 %."""
+    out, _ = quick_report
+    c = json.loads((out / "summary.json").read_text())["checked"]
+    for w in ("primary", "secondary"):
+        spice = c[f"summary.{w}.cg_out_spice_uV_per_e"]["value"]
+        physics = c[f"summary.{w}.cg_out_physics_uV_per_e"]["value"]
+        assert 0.97 * physics <= spice <= physics, (w, spice, physics)
+    # the pair: a secondary electron moves the column ~2.8x as far (the smaller PD node)
+    ratio = c["summary.secondary.cg_out_spice_uV_per_e"]["value"] / c["summary.primary.cg_out_spice_uV_per_e"]["value"]
+    physics_ratio = (c["summary.secondary.cg_out_physics_uV_per_e"]["value"]
+                     / c["summary.primary.cg_out_physics_uV_per_e"]["value"])
+    assert ratio == pytest.approx(physics_ratio, rel=0.02)
 
 
 def test_report_renders_in_chromium_images_tables_no_errors(quick_report):

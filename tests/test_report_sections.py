@@ -2,7 +2,8 @@
 
 Independent paths, one per check:
 - sizing: the sized design simulated in SPICE over its own integration times
-  (``optimize.flow.verify``) must land on the design's criterion (mid-scale / 5 % of swing);
+  (``optimize.flow.verify``) must land on the design's criterion (mid-scale / 5 % of swing),
+  and C_M is the closed form 12 (A_s / A_p)(i_mid / i_5pct) of the experiment's currents;
 - AFE: the SPICE bench's gain error against -eps/(1+eps), eps = (C11 + C13)/(A C13), written here;
 - array: signals rise along the scene's gradient (physics), and the one-deck frame agrees with
   the frame engine's split decks;
@@ -47,6 +48,7 @@ def _value(summary, name):
     ("layout", ["layout_extracted"], ["layout/dual_pixel_revA_dualpix.png", "layout/dual_pixel_revA_dualpix_3d.png"]),
 ])
 def test_section_is_available_with_tables_and_figures(report, key, tables, figures):
+    """Structure only: each section's numbers are checked against their references below."""
     out, summary = report
     assert summary["sections"][key] == "available"
     for t in tables:
@@ -56,13 +58,14 @@ def test_section_is_available_with_tables_and_figures(report, key, tables, figur
     assert any(n.startswith(f"{key}.") for n in summary["checked"])
 
 
-def test_sizing_verifies_on_the_criterion_and_names_binding_constraints(report):
+def test_sizing_verifies_on_the_criterion_and_names_binding_constraints(report, ref_design, experiment):
     out, summary = report
     assert _value(summary, "sizing.verify.primary_frac") == pytest.approx(0.5, abs=0.02)
     assert _value(summary, "sizing.verify.secondary_frac") == pytest.approx(0.05, abs=0.005)
-    c_m = _value(summary, "sizing.c_m")
-    a_open = _value(summary, "sizing.mask_open_m2")
-    assert c_m * a_open == pytest.approx(25e-12, rel=1e-6)     # C_M = A_pd / A_open, 5 x 5 um PD
+    # C_M = 12 (A_s / A_p)(i_mid / i_5pct): the derivation of test_sizing.py, on the report's experiment
+    d = ref_design
+    a_s_over_a_p = (d.secondary.pd_width * d.secondary.pd_height) / (d.primary.pd_width * d.primary.pd_height)
+    assert _value(summary, "sizing.c_m") == pytest.approx(12 * a_s_over_a_p * experiment["ratio"], rel=0.01)
     states = {r["constraint"].split(" ")[0]: r["state"] for r in _csv(out, "sizing_constraints")}
     assert states["t_ratio"] == "binding"                        # the design fixes t_s = 12 t_p
     assert states["motion"] == "slack" and states["trace"] == "slack"

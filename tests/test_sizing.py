@@ -25,30 +25,50 @@ def cli_module():
     return run_cli
 
 
-def test_thesis_choices_land_in_band(sized):
+def test_spice_level_is_the_closed_form_of_the_experiments_currents(sized, experiment, ref_design):
+    """Independent reference: a derivation. With t_s = 12 t_p and the criterion as equalities,
+    both arrays under the same background j: j A_p t_p = i_mid t_w and j A_open 12 t_p =
+    i_5pct t_w, so C_M = A_s / A_open = 12 (A_s / A_p) (i_mid / i_5pct) and t_p = i_mid t_w /
+    (j A_p), with i_mid / i_5pct checked by SPICE runs at those currents (test_experiment);
+    casadi solves it on interpolants of the sweep, so both within 1 %."""
     r, _ = sized
-    # thesis [Thesis2019]: C_M = 39, opening 0.64 um2; the issue's bands for ratio 12, SPICE level, c35_thesis
+    d = ref_design
     assert r["level"] == "spice"
-    assert 30 <= r["c_m"] <= 48
-    assert 0.52e-12 <= r["mask_open_m2"] <= 0.83e-12
-    assert r["t_int_secondary_s"] / r["t_int_primary_s"] == pytest.approx(12, rel=1e-6)
-    assert r["mask_open_m2"] * r["c_m"] == pytest.approx(25e-12, rel=1e-9)
+    a_p, a_s = d.primary.pd_width * d.primary.pd_height, d.secondary.pd_width * d.secondary.pd_height
+    i_mid, i_5 = experiment["primary"]["i_mid_A"], experiment["secondary"]["i_5pct_A"]
+    assert r["c_m"] == pytest.approx(12 * a_s / a_p * i_mid / i_5, rel=0.01)
+    j = r["levels"]["spice"]["j_background_A_per_m2"]
+    assert r["t_int_primary_s"] == pytest.approx(i_mid * experiment["t_window_s"] / (j * a_p), rel=0.01)
+
+
+def test_c_m_near_the_thesis_choice(sized):
+    """Published reference: the thesis [Thesis2019] chose C_M = 39 (opening 0.64 um2). C_M is proportional
+    to i_mid / i_5pct (above), which sits 10 % above the thesis's 26.9 in the c35_thesis
+    stand-in (calibrated on the PD junction, not the SF chain): so within 15 % of 39."""
+    assert sized[0]["c_m"] == pytest.approx(39.0, rel=0.15)
 
 
 def test_verify_in_spice(sized):
-    """Independent path: a SPICE run of the sized design at its real integration times
-    (separate exposure windows), not the short-window sweep the sizing was solved from."""
+    """Independent reference: a SPICE run of the sized design at its real integration times
+    (separate exposure windows), not the short-window sweep the sizing was solved from. The
+    fractions differ from 0.5 / 0.05 by the dark charge of the real times (0.5005 / 0.0507)."""
     v = sized[0]["verify"]
     assert v["t_int_secondary_s"] == pytest.approx(sized[0]["t_int_secondary_s"])
-    assert abs(v["primary_frac"] - 0.50) <= 0.02
-    assert abs(v["secondary_frac"] - 0.05) <= 0.01
+    assert abs(v["primary_frac"] - 0.50) <= 0.005
+    assert abs(v["secondary_frac"] - 0.05) <= 0.002
 
 
-def test_constraints_hold_at_the_solution(sized, ref_design):
+def test_motion_and_trace_constraints_by_hand(sized, ref_design):
+    """Independent reference: the image speed u = v f / c written here: the primary's motion
+    u(v_max) t_p / pitch_p and the trace u(v_min) t_s / pitch_s must be what the solver reports
+    and meet the design's limits; the dark and headlight fractions are the solver's own."""
     r, _ = sized
-    sz = ref_design.sizing
-    assert r["motion_px_primary"] <= sz.max_motion_px
-    assert r["trace_px_at_speed_min"] >= sz.min_trace_px
+    d, sz = ref_design, ref_design.sizing
+    f, c = d.optics.focal_length, d.scene.distance
+    motion = d.scene.speed_max * f / c * r["t_int_primary_s"] / d.primary.pitch
+    trace = d.scene.speed_min * f / c * r["t_int_secondary_s"] / d.secondary.pitch
+    assert r["motion_px_primary"] == pytest.approx(motion, rel=1e-6) and motion <= sz.max_motion_px
+    assert r["trace_px_at_speed_min"] == pytest.approx(trace, rel=1e-6) and trace >= sz.min_trace_px
     assert r["dark_frac_secondary"] <= sz.dark_fraction
     assert r["headlight_frac"] <= sz.headlight_max
 
@@ -62,24 +82,35 @@ def test_sized_design_file_loads_and_carries_the_sizes(sized):
     assert d.secondary.t_int == pytest.approx(r["t_int_secondary_s"], rel=1e-3)
 
 
-def test_sensitivity_table(sized, ref_design):
+def test_sensitivity_table(sized, ref_design, experiment):
+    """Independent reference: a derivation. t_p is proportional to the charge Q_mid that takes
+    the column to mid-scale; scaling the PD junction by k scales only its part Q_j of that
+    charge, so dt_p / t_p = (k - 1) Q_j / Q_mid, with Q_j / Q_mid from the analytic C(V) of
+    the PD node and FD over the node swing the SPICE mid-scale needs (0.889 of the charge:
+    EC/TG diffusions and FD do not scale). Within 0.003 (3 % of the 10 % step)."""
+    from pixelkit.camera.model import combined_node
+    from pixelkit.camera.spicenoise import sf_gain
+    from pixelkit.physics.junction import Node
+    d = ref_design
     rows = {row["variant"]: row for row in sized[0]["sensitivity"]}
-    corners = {f"corner {c}" for c in ref_design.tech.models.corners}
+    corners = {f"corner {c}" for c in d.tech.models.corners}
     assert {"C_j x0.9", "C_j x1.1", "SF bias x0.8", "SF bias x1.2", "temperature -10 K",
             "temperature +10 K"} | corners <= set(rows)
-    # a larger junction needs more charge for mid-scale: t_primary grows with C_j (~ in proportion)
-    assert rows["C_j x0.9"]["t_primary_change_frac"] < 0 < rows["C_j x1.1"]["t_primary_change_frac"]
-    assert rows["C_j x1.1"]["t_primary_change_frac"] == pytest.approx(0.1, abs=0.05)
+    a_sf = sf_gain(d)
+    node = combined_node(d, "primary", a_sf)
+    pd_only = Node(node.terms[:1], 0.0)               # the PD junction: the first term
+    v0 = d.pixel.v_pd_reset
+    dv = d.experiment.mid_fraction * experiment["primary"]["swing_V"] / a_sf
+    share = float((pd_only.charge(v0) - pd_only.charge(v0 - dv)) / (node.charge(v0) - node.charge(v0 - dv)))
+    assert 0.8 < share < 1.0
+    for k in (0.9, 1.1):
+        assert rows[f"C_j x{k:g}"]["t_primary_change_frac"] == pytest.approx((k - 1) * share, abs=0.003)
 
 
-def test_both_levels_reported(sized):
-    lv = sized[0]["levels"]
-    assert lv["analytic"]["level"] == "analytic" and lv["spice"]["level"] == "spice"
-    assert lv["analytic"]["c_m"] != pytest.approx(lv["spice"]["c_m"], rel=0.01)
-
-
-def test_analytic_level_matches_its_closed_form(ref_design):
-    """With the ratio fixed and the criterion as equalities the analytic solution is closed form."""
+def test_analytic_level_matches_its_closed_form(ref_design, sized):
+    """Independent reference: a derivation. With the ratio fixed and the criterion as equalities
+    the analytic solution is closed form (charges at 50 % / 5 % of the analytic curves); the
+    command reports this level beside the SPICE level."""
     c = analytic_curves(ref_design)
     r = solve(ref_design, c)
     from pixelkit.optimize.sizing import light
@@ -88,6 +119,8 @@ def test_analytic_level_matches_its_closed_form(ref_design):
     t_p = q_mid / (j * ref_design.primary.area)
     assert r["t_int_primary_s"] == pytest.approx(t_p, rel=1e-6)
     assert r["mask_open_m2"] == pytest.approx(q_low / (j * 12 * t_p), rel=1e-6)
+    lv = sized[0]["levels"]["analytic"]
+    assert lv["level"] == "analytic" and lv["c_m"] == pytest.approx(r["c_m"], rel=1e-9)
     # its speed is measured in benchmarks/run.py (sizing_solve_s, against one SPICE run), not timed here
 
 
