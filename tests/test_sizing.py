@@ -42,9 +42,9 @@ def test_spice_level_is_the_closed_form_of_the_experiments_currents(sized, exper
 
 
 def test_c_m_near_the_thesis_choice(sized):
-    """Published reference: the thesis [Thesis2019] chose C_M = 39 (opening 0.64 um2). C_M is proportional
-    to i_mid / i_5pct (above), which sits 10 % above the thesis's 26.9 in the c35_thesis
-    stand-in (calibrated on the PD junction, not the SF chain): so within 15 % of 39."""
+    """Published reference: the thesis [Thesis2019] chose C_M = 39 (opening 0.64 um2). C_M is
+    proportional to i_mid / i_5pct (above), which sits 10 % above the thesis's 26.9 in the
+    c35_thesis stand-in (calibrated on the PD junction, not the SF chain): so within 15 % of 39."""
     assert sized[0]["c_m"] == pytest.approx(39.0, rel=0.15)
 
 
