@@ -24,6 +24,26 @@ def _honour_umask(tmp) -> None:
     os.chmod(tmp, 0o666 & ~_umask())
 
 
+def staging_dir(parent: Path, prefix: str) -> Path:
+    """A new folder in ``parent`` to build an output in before renaming it into place, with the
+    mode ``mkdir`` gives (0777 minus the umask), not the 0700 of ``tempfile.mkdtemp``."""
+    d = Path(tempfile.mkdtemp(prefix=prefix, dir=parent))
+    os.chmod(d, 0o777 & ~_umask())
+    return d
+
+
+def honour_umask_tree(root: Path) -> None:
+    """Folders 0777 and files 0666 minus the umask under ``root`` (copies of cached or staged files
+    keep the mode they were made with; the user's output gets the user's umask)."""
+    mask = _umask()
+    for dirpath, dirnames, filenames in os.walk(root):
+        os.chmod(dirpath, 0o777 & ~mask)
+        for name in filenames:
+            path = os.path.join(dirpath, name)
+            if not os.path.islink(path):
+                os.chmod(path, 0o666 & ~mask)
+
+
 def path_kind(path: str | os.PathLike) -> str | None:
     """"file", "dir", "other" or None (absent or unusable, e.g. a name too long).
 

@@ -1,21 +1,33 @@
-"""Progress bars for anything that runs longer than a couple of seconds.
+"""Progress of anything that runs longer than a couple of seconds, on stderr (tqdm).
 
-``progress(iterable, total=..., desc=...)`` wraps an iterable in a tqdm bar on
-stderr. The bar is quiet (no output at all) when stderr is not a terminal, when
-the command runs with ``--json`` (the CLI calls :func:`set_quiet`), or when the
-environment sets ``PIXELKIT_PROGRESS=0``; ``PIXELKIT_PROGRESS=1`` forces it on.
-Library code uses it freely: a script or a test that pipes stderr sees nothing.
+Three modes (:func:`mode`):
 
-``step(desc)`` is a context manager for one long step without an iterable (for
-example a surrogate build): it shows an indeterminate bar while it runs.
+- ``bar``: a tqdm bar, when stderr is a terminal (or ``PIXELKIT_PROGRESS=1``);
+- ``lines``: plain lines for a log or a CI job, when stderr is not a terminal (or
+  ``PIXELKIT_PROGRESS=lines``): one line when a bar starts, when its stage changes, at
+  most every ``LINE_EVERY_S`` seconds while it runs, and one when it ends, never a
+  carriage return;
+- ``quiet``: nothing, with ``--quiet`` or ``--json`` (the CLI calls :func:`set_quiet`) or
+  ``PIXELKIT_PROGRESS=0``.
+
+``progress(iterable, total=..., desc=...)`` wraps an iterable (or counts by hand with
+``total``); ``step(desc)`` is a context manager for one long step without an iterable (an
+indeterminate bar). A command shows *one* bar: :func:`command_bar` opens it, and every bar
+the library opens while it is open stays silent (the SPICE batches of a report, the points
+of a sweep inside a report section), so the terminal or the log reads as one progress line
+per command.
 """
 from __future__ import annotations
 
 import os
 import sys
+import time
 from contextlib import contextmanager
 
 _QUIET = False
+_COMMAND_BARS = 0
+#: Lines mode: at most one line per this many seconds while the description stays the same.
+LINE_EVERY_S = 10.0
 
 
 def set_quiet(quiet: bool = True) -> None:
@@ -24,23 +36,114 @@ def set_quiet(quiet: bool = True) -> None:
     _QUIET = bool(quiet)
 
 
-def enabled() -> bool:
+def mode() -> str:
+    """``quiet``, ``bar`` or ``lines`` (see the module docstring)."""
     env = os.environ.get("PIXELKIT_PROGRESS", "")
     if env == "0" or _QUIET:
-        return False
+        return "quiet"
     if env == "1":
-        return True
+        return "bar"
+    if env == "lines":
+        return "lines"
     try:
-        return sys.stderr.isatty()
+        return "bar" if sys.stderr.isatty() else "lines"
     except (AttributeError, ValueError):
-        return False
+        return "lines"
+
+
+def enabled() -> bool:
+    return mode() != "quiet"
+
+
+def _tqdm():
+    from tqdm.auto import tqdm
+    return tqdm
+
+
+class _NoCarriageReturn:
+    """stderr for the lines mode: tqdm's lone carriage returns dropped."""
+
+    def __init__(self, stream):
+        self.stream = stream
+
+    def write(self, s):
+        s = s.replace("\r", "")
+        if s:
+            self.stream.write(s)
+
+    def flush(self):
+        self.stream.flush()
+
+
+def _line_bar_class():
+    from tqdm import tqdm
+
+    class LineBar(tqdm):
+        """A tqdm whose display is a new line when the stage changes or LINE_EVERY_S has passed."""
+
+        def display(self, msg=None, pos=None):
+            if msg == "":          # close() clearing the bar: say it ended instead
+                if not getattr(self, "_ended", False):
+                    self._ended = True
+                    count = self._count()
+                    ended = "stopped at" if self.total and self.n < self.total else "done"
+                    self.fp.write(f"{self.desc or 'progress'}: {ended} {count + ' ' if count else ''}in "
+                                  f"{self.format_interval(self.format_dict['elapsed'])}\n")
+                    self.fp.flush()
+                return None        # no trailing carriage return
+            now = time.monotonic()
+            last_desc, last_t = getattr(self, "_last_line", (None, -1e9))
+            if self.desc == last_desc and now - last_t < LINE_EVERY_S:
+                return None
+            self._last_line = (self.desc, now)
+            self.fp.write(self.__str__().strip() + "\n")
+            self.fp.flush()
+            return None
+
+        def set_description(self, desc=None, refresh=True):
+            self.set_description_str(desc, refresh)   # tqdm's would append ": " to the line's name
+
+        def _count(self) -> str:
+            if self.total is None and self.unit == "s":   # an indeterminate step: its time says it all
+                return ""
+            unit = self.unit if self.unit != "it" else ""
+            n = f"{self.n}/{self.total}" if self.total else f"{self.n}"
+            return f"{n} {unit}".strip()
+
+    return LineBar
+
+
+def _bar(iterable, total, desc, unit, **kw):
+    silent = mode() == "quiet" or _COMMAND_BARS > 0
+    m = mode()
+    if m == "lines" and not silent:
+        known = total is not None or hasattr(iterable, "__len__")
+        fmt = kw.pop("bar_format", None) or ("{desc}: {n_fmt}/{total_fmt} {unit} [{elapsed}]{postfix}" if known
+                                             else "{desc}: {n_fmt} {unit} [{elapsed}]{postfix}")
+        return _line_bar_class()(iterable, total=total, desc=desc, unit=unit, leave=False,
+                                 file=_NoCarriageReturn(sys.stderr), mininterval=LINE_EVERY_S,
+                                 bar_format=fmt, **kw)
+    return _tqdm()(iterable, total=total, desc=desc, unit=unit, disable=silent, leave=False,
+                   file=sys.stderr, dynamic_ncols=True, **kw)
 
 
 def progress(iterable=None, total: int | None = None, desc: str = "", unit: str = "run", **kw):
-    """A tqdm bar over ``iterable`` (or a manual bar with ``total``), or a silent one."""
-    from tqdm.auto import tqdm
-    return tqdm(iterable, total=total, desc=desc, unit=unit, disable=not enabled(), leave=False,
-                file=sys.stderr, dynamic_ncols=True, **kw)
+    """A bar over ``iterable`` (or a manual bar with ``total``); silent inside a command bar."""
+    return _bar(iterable, total, desc, unit, **kw)
+
+
+@contextmanager
+def command_bar(desc: str, total: int | None = None, unit: str = "step"):
+    """The one bar of a command: every other bar opened while it is open stays silent (so a
+    command bar opened inside another, a sweep's inside a report section, is silent too)."""
+    global _COMMAND_BARS
+    bar = _bar(None, total, desc, unit)
+    _COMMAND_BARS += 1
+    try:
+        yield bar
+    finally:
+        _COMMAND_BARS -= 1
+        bar.close()
 
 
 @contextmanager

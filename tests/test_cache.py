@@ -110,9 +110,9 @@ def test_retried_run_is_cached_under_its_own_key():
 def test_the_report_counter_sees_every_deck(backend):
     """The report's SPICE counter (an engine observer) counts what was asked of it: three
     different decks run, then the same three served from the cache, on either backend."""
-    from pixelkit.report.spicecount import SpiceCounter
+    from pixelkit.spice.counter import SpiceCounter
     nets = [_rc(r) for r in (1e3, 2e3, 3e3)]
-    with SpiceCounter(lambda text: None) as counter:
+    with SpiceCounter(lambda counter: None) as counter:
         first = engine.simulate_many(nets, backend=backend, jobs=2)
         again = engine.simulate_many(nets, backend=backend, jobs=2)
     assert all(_right(res, r) for res, r in zip(first + again, (1e3, 2e3, 3e3) * 2))

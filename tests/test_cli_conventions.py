@@ -6,6 +6,7 @@ The expected exit statuses and JSON fields are the documented convention
 the soft-reset limit is derived here from the technology (supply - Vth).
 """
 import json
+import re
 
 import click
 import pytest
@@ -159,19 +160,28 @@ def test_failed_simulation_keeps_deck_and_log_in_user_terms(cli, tmp_path):
     assert ".options" in (folder / "deck.cir").read_text() and (folder / "models").is_dir()
 
 
-def test_progress_is_quiet_off_a_terminal_and_with_json(monkeypatch, capsys):
+def test_progress_is_plain_lines_off_a_terminal_and_quiet_with_json(monkeypatch, capsys):
+    """Off a terminal (pytest's stderr) progress is whole lines, never a carriage return; inside a
+    command's bar the library's bars are silent; --quiet / --json (set_quiet) and
+    PIXELKIT_PROGRESS=0 silence everything."""
     from pixelkit import progress
     monkeypatch.delenv("PIXELKIT_PROGRESS", raising=False)
-    assert not progress.enabled()  # pytest's stderr is not a terminal
-    monkeypatch.setenv("PIXELKIT_PROGRESS", "1")
-    list(progress.progress(range(3), desc="visible"))
-    assert "visible" in capsys.readouterr().err
-    progress.set_quiet(True)  # what --json does
+    assert progress.mode() == "lines"
+    with progress.command_bar("outer", total=2, unit="steps") as bar:
+        list(progress.progress(range(3), desc="inner"))
+        bar.update(2)
+    err = capsys.readouterr().err
+    lines = [re.sub(r"\d\d:\d\d", "T", ln) for ln in err.splitlines()]   # elapsed times vary
+    assert "\r" not in err and lines == ["outer: 0/2 steps [T]", "outer: done 2/2 steps in T"], err
+    progress.set_quiet(True)  # what --quiet and --json do
     try:
         list(progress.progress(range(3), desc="hidden"))
-        assert "hidden" not in capsys.readouterr().err
+        assert capsys.readouterr().err == ""
     finally:
         progress.set_quiet(False)
+    monkeypatch.setenv("PIXELKIT_PROGRESS", "0")
+    list(progress.progress(range(3), desc="hidden"))
+    assert capsys.readouterr().err == ""
 
 
 def test_outputs_default_under_reports_design(cli, tmp_path):

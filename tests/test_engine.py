@@ -88,7 +88,8 @@ def _start_simulation(backend, tmp_path):
     import sys
 
     from conftest import REF, ROOT, wait_for
-    env = dict(os.environ, PIXELKIT_CACHE=str(tmp_path / "cache"), PIXELKIT_REPORTS=str(tmp_path / "rep"))
+    env = dict(os.environ, PIXELKIT_CACHE=str(tmp_path / "cache"), PIXELKIT_REPORTS=str(tmp_path / "rep"),
+               PIXELKIT_PROGRESS="0")   # stderr holds only what the interrupt writes
     p = subprocess.Popen([sys.executable, "-m", "pixelkit", "simulate", str(REF), "--backend", backend],
                          cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                          start_new_session=True)

@@ -13,7 +13,6 @@ export leaves no half-written dataset.
 """
 from __future__ import annotations
 
-import os
 import shutil
 import tempfile
 from pathlib import Path
@@ -21,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import PixelkitError
-from ..fileio import check_output, path_kind
+from ..fileio import check_output, honour_umask_tree, path_kind
 from .png16 import png_bytes
 from .ptc import frame
 
@@ -69,7 +68,7 @@ def write_dataset(folder, cam, s, mm, seed: int, stack: int = 16) -> Path:
             lines += [f"d {t * 1e9:.3f}", *images(f"d_{k:03d}", 0.0, t, 2)]
         lines += [f"d {s.t_exp_s[ks] * 1e9:.3f}", *images("d_s_000", 0.0, s.t_exp_s[ks], stack)]
         (tmp / "EMVA1288_Data.txt").write_text("\n".join(lines) + "\n")
-        os.chmod(tmp, 0o755)
+        honour_umask_tree(tmp)
         old = None
         if path_kind(folder) is not None:
             old = folder.with_name(f".{folder.name}.old")

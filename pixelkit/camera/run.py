@@ -38,7 +38,7 @@ def array_report(design, which: str, a_sf: float, clip_V: float | None, seed: in
                     "k0_dn_per_e": cam.k0_dn_per_e, "cg_out_V_per_e": cam.cg0_V_per_e,
                     "read_noise_chain_e": ch["pixel_e"], "read_noise_afe_e": ch["afe_e"],
                     "dark_current_e_per_s": cam.dark_e_per_s, "prnu_pct": 100 * mm.sigma_gain,
-                    "dsnu_e": mm.sigma_offset_V / cam.cg0_V_per_e, "bits": cam.adc.bits,
+                    "dsnu_V": mm.sigma_offset_V, "dsnu_e": mm.sigma_offset_V / cam.cg0_V_per_e, "bits": cam.adc.bits,
                     "lsb_V": cam.adc.lsb_V, "clip_V": cam.clip_V, "a_sf": a_sf,
                     "wavelength_m": cam.wavelength_m, "irradiance_W_m2": s.irradiance_W_m2,
                     "t_int_s": cam.t_int},
@@ -65,7 +65,6 @@ def camera(design, seed: int = 1, swings: dict | None = None, emva_out: str | Pa
         f["cg_out_spice_V_per_e"] = cg[which]
         f["read_noise_spice_e"] = sp["pixel_V"] / f["cg_out_V_per_e"]
         f["read_noise_afe_spice_e"] = np.sqrt(sp["pixel_V"] ** 2 + afe_in) / f["cg_out_V_per_e"]
-        f["read_noise_chain_no_dark_e"] = out[which]["camera"].read_V / f["cg_out_V_per_e"]
     if emva_out is not None:
         for which in ARRAYS:
             r = out[which]

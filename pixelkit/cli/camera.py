@@ -5,25 +5,43 @@ import click
 
 from .common import design_arg, emit, json_opt, load, main, out_opt, output_path, spice_opts
 
-_ROWS = (("K (DN/e-)", "k_dn_per_e", 1.0, ".4g"), ("CG out (uV/e-)", "cg_out_V_per_e", 1e6, ".3f"),
-         ("CG out, SPICE step (uV/e-)", "cg_out_spice_V_per_e", 1e6, ".3f"),
-         ("read noise, EMVA (e-)", "read_noise_e", 1.0, ".1f"),
-         ("read noise, chain (e-)", "read_noise_chain_no_dark_e", 1.0, ".1f"),
-         ("read noise, SPICE (e-)", "read_noise_spice_e", 1.0, ".1f"),
-         ("read noise, AFE probe (e-)", "read_noise_afe_e", 1.0, ".1f"),
-         ("read noise, AFE, SPICE (e-)", "read_noise_afe_spice_e", 1.0, ".1f"),
+_ROWS = (("K (DN/e-)", "k_dn_per_e", 1.0, ".4g"),
+         ("K x LSB (uV/e-)", None, 1e6, ".3f"),
+         ("CG_out(0), model (uV/e-)", "cg_out_V_per_e", 1e6, ".3f"),
+         ("CG_out(0), SPICE step (uV/e-)", "cg_out_spice_V_per_e", 1e6, ".3f"),
          ("QE (EMVA eta)", "qe", 1.0, ".4g"), ("saturation (e-)", "saturation_e", 1.0, ".0f"),
          ("DR (dB)", "dr_db", 1.0, ".1f"), ("SNR max (dB)", "snr_max_db", 1.0, ".1f"),
          ("linearity error (%)", "linearity_error_pct", 1.0, ".2f"), ("GSE (signal)", "gse", 1.0, ".1f"),
-         ("dark current (e-/s)", "dark_current_e_per_s", 1.0, ".1f"), ("PRNU (%)", "prnu_pct", 1.0, ".3f"),
-         ("DSNU (e-)", "dsnu_e", 1.0, ".0f"))
+         ("dark current (e-/s)", "dark_current_e_per_s", 1.0, ".1f"), ("PRNU (%)", "prnu_pct", 1.0, ".3f"))
+
+#: The read-noise figures: (label, key, what it is). Each is a temporal noise in e- rms; they differ by
+#: what they include and by the gain that refers them to the photodiode.
+_NOISE = (("sigma_d (EMVA)", "read_noise_e", "dark temporal noise of the images / K"),
+          ("at the column, model", "read_noise_chain_e", "pixel chain (NCDS) / CG_out(0)"),
+          ("at the column, SPICE", "read_noise_spice_e", "ngspice .noise of the chain / CG_out(0)"),
+          ("with the AFE, model", "read_noise_afe_e", "+ the SC AFE / CG_out(0)"),
+          ("with the AFE, SPICE", "read_noise_afe_spice_e", "+ the AFE, .noise / CG_out(0)"))
+
+
+def _value(f: dict, key):
+    return f["k_dn_per_e"] * f["lsb_V"] if key is None else f[key]
 
 
 def camera_text(r: dict) -> str:
     p, s = r["primary"], r["secondary"]
-    lines = [f"{'':26s}{'primary':>14s}{'secondary':>14s}"]
+    lines = [f"{'':30s}{'primary':>12s}{'secondary':>12s}"]
     for label, key, scale, spec in _ROWS:
-        lines.append(f"{label:26s}{p[key] * scale:>14{spec}}{s[key] * scale:>14{spec}}")
+        lines.append(f"{label:30s}{_value(p, key) * scale:>12{spec}}{_value(s, key) * scale:>12{spec}}")
+    lines.append("read noise (e- rms), each with what it includes and the gain that refers it:")
+    for label, key, what in _NOISE:
+        lines.append(f"  {label:28s}{p[key]:>12.1f}{s[key]:>12.1f}   {what}")
+    k_lsb = _value(p, None)
+    lines.append(f"  (sigma_d = column noise / K x LSB: {p['read_noise_chain_e']:.1f} x "
+                 f"{p['cg_out_V_per_e'] * 1e6:.3f} / {k_lsb * 1e6:.3f} = "
+                 f"{p['read_noise_chain_e'] * p['cg_out_V_per_e'] / k_lsb:.1f} e- for the primary)")
+    lines.append(f"DSNU, model (TG channel-charge mismatch only): {p['dsnu_V'] * 1e3:.2f} / "
+                 f"{s['dsnu_V'] * 1e3:.2f} mV = {p['dsnu_e']:.0f} / {s['dsnu_e']:.0f} e- "
+                 "(pixelkit mc draws every device's mismatch in SPICE)")
     lines.append("read-noise budget (e- rms): " + ", ".join(
         f"{k} {p['noise_budget_e'][k]:.0f} / {s['noise_budget_e'][k]:.0f}" for k in p["noise_budget_e"]))
     lines += [f"plot: {f}" for f in r.get("plots", [])]
@@ -48,6 +66,7 @@ def camera(design, out, emva_out, seed, size, backend, jobs, as_json):
     from ..camera.run import camera as run, summary
     from ..errors import ConfigError
     from ..fileio import check_output
+    from ..spice.counter import spice_progress
     shape = None
     if size is not None:
         try:
@@ -59,8 +78,10 @@ def camera(design, out, emva_out, seed, size, backend, jobs, as_json):
     d = load(design)
     if emva_out is not None:
         check_output(emva_out)
-    r = run(d, seed=seed, emva_out=emva_out, shape=shape, backend=backend)
-    data = summary(r)
-    data["plots"] = write_all(r, output_path(out, d, "camera"))
+    with spice_progress("camera") as bar:
+        r = run(d, seed=seed, emva_out=emva_out, shape=shape, backend=backend)
+        data = summary(r)
+        bar.set_description("camera: plots")
+        data["plots"] = write_all(r, output_path(out, d, "camera"))
     data["design"] = d.name
     emit(data, as_json, camera_text)

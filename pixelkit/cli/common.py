@@ -21,8 +21,10 @@ The convention every command follows (README, "Command line and Python API"):
   :class:`~pixelkit.errors.RegressionFound` (or call ``sys.exit(1)`` after
   emitting) for a difference, ``ConfigError``/``PixelkitError`` for bad input;
   never ``sys.exit(2)`` by hand;
-- anything that runs longer than a couple of seconds shows a bar from
-  :mod:`pixelkit.progress`.
+- anything that runs longer than a couple of seconds shows its progress on stderr
+  (:mod:`pixelkit.progress`: a bar on a terminal, plain lines otherwise, one per command
+  - :func:`~pixelkit.progress.command_bar`, or ``spice.counter.spice_progress`` to count
+  SPICE runs); ``--quiet`` (in ``spice_opts``) and ``--json`` silence it.
 
 How to add a command group ``foo``:
 
@@ -94,6 +96,8 @@ def _quiet(ctx, param, value):
 design_arg = click.argument("design", type=click.Path(dir_okay=False))
 json_opt = click.option("--json", "as_json", is_flag=True, callback=_quiet,
                         help="print one JSON object (errors too); no progress bars")
+quiet_opt = click.option("--quiet", is_flag=True, callback=_quiet, expose_value=False,
+                         help="no progress on stderr (a bar on a terminal, plain lines otherwise)")
 
 
 def out_opt(help_text: str, folder: bool = False):
@@ -109,7 +113,8 @@ def _jobs(ctx, param, value):
 
 
 def spice_opts(f):
-    """``--backend`` and ``--jobs``, for every command that runs SPICE."""
+    """``--backend``, ``--jobs`` and ``--quiet``, for every command that runs SPICE."""
+    f = quiet_opt(f)
     f = click.option("--jobs", type=click.IntRange(1, 64), default=None, callback=_jobs,
                      help="parallel ngspice workers (default: $PIXELKIT_JOBS, else the cores, at most 8)")(f)
     return click.option("--backend", type=click.Choice(["batch", "shared"]), default="batch",

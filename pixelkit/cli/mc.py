@@ -46,11 +46,15 @@ def mc_cmd(design, rows, cols, seed, corners, with_afe, scheduler, out, backend,
         for s in x["runs"]:
             lines.append(f"corner {s['corner']}:")
             for k in ("primary", "secondary"):
-                lines.append(f"  {k:9s} pedestal {s[f'{k}_pedestal_V'] * 1e3:7.2f} mV  DSNU {s[f'{k}_dsnu_V'] * 1e3:6.3f} mV"
+                lines.append(f"  {k:9s} pedestal (chip mean) {s[f'{k}_pedestal_V'] * 1e3:7.2f} mV  "
+                             f"DSNU {s[f'{k}_dsnu_V'] * 1e3:6.3f} mV"
                              f"  PRNU {s[f'{k}_prnu_pct']:5.2f} %  column FPN {s[f'{k}_column_fpn_V'] * 1e3:6.3f} mV"
                              f"  offset FPN (before DS) {s[f'{k}_offset_fpn_V'] * 1e3:5.2f} mV")
             lines.append(f"  secondary 5 % target / DSNU = {s['secondary_target_over_dsnu']:.0f}; offset FPN "
                          f"{s['measured_offset_fpn_V'] * 1e3:.2f} mV vs Pelgrom {s['pelgrom_offset_fpn_V'] * 1e3:.2f} mV")
+        lines.append("DSNU: pixel sigma of the dark frame after double sampling, every device drawn from the "
+                     "models' statistics (SPICE); pedestal: the dark frame's mean output (switch charge injection "
+                     "and feedthrough, not dark current)")
         lines.append(f"details: {x['json']}")
         return "\n".join(lines)
     emit(data, as_json, text)

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from .common import design_arg, emit, json_opt, main
+from .common import design_arg, emit, json_opt, main, quiet_opt
 
 
 @main.command("report")
@@ -21,18 +21,13 @@ from .common import design_arg, emit, json_opt, main
 @click.option("--no-cache", is_flag=True, help="rebuild every section (SPICE runs still use the simulation cache)")
 @click.option("--backend", type=click.Choice(["batch", "shared"]), default="batch", show_default=True)
 @click.option("--jobs", type=click.IntRange(1, 64), default=None, help="parallel ngspice workers")
+@quiet_opt
 @json_opt
 def report(design, out, baseline, measured, quick, no_cache, backend, jobs, as_json):
     """Write the design report (HTML + CSV/JSON + summary.json); with --baseline, the revision diff."""
     from ..design import load_design
     from ..report.build import build_report
     from ..report.text import report_text
-    if as_json:
-        try:
-            from ..progress import set_quiet
-            set_quiet(True)
-        except ImportError:
-            pass
     d = load_design(design)
     out = Path(out) if out else Path("reports") / d.name
     r = build_report(d, out, quick=quick, backend=backend, jobs=jobs, measured=measured, baseline=baseline,

@@ -18,8 +18,10 @@ def size(design, out, with_sens, backend, jobs, as_json):
     from ..fileio import write_atomic
     from ..optimize.flow import size_result
     from ..report.text import size_text
+    from ..spice.counter import spice_progress
     d = load(design)
-    result, text = size_result(d, output_path(out, d, f"{d.name}_sized.toml"), with_sens, backend=backend)
+    with spice_progress("size"):
+        result, text = size_result(d, output_path(out, d, f"{d.name}_sized.toml"), with_sens, backend=backend)
     finishing()  # all computed: a Ctrl-C from here no longer stops the file or the summary
     write_atomic(result["sized_design"], text)
     emit(result, as_json, size_text)

@@ -5,7 +5,10 @@ Both subpixels are exposed over the same short window (the design's
 photocurrents, read through the column with the global-shutter sequence, and
 the double-sampled column signal (reset level - signal level) is measured.
 
-- swing: the signal at saturation minus the dark signal, per subpixel kind
+- pedestal: the double-sampled signal at zero photocurrent (switch charge injection and
+  feedthrough, the PD / FD reset offsets; not dark current, which adds a few electrons in the
+  window)
+- swing: the signal at saturation minus the pedestal, per subpixel kind
 - i_mid: the primary photocurrent at ``mid_fraction`` of its swing
 - i_5pct: the secondary photocurrent at ``low_fraction`` of its swing
 - model_vs_spice: the analytic C(V) discharge of the PD node (PD junction +
@@ -139,9 +142,9 @@ def run_experiment(design, backend: str = "batch", jobs: int | None = None) -> d
         "t_window_s": exp.t_window,
         "backend": backend,
         "ngspice_version": runs[0].meta["ngspice_version"],
-        "primary": {"i_mid_A": i_mid, "swing_V": float(swing_p), "dark_signal_V": float(dark_p),
+        "primary": {"i_mid_A": i_mid, "swing_V": float(swing_p), "pedestal_V": float(dark_p),
                     "target_frac": exp.mid_fraction, "sweep_A": all_ip.tolist(), "signal_V": all_sp.tolist()},
-        "secondary": {"i_5pct_A": i_low, "swing_V": float(swing_s), "dark_signal_V": float(dark_s),
+        "secondary": {"i_5pct_A": i_low, "swing_V": float(swing_s), "pedestal_V": float(dark_s),
                       "target_frac": exp.low_fraction, "sweep_A": all_is.tolist(), "signal_V": all_ss.tolist(),
                       "subpixel_spread_V": spread},
         "ratio": i_mid / i_low,

@@ -28,16 +28,16 @@ def verify(design, sized: dict, experiment: dict) -> dict:
     Each array is exposed for its own sized time (1 ms-scale primary, 12 ms-scale
     secondary, transfers aligned) at the photocurrent the background gives its
     photoactive area: a run independent of the short-window experiment the sizing
-    was solved from. The fraction is (signal - experiment's dark level) / swing.
+    was solved from. The fraction is (signal - experiment's pedestal) / swing.
     """
     lt = light(design)
     i_p = lt.j_bg * design.primary.area
     i_s = lt.j_bg * sized["mask_open_m2"]
     tm = timings(design, sized["t_int_primary_s"], 1, sized["t_int_secondary_s"])
     r = simulate(dual_pixel_bench(design, i_p, i_s, title="size_verify", tm=tm))
-    fp = (double_sampled(r, "col_p", tm["primary"]) - experiment["primary"]["dark_signal_V"]) \
+    fp = (double_sampled(r, "col_p", tm["primary"]) - experiment["primary"]["pedestal_V"]) \
         / experiment["primary"]["swing_V"]
-    fs = (double_sampled(r, "col_s0", tm["secondary"]) - experiment["secondary"]["dark_signal_V"]) \
+    fs = (double_sampled(r, "col_s0", tm["secondary"]) - experiment["secondary"]["pedestal_V"]) \
         / experiment["secondary"]["swing_V"]
     return {"primary_frac": fp, "secondary_frac": fs, "i_primary_A": i_p, "i_secondary_A": i_s,
             "t_int_primary_s": sized["t_int_primary_s"], "t_int_secondary_s": sized["t_int_secondary_s"],

@@ -59,7 +59,7 @@ def spice_curves(design, experiment: dict) -> Curves:
         e = experiment[which]
         order = np.argsort(e["sweep_A"])
         q = np.asarray(e["sweep_A"])[order] * t_w
-        f = (np.asarray(e["signal_V"])[order] - e["dark_signal_V"]) / e["swing_V"]
+        f = (np.asarray(e["signal_V"])[order] - e["pedestal_V"]) / e["swing_V"]
         out[which] = (q, f)
     full = analytic_curves(design).q_full_secondary
     return Curves("spice", *out["primary"], *out["secondary"], full)

@@ -11,18 +11,17 @@ import io
 import json
 import os
 import shutil
-import tempfile
 import time
 import traceback
 from pathlib import Path
 
 from ..errors import ConfigError, PixelkitError
-from ..fileio import json_default, path_kind
+from ..fileio import honour_umask_tree, json_default, path_kind, staging_dir
+from ..spice.counter import SpiceCounter
 from . import cache
 from .diff import diff_reports, load_report
 from .html import render
 from .sections import REGISTRY, Context, Section, load_section
-from .spicecount import SpiceCounter
 
 #: Sections whose output depends on the --measured file.
 MEASURED_SECTIONS = ("gap",)
@@ -88,8 +87,9 @@ def _write_outputs(stage: Path, design, sections, meta: dict) -> dict:
             (stage / f"data_{s.key}.json").write_text(json.dumps(s.data, indent=1, default=json_default))
     (stage / "design.json").write_text(json.dumps(design.raw, indent=1, default=json_default) + "\n")
     summary = {"design": design.name, "revision": design.revision, **meta,
-               "sections": {s.key: ("available" if s.available else ("failed" if s.failed else "not yet available"))
-                            for s in sections},
+               "sections": {s.key: s.status for s in sections},
+               "needs": {s.key: {"input": s.needs, "why": s.why} for s in sections if s.needs},
+               "flags": {s.key: list(s.flags) for s in sections if s.flags},
                "checked": _checked(sections)}
     (stage / "summary.json").write_text(json.dumps(summary, indent=1) + "\n")
     (stage / "tables.json").write_text(json.dumps(tables, indent=1, default=json_default) + "\n")
@@ -112,35 +112,35 @@ def build_report(design, out: Path, *, quick: bool = False, backend: str = "batc
                  measured: Path | None = None, baseline: Path | None = None, use_cache: bool = True,
                  html: bool = True) -> dict:
     """Build the report of ``design`` into ``out``; returns the summary (with the diff when asked)."""
-    from ..progress import progress
+    from ..progress import command_bar
     t0 = time.perf_counter()
     out = Path(out)
     base = load_report(Path(baseline)) if baseline else None
     if measured is not None and path_kind(measured) != "file":
         raise ConfigError("", "--measured", str(measured), "an existing CSV file of measured rows")
     out.parent.mkdir(parents=True, exist_ok=True)
-    stage = Path(tempfile.mkdtemp(prefix=f".{out.name}.new-", dir=out.parent))
+    stage = staging_dir(out.parent, f".{out.name}.new-")
     try:
-        bar = progress(total=len(REGISTRY), desc="report", unit="section")
-        counter = SpiceCounter(lambda text: bar.set_postfix_str(text, refresh=True))
-
-        def tell(stage_name, done=None, total=None):
-            bar.set_description(f"report: {stage_name}" + (f" {done}/{total}" if total else ""))
-
-        ctx = Context(design, stage, quick, backend, jobs, Path(measured) if measured else None, tell)
         sections, how = [], {}
-        measured_hash = cache.file_hash(measured) if measured else None
-        with counter:
-            for key, title, owner in REGISTRY:
-                tell(title)
-                options = {"quick": quick, "backend": backend}
-                if key in MEASURED_SECTIONS:
-                    options["measured"] = measured_hash
-                s, how[key] = build_section(key, title, owner, ctx, options, use_cache)
-                s.key = key
-                sections.append(s)
-                bar.update(1)
-        bar.close()
+        with command_bar("report", total=len(REGISTRY), unit="sections") as bar:
+            counter = SpiceCounter(lambda c: bar.set_postfix_str(c.text(), refresh=True))
+
+            def tell(stage_name, done=None, total=None):
+                bar.set_description(f"report: {stage_name}" + (f" {done}/{total}" if total else ""))
+
+            ctx = Context(design, stage, quick, backend, jobs, Path(measured) if measured else None, tell)
+            measured_hash = cache.file_hash(measured) if measured else None
+            with counter:
+                for key, title, owner in REGISTRY:
+                    tell(title)
+                    options = {"quick": quick, "backend": backend}
+                    if key in MEASURED_SECTIONS:
+                        options["measured"] = measured_hash
+                    s, how[key] = build_section(key, title, owner, ctx, options, use_cache)
+                    s.key = key
+                    sections.append(s)
+                    bar.update(1)
+            bar.set_description("report")
         meta = {"profile": "quick" if quick else "full", "backend": backend,
                 "spice_runs": counter.runs, "spice_cached": counter.cached,
                 "sections_from_cache": sum(v == "cache" for v in how.values()),
@@ -154,6 +154,7 @@ def build_report(design, out: Path, *, quick: bool = False, backend: str = "batc
         (stage / "summary.json").write_text(json.dumps(summary, indent=1) + "\n")
         if html:
             render(stage, design, sections, summary, result.get("diff"))
+        honour_umask_tree(stage)   # cached section files keep the cache's modes otherwise
         _swap_into_place(stage, out)
     except BaseException:
         shutil.rmtree(stage, ignore_errors=True)

@@ -11,7 +11,8 @@ _ENV = jinja2.Environment(loader=jinja2.PackageLoader("pixelkit", "report/templa
 
 
 def fmt(x) -> str:
-    """Numbers to 4 significant digits (integers as they are); anything else as text."""
+    """Numbers to 4 significant digits, trailing zeros kept (3.9996 is 4.000, never a bare 4 beside
+    11.24); integers as they are; anything else as text."""
     if isinstance(x, bool) or x is None:
         return "" if x is None else str(x)
     if isinstance(x, int):
@@ -19,8 +20,19 @@ def fmt(x) -> str:
     if isinstance(x, float):
         if not math.isfinite(x):
             return str(x)
-        return f"{x:.4g}"
+        s = f"{x:#.4g}"
+        return s[:-1] if s.endswith(".") else s
     return str(x)
+
+
+def tol(x) -> str:
+    """A tolerance as stated (3 significant digits, no trailing zeros): 0.5 %, 0.002 V."""
+    return f"{x:.3g}"
+
+
+def unit(u: str) -> str:
+    """A unit as printed: dimensionless figures (unit "1" in summary.json) carry none."""
+    return "" if u in ("1", None) else u
 
 
 def _template_for(key: str) -> str:
@@ -36,7 +48,7 @@ def render(folder: Path, design, sections, summary: dict, diff: dict | None) -> 
     css = (Path(__file__).parent / "templates" / "report.css").read_text()
     blocks = [(s, _template_for(s.key)) for s in sections]
     html = _ENV.get_template("report.html.j2").render(design=design, blocks=blocks, summary=summary, diff=diff,
-                                                      css=css, f=fmt)
+                                                      css=css, f=fmt, u=unit, tol=tol)
     path = Path(folder) / "index.html"
     path.write_text(html)
     return path

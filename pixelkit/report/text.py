@@ -89,17 +89,22 @@ def report_text(r: dict) -> str:
     lines = [f"report: {where}",
              f"  {r['design']} rev {r['revision']} ({r['profile']} profile): {r['spice_runs']} SPICE runs, "
              f"{r['spice_cached']} from cache, {r['sections_from_cache']} sections from cache, {r['wall_s']} s"]
-    for name, label in (("summary.primary.cg_pd_uV_per_e", "primary CG (PD)"),
-                        ("summary.secondary.cg_pd_uV_per_e", "secondary CG (PD)"),
+    from .html import fmt, unit
+    for name, label in (("summary.primary.cg_jdep_uV_per_e", "primary CG_jdep(2.5 V)"),
+                        ("summary.secondary.cg_jdep_uV_per_e", "secondary CG_jdep(2.5 V)"),
                         ("model_vs_spice.primary.i_mid_A", "primary i_mid"),
                         ("model_vs_spice.secondary.i_5pct_A", "secondary i_5pct"),
-                        ("model_vs_spice.max_err_frac", "model vs SPICE worst"),
+                        ("model_vs_spice.model_vs_spice.max_err_frac", "model vs SPICE worst"),
                         ("sizing.c_m", "C_M (sized)"), ("afe.gain_error_frac", "AFE gain error")):
         if name in c:
-            lines.append(f"  {label:<24} {c[name]['value']:.4g} {c[name]['unit']}")
-    waiting = [k for k, v in r["sections"].items() if v != "available"]
-    if waiting:
-        lines.append("  not yet available / failed: " + ", ".join(f"{k} ({r['sections'][k]})" for k in waiting))
+            lines.append(f"  {label:<24} {fmt(c[name]['value'])} {unit(c[name]['unit'])}".rstrip())
+    for key, n in r.get("needs", {}).items():
+        lines.append(f"  {key}: give {n['input']} ({n['why']})")
+    failed = [k for k, v in r["sections"].items() if v in ("failed", "not yet available")]
+    if failed:
+        lines.append("  " + ", ".join(f"{k}: {r['sections'][k]}" for k in failed))
+    for key, flags in r.get("flags", {}).items():   # the first sentence; the report gives the reason
+        lines += [f"  flag ({key}): {x.split('. ')[0].rstrip('.')}." for x in flags]
     d = r.get("diff")
     if d:
         lines.append(f"diff against {d['baseline']}: " + ("no checked figure moved beyond tolerance" if d["passed"]
@@ -108,6 +113,7 @@ def report_text(r: dict) -> str:
         for x in d["checked"]:
             if x["status"] in ("moved", "removed"):
                 new = "removed" if x["new"] is None else f"{x['new']:.4g}"
-                lines.append(f"  FAIL {x['figure']}: {x['old']:.4g} -> {new} {x['unit']} (tolerance {x.get('tolerance', 0):.3g})")
+                lines.append(f"  FAIL {x['figure']}: {x['old']:.4g} -> {new} {unit(x['unit'])} "
+                             f"(tolerance {x.get('tolerance', 0):.3g})".rstrip())
         lines += [f"  netlist changed: {n['netlist']}" for n in d["netlists"]]
     return "\n".join(lines)

@@ -17,7 +17,7 @@ from __future__ import annotations
 from concurrent.futures import ThreadPoolExecutor, as_completed
 
 from ..errors import ConfigError
-from ..progress import progress
+from ..progress import command_bar
 
 
 def run_tasks(fn, tasks, jobs: int | None = None, scheduler=None, desc: str = "simulating"):
@@ -29,7 +29,7 @@ def run_tasks(fn, tasks, jobs: int | None = None, scheduler=None, desc: str = "s
         return
     from ..spice.engine import default_jobs
     jobs = max(1, int(jobs or default_jobs()))
-    with progress(total=len(tasks), desc=desc) as bar:
+    with command_bar(desc, total=len(tasks), unit="tasks") as bar:
         if jobs == 1:
             for i, t in enumerate(tasks):
                 out = fn(t)
@@ -70,7 +70,7 @@ def _dask(fn, tasks, scheduler, desc):
     try:
         futs = client.map(fn, tasks, pure=False)
         index = {f.key: i for i, f in enumerate(futs)}
-        with progress(total=len(tasks), desc=f"{desc} (dask)") as bar:
+        with command_bar(f"{desc} (dask)", total=len(tasks), unit="tasks") as bar:
             try:
                 for f in dask_completed(futs):
                     bar.update(1)

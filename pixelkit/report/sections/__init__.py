@@ -37,7 +37,13 @@ How to add a section
    - Other files you write beside the HTML (a GDS, netlists: ``ctx.figure("netlists/x.cir")``)
      go in ``files`` (relative paths) so the section cache keeps them too.
    - When your capability cannot run for this design, return
-     ``Section.unavailable(TITLE, "why, in one sentence")``: the report says so plainly.
+     ``Section.unavailable(TITLE, "why, in one sentence")``: the report says so plainly. When it
+     needs an input the user did not give, return ``Section.needs_input(TITLE, "--measured", "what
+     it adds")``: the report and the command's summary say which input (never "failed").
+   - A figure far outside what a modern pixel of its kind reaches goes in ``flags`` with the
+     reason ("read noise 402 e-: ..."): the section shows it boxed, summary.json lists it.
+   - ``ctx.reference`` is True when the design is the test chip of [Thesis2019]
+     (``experiments.reference``): only then set the dissertation's printed values beside the kit's.
    - Raise PixelkitError for user errors; any other exception is shown in the section as
      "failed: ..." and the rest of the report still builds (and the command exits non-zero).
 
@@ -63,7 +69,7 @@ from typing import Any, Callable
 #: Reading order of the report: (module key, title, who provides it).
 #: A planned section whose module does not exist yet says "not yet available".
 REGISTRY: list[tuple[str, str, str]] = [
-    ("summary", "Design summary (thesis table 3.2)", "report"),
+    ("summary", "Design summary", "report"),
     ("schematics", "Schematics of the generated circuits", "report"),
     ("model_vs_spice", "Analytic model vs SPICE (fig. A.1 - A.3)", "report"),
     ("sizing", "Sizing: mask opening and integration times", "report"),
@@ -73,7 +79,6 @@ REGISTRY: list[tuple[str, str, str]] = [
     ("noise", "Noise", "issue 11 (noise / virtual camera)"),
     ("camera", "Virtual camera: EMVA 1288 figures", "issue 11 (noise / virtual camera)"),
     ("frame", "Frame-level models", "issue 15 (frame-level models)"),
-    ("families", "Other pixel families: WDR and ratio pixels", "issue 16 (pixel families)"),
     ("variation", "Sweeps, corners and Monte Carlo", "issue 14 (sweeps / corners / Monte Carlo)"),
     ("gap", "Sim-to-real diagnosis (--measured)", "report"),
     ("inputs", "Input checks: plausibility and model library", "issue 9 (hostile input)"),
@@ -118,10 +123,26 @@ class Section:
     why: str = ""             # why not available (or why it failed)
     failed: bool = False
     key: str = ""             # filled in by the builder
+    needs: str = ""           # the input the user did not give (an option or a design-file table)
+    flags: list[str] = field(default_factory=list)   # implausible figures, each with its reason
 
     @classmethod
     def unavailable(cls, title: str, why: str) -> "Section":
         return cls(title, available=False, why=why)
+
+    @classmethod
+    def needs_input(cls, title: str, needs: str, why: str) -> "Section":
+        """The section needs ``needs`` (e.g. ``--measured``), which the user did not give."""
+        return cls(title, available=False, needs=needs, why=why)
+
+    @property
+    def status(self) -> str:
+        """available | failed | needs <input> | not yet available (summary.json, the CLI, the HTML)."""
+        if self.available:
+            return "available"
+        if self.failed:
+            return "failed"
+        return f"needs {self.needs}" if self.needs else "not yet available"
 
 
 @dataclass
@@ -146,6 +167,14 @@ class Context:
         if name not in self._memo:
             self._memo[name] = fn()
         return self._memo[name]
+
+    @property
+    def reference(self) -> bool:
+        """Whether the design is the test chip of [Thesis2019] (then the report compares with it)."""
+        if "reference" not in self._memo:
+            from ...experiments.reference import is_reference
+            self._memo["reference"] = is_reference(self.design)
+        return self._memo["reference"]
 
     def experiment(self) -> dict:
         """The thesis experiment (fig. A.1 - A.3) of the design."""

@@ -1,7 +1,7 @@
 """2 x 2 array readout ([Thesis2019] fig. 3.13): the column waveforms of one frame of both arrays with
 the sample phases (S1 signal, RST, S2 reset level) marked, and the subpixel signals.
 
-Independent path: each subpixel's double-sampled signal against the thesis experiment's
+Independent path: each subpixel's double-sampled signal against the simulation experiment's
 transfer curve (a different deck: one dual pixel and its column, ``experiments.thesis``) at the
 same photocurrent and exposure window.
 """
@@ -45,7 +45,7 @@ def _plot(ctx, r, tm, n):
     axs[-1].set_xlabel("time (us)")
     path = save(fig, ctx.figure("array_readout.png"))
     return Figure(path.name, "2 x 2 frame, read-out phase: column voltages and AFE outputs with the sample "
-                             "phases shaded (S1 signal sample, RST pulse, S2 reset sample), cf. thesis fig. 3.13")
+                             "phases shaded (S1 signal sample, RST pulse, S2 reset sample), cf. [Thesis2019] fig. 3.13")
 
 
 def build(ctx) -> Section:
@@ -101,7 +101,7 @@ def build(ctx) -> Section:
             "samples the reset level (non-correlated double sampling, fig. 3.3).",
             f"Checks: the same frame split into column chains (a deck per row and column group, the column "
             f"state handed over: the frame engine's fast path) agrees "
-            f"with the one deck within {worst_split:.3f} mV. Against the thesis experiment's transfer curve "
+            f"with the one deck within {worst_split:.3f} mV. Against the simulation experiment's transfer curve "
             f"(one dual pixel and its column, another bench and timing) at the same photocurrent the frame's "
             f"signals are smaller, by up to {worst:.0f} mV (the bright primary columns). The columns are still "
             "moving during S1 (the creep column: the change from mid to end of S1), most for the bright "

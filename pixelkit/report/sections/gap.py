@@ -15,8 +15,8 @@ TITLE = "Sim-to-real diagnosis (--measured)"
 
 def build(ctx) -> Section:
     if ctx.measured is None:
-        return Section.unavailable(TITLE, "no measured data: give --measured M.csv (the gap table format "
-                                          "of pixelkit gap diagnose) to add the diagnosis")
+        return Section.needs_input(TITLE, "--measured", "M.csv, measured data in the gap table format of "
+                                   "pixelkit gap diagnose: adds the sim-to-real diagnosis")
     from ...gap.data import read_table
     from ...gap.diagnose import analyse
     from ...gap.nominal import build_nominal

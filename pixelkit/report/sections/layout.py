@@ -30,14 +30,14 @@ def build(ctx) -> Section:
                     Checked(f"layout.{w}.photoactive_area_m2", x["photoactive_area_m2"], "m2", tol_rel=1e-3)]
     c_a_design = d.primary.area / d.secondary.area
     rows.append(["both", "C_A = A_pd,primary / A_pd,secondary", r["c_a"], c_a_design])
-    checked.append(Checked("layout.c_a", r["c_a"], "1", tol_rel=1e-3,
-                           note=f"design file {c_a_design:.4g}, thesis {THESIS_C_A:.4g}"))
+    thesis = f"; [Thesis2019] 15.1 x 13.55 um / 5 x 5 um = {THESIS_C_A:.4g}" if ctx.reference else ""
+    checked.append(Checked("layout.c_a", r["c_a"], "1", tol_rel=1e-3, note=f"design file {c_a_design:.4g}{thesis}"))
     def rel(p: str) -> str:
         return "layout/" + p.rsplit("/", 1)[-1]
     text = [f"The generator writes the GDS ({', '.join(r['cells'])}) for a 2 x 2 array; the PD area, "
             "perimeter and photoactive (mask-open) area are extracted back from the GDS polygons and set "
             f"beside the design file's values. C_A from the GDS is {r['c_a']:.4g} (design file "
-            f"{c_a_design:.4g}; thesis 15.1 x 13.55 um / 5 x 5 um = {THESIS_C_A:.4g}). The GDS is beside this "
+            f"{c_a_design:.4g}{thesis}). The GDS is beside this "
             f"report: {rel(r['gds'])}."]
     return Section(
         TITLE, text=text,

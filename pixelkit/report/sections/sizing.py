@@ -40,7 +40,7 @@ def _slacks(design, curves, s: dict) -> list[list]:
     rows.append(["opening_max (A_open <= A_pd)", design.secondary.area * 1e12, a * 1e12, "um2",
                  design.secondary.area / a - 1])
     if design.sizing.t_ratio > 0:
-        rows.append(["t_ratio (t_s = ratio t_p)", design.sizing.t_ratio, s["t_ratio"], "1", 0.0])
+        rows.append(["t_ratio (t_s = ratio t_p)", design.sizing.t_ratio, s["t_ratio"], "", 0.0])
     hmax = q["q_head_max"] * (1 - m)
     rows.append(["headlight_max (Q_head <=)", hmax * 1e15, q["q_head"] * 1e15, "fC", hmax / q["q_head"] - 1])
     hmin = design.sizing.headlight_snr * q["q_noise"] * (1 + m)
@@ -116,7 +116,7 @@ def build(ctx) -> Section:
     data = {"levels": levels, "verify": v, "constraints": slack_rows}
     if ctx.quick:
         sens_note = "The sensitivity table (re-sizing at +-10 % C_j, +-20 % SF bias, each corner, +-10 K) " \
-                    "is skipped in the quick profile: it re-runs the thesis [Thesis2019] experiment for every variant."
+                    "is skipped in the quick profile: it re-runs the simulation experiment for every variant."
         tables.append(Table("sizing_sensitivity", "Sensitivity: skipped in the quick profile",
                             ["variant", "note"], [["all", "skipped (--quick)"]]))
     else:
@@ -131,7 +131,7 @@ def build(ctx) -> Section:
                               r["t_primary_change_frac"] * 100, r["t_int_secondary_s"] * 1e3] for r in sens]))
     binding = [r[0].split(" ")[0] for r in slack_rows if r[5] == "binding" and r[3] != "% swing"] or ["none"]
     text = [f"The secondary mask opening and both integration times solved with casadi/IPOPT at the analytic "
-            f"level (PD node C(V)) and at the SPICE level (the thesis experiment's double-sampled column "
+            f"level (PD node C(V)) and at the SPICE level (the simulation experiment's double-sampled column "
             f"curves); the {d.sizing.level} level is chosen. Besides the two criterion equalities (mid-scale / 5 %), the binding "
             f"constraints are: {', '.join(binding)}. "
             f"The sized design file is written beside this report (sized_design.toml), not in the design's folder.",
