@@ -194,3 +194,27 @@ def test_plots_mark_clipped_and_non_physical_points():
     assert ok.tolist() == [True, True, True, True, False, False] and bad.tolist() == [False] * 4 + [True] * 2
     ok, bad = data_points({"var_dn": np.array([10.0, 9.0, 20.0, 15.0]), "dark_var_dn": np.full(4, 10.0)})
     assert bad.tolist() == [False, True, False, True]     # below dark, and past saturation
+
+
+def test_baselines_written_before_the_renames_still_compare():
+    """A regress baseline or a report written with the old names ('dark_signal', 'cg_pd') is compared
+    with the figure's new name, not reported as a figure that vanished; a retired figure is not a
+    failure. Checked on hand-written baselines (the values here, not the code's)."""
+    from pixelkit.regress import TOLERANCES, compare
+    from pixelkit.report.diff import _checked
+    result: dict = {}
+    for name in TOLERANCES:                       # a result with every figure at 1.0 ...
+        node = result
+        *path, last = name.split(".")
+        for part in path:
+            node = node.setdefault(part, {})
+        node[last] = 1.0
+    result["primary"]["pedestal_V"] = 0.0463      # ... and the pedestal under its new name
+    rows = compare({"figures": {"primary.dark_signal_V": {"value": 0.0460, "tol_rel": 0.0, "tol_abs": 2e-3}}}, result)
+    assert [(r["figure"], r["new"], r["changed"]) for r in rows] == [("primary.pedestal_V", 0.0463, False)]
+    old = {"summary.primary.cg_pd_uV_per_e": {"value": 6.037, "unit": "uV/e-", "tol_rel": 0.005, "tol_abs": 0.0},
+           "families.wdr_dr_db": {"value": 111.9, "unit": "dB", "tol_rel": 0.0, "tol_abs": 0.5}}
+    new = {"summary.primary.cg_jdep_uV_per_e": {"value": 6.037, "unit": "uV/e-", "tol_rel": 0.005, "tol_abs": 0.0,
+                                                "section": "summary"}}
+    status = {r["figure"]: r["status"] for r in _checked(old, new)}
+    assert status == {"summary.primary.cg_jdep_uV_per_e": "same", "families.wdr_dr_db": "retired"}

@@ -48,7 +48,7 @@ def ptc(result: dict, path: Path) -> Path:
     ax.set_ylabel("variance - dark variance (DN$^2$)")
     ax.set_title("Photon transfer (analytic, EMVA 1288)")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
+    ax.legend(fontsize=7, loc="upper left")
     return _save(fig, path)
 
 

@@ -6,9 +6,9 @@ import click
 from .common import design_arg, emit, json_opt, load, main, out_opt, output_path, spice_opts
 
 _ROWS = (("K (DN/e-)", "k_dn_per_e", 1.0, ".4g"),
-         ("K x LSB (uV/e-)", None, 1e6, ".3f"),
-         ("CG_out(0), model (uV/e-)", "cg_out_V_per_e", 1e6, ".3f"),
-         ("CG_out(0), SPICE step (uV/e-)", "cg_out_spice_V_per_e", 1e6, ".3f"),
+         ("K x LSB (uV/e-)", None, 1e6, "sig"),
+         ("CG_out(0), model (uV/e-)", "cg_out_V_per_e", 1e6, "sig"),
+         ("CG_out(0), SPICE step (uV/e-)", "cg_out_spice_V_per_e", 1e6, "sig"),
          ("QE (EMVA eta)", "qe", 1.0, ".4g"), ("saturation (e-)", "saturation_e", 1.0, ".0f"),
          ("DR (dB)", "dr_db", 1.0, ".1f"), ("SNR max (dB)", "snr_max_db", 1.0, ".1f"),
          ("linearity error (%)", "linearity_error_pct", 1.0, ".2f"), ("GSE (signal)", "gse", 1.0, ".1f"),
@@ -30,8 +30,12 @@ def _value(f: dict, key):
 def camera_text(r: dict) -> str:
     p, s = r["primary"], r["secondary"]
     lines = [f"{'':30s}{'primary':>12s}{'secondary':>12s}"]
+    from ..report.html import fmt
+
+    def cell(x, spec):   # "sig": 4 significant digits, as the report prints them
+        return fmt(float(x)) if spec == "sig" else format(x, spec)
     for label, key, scale, spec in _ROWS:
-        lines.append(f"{label:30s}{_value(p, key) * scale:>12{spec}}{_value(s, key) * scale:>12{spec}}")
+        lines.append(f"{label:30s}{cell(_value(p, key) * scale, spec):>12}{cell(_value(s, key) * scale, spec):>12}")
     lines.append("read noise (e- rms), each with what it includes and the gain that refers it:")
     for label, key, what in _NOISE:
         lines.append(f"  {label:28s}{p[key]:>12.1f}{s[key]:>12.1f}   {what}")

@@ -3,21 +3,31 @@ from __future__ import annotations
 
 
 def _row(label, *cells):
-    return f"  {label:<34}" + "".join(f"{c:>14}" for c in cells)
+    return f"  {label:<44}" + "".join(f"{c:>12}" for c in cells)
+
+
+def _cell(x: float, fm: str) -> str:
+    from .html import fmt
+    return fmt(float(x)) if fm == "sig" else f"{x:{fm}}"
 
 
 def _pairs(a: dict, b: dict, specs) -> list[str]:
-    """Rows of two columns: ``specs`` = (label, key, scale, format) for each row."""
-    return [_row(label, f"{a[k] * sc:{fm}}", f"{b[k] * sc:{fm}}") for label, k, sc, fm in specs]
+    """Rows of two columns: ``specs`` = (label, key, scale, format; "sig": 4 significant digits)."""
+    return [_row(label, _cell(a[k] * sc, fm), _cell(b[k] * sc, fm)) for label, k, sc, fm in specs]
 
 
-_MODEL_ROWS = (("PD area (um2)", "area_m2", 1e12, ".2f"), ("PD perimeter (um)", "perimeter_m", 1e6, ".2f"),
-               ("photoactive area (um2)", "photoactive_area_m2", 1e12, ".3f"),
-               ("C_jdep (fF)", "c_jdep_F", 1e15, ".2f"), ("PD node incl. EC/TG (fF)", "c_node_F", 1e15, ".2f"),
-               ("conversion gain (uV/e-)", "cg_V_per_e", 1e6, ".2f"),
-               ("full well, swing x C (ke-)", "fwc_e", 1e-3, ".1f"),
-               ("full well with C(V) (ke-)", "fwc_cv_e", 1e-3, ".1f"),
-               ("dark current (fA)", "dark_current_A", 1e15, ".3f"))
+def _model_rows(v: float):
+    """Rows of the junction table at the technology's reference bias ``v`` (names: ``report.names``)."""
+    from .names import c_jdep, c_node, cg_jdep, label
+    return (("PD area (um2)", "area_m2", 1e12, ".2f"), ("PD perimeter (um)", "perimeter_m", 1e6, ".2f"),
+            ("photoactive area (um2)", "photoactive_area_m2", 1e12, ".3f"),
+            (label(c_jdep(v)), "c_jdep_F", 1e15, "sig"), (label(c_node(v)), "c_node_F", 1e15, "sig"),
+            (label(cg_jdep(v)), "cg_V_per_e", 1e6, "sig"),
+            (f"full well, swing x {c_jdep(v)} / q (ke-)", "fwc_e", 1e-3, ".1f"),
+            ("full well with C(V) (ke-)", "fwc_cv_e", 1e-3, ".1f"),
+            ("dark current (fA)", "dark_current_A", 1e15, ".3f"))
+
+
 _SIZE_ROWS = (("C_M", "c_m", 1.0, ".1f"), ("mask opening (um2)", "mask_open_m2", 1e12, ".3f"),
               ("t_int primary (us)", "t_int_primary_s", 1e6, ".1f"),
               ("t_int secondary (us)", "t_int_secondary_s", 1e6, ".1f"),
@@ -25,22 +35,25 @@ _SIZE_ROWS = (("C_M", "c_m", 1.0, ".1f"), ("mask opening (um2)", "mask_open_m2",
               ("primary motion (px)", "motion_px_primary", 1.0, ".2f"))
 
 
-_RESPONSE_ROWS = (("C_PD (fF)", "c_pd_F", 1e15, ".2f"), ("PD node incl. EC/TG (fF)", "c_pd_node_F", 1e15, ".2f"),
-                  ("C_FD (fF)", "c_fd_F", 1e15, ".2f"), ("CG PD-referred q/C_PD (uV/e-)", "cg_pd_V_per_e", 1e6, ".2f"),
-                  ("charge sharing C_node/(C_node+C_FD)", "sharing", 1.0, ".3f"),
-                  ("SF gain A_sf", "a_sf", 1.0, ".3f"),
-                  ("CG output-referred (uV/e-)", "cg_out_V_per_e", 1e6, ".2f"))
+def _response_rows(v: float):
+    """Rows at the design's PD reset level ``v``: PD-referred and output-referred (column) gains."""
+    from .names import c_jdep, c_node, cg_jdep, label
+    return ((label(c_jdep(v)), "c_pd_F", 1e15, "sig"), (label(c_node(v)), "c_pd_node_F", 1e15, "sig"),
+            ("C_FD (fF)", "c_fd_F", 1e15, "sig"), (label(cg_jdep(v)), "cg_pd_V_per_e", 1e6, "sig"),
+            ("charge sharing C_node/(C_node+C_FD)", "sharing", 1.0, ".3f"),
+            ("SF gain A_sf", "a_sf", 1.0, ".3f"),
+            (label("CG_out(0)"), "cg_out_V_per_e", 1e6, "sig"))
 
 
 def model_text(t: dict) -> str:
     lines = [f"Analytic models: {t['design']} ({t['technology']}, C_jdep at V_R = {t['reset_bias_V']:g} V)",
-             _row("", "primary", "secondary"), *_pairs(t["primary"], t["secondary"], _MODEL_ROWS),
+             _row("", "primary", "secondary"), *_pairs(t["primary"], t["secondary"], _model_rows(t["reset_bias_V"])),
              f"  C_A = A1/A2 = {t['c_a']:.3f}   C_C = C_jdep1/C_jdep2 = {t['c_c']:.3f}   "
              f"photoactive ratio = {t['photoactive_ratio']:.1f}"]
     if "at_reset" in t["primary"]:
         p, s = t["primary"]["at_reset"], t["secondary"]["at_reset"]
         lines += [f"At the design's reset bias ({p['v_bias_V']:g} V): PD-referred and output-referred (column) CG",
-                  *_pairs(p, s, _RESPONSE_ROWS)]
+                  *_pairs(p, s, _response_rows(p["v_bias_V"]))]
     return "\n".join(lines)
 
 
