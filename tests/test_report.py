@@ -103,13 +103,13 @@ def test_report_output_cg_pair_against_the_analytic_level(quick_report):
     out, _ = quick_report
     c = json.loads((out / "summary.json").read_text())["checked"]
     for w in ("primary", "secondary"):
-        spice = c[f"summary.{w}.cg_out_spice_uV_per_e"]["value"]
-        physics = c[f"summary.{w}.cg_out_physics_uV_per_e"]["value"]
+        spice = c[f"summary.{w}.cg_out_0_30_uV_per_e"]["value"]
+        physics = c[f"summary.{w}.cg_out_0_uV_per_e"]["value"]
         assert 0.97 * physics <= spice <= physics, (w, spice, physics)
     # the pair: a secondary electron moves the column ~2.8x as far (the smaller PD node)
-    ratio = c["summary.secondary.cg_out_spice_uV_per_e"]["value"] / c["summary.primary.cg_out_spice_uV_per_e"]["value"]
-    physics_ratio = (c["summary.secondary.cg_out_physics_uV_per_e"]["value"]
-                     / c["summary.primary.cg_out_physics_uV_per_e"]["value"])
+    ratio = c["summary.secondary.cg_out_0_30_uV_per_e"]["value"] / c["summary.primary.cg_out_0_30_uV_per_e"]["value"]
+    physics_ratio = (c["summary.secondary.cg_out_0_uV_per_e"]["value"]
+                     / c["summary.primary.cg_out_0_uV_per_e"]["value"])
     assert ratio == pytest.approx(physics_ratio, rel=0.02)
 
 

@@ -122,4 +122,6 @@ def test_bad_timing_exits_2_before_simulating(tmp_path, cli):
     code, out, err = cli("simulate", p, "--json")
     assert code == 2 and '"field": "primary.timing.s2_off"' in out and "1.8 us" in out
     code, out, err = cli("sweep", REF, "--over", "t_exp=500n", "--out", tmp_path / "sw")
-    assert code == 2 and "t_exp" in err and "t_tg + t_gap" in err and len(err.strip().splitlines()) == 1
+    lines = err.strip().splitlines()   # the sweep's progress lines, then the one error line
+    assert code == 2 and "t_exp" in lines[-1] and "t_tg + t_gap" in lines[-1] and "Traceback" not in err
+    assert [ln for ln in lines if ln.startswith("pixelkit:")] == lines[-1:]
