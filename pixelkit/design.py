@@ -15,8 +15,9 @@ from pathlib import Path
 from .errors import ConfigError
 from .physics.conversion import photoactive_area, rectangle
 from .readout_timing import Timing
-from .schema import as_written, ident, integer, load, num, qty, read_toml, table, text
+from .schema import as_written, ident, integer, load, named, num, qty, read_toml, table, text
 from .tech import Technology, load_technology
+from .verify.spec import Spec, VerifySettings, check_conditions
 
 
 @dataclass(frozen=True)
@@ -122,6 +123,9 @@ class Afe:
                              "e_n^2 = 4 k T R_n (25 kOhm = 20 nV/rtHz at 27 degC; 0 = noiseless)")
     noise_corner: float = qty("Hz", 100e3, ge=0, plausible=(0.0, 1e9),
                               doc="macromodel 1/f corner: input PSD e_n^2 (1 + f_c / f)")
+    supply_current: float = qty("A", 10e-6, ge=0, plausible=(0.0, 1e-2),
+                                doc="quiescent supply current of the macromodel op-amp (power only: the macromodel "
+                                    "draws nothing itself; the OTA draws its own)")
     nonoverlap: float = qty("s", 20e-9, gt=0, plausible=(1e-11, 1e-3), doc="non-overlap of the two clock phases")
     f_clk: float = qty("Hz", 500e3, gt=0, plausible=(1.0, 1e9),
                        doc="double-sampling rate (one signal + one reset per period)")
@@ -209,6 +213,9 @@ class Design:
     scene: Scene | None = table(Scene, None, doc="the measurement scene (sizing and frame models)")
     sizing: Sizing = table(Sizing, default=Sizing, doc="the sizing criteria and bounds")
     layout: LayoutRef | None = table(LayoutRef, None, doc="a GDS whose extracted geometry replaces the drawn one")
+    verify: VerifySettings = table(VerifySettings, default=VerifySettings,
+                                   doc="the sign-off grid of pixelkit verify: corners, temperatures, supplies, Monte Carlo")
+    spec: tuple = named(Spec, doc="specifications: one [spec.<name>] table each (docs/verify.md)")
     tech: Technology = field(default=None, metadata=dict(kind="skip"))
     source: str = field(default="", metadata=dict(kind="skip"))
     raw: dict = field(default=None, metadata=dict(kind="skip"), repr=False, compare=False)
@@ -259,6 +266,7 @@ def load_design(path: str | Path) -> Design:
         raise ConfigError(src, "corner", design.corner,
                           f"one of {', '.join(sorted(tech.models.corners))}")
     design = replace(design, tech=tech, source=str(path), raw=raw)
+    check_conditions(design, tech)
     _check_layout_rules(design)
     if design.layout is not None:
         design = with_layout(design, path.parent / design.layout.gds)

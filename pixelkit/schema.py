@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import dataclasses
 import inspect
+import math
 import re
 import tomllib
 from pathlib import Path
@@ -64,6 +65,24 @@ def ident(default=_NODEFAULT, doc=""):
 
 def flag(default=_NODEFAULT, doc=""):
     return _field("bool", default, doc)
+
+
+def items(inner, default=_NODEFAULT, *, min_len=1, max_len=64, doc=""):
+    """A TOML array whose elements are each read as ``inner`` (a field made by :func:`qty`,
+    :func:`num`, :func:`ident`, ...); loaded as a tuple."""
+    return _field("list", default, doc, item=dict(inner.metadata), min_len=min_len, max_len=max_len)
+
+
+def limit(default=None, doc=""):
+    """A quantity whose dimension another field decides (a spec limit, in its figure's unit):
+    a string with a unit, or a plain number; the table's ``validate`` converts it."""
+    return _field("limit", default, doc)
+
+
+def named(cls, doc=""):
+    """A table of named tables (``[spec.<name>]``), each loaded into ``cls``, whose ``name``
+    field receives the table's name; loaded as a tuple in file order (empty when absent)."""
+    return dataclasses.field(default=(), metadata=dict(kind="map", cls=cls, doc=doc))
 
 
 def table(cls, default=_NODEFAULT, doc=""):
@@ -119,7 +138,48 @@ def _convert(value, meta, path, source):
         return value
     if kind == "table":
         return load(meta["cls"], value, path, source)
+    if kind == "list":
+        return _convert_list(value, meta, path, source)
+    if kind == "limit":
+        ok = isinstance(value, str) and 0 < len(value) <= 64 or (
+            isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value))
+        if not ok:
+            raise ConfigError(source, path, value, "a quantity with its unit, like '5 uV/e-' or '30 e-'")
+        return value
+    if kind == "map":
+        return _convert_map(value, meta, path, source)
     raise AssertionError(kind)
+
+
+def _convert_list(value, meta, path, source) -> tuple:
+    item, lo, hi = meta["item"], meta["min_len"], meta["max_len"]
+    if not isinstance(value, list):
+        raise ConfigError(source, path, value, f"a list of {lo} to {hi} values, each {_describe(item)}")
+    if not lo <= len(value) <= hi:
+        raise ConfigError(source, path, f"{len(value)} items", f"a list of {lo} to {hi} items")
+    out = tuple(_convert(v, item, f"{path}[{i}]", source) for i, v in enumerate(value))
+    if len(set(out)) != len(out):
+        raise ConfigError(source, path, value, "a list without repeated values")
+    return out
+
+
+#: Most named tables (specs) one file may hold.
+MAX_NAMED = 200
+
+
+def _convert_map(value, meta, path, source) -> tuple:
+    if not isinstance(value, dict):
+        raise ConfigError(source, path, value, f"a table of named tables, like [{path}.<name>]")
+    if len(value) > MAX_NAMED:
+        raise ConfigError(source, path, f"{len(value)} entries", f"at most {MAX_NAMED} entries")
+    out = []
+    for key, sub in value.items():
+        if not IDENT.match(key):
+            raise ConfigError(source, f"{path}.{key}", key,
+                              "a name of letters, digits and '_' (starting with a letter, at most 64)")
+        obj = load(meta["cls"], sub, f"{path}.{key}", source)
+        out.append(dataclasses.replace(obj, name=key))
+    return tuple(out)
 
 
 def load(cls, mapping, path: str = "", source: str = ""):
@@ -164,8 +224,11 @@ def _describe(meta) -> str:
     if kind == "qty":
         from .units import DIMENSIONS
         return f"a quantity like '{DIMENSIONS[meta['dim']][1]}'"
+    if kind == "list":
+        return f"a list of values, each {_describe(meta['item'])}"
     return {"int": "a whole number", "str": "a string", "ident": "a name",
-            "bool": "true or false", "table": "a table"}[kind]
+            "bool": "true or false", "table": "a table", "map": "a table of named tables",
+            "limit": "a quantity in the figure's unit"}[kind]
 
 
 def read_toml(path: Path, what: str) -> dict:

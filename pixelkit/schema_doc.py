@@ -13,7 +13,8 @@ import dataclasses
 import sys
 from pathlib import Path
 
-_KNOWN = {"kind", "doc", "dim", "gt", "ge", "le", "lt", "choices", "cls", "plausible", "unit_required"}
+_KNOWN = {"kind", "doc", "dim", "gt", "ge", "le", "lt", "choices", "cls", "plausible", "unit_required",
+          "item", "min_len", "max_len"}
 _PREFIX = [(1e9, "G"), (1e6, "M"), (1e3, "k"), (1.0, ""), (1e-3, "m"), (1e-6, "u"), (1e-9, "n"),
            (1e-12, "p"), (1e-15, "f"), (1e-18, "a")]
 _PREFIXABLE = {"m", "s", "Hz", "V", "A", "F"}
@@ -43,6 +44,9 @@ def _value(x, dim) -> str:
 
 
 def _range(meta) -> str:
+    if meta["kind"] == "list":
+        inner = _range(meta["item"])
+        return f"{meta['min_len']} to {meta['max_len']} values" + ("" if inner == "-" else f", each {inner}")
     dim = meta.get("dim")
     parts = []
     for key, sym in (("gt", ">"), ("ge", ">="), ("lt", "<"), ("le", "<=")):
@@ -61,6 +65,10 @@ def _range(meta) -> str:
 
 def _kind(meta) -> str:
     kind, dim = meta["kind"], meta.get("dim")
+    if kind == "list":
+        return f"list of {_kind(meta['item'])}"
+    if kind == "limit":
+        return "quantity in the figure's unit, e.g. `\"3.5 uV/e-\"`"
     if kind == "qty":
         if dim == "1":
             return "number"
@@ -71,6 +79,8 @@ def _kind(meta) -> str:
 
 
 def _default(f) -> str:
+    if isinstance(f.default, tuple):
+        return ", ".join(_value(x, f.metadata["item"].get("dim")) for x in f.default) or "(grid's)"
     if f.default is not dataclasses.MISSING:
         return _value(f.default, f.metadata.get("dim"))
     if f.default_factory is not dataclasses.MISSING:
@@ -80,7 +90,7 @@ def _default(f) -> str:
 
 def _table(cls, path: str, out: list, family: str = "") -> None:
     fields = [f for f in dataclasses.fields(cls) if f.metadata.get("kind", "skip") != "skip"]
-    rows = [f for f in fields if f.metadata["kind"] != "table"]
+    rows = [f for f in fields if f.metadata["kind"] not in ("table", "map")]
     title = f"`[{path}]`" if path else "top level"
     out += ["", f"## {family + ': ' if family else ''}{title}", ""]
     if cls.__doc__ and not cls.__doc__.startswith(cls.__name__ + "("):
@@ -90,13 +100,15 @@ def _table(cls, path: str, out: list, family: str = "") -> None:
         for f in rows:
             m = f.metadata
             out.append(f"| `{f.name}` | {_kind(m)} | {_default(f)} | {_range(m)} | {m.get('doc', '') or ''} |")
-    subs = [f for f in fields if f.metadata["kind"] == "table"]
+    subs = [f for f in fields if f.metadata["kind"] in ("table", "map")]
     if subs:
         out += ["", "Tables:", ""] + [
-            f"- `[{path + '.' if path else ''}{f.name}]` ({'required' if _default(f) == '**required**' else 'optional'})"
+            f"- `[{path + '.' if path else ''}{f.name}{'.<name>' if f.metadata['kind'] == 'map' else ''}]` "
+            f"({'required' if _default(f) == '**required**' else 'optional'})"
             + (f": {f.metadata['doc']}" if f.metadata.get("doc") else "") for f in subs]
     for f in subs:
-        _table(f.metadata["cls"], f"{path}.{f.name}" if path else f.name, out, family)
+        sub = f"{path}.{f.name}" if path else f.name
+        _table(f.metadata["cls"], sub + (".<name>" if f.metadata["kind"] == "map" else ""), out, family)
 
 
 def undocumented(*classes) -> list[str]:
@@ -116,7 +128,7 @@ def undocumented(*classes) -> list[str]:
                 continue
             if not f.metadata.get("doc"):
                 missing.append(f"{cls.__module__}.{cls.__name__}: {path}{f.name}")
-            if kind == "table":
+            if kind in ("table", "map"):
                 walk(f.metadata["cls"], f"{path}{f.name}.")
     for cls in classes:
         walk(cls, "")
@@ -140,6 +152,7 @@ def generate() -> str:
            "values inside these ranges can still be outside the circuit's working range, which is warned "
            "about (`pixelkit/working_range.py`)."]
     _table(Design, "", out)
+    _figures(out)
     from .families.ratio.design import RatioDesign
     from .families.wdr.design import WdrDesign
     for fam, cls, example in (("wdr", WdrDesign, "designs/wdr_pixel.toml"), ("ratio", RatioDesign,
@@ -149,6 +162,18 @@ def generate() -> str:
                 "rules above (units, ranges, unknown fields refused) are the same."]
         _table(cls, "", out, fam)
     return "\n".join(out) + "\n"
+
+
+def _figures(out: list) -> None:
+    """The figures a ``[spec.<name>]`` can name (``pixelkit/verify/figures.py``)."""
+    from .verify.figures import FIGURES
+    out += ["", "## Figures a `[spec.<name>]` can name", "",
+            "Each is measured at every condition of the grid; `pixelkit verify` and docs/verify.md say how. "
+            "A limit must carry a unit of the figure's kind (or be a plain number in the spec's `unit`).", "",
+            "| figure | unit | Monte Carlo | what |", "|---|---|---|---|"]
+    for f in FIGURES.values():
+        out.append(f"| `{f.name}` | {f.unit or '1'} | {'yes' if f.mc else 'no (mismatch does not move it)'} | "
+                   f"{f.what} |")
 
 
 def main(argv=None) -> int:

@@ -63,10 +63,15 @@ DIMENSIONS = {
     "lx": ((-2, 0, 0, 0, 0, 1), "1000 lx"),
     "m/s": ((1, -1, 0, 0, 0, 0), "60 km/h"),
     "rad": ((0, 0, 0, 0, 0, 0), "7.4 deg"),
+    "C": ((0, 1, 0, 1, 0, 0), "20000 e-"),
+    "V/C": ((2, -4, 1, -2, 0, 0), "11 uV/e-"),
+    "W": ((2, -3, 1, 0, 0, 0), "10 mW"),
+    "V*m": ((3, -3, 1, -1, 0, 0), "5 mV*um"),
 }
 
 _NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
 _QTY = re.compile(rf"^\s*({_NUMBER})\s*(.*?)\s*$")
+_ELECTRON = re.compile(r"(?<![A-Za-z])([kM]?)e-(?=$|/|\*)")
 _TERM = re.compile(r"^([A-Za-zµ%]+)(?:\^?(-?\d))?$")
 
 
@@ -90,12 +95,15 @@ def _symbol(sym: str) -> tuple[float, tuple[int, ...]]:
             return scale, _BASE[rest]
         if rest in _DERIVED and _DERIVED[rest][0] is not None and rest not in ("%", "deg", "e"):
             return _PREFIX[sym[0]] * _DERIVED[rest][0], _DERIVED[rest][1]
+        if rest == "e" and sym[0] in "kM":  # ke-, Me- (electrons); "me" and "ue" mean nothing
+            return _PREFIX[sym[0]] * _DERIVED["e"][0], _DERIVED["e"][1]
     raise ValueError(f"unknown unit symbol {sym!r}")
 
 
 def parse_unit(text: str) -> tuple[float, tuple[int, ...]]:
     """Scale to SI and dimension of a unit such as ``fF/um2`` or ``km/h``."""
     text = text.replace("²", "2").replace("·", "*")
+    text = _ELECTRON.sub(r"\1e", text)  # "e-" (electrons, as designers write it) is "e"
     scale, dim = 1.0, [0] * 6
     parts = re.split(r"(/|\*)", text)
     sign = 1
@@ -162,7 +170,7 @@ def _finite(x: float, field: str, source: str, example: str, shown) -> float:
 
 _SI_PREFIX = [(1e9, "G"), (1e6, "M"), (1e3, "k"), (1.0, ""), (1e-3, "m"), (1e-6, "u"), (1e-9, "n"),
               (1e-12, "p"), (1e-15, "f"), (1e-18, "a")]
-_PREFIXED = {"m": "m", "s": "s", "Hz": "Hz", "V": "V", "A": "A", "F": "F", "m2": "m2", "Ohm": "Ohm"}
+_PREFIXED = {"m": "m", "s": "s", "Hz": "Hz", "V": "V", "A": "A", "F": "F", "m2": "m2", "Ohm": "Ohm", "W": "W"}
 
 
 def si_text(x: float, dimension: str) -> str:

@@ -85,6 +85,14 @@ def _design_variants(tmp_path, sep, marker):
     yield "design.corner", ref.replace('technology = "c35_thesis"', f'technology = "c35_thesis"\ncorner = {p}'), None
     yield "design.technology", ref.replace('"c35_thesis"', p), None
     yield "afe.opamp", ref.replace('opamp = "macro"', f"opamp = {p}"), None
+    yield "spec.note", ref.replace('note = "thesis: sensor ~10 mW"', f"note = {p}"), None
+    yield "spec.figure", ref.replace("[spec.afe_gain_error]\n", f"[spec.afe_gain_error]\nfigure = {p}\n"), None
+    yield "spec.unit", ref.replace("[spec.afe_gain_error]\n", f"[spec.afe_gain_error]\nunit = {p}\n"), None
+    yield "spec.name", ref.replace("[spec.afe_gain_error]", f"[spec.{p}]"), None
+    yield "spec.limit", ref.replace('max = "0.5 %"', f"max = {p}"), None
+    yield "spec.corners", ref.replace("[spec.afe_gain_error]\n", f"[spec.afe_gain_error]\ncorners = [{p}]\n"), None
+    yield "verify.corners", ref.replace("[verify]\n", f"[verify]\ncorners = [{p}]\n"), None
+    yield "verify.mismatch", ref.replace("[verify]\n", f"[verify]\nmismatch = {p}\n"), None
     for field_, old in [("name", 'name = "c35_thesis"'), ("photodiode.spice_model", 'spice_model = "pd_c35"'),
                         ("mos.nmos", 'nmos = "nfet_03v3"'), ("mos.pmos", 'pmos = "pfet_03v3"'),
                         ("models.default_corner", 'default_corner = "tt"')]:
@@ -123,7 +131,7 @@ def test_every_design_and_technology_string(tmp_path, sep):
             simulate(net, backend=backend, use_cache=False)
         ran.append(label)
     assert not marker.exists()
-    assert set(ran) <= {"design.revision", "tech.description"}, ran  # free text only
+    assert set(ran) <= {"design.revision", "tech.description", "spec.note"}, ran  # free text only
 
 
 @pytest.mark.parametrize("sep", SEPARATORS + ["\x00", "\t"], ids=lambda s: f"U+{ord(s[-1]):04X}")

@@ -88,8 +88,10 @@ def test_design_reference_lists_every_field_of_the_reference_design():
     def walk(table, path):
         for k, v in table.items():
             if isinstance(v, dict):
-                assert f"## `[{path + k}]`" in doc, path + k
-                walk(v, f"{path}{k}.")
+                named = path == "spec."   # [spec.<name>]: the names are the designer's
+                key = f"{path}<name>" if named else path + k
+                assert f"## `[{key}]`" in doc or f"## `[{key}.<name>]`" in doc, key
+                walk(v, f"{key}.")
             else:
                 assert f"| `{k}` |" in doc, path + k
     walk(raw, "")

@@ -110,6 +110,10 @@ class Mismatch:
     models carry their own Pelgrom mismatch, switched on by ``sw_stat_mismatch``.)"""
     cap_pelgrom: float = qty("m", gt=0, plausible=(1e-10, 1e-6), doc="capacitor matching: sigma(dC/C) x sqrt(area); 1 %um = 1e-8 m")
     cap_density: float = qty("F/m2", gt=0, plausible=(1e-5, 0.1), doc="capacitance per area (gives a capacitor's area from its value)")
+    mos_avt_n: float | None = qty("V*m", None, gt=0, plausible=(1e-10, 1e-7),
+                                  doc="NMOS threshold matching A_VT (one device: sigma_VT = A_VT / sqrt(W L)), for "
+                                      "the kit's Pelgrom draw when the model library has no mismatch statistics")
+    mos_avt_p: float | None = qty("V*m", None, gt=0, plausible=(1e-10, 1e-7), doc="PMOS threshold matching A_VT")
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,76 @@
+"""``pixelkit verify``: every spec over the PVT grid and its Monte Carlo yield; the sign-off table."""
+from __future__ import annotations
+
+import click
+
+from .common import design_arg, emit, json_opt, load, main, out_opt, output_path, spice_opts
+
+
+def _list(kind: str):
+    def parse(ctx, param, value):
+        if value is None:
+            return None
+        from ..errors import ConfigError
+        from ..units import quantity
+        items = [v.strip() for v in value.split(",") if v.strip()]
+        if not items:
+            raise ConfigError("verify", param.opts[0], value, "a comma-separated list")
+        if kind == "corner":
+            return tuple(items)
+        dim = "K" if kind == "temperature" else "1"
+        out = tuple(quantity(v, dim, param.opts[0], "verify") for v in items)
+        if kind == "supply" and any(not -0.5 <= s <= 0.5 for s in out):
+            raise ConfigError("verify", param.opts[0], value, "supply deviations from -50 % to +50 %")
+        if kind == "temperature" and any(not 213.15 <= t <= 473.15 for t in out):
+            raise ConfigError("verify", param.opts[0], value, "temperatures from -60 degC to 200 degC")
+        return out
+    return parse
+
+
+@main.command("verify")
+@design_arg
+@click.option("--corners", callback=_list("corner"), default=None, metavar="C,C,...",
+              help="process corners (default: [verify] corners, else every corner of the model library)")
+@click.option("--temperatures", callback=_list("temperature"), default=None, metavar="T,T,...",
+              help="die temperatures, like -20degC,27degC,85degC (default: [verify] temperatures)")
+@click.option("--supplies", callback=_list("supply"), default=None, metavar="S,S,...",
+              help="supply deviations, like -10%,0%,10% (default: [verify] supplies)")
+@click.option("--mc", type=click.IntRange(0, 100000), default=None,
+              help="Monte Carlo samples at the nominal condition (default: [verify] mc)")
+@click.option("--seed", type=click.IntRange(0, 2**31 - 1), default=None, help="Monte Carlo seed (default: [verify] seed)")
+@click.option("--post-layout", is_flag=True, help="run on the extracted (post-layout) netlists")
+@click.option("--scheduler", default=None, help="Dask scheduler address (default: local workers)")
+@out_opt("folder for signoff.csv and signoff.json (default reports/<design>/verify)", folder=True)
+@spice_opts
+@json_opt
+def verify_cmd(design, corners, temperatures, supplies, mc, seed, post_layout, scheduler, out, backend, jobs,
+               as_json):
+    """Sign-off: every [spec] at every corner x temperature x supply, Monte Carlo yield; exit 1 on a failing spec."""
+    import csv
+    import io
+    import json
+
+    from ..errors import EXIT_REGRESSION, EXIT_SIMULATION
+    from ..fileio import json_default, write_atomic
+    from ..verify.run import verify
+    from ..verify.signoff import COLUMNS, csv_rows, text, where
+    d = load(design)
+    folder = output_path(out, d, "verify")
+    r = verify(d, corners, temperatures, supplies, mc, seed, backend=backend, jobs=jobs, scheduler=scheduler,
+               post_layout=post_layout)
+    folder.mkdir(parents=True, exist_ok=True)
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(COLUMNS)
+    w.writerows(csv_rows(r["rows"]))
+    write_atomic(folder / "signoff.csv", buf.getvalue())
+    write_atomic(folder / "signoff.json", json.dumps(r, indent=1, default=json_default) + "\n")
+    r = {**r, "csv": str(folder / "signoff.csv"), "json": str(folder / "signoff.json")}
+    summary = {k: v for k, v in r.items() if k not in ("raw", "conditions", "mc_values")}
+    emit(summary, as_json, lambda x: text(x) + f"\ntable: {x['csv']}\ndetails: {x['json']}")
+    if r["failed"]:
+        names = "; ".join(f"{row['spec']} {where(row)}" for row in r["rows"] if row["status"] == "fail")
+        click.echo(f"pixelkit: verify: {len(r['failed'])} spec(s) fail: {names}", err=True)
+        raise SystemExit(EXIT_REGRESSION)
+    if r["unmeasured"] or r["errors"]:
+        raise SystemExit(EXIT_SIMULATION)

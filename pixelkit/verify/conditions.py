@@ -1,0 +1,61 @@
+"""Operating conditions of the sign-off grid: process corner x temperature x supply.
+
+A condition changes three things of a design and nothing else: the model library's
+corner (the technology's corner table: MOS sections and, where the library has them,
+the diode sections it pairs with them), the die temperature (every deck's ``.temp``,
+hence the device models and the kit's dark-current law), and the supply (the
+technology's ``supply``: VDD of the pixels, columns, AFE and the clock levels). The
+reset drains (``pixel.v_pd_reset``, ``v_fd_reset``) and ``afe.vref`` are references a
+chip regulates, and stay as designed.
+"""
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass, replace
+
+from ..errors import ConfigError
+
+
+@dataclass(frozen=True, order=True)
+class Condition:
+    corner: str
+    temperature: float   # K
+    supply: float        # relative deviation from the technology's supply
+
+    @property
+    def label(self) -> str:
+        return f"{self.corner} {self.temperature - 273.15:g}degC {self.supply * 100:+g}%"
+
+    def as_dict(self) -> dict:
+        return {"corner": self.corner, "temperature_C": round(self.temperature - 273.15, 6),
+                "supply_dev": self.supply}
+
+
+def nominal(design) -> Condition:
+    return Condition(design.corner_name, design.temperature, 0.0)
+
+
+def grid(design, corners=None, temperatures=None, supplies=None) -> list[Condition]:
+    """Every condition of the grid: the arguments, else the design's ``[verify]`` table
+    (corners: every corner of the model library)."""
+    v = design.verify
+    corners = tuple(corners or v.corners or sorted(design.tech.models.corners))
+    temps = tuple(temperatures or v.temperatures)
+    sups = tuple(supplies if supplies is not None else v.supplies)
+    have = design.tech.models.corners
+    for c in corners:
+        if c not in have:
+            raise ConfigError(design.source, "--corners", c, f"a corner of the model library: {', '.join(sorted(have))}")
+    return [Condition(c, t, s) for c, t, s in itertools.product(corners, temps, sups)]
+
+
+def at(design, cond: Condition):
+    """``design`` at condition ``cond`` (corner, temperature, supply)."""
+    supply = design.tech.supply * (1.0 + cond.supply)
+    for what, v in (("pixel.v_pd_reset", design.pixel.v_pd_reset), ("pixel.v_fd_reset", design.pixel.v_fd_reset),
+                    ("afe.vref", design.afe.vref), ("pixel.swing", design.pixel.swing)):
+        if v >= supply and not (what.endswith("reset") and v == supply):
+            raise ConfigError(design.source, what, v, f"a level below the supply at condition {cond.label} "
+                              f"({supply:g} V)")
+    tech = replace(design.tech, supply=supply) if cond.supply else design.tech
+    return replace(design, corner=cond.corner, temperature=cond.temperature, tech=tech)

@@ -1,0 +1,131 @@
+"""The figures a ``[spec]`` entry can name: what each is, its unit, how the kit measures it.
+
+Every figure is measured at one condition (process corner, temperature, supply) and,
+for Monte Carlo, at one draw of the devices. Figures are SI inside (a charge in C, a
+conversion gain in V/C, a fraction as a number); ``unit`` is how the sign-off table
+shows it. ``group`` is the measurement that produces it (``verify.measure``); only the
+groups the specs need are run. ``mc``: whether device mismatch moves it (figures
+computed from the analytic C(V) model alone do not, so they get no yield).
+
+``check`` names the independent path each figure is cross-checked against in the tests
+and in ``docs/verify.md``.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from ..units import parse_unit
+
+KINDS = ("primary", "secondary")
+
+
+@dataclass(frozen=True)
+class Figure:
+    name: str
+    dim: str          # a pixelkit.units dimension name
+    unit: str         # display unit
+    group: str        # the measurement that produces it
+    what: str
+    check: str
+    mc: bool = True
+
+
+def _per_kind(stem, dim, unit, group, what, check, mc=True):
+    return [Figure(f"{stem}_{k}", dim, unit, group, what.format(kind=k), check, mc) for k in KINDS]
+
+
+_LIST = [
+    *_per_kind("conversion_gain", "V/C", "uV/e-", "pixel",
+               "output-referred conversion gain of the {kind} subpixel: double-sampled column signal per "
+               "collected electron at a small signal (SPICE)",
+               "analytic C(V) of PD + FD times the SF gain (physics.fd.response)"),
+    *_per_kind("pd_conversion_gain", "V/C", "uV/e-", "pixel",
+               "PD-referred conversion gain of the {kind} subpixel (thesis table 3.2): drop of the PD node "
+               "per collected electron during exposure, small signal (SPICE)",
+               "analytic C(V) of the PD node (physics.subpixel.pd_node)"),
+    *_per_kind("swing", "V", "V", "pixel",
+               "column swing of the {kind} subpixel: saturated minus dark double-sampled signal (SPICE)",
+               "pixel.swing minus the SF's drop (README: 'Column swing ~0.85 V')"),
+    *_per_kind("full_well", "C", "e-", "pixel",
+               "saturation capacity of the {kind} subpixel as EMVA 1288 defines it: column swing over the "
+               "output-referred conversion gain (SPICE)",
+               "swing x C(V) of the PD node (table 3.2's 248 / 69 ke- are 1.5 V x C_jdep)"),
+    *_per_kind("read_noise", "C", "e-", "noise",
+               "temporal read noise of the {kind} subpixel through the AFE, input-referred (kTC, NCDS, SF and "
+               "load thermal and 1/f, dark shot, AFE; the SF gain from SPICE at the condition)",
+               "ngspice .noise of the read chain (camera.spicenoise)"),
+    *_per_kind("ktc_noise", "C", "e-", "noise",
+               "FD reset (kT/C) noise of the {kind} subpixel's NCDS read, input-referred electrons",
+               "sqrt(k T C_FD) / q with C_FD from the junction model", mc=False),
+    *_per_kind("dynamic_range", "1", "dB", "pixel+noise",
+               "dynamic range of the {kind} subpixel: 20 log10(full well / read noise)",
+               "the two figures it is made of"),
+    *_per_kind("dark_signal", "V", "mV", "dark",
+               "dark signal of the {kind} PD over its integration time t_int: drop of the PD node in the "
+               "dark (SPICE: the diode card's dark current and the EC/TG junction leakage)",
+               "physics.dark.dark_current x t_int / C(V) of the PD node"),
+    *_per_kind("image_lag", "1", "%", "lag",
+               "image lag of the {kind} subpixel: a dark frame after a saturated one minus a dark frame after "
+               "a dark one, each from the state its previous frame ended in, in % of the swing (SPICE)",
+               "a hard reset leaves ~0; a deliberately soft reset shows lag (tests)"),
+    *_per_kind("gse", "1", "", "gse",
+               "global-shutter efficiency of the {kind} subpixel on the signal: signal per second of "
+               "exposure over signal per second of storage under the same light (1 / PLS) (SPICE)",
+               "pixel.gse x C_FD / (C_PD,node + C_FD) (physics.fd.signal_gse)"),
+    *_per_kind("settling", "V", "mV", "settling",
+               "settling error at f_read of the {kind} array's AFE output: the second row of a column read "
+               "at the design's clocks against the same read with 10x longer phases (SPICE)",
+               "the long read itself (10x the time constant budget)"),
+    Figure("criterion_secondary", "1", "%", "pixel",
+           "the 5 % / mid-scale criterion: the secondary's signal, in % of its swing, when the primary sits at "
+           "mid_fraction of its swing under the same light (mask opening and integration times as designed; "
+           "the thesis's equivalent-current method)",
+           "i_mid / i_5pct of the thesis experiment (experiments.thesis)"),
+    Figure("afe_gain_error", "1", "%", "afe",
+           "gain error of the SC AFE: |(measured dVout / dVin) / (C11 / C13) - 1| (SPICE, three input steps)",
+           "finite-gain charge balance eps / (1 + eps) (measure.afe)"),
+    Figure("power_pixel", "W", "nW", "power",
+           "average power of one dual pixel over a frame at the design's frame rate: its resets and its read "
+           "current (the column load's current while its row is selected) (SPICE supply currents)",
+           "bias currents x supply x duty (verify.power.estimate)"),
+    Figure("power_column", "W", "uW", "power",
+           "average power of one primary column's circuits: bias reference and AFE (op-amp, reference, "
+           "samplers) (SPICE supply currents)", "bias currents x supply (verify.power.estimate)"),
+    Figure("power_chip", "W", "mW", "power",
+           "average power of the chip over a frame at the design's frame rate: resets, read currents, column "
+           "bias and AFEs of both arrays (SPICE supply currents per block x counts; the control signals, "
+           "which the thesis's FPGA drove, are left out)",
+           "bias currents x supply x duty (verify.power.estimate)"),
+]
+
+FIGURES: dict[str, Figure] = {f.name: f for f in _LIST}
+
+
+def unit_scale(unit: str, dim: str) -> tuple[str, float] | None:
+    """(kind, scale) to show an SI value of ``dim`` in ``unit``: kind "dB" (20 log10), "%"
+    (x 100) or "lin" (divide by scale); None when the unit does not fit the dimension."""
+    if dim == "1":
+        return {"": ("lin", 1.0), "dB": ("dB", 1.0), "%": ("%", 1.0)}.get(unit)
+    from ..units import DIMENSIONS
+    try:
+        scale, vec = parse_unit(unit)
+    except ValueError:
+        return None
+    return ("lin", scale) if vec == DIMENSIONS[dim][0] else None
+
+
+def shown(x: float, unit: str, dim: str) -> float:
+    """``x`` (SI) in ``unit``."""
+    kind, scale = unit_scale(unit, dim)
+    if kind == "dB":
+        return 20.0 * math.log10(x) if x > 0 else -math.inf
+    if kind == "%":
+        return 100.0 * x
+    return x / scale
+
+
+def units_for(dim: str) -> str:
+    """Examples of units that fit ``dim`` (for error messages)."""
+    return {"V/C": "uV/e-, V/C", "C": "e-, ke-, fC", "V": "V, mV, uV", "W": "W, mW, uW",
+            "1": "a plain number, % or dB"}.get(dim, dim)

@@ -1,0 +1,123 @@
+"""``verify``: every spec at every condition of the grid, the Monte Carlo yield, the table.
+
+Work is cut into tasks (one condition or one Monte Carlo sample x one measurement group)
+that run through ``sweep.executors.run_tasks``: local worker threads by default (each
+drives one ngspice at a time), a Dask cluster with ``scheduler``. Every deck goes through
+the engine's content-hash cache as soon as it finishes, so an interrupted run resumes
+where it stopped and a re-run with nothing changed simulates nothing. A task whose
+simulation fails is kept with ngspice's message; the specs it feeds are reported
+"not measured" at that condition, never dropped.
+"""
+from __future__ import annotations
+
+import time
+
+from ..errors import ConfigError, PixelkitError, SimulationError
+from . import conditions, measure, mismatch
+
+
+def _task(task):
+    """One group at one condition (and draw). Runs in a worker."""
+    design, cond, group, draw, backend = task
+    d = conditions.at(design, cond)
+    try:
+        return {"ok": True, "raw": measure.run_group(group, d, draw, backend)}
+    except SimulationError as exc:
+        return {"ok": False, "error": f"{exc.what or exc.deck}: {exc.message}"}
+
+
+def post_layout_view(design):
+    """The design whose decks carry the extracted parasitics (``--post-layout``).
+
+    Hook for the post-layout work (issue 28 and after): return a design (or raise) so that
+    the generators use the extracted netlists; every measurement then runs on that view
+    unchanged. Until extraction exists this refuses clearly."""
+    raise ConfigError(design.source, "--post-layout", True,
+                      "the schematic view: post-layout extraction not available yet")
+
+
+def spec_conditions(spec, grid: list) -> list:
+    return [c for c in grid
+            if (not spec.corners or c.corner in spec.corners)
+            and (not spec.temperatures or any(abs(c.temperature - t) < 1e-6 for t in spec.temperatures))
+            and (not spec.supplies or any(abs(c.supply - s) < 1e-9 for s in spec.supplies))]
+
+
+def plan(design, grid: list, mc: int) -> tuple[list, list]:
+    """(condition tasks, Monte Carlo specs): which groups run where. The Monte Carlo runs at the
+    nominal condition, so it serves the specs that hold there and whose figure mismatch moves."""
+    need: dict = {}
+    for s in design.spec:
+        for c in spec_conditions(s, grid):
+            for g in measure.groups_for([s.fig.name]):
+                need.setdefault(c, set()).add(g)
+    nominal = [conditions.nominal(design)]
+    mc_specs = [s for s in design.spec if mc and s.mc and s.fig.mc and spec_conditions(s, nominal)]
+    return sorted((c, g) for c, gs in need.items() for g in sorted(gs)), mc_specs
+
+
+def verify(design, corners=None, temperatures=None, supplies=None, mc: int | None = None, seed: int | None = None,
+           backend: str = "batch", jobs=None, scheduler=None, post_layout: bool = False) -> dict:
+    from ..sweep.executors import run_tasks
+    from .signoff import table
+    if post_layout:
+        design = post_layout_view(design)
+    if not design.spec:
+        raise ConfigError(design.source, "spec", None, "a [spec] table with at least one spec (docs/verify.md)")
+    t0 = time.perf_counter()
+    grid = conditions.grid(design, corners, temperatures, supplies)
+    for c in grid:   # a supply corner that puts a reference above the supply: refused before any run
+        conditions.at(design, c)
+    mc = design.verify.mc if mc is None else mc
+    seed = design.verify.seed if seed is None else seed
+    cond_tasks, mc_specs = plan(design, grid, mc)
+    src, mc_groups, nominal = None, [], conditions.nominal(design)
+    if mc_specs:
+        src = mismatch.source(design)
+        mc_groups = measure.groups_for([s.fig.name for s in mc_specs])
+    tasks = [(design, c, g, None, backend) for c, g in cond_tasks]
+    tasks += [(design, nominal, g, mismatch.Draw(seed, i, src), backend) for i in range(mc) for g in mc_groups
+              if mc_specs]
+    outs = [None] * len(tasks)
+    for i, out in run_tasks(_task, tasks, jobs=jobs, scheduler=scheduler, desc="verify"):
+        outs[i] = out
+    raw_cond: dict = {}
+    raw_mc: dict = {}
+    errors = []
+    for (d, c, g, draw, _), out in zip(tasks, outs):
+        where = raw_cond.setdefault(c, {}) if draw is None else raw_mc.setdefault(draw.sample, {})
+        if out["ok"]:
+            where[g] = out["raw"]
+        else:
+            errors.append({"condition": c.label, "group": g, "sample": None if draw is None else draw.sample,
+                           "error": out["error"]})
+    values = {c: measure.figures(r) for c, r in raw_cond.items()}
+    samples = [measure.figures(raw_mc[i]) for i in sorted(raw_mc)]
+    rows = table(design, grid, values, samples, mc_specs)
+    _refuse_zero_spread(rows, len(samples))
+    return {"design": design.name, "revision": design.revision, "rows": rows,
+            "grid": {"corners": sorted({c.corner for c in grid}),
+                     "temperatures_C": sorted({round(c.temperature - 273.15, 6) for c in grid}),
+                     "supplies": sorted({c.supply for c in grid}), "conditions": len(grid)},
+            "mc": {"samples": len(samples) if mc_specs else 0, "seed": seed, "source": src,
+                   "draws": mismatch.describe(src) if src else None, "condition": nominal.label,
+                   "confidence": design.verify.confidence},
+            "supply_V": design.tech.supply, "view": "schematic",
+            "conditions": [{**c.as_dict(), "label": c.label, "figures": {k: v for k, v in values.get(c, {}).items()
+                                                                          if k in {s.fig.name for s in design.spec}}}
+                           for c in grid],
+            "mc_values": {s.name: [x.get(s.fig.name) for x in samples] for s in mc_specs},
+            "raw": {c.label: raw_cond.get(c, {}) for c in grid},
+            "errors": errors, "tasks": len(tasks), "wall_s": time.perf_counter() - t0,
+            "failed": [r["spec"] for r in rows if r["status"] == "fail"],
+            "unmeasured": [r["spec"] for r in rows if r["status"] == "not measured"]}
+
+
+def _refuse_zero_spread(rows, n: int) -> None:
+    flat = [r["spec"] for r in rows if r.get("yield") is not None and r["yield"].get("zero_spread")]
+    if flat:
+        raise PixelkitError(
+            f"Monte Carlo of {n} samples: zero spread of {', '.join(flat)}: every sample gave the same value, so "
+            "the devices carried no mismatch; a zero-spread Monte Carlo is never a pass (check the model "
+            "library's statistics or the technology's [mismatch] table)")
+

@@ -1,0 +1,157 @@
+"""The [spec] and [verify] tables: refused with the key and what is allowed before anything runs;
+yield statistics against the binomial distribution summed directly (independent path)."""
+import copy
+import json
+import math
+import tomllib
+from pathlib import Path
+
+import pytest
+
+from conftest import REF, run_cli
+from pixelkit.design import load_design
+from pixelkit.errors import ConfigError
+from pixelkit.schema import to_toml
+
+BASE = tomllib.loads(REF.read_text())
+
+
+def _write(tmp_path: Path, extra: dict, drop_specs=True) -> Path:
+    raw = copy.deepcopy(BASE)
+    if drop_specs:
+        raw.pop("spec", None)
+    for k, v in extra.items():
+        raw[k] = v
+    p = tmp_path / "d.toml"
+    p.write_text(to_toml(raw))
+    return p
+
+
+BAD = [  # (what, extra tables, field named in the error, words of what is allowed)
+    ("unknown figure", {"spec": {"frobnicate": {"min": "1 V"}}}, "spec.frobnicate", "a figure the kit measures"),
+    ("unknown named figure", {"spec": {"x": {"figure": "cg", "min": "1 V"}}}, "spec.x.figure", "conversion_gain_primary"),
+    ("unit of another figure", {"spec": {"swing_primary": {"min": "1 uV/e-"}}}, "spec.swing_primary.min",
+     "a quantity in V"),
+    ("display unit that does not fit", {"spec": {"swing_primary": {"min": "1 V", "unit": "e-"}}},
+     "spec.swing_primary.unit", "V, mV, uV"),
+    ("min above max", {"spec": {"swing_primary": {"min": "1 V", "max": "500 mV"}}}, "spec.swing_primary.max",
+     "a value >= min"),
+    ("no limit", {"spec": {"swing_primary": {"typ": "1 V"}}}, "spec.swing_primary", "a min and / or a max"),
+    ("corner the library lacks", {"spec": {"swing_primary": {"min": "1 V", "corners": ["tt", "xx"]}}},
+     "spec.swing_primary.corners", "a corner of the model library: ff, fs, sf, ss, tt"),
+    ("grid corner the library lacks", {"verify": {"corners": ["zz"]}}, "verify.corners", "a corner of the model"),
+    ("temperature without unit", {"verify": {"temperatures": [27]}}, "verify.temperatures[0]", "a number with a unit"),
+    ("not a list", {"verify": {"supplies": "-10 %"}}, "verify.supplies", "a list of"),
+    ("repeated value", {"verify": {"supplies": ["-10 %", "-0.1"]}}, "verify.supplies", "without repeated"),
+    ("bad spec name", {"spec": {"a;b": {"min": "1 V"}}}, "spec.a;b", "a name of letters"),
+    ("limit that is a table", {"spec": {"swing_primary": {"min": {"value": 1}}}}, "spec.swing_primary.min",
+     "a quantity with its unit"),
+    ("unknown key", {"spec": {"swing_primary": {"min": "1 V", "minimum": "1 V"}}}, "spec.swing_primary.minimum",
+     "no such field"),
+    ("mismatch source", {"verify": {"mismatch": "magic"}}, "verify.mismatch", "one of auto, library, pelgrom"),
+]
+
+
+@pytest.mark.parametrize("what,extra,field,allowed", BAD, ids=[b[0] for b in BAD])
+def test_bad_spec_is_refused_at_load(tmp_path, what, extra, field, allowed):
+    with pytest.raises(ConfigError) as err:
+        load_design(_write(tmp_path, extra))
+    assert err.value.field == field, str(err.value)
+    assert allowed in err.value.allowed, str(err.value)
+
+
+def test_bad_spec_refused_by_verify_before_any_simulation(tmp_path):
+    """exit 2, one line naming the key and what is allowed; the simulation cache stays empty."""
+    cache = tmp_path / "cache"
+    f = _write(tmp_path, {"spec": {"swing_primary": {"min": "1 V", "corners": ["xx"]}}})
+    import os
+    import subprocess
+    import sys
+    p = subprocess.run([sys.executable, "-m", "pixelkit", "verify", str(f), "--json"], capture_output=True, text=True,
+                       env={**os.environ, "PIXELKIT_CACHE": str(cache)}, timeout=120)
+    assert p.returncode == 2, p.stderr
+    obj = json.loads(p.stdout)
+    assert obj["field"] == "spec.swing_primary.corners" and "ff, fs, sf, ss, tt" in obj["allowed"]
+    assert len(p.stderr.strip().splitlines()) == 1
+    assert not any(cache.rglob("*.npz"))
+
+
+def test_spec_values_in_si_and_in_their_unit(tmp_path):
+    d = load_design(_write(tmp_path, {"spec": {
+        "cg": {"figure": "conversion_gain_primary", "min": "3.5 uV/e-", "typ": 4.0},
+        "dynamic_range_primary": {"min": "60 dB"},
+        "full_well_primary": {"min": "200 ke-", "unit": "ke-"},
+        "criterion_secondary": {"min": 4, "max": "6 %"}}}))
+    s = {x.name: x for x in d.spec}
+    q = 1.602176634e-19
+    assert s["cg"].lo == pytest.approx(3.5e-6 / q) and s["cg"].typical == pytest.approx(4.0e-6 / q)
+    assert s["dynamic_range_primary"].lo == pytest.approx(1000.0)       # 60 dB as an amplitude ratio
+    assert s["full_well_primary"].lo == pytest.approx(200e3 * q)
+    assert (s["criterion_secondary"].lo, s["criterion_secondary"].hi) == pytest.approx((0.04, 0.06))
+    assert [x.name for x in d.spec] == ["cg", "dynamic_range_primary", "full_well_primary", "criterion_secondary"]
+
+
+def test_reference_design_specs_load(ref_design):
+    names = {s.name for s in ref_design.spec}
+    assert {"pd_conversion_gain_primary", "criterion_secondary", "power_chip", "settling_primary"} <= names
+    assert ref_design.verify.mc == 200 and len(ref_design.verify.temperatures) == 3
+
+
+def _binomial_interval(k, n, conf):
+    """Clopper-Pearson by bisection on the binomial tail, summed term by term."""
+    a = 1 - conf
+
+    def tail_ge(p):   # P(X >= k)
+        return sum(math.comb(n, j) * p ** j * (1 - p) ** (n - j) for j in range(k, n + 1))
+
+    def tail_le(p):   # P(X <= k)
+        return sum(math.comb(n, j) * p ** j * (1 - p) ** (n - j) for j in range(0, k + 1))
+
+    def solve(f, target, increasing):
+        lo, hi = 0.0, 1.0
+        for _ in range(80):
+            mid = (lo + hi) / 2
+            if (f(mid) < target) == increasing:
+                lo = mid
+            else:
+                hi = mid
+        return (lo + hi) / 2
+    lower = 0.0 if k == 0 else solve(tail_ge, a / 2, True)
+    upper = 1.0 if k == n else solve(tail_le, a / 2, False)
+    return lower, upper
+
+
+@pytest.mark.parametrize("k,n", [(0, 10), (5, 10), (10, 10), (97, 100), (180, 200)])
+def test_clopper_pearson_against_the_binomial(k, n):
+    from pixelkit.verify.yields import clopper_pearson
+    assert clopper_pearson(k, n, 0.95) == pytest.approx(_binomial_interval(k, n, 0.95), abs=1e-6)
+
+
+def test_margin_sigma():
+    from pixelkit.verify.yields import margin_sigma
+    v = [1.0, 2.0, 3.0]                       # mean 2, sample sigma 1
+    assert margin_sigma(v, 0.5, None) == pytest.approx(1.5)
+    assert margin_sigma(v, None, 2.5) == pytest.approx(0.5)
+    assert margin_sigma(v, 0.0, 2.5) == pytest.approx(0.5)     # the nearer limit
+    assert margin_sigma(v, 3.0, None) == pytest.approx(-1.0)
+
+
+def test_electron_units():
+    from pixelkit.units import quantity
+    q = 1.602176634e-19
+    assert quantity("30 e-", "C", "x") == pytest.approx(30 * q)
+    assert quantity("248 ke-", "C", "x") == pytest.approx(248e3 * q)
+    assert quantity("4 uV/e-", "V/C", "x") == pytest.approx(4e-6 / q)
+    with pytest.raises(ConfigError):
+        quantity("1 me-", "C", "x")
+
+
+def test_verify_options_are_checked(tmp_path):
+    f = _write(tmp_path, {"spec": {"afe_gain_error": {"max": "1 %"}}})
+    for args, field in ((["--corners", "tt,nope"], "--corners"), (["--temperatures", "27"], "--temperatures"),
+                        (["--supplies", "-80%"], "--supplies"), (["--temperatures", "1e300 degC"], "--temperatures")):
+        code, out, err = run_cli("verify", f, *args, "--json", timeout=120)
+        assert code == 2, (args, err)
+        assert json.loads(out)["field"] == field, (args, out)
+    code, out, err = run_cli("verify", f, "--post-layout", timeout=120)
+    assert code == 2 and "post-layout extraction not available yet" in err
