@@ -85,7 +85,7 @@ def _design_variants(tmp_path, sep, marker):
     yield "design.corner", ref.replace('technology = "c35_thesis"', f'technology = "c35_thesis"\ncorner = {p}'), None
     yield "design.technology", ref.replace('"c35_thesis"', p), None
     yield "afe.opamp", ref.replace('opamp = "macro"', f"opamp = {p}"), None
-    yield "spec.note", ref.replace('note = "thesis: sensor ~10 mW"', f"note = {p}"), None
+    yield "spec.note", ref.replace('note = "[Thesis2019]: sensor ~10 mW"', f"note = {p}"), None
     yield "spec.figure", ref.replace("[spec.afe_gain_error]\n", f"[spec.afe_gain_error]\nfigure = {p}\n"), None
     yield "spec.unit", ref.replace("[spec.afe_gain_error]\n", f"[spec.afe_gain_error]\nunit = {p}\n"), None
     yield "spec.name", ref.replace("[spec.afe_gain_error]", f"[spec.{p}]"), None

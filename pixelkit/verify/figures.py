@@ -78,7 +78,7 @@ _LIST = [
                "at the design's clocks against the same read with 10x longer phases (SPICE)",
                "the long read itself (10x the time constant budget)"),
     Figure("criterion_secondary", "1", "%", "pixel",
-           "the 5 % / mid-scale criterion: the secondary's signal, in % of its swing, when the primary sits at "
+           "the 5 % / mid-scale criterion of [Thesis2019]: the secondary's signal, in % of its swing, when the primary sits at "
            "mid_fraction of its swing under the same light (mask opening and integration times as designed; "
            "the thesis's equivalent-current method)",
            "i_mid / i_5pct of the thesis experiment (experiments.thesis)"),

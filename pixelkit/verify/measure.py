@@ -8,7 +8,7 @@ A *group* is a set of decks run together; ``run_group`` returns its raw measurem
   experiment's window: dark, a small signal (~3 % of the PD range), saturation (the PD
   driven to 0.5 V, as the experiment's sweep top), then the primary bracketing
   mid-scale at two currents predicted from the first three, each with the secondaries
-  at the *equivalent* current (the thesis's method: I_s = I_p (A_s / A_p)
+  at the *equivalent* current (the method of [Thesis2019]: I_s = I_p (A_s / A_p)
   (t_s / t_p), same window).
 - ``gse``: the same bench with and without storage, with and without light.
 - ``lag``: dark frames that follow the saturated and the dark frame.

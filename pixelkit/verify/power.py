@@ -10,7 +10,7 @@ every block on a supply of its own:
 - ``bias``: the column's bias reference (``Ibias``);
 - ``afe``: the AFE (``vdd`` of the SC cell: the OTA's own currents; the macromodel draws
   nothing, so the design's ``afe.supply_current`` stands for its quiescent current);
-(The control sources are left out: the thesis's chip took every control signal from an FPGA.)
+(The control sources are left out: the chip of [Thesis2019] took every control signal from an FPGA.)
 
 From each supply's current: the static current (mean over the exposure, nothing switching)
 and the energy above it of the frame's events (global reset and transfer) and of one row's

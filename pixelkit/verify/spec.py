@@ -9,7 +9,7 @@ written in the design file's own convention (values carry their unit)::
     [spec.conversion_gain_primary]
     min = "3.5 uV/e-"
     typ = "4.0 uV/e-"
-    note = "thesis table 3.2"
+    note = "[Thesis2019] table 3.2"
 
     [spec.cg_hot]                     # a second spec on the same figure
     figure = "conversion_gain_primary"
