@@ -1,20 +1,36 @@
-"""Monte Carlo mismatch: reproducible from the seed, offset FPN against the Pelgrom estimate."""
+"""Monte Carlo mismatch: reproducible from the seed; offset FPN against the Pelgrom estimate,
+DSNU, column FPN and pedestal against a linear-propagation estimate (``mismatch_estimate``),
+the ``pixelkit mc`` command with corners and the AFE against the AFE's derivation."""
+import json
+import math
+import re
+
 import numpy as np
 import pytest
+from mismatch_estimate import estimate, sample_band
 
+from conftest import REF
 from pixelkit.mc.montecarlo import run_monte_carlo
 from pixelkit.mc.pelgrom import cap_sigma_rel, coefficients, sigma_vth
 
+ROWS, COLS = 6, 4
 
-def test_offset_fpn_matches_pelgrom(ref_design):
+
+@pytest.fixture(scope="module")
+def chip(ref_design):
+    r = run_monte_carlo(ref_design, ROWS, COLS, seed=11, jobs=2)
+    assert not r["failures"]
+    return r
+
+
+def test_offset_fpn_matches_pelgrom(chip):
     """Independent path: sigma(V_reset,col) = G_SF * A_VT / sqrt(2 Leff Weff) (Pelgrom, with
     the model card's own coefficients and a nominal two-point SF gain), against the spread
     of 96 Monte Carlo pixels (6 x 4 dual pixels, within-column, 80 degrees of freedom).
 
     Tolerance 0.8 .. 1.3: the sample sigma's own 2-sigma error is +-16 % at 80 dof, and the
     estimate leaves out the RST switch's charge split (at most +8 %, see mc.pelgrom)."""
-    r = run_monte_carlo(ref_design, 6, 4, seed=11, jobs=2)
-    assert not r["failures"]
+    r = chip
     p = r["pelgrom"]
     assert p["dof"] == 80
     assert 0.8 <= p["ratio"] <= 1.3, p
@@ -23,6 +39,28 @@ def test_offset_fpn_matches_pelgrom(ref_design):
         assert r[k]["dsnu_V"] < 0.3 * r[k]["offset_fpn_V"]
         assert 0 < r[k]["prnu_pct"] < 5
     assert r["secondary"]["target_over_dsnu"] > 1
+
+
+def test_dsnu_column_fpn_and_pedestal_against_linear_propagation(ref_design, chip):
+    """Independent reference: linear propagation of the model card's sigmas through
+    sensitivities of nominal decks (``mismatch_estimate``: no statistics, one device moved at a
+    time), against the Monte Carlo chip's sample. Bands: the chi-square interval of a sample
+    sigma at p = 1e-3 (effective degrees of freedom of pixel + column parts, Satterthwaite),
+    widened by 10 % for the estimate (linearisation, current factor through W)."""
+    est = estimate(ref_design, ROWS)
+    for k, cols in (("primary", COLS), ("secondary", ref_design.secondary_per_pixel * COLS)):
+        e, m = est[k], chip[k]
+        n = ROWS * cols
+        pix2, col2 = e["sigma_pix_V"] ** 2, e["sigma_col_V"] ** 2
+        dof = (pix2 + col2) ** 2 / (pix2 ** 2 / (n - cols) + col2 ** 2 / (cols - 1))
+        lo, hi = sample_band(round(dof))
+        assert lo <= m["dsnu_V"] / e["dsnu_V"] <= hi, (k, m["dsnu_V"], e, dof)
+        lo, hi = sample_band(cols - 1)
+        assert lo <= m["column_fpn_V"] / e["column_fpn_V"] <= hi, (k, m["column_fpn_V"], e)
+        # the mean of the draws is the nominal dark signal: within 4 standard errors of the
+        # mean, + 0.3 mV for two decks at different tolerances (README: ~0.2 mV)
+        se = math.sqrt(pix2 / n + col2 / cols)
+        assert abs(m["pedestal_V"] - e["nominal_dark_V"]) <= 4 * se + 3e-4, (k, m["pedestal_V"], e)
 
 
 def test_monte_carlo_is_reproducible_from_the_seed(ref_design, tmp_path, monkeypatch):
@@ -50,3 +88,35 @@ def test_mismatch_coefficients_from_the_model_card(ref_design):
     assert coefficients(ref_design, "p")["par_vth"] == pytest.approx(0.00666)
     assert sigma_vth(ref_design, 1e-6, 0.5e-6) == pytest.approx(8.15e-3, rel=2e-3)
     assert cap_sigma_rel(ref_design, 500e-15) == pytest.approx(3.162e-4, rel=1e-3)
+
+
+def test_mc_command_with_corners_and_the_afe(cli, tmp_path, ref_design):
+    """``pixelkit mc --corner tt --corner ff --afe``: per corner, the AFE gain FPN against the
+    technology's capacitor matching (derivation written here: the gain C11 / C13 of a column
+    varies by sqrt(2) A_C / sqrt(C / C_density) relative, the op-amp macromodel draws nothing)
+    and the offset FPN against the Pelgrom estimate, each in the chi-square band of its
+    sample (secondary: 9 columns; offset: 2 x 3 dual pixels within columns).
+
+    The read is slowed to half the reference design's clocks: at the reference read the
+    column does not settle with the AFE's C11 attached (the frame's column slews through S1:
+    tt primary PRNU 13.5 % with the AFE against 0.18 % without; ss: a -251 mV dark signal on
+    the first row), which issue 27 (settling) fixes in the design."""
+    design = tmp_path / "slow_read.toml"
+    text = re.sub(r'^f_read = "500 kHz"', 'f_read = "250 kHz"', REF.read_text(), flags=re.M)
+    design.write_text(re.sub(r'^f_read = "1 MHz"', 'f_read = "500 kHz"', text, flags=re.M))
+    code, out, err = cli("mc", design, "--rows", "2", "--cols", "3", "--seed", "3", "--corner", "tt",
+                         "--corner", "ff", "--afe", "--json", "--out", tmp_path / "mc")
+    assert code == 0, err
+    summary = json.loads(out)
+    runs = json.loads((tmp_path / "mc" / "mc.json").read_text())
+    assert [r["corner"] for r in summary["runs"]] == [r["corner"] for r in runs] == ["tt", "ff"]
+    mm = ref_design.tech.mismatch
+    a = ref_design.afe
+    gain_fpn = 100 * math.hypot(*(mm.cap_pelgrom / math.sqrt(c / mm.cap_density) for c in (a.c11, a.c13)))
+    for r in runs:
+        assert r["with_afe"] and not r["failures"]
+        lo, hi = sample_band(9 - 1)
+        assert lo <= r["secondary"]["afe_gain_fpn_pct"] / gain_fpn <= hi, (r["corner"], r["secondary"], gain_fpn)
+        p = r["pelgrom"]
+        lo, hi = sample_band(p["dof"])
+        assert lo <= p["ratio"] <= hi, (r["corner"], p)
