@@ -95,9 +95,9 @@ def test_report_prints_where_it_is_and_a_summary(quick_report):
 
 
 def test_report_output_cg_pair_against_the_analytic_level(quick_report):
-    """Independent reference: the other level. The report's SPICE output-referred CG (slope of
-    the column signal against I t_window below 30 % of swing) against the analytic A_sf q / C
-    of the PD node + FD at the reset bias (C(V) junctions; A_sf from two SPICE operating points,
+    """Independent reference: the other level. The report's SPICE output-referred CG_out(0-30 %)
+    (slope of the column signal against I t_window below 30 % of swing) against the analytic
+    CG_out(0) = A_sf q / C of the PD node + FD at the reset bias (C(V) junctions; A_sf from two SPICE operating points,
     no transient). C rises as the node discharges, so the SPICE slope sits below the
     zero-signal figure, by at most 3 %."""
     out, _ = quick_report
@@ -107,7 +107,8 @@ def test_report_output_cg_pair_against_the_analytic_level(quick_report):
         physics = c[f"summary.{w}.cg_out_0_uV_per_e"]["value"]
         assert 0.97 * physics <= spice <= physics, (w, spice, physics)
     # the pair: a secondary electron moves the column ~2.8x as far (the smaller PD node)
-    ratio = c["summary.secondary.cg_out_0_30_uV_per_e"]["value"] / c["summary.primary.cg_out_0_30_uV_per_e"]["value"]
+    ratio = (c["summary.secondary.cg_out_0_30_uV_per_e"]["value"]
+             / c["summary.primary.cg_out_0_30_uV_per_e"]["value"])
     physics_ratio = (c["summary.secondary.cg_out_0_uV_per_e"]["value"]
                      / c["summary.primary.cg_out_0_uV_per_e"]["value"])
     assert ratio == pytest.approx(physics_ratio, rel=0.02)
