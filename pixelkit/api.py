@@ -130,6 +130,6 @@ def diagnose(design, measured, seed: int = 0) -> dict:
     """Where measured data leave the simulation and which effect explains it (``pixelkit gap diagnose``)."""
     from .gap.data import read_table
     from .gap.diagnose import analyse
-    from .gap.nominal import build_nominal
-    r, _x, _resid = analyse(design, read_table(measured, design, measured=True), build_nominal(design), seed=seed)
+    from .gap.store import load_nominal
+    r, _x, _resid = analyse(design, read_table(measured, design, measured=True), load_nominal(design), seed=seed)
     return r

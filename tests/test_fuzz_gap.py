@@ -1,5 +1,7 @@
 """Seeded fuzz of the gap CSV: every column x a corpus of hostile values, in one row and in all rows.
 
+The base is a committed virtual-silicon case (SPICE-made, ``tests/gapcases.py``).
+
 Asserts: no internal error (only the kit's one-line data errors), and no
 success with a non-finite number anywhere in the answer (checked by a strict
 JSON encoding). Mutations that pass validation are diagnosed (a seeded sample,
@@ -12,8 +14,8 @@ import json
 import numpy as np
 import pytest
 
+import gapcases
 from pixelkit.errors import PixelkitError
-from pixelkit.gap import selftest
 from pixelkit.gap.data import validate
 
 CORPUS = ["", " ", "nan", "NaN", "inf", "-inf", "1e300", "-1e300", "1e-300", "-1", "0", "1_0", "0x1A", "abc",
@@ -22,20 +24,15 @@ CORPUS = ["", " ", "nan", "NaN", "inf", "-inf", "1e300", "-1e300", "1e-300", "-1
 
 @pytest.fixture(scope="module")
 def nominal(ref_design):
-    from pixelkit.gap.nominal import build_nominal
-    return build_nominal(ref_design)
+    from pixelkit.gap.store import load_nominal
+    return load_nominal(ref_design)
 
 
 @pytest.fixture(scope="module")
-def base(ref_design, nominal):
-    rng = np.random.default_rng(9)
-    t = selftest.campaign(ref_design, nominal, rng, n=60)
-    v, _ = selftest.measure(ref_design, nominal, t, "gse", rng)
-    t.columns["v_V"] = v
-    header = list(t.columns)
-    rows = [{h: (f"{t.columns[h][i]:.9g}" if isinstance(t.columns[h], np.ndarray) else t.columns[h][i])
-             for h in header} for i in range(len(t))]
-    return header, rows
+def base():
+    """A committed SPICE-made case (stray light on the storage node, ``tests/gapcases.py``)."""
+    rows = gapcases.rows(gapcases.ids("gse")[0])
+    return list(rows[0]), rows
 
 
 def _roundtrip(header, rows):

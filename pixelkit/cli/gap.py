@@ -1,4 +1,4 @@
-"""``pixelkit gap predict | diagnose | plan | selftest | silicon | emva``."""
+"""``pixelkit gap predict | diagnose | plan | selftest | silicon | surrogate | emva``."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -23,14 +23,15 @@ def gap():
 def predict(design, conditions, out, backend, jobs, as_json):
     """Write the nominal prediction of every row of a conditions file (column v_nominal_V)."""
     from ..gap.data import read_table, write_table
-    from ..gap.nominal import build_nominal, features
+    from ..gap.nominal import features
     from ..gap.nominal import predict as nominal_predict
+    from ..gap.store import load_nominal
     from ..progress import step
     d = load(design)
     out = output_path(out, d, "predicted.csv")
     table = read_table(conditions, d, measured=False)
     with step("building the SPICE-calibrated surrogate (first run only)"):
-        nom = build_nominal(d, backend=backend)
+        nom = load_nominal(d, backend=backend)
     v = nominal_predict(nom, features(table, nom, d))
     write_table(table, out, {"v_nominal_V": v})
     emit({"out": str(out), "rows": len(table), "surrogate_error_V": nom.error}, as_json,
@@ -47,12 +48,12 @@ def setup_opts(f):
 
 def _prepare(design, measured, backend):
     from ..gap.data import read_table
-    from ..gap.nominal import build_nominal
+    from ..gap.store import load_nominal
     from ..progress import step
     d = load(design)
     table = read_table(measured, d, measured=True)
     with step("building the SPICE-calibrated surrogate (first run only)"):
-        nom = build_nominal(d, backend=backend)
+        nom = load_nominal(d, backend=backend)
     return d, table, nom
 
 
@@ -126,24 +127,26 @@ def plan(design, measured, top, gain_tol, offset_tol, backend, jobs, as_json):
 @click.argument("design", type=click.Path(dir_okay=False), required=False, default="designs/dual_pixel_revA.toml")
 @click.option("--per-effect", type=click.IntRange(1, 1000), default=10, show_default=True)
 @click.option("--clean", type=click.IntRange(0, 10000), default=20, show_default=True)
+@click.option("--rows", type=click.IntRange(40, 100000), default=240, show_default=True,
+              help="rows per surrogate-generated case")
 @click.option("--seed", type=int, default=1, show_default=True)
 @click.option("--spice-cases", type=click.Path(file_okay=False), default=None,
               help="folder of committed SPICE cases (default: the kit's pixelkit/gap/silicon_cases)")
 @click.option("--kind", type=click.Choice(["both", "surrogate", "spice"]), default="both", show_default=True)
 @spice_opts
 @json_opt
-def selftest(design, per_effect, clean, seed, spice_cases, kind, backend, jobs, as_json):
+def selftest(design, per_effect, clean, rows, seed, spice_cases, kind, backend, jobs, as_json):
     """Blind diagnosis: surrogate-generated cases and SPICE-generated cases, reported separately."""
     from ..gap import silicon
-    from ..gap.nominal import build_nominal
+    from ..gap.store import load_nominal
     from ..gap.selftest import run
     from ..progress import step
     d = load(design)
     with step("building the SPICE-calibrated surrogate (first run only)"):
-        nom = build_nominal(d, backend=backend)
+        nom = load_nominal(d, backend=backend)
     r = {}
     if kind in ("both", "surrogate"):
-        r["surrogate"] = run(d, nom, per_effect, clean, seed)
+        r["surrogate"] = run(d, nom, per_effect, clean, seed, rows)
     if kind in ("both", "spice"):
         r["spice"] = silicon.run_committed(d, nom, Path(spice_cases) if spice_cases else silicon.CASES_DIR)
     emit(r, as_json, lambda x: "\n".join(_selftest_text(k, v) for k, v in x.items()))
@@ -170,17 +173,34 @@ def _selftest_text(kind, x):
 def silicon(design, out, backend, jobs, as_json):
     """Make the virtual-silicon SPICE cases (effects inserted as circuit elements); slow: ~1000 decks."""
     from ..gap import silicon as si
-    from ..gap.nominal import build_nominal
+    from ..gap.store import load_nominal
     from ..progress import progress, step
     d = load(design)
     with step("building the SPICE-calibrated surrogate (first run only)"):
-        nom = build_nominal(d, backend=backend)
+        nom = load_nominal(d, backend=backend)
     plan_ = si.plan_cases()
     bar = progress(total=len(plan_), desc="SPICE cases", unit="case")
     r = si.write_cases(d, nom, Path(out) if out else si.CASES_DIR, plan_, progress=lambda k, n: bar.update(1),
                        jobs=jobs)
     bar.close()
     emit(r, as_json, lambda x: f"wrote {x['n_cases']} cases to {x['folder']}")
+
+
+@gap.command()
+@click.argument("design", type=click.Path(dir_okay=False), required=False, default="designs/dual_pixel_revA.toml")
+@out_opt("surrogate file (default: the kit's pixelkit/gap/surrogates/<design>.json)")
+@spice_opts
+@json_opt
+def surrogate(design, out, backend, jobs, as_json):
+    """Build the design's SPICE-calibrated surrogate from SPICE (~260 decks) and store it with its decks' key."""
+    from ..gap import store
+    from ..gap.nominal import build_nominal
+    from ..progress import step
+    d = load(design)
+    with step("building the SPICE-calibrated surrogate"):
+        nom = build_nominal(d, backend=backend)
+    path = store.write(d, nom, Path(out) if out else None)
+    emit({"out": str(path), "error_V": nom.error}, as_json, lambda x: f"wrote {x['out']}")
 
 
 @gap.command()

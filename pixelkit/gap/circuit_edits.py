@@ -93,3 +93,24 @@ def vm_current(design, array: str, value: float) -> Element:
 
 
 DIODE = Model("dfault", "d", (("is", 1e-15), ("n", 1.0)))
+
+
+def column_conductance(net: Netlist, design, col: str, v_pivot: float, g: float, tag: str = "sf") -> Netlist:
+    """A conductance ``g`` (S) from column line ``col`` to a source at ``v_pivot``, switched in with the
+    row select of the column's array (connected while a row is read): a load on the column."""
+    from ..circuits.devices import mosfet
+    gate = "rs_p" if col == "col_p" else "rs_s"
+    return add_top(net, Element(f"Vpiv_{col}", (f"piv_{col}", "0"), v_pivot),
+                   mosfet(f"sw_{col}", col, gate, f"m_{col}", "0", 1e-6, 0.35e-6, design.tech),
+                   Element(f"R{tag}_{col}", (f"m_{col}", f"piv_{col}"), 1.0 / g))
+
+
+def scale_load(net: Netlist, col: str, factor: float) -> Netlist:
+    """The column load of ``col`` with its width (so its current) times ``factor``."""
+    return set_param(net, f"ld_{col}", "w", lambda v: v * factor)
+
+
+def afe_coupling(c: float, tag: str = "Ccp") -> Element:
+    """A coupling capacitor |c| onto an AFE's virtual ground vm from its p1 clock (c > 0) or from the
+    complement p1b (c < 0): a clock kick of either sign at every p1 edge."""
+    return Element(tag, ("p1" if c > 0 else "p1b", "vm"), abs(c))

@@ -32,8 +32,8 @@ import numpy as np
 from scipy import stats
 
 from .data import check_degenerate
-from .effects import applicable
-from .fit import SetupBounds, column_keys, evaluate, fit
+from .effects import COLUMN_EFFECTS, applicable
+from .fit import N_SETUP, SetupBounds, column_keys, evaluate, fit
 from .nominal import features
 from .where import breakdown
 
@@ -42,6 +42,7 @@ BIC_MARGIN = 10.0
 P_BEAT = 1e-3
 AMBIGUOUS_DCHI2 = 3.84
 P_EXPLAINED = 1e-3
+P_SPREAD = 1e-3
 
 
 def split(n: int, seed: int = 0):
@@ -68,7 +69,8 @@ def noise(table, X, nom) -> tuple[np.ndarray, str]:
     if std is not None and np.all(np.isfinite(std)):
         n_avg = table.columns.get("n_avg")
         n_avg = np.ones_like(std) if n_avg is None else np.where(np.isfinite(n_avg), n_avg, 1.0)
-        return np.sqrt(std ** 2 / n_avg + sur ** 2), "v_std_V / sqrt(n_avg) + surrogate error"
+        with np.errstate(over="ignore"):
+            return np.sqrt(std ** 2 / n_avg + sur ** 2), "v_std_V / sqrt(n_avg) + surrogate error"
     keys = {}
     y = table.num("v_V")
     for i in range(len(y)):
@@ -98,8 +100,13 @@ def analyse(design, table, nom, seed: int = 0, candidates=None, setup: SetupBoun
     Xtr, Xte = _sub(X, train), _sub(X, test)
     cols = np.unique(column_keys(X))
     fits = {"none": fit("none", nom, Xtr, y[train], w[train], setup=setup)}
+    spread = {}
     for name in names:
         fits[name] = fit(name, nom, Xtr, y[train], w[train], cols, setup)
+        if name in COLUMN_EFFECTS:   # is the column-to-column spread significant? (nested likelihood ratio)
+            uni = fit(name, nom, Xtr, y[train], w[train], cols, setup, uniform=True)
+            dof = (len(fits[name]["specs"]) - len(uni["specs"]))
+            spread[name] = float(stats.chi2.sf(max(uni["chi2"] - fits[name]["chi2"], 0.0), max(dof, 1)))
     resid_te, ranking = {}, []
     for name, fr in fits.items():
         resid_te[name] = evaluate(name, nom, Xte, fr, cols) - y[test]
@@ -111,11 +118,12 @@ def analyse(design, table, nom, seed: int = 0, candidates=None, setup: SetupBoun
         ranking.append({"effect": name, "heldout_rms_V": fr["heldout_rms_V"], "bic": fr["bic"],
                         "heldout_chi2_per_row": fr["heldout_chi2"] / max(int(test.sum()), 1),
                         "train_rms_V": _rms(evaluate(name, nom, Xtr, fr, cols) - y[train]),
-                        "n_params": fr["k"] - 2, "params": _params(name, fr),
-                        "setup_gain": float(fr["theta"][1]), "setup_offset_V": float(fr["theta"][0]),
+                        "n_params": fr["k"] - N_SETUP, "params": _params(name, fr), "setup": fr["setup"],
                         "setup_at_bound": fr["setup_at_bound"], "heldout_dchi2_vs_none": gain,
-                        "beats_none": bool(name != "none" and gain > stats.chi2.isf(P_BEAT, max(fr["k"] - 2, 1))
-                                           and none["bic"] - fr["bic"] > BIC_MARGIN)})
+                        "column_spread_p": spread.get(name),
+                        "beats_none": bool(name != "none" and gain > stats.chi2.isf(P_BEAT, max(fr["k"] - N_SETUP, 1))
+                                           and none["bic"] - fr["bic"] > BIC_MARGIN
+                                           and spread.get(name, 0.0) < P_SPREAD)})
     ranking.sort(key=lambda r: r["bic"])
     winners = [r for r in ranking if r["beats_none"]]
     if winners:
@@ -146,7 +154,8 @@ def analyse(design, table, nom, seed: int = 0, candidates=None, setup: SetupBoun
         "gap_before_rms_V": before, "gap_after_rms_V": after,
         "gap_before_max_V": float(np.max(np.abs(resid_te["none"]))),
         "gap_after_max_V": float(np.max(np.abs(resid_te[best]))),
-        "shrink_frac": 1.0 - after / before if before > 0 else 0.0,
+        "shrink_frac": _shrink(before, after, float(np.sqrt(np.mean(sigma[test] ** 2))) if known else 0.0),
+        "shrink_rms_frac": 1.0 - after / before if before > 0 else 0.0,
         "best": best, "runner_up": top if best == "none" else (winners[1]["effect"] if len(winners) > 1 else None),
         "indistinguishable": ambiguous,
         "explained": explained, "fit_p_value": p_fit, "heldout_chi2_per_row": chi2 / max(n_te, 1),
@@ -156,12 +165,27 @@ def analyse(design, table, nom, seed: int = 0, candidates=None, setup: SetupBoun
         "ranking": ranking,
         "regions": _regions(Xte, y[test], y[test] + resid_te["none"], y[test] + resid_te[best]),
         "where": breakdown(X, resid_none),
-        "remainder_where": [w_ for w_ in breakdown(X, resid_best) if w_["significant"]][:5]
-        if explained is False else [],
+        "remainder_where": _remainder(X, resid_best) if explained is False else [],
         "surrogate_error": nom.error,
         "verdict": _verdict(best, explained, ambiguous, setup_flag, top),
     }
     return result, X, resid_none
+
+
+def _remainder(X, resid):
+    """Where the named model's remainder lies: the significant groups, else (a remainder with no pattern in
+    any one factor, e.g. column-pair coupling) the groups with the largest mean, each with its p-value."""
+    rows = breakdown(X, resid)
+    sig = [w for w in rows if w["significant"]]
+    return (sig or sorted(rows, key=lambda w: -abs(w["mean_V"])))[:5]
+
+
+def _shrink(before, after, noise_rms):
+    """Fraction of the gap beyond the noise that the named model removes (held-out rows):
+    1 - sqrt(after^2 - noise^2) / sqrt(before^2 - noise^2), each excess floored at zero."""
+    b = np.sqrt(max(before ** 2 - noise_rms ** 2, 0.0))
+    a = np.sqrt(max(after ** 2 - noise_rms ** 2, 0.0))
+    return float(1.0 - a / b) if b > 0 else 0.0
 
 
 def _verdict(best, explained, ambiguous, setup_flag, top):
@@ -180,10 +204,9 @@ def _verdict(best, explained, ambiguous, setup_flag, top):
 
 
 def _params(name, fr):
-    if name in ("column_pixel", "column_afe"):
-        vals, kinds = fr["theta"][2:], [spec[0] for spec in fr["specs"]]
-        out = {f"{k}_rms" + ("_V" if k.startswith("offset") else ""): float(np.std(vals[[j == k for j in kinds]]))
-               for k in dict.fromkeys(kinds)}
+    if name in COLUMN_EFFECTS:
+        vals, kinds = fr["theta"][N_SETUP:], [spec[0].split("[")[0] for spec in fr["specs"]]
+        out = {f"{k}_rms": float(np.std(vals[[j == k for j in kinds]])) for k in dict.fromkeys(kinds)}
         return out | {"n_columns": kinds.count(kinds[0])}
     return {spec[0]: iv for spec, iv in zip(fr["specs"], fr["intervals"])}
 

@@ -4,16 +4,16 @@ Domains (the term each effect feeds):
 
 - PD charge ``dq`` (passes through PD + FD charge sharing): ``dark_current``,
   ``crosstalk``, ``lag``;
-- storage-node charge ``dq_fd`` (on the FD only, after the transfer; converted
-  with the SPICE-measured FD response, ``Nominal.fd_to_pd``): ``gse`` (stray
-  light on the FD), ``fd_leakage`` (droop with its T law);
-- chain gain ``dv_pix`` (pivots at the reset level, both probes): ``sf_gain``
-  (linear chain gain + compression);
+- storage-node charge ``fd`` (on the FD during its hold; the measured response
+  of the FD site, ``responses``): ``gse`` (stray light on the FD),
+  ``fd_leakage`` (droop with its T law);
+- a load on the column during the read (``col_g``, measured): ``sf_gain``;
+  the column load's current (``load``, measured): ``column_load`` (the same
+  on every column) and ``column_pixel`` (per column: mismatch);
 - AFE: ``afe_gain`` (``deps``, pivots at the reset level, where the SC stage's
-  output is Vref); ``charge_injection`` (clock feedthrough and switch
-  injection, per array: a pixel-probe level shift, and an AFE output offset,
-  since the feedthrough before the transfer is shared with the PD and the one
-  before the reset sample is not, double sampling leaves their difference);
+  output is Vref); ``charge_injection`` (coupling from the RST clock onto FD
+  and from the AFE's p1 clock onto its virtual ground vm, both measured:
+  ``rst_fd``, ``p1_vm``); ``column_afe`` (per column: SC gain and p1 coupling);
 - readout light ``readout_light``: a junction photocurrent on the AFE's
   virtual-ground node, junction area x the irradiance, either sign; its
   response (``Nominal.vm_light``, derived in ``nominal``'s docstring) is the
@@ -21,19 +21,21 @@ Domains (the term each effect feeds):
   the output sample), plus the column kick and the op-amp clamp in the
   non-overlap gap, both measured on the nominal circuit; and on the output
   stage (both probes), either sign;
-- columns, per stage: ``column_pixel`` (column load / SF mismatch: a per-column
-  offset of the pixel probe, cancelled by double sampling, and a per-column
-  signal gain from the load current's slewing, seen by both probes) and ``column_afe``
-  (C11/C13 ratio and injection mismatch: per-column gain and offset of the AFE);
 - set-up conditions when the data vary them: ``supply`` (``vdd_V``: supply
   coupling of each probe) and ``settling`` (``f_read_Hz``: incomplete settling
   of the column, a signal loss growing as exp(-t_row / tau)).
 
+Per-column effects (``COLUMN_EFFECTS``) are mismatch drawn around zero: one
+value per column of each parameter, with a zero-mean Gaussian prior; the
+diagnosis names one only when its column-to-column spread is significant
+against its uniform version (``diagnose``).
+
 Stray-light effects scale with the irradiance ``J`` (A/m^2 of photocurrent
 density) times the exposed area of their structure, never with the pixel's own
-photocurrent. Parameters have physical bounds; ``scale`` is their typical size
-(the fit works in units of it). Temperatures are in degC; 25 degC is the
-reference of T-laws.
+photocurrent. Parameters have physical bounds (measured responses: within
+1.5 x the largest amplitude measured); ``scale`` is their typical size (the
+fit works in units of it). Temperatures are in degC; 25 degC is the reference
+of T-laws.
 """
 from __future__ import annotations
 
@@ -57,11 +59,11 @@ def _t_law(X, td):
 
 
 def _gse(X, p):            # light reaching the FD while it holds: 1/GSE of the PD's response
-    return {"dq_fd": p[0] * X["J"] * X["a_ref"] * X["t_wait"]}
+    return {"fd": p[0] * X["J"] * X["a_ref"] * X["t_wait"]}
 
 
 def _fd_leakage(X, p):     # FD droop in the dark while it holds; T-doubling
-    return {"dq_fd": p[0] * _t_law(X, p[1]) * X["t_wait"]}
+    return {"fd": p[0] * _t_law(X, p[1]) * X["t_wait"]}
 
 
 def _dark_current(X, p):   # PD dark current over the integration; T-doubling; perimeter-scaled
@@ -69,17 +71,16 @@ def _dark_current(X, p):   # PD dark current over the integration; T-doubling; p
     return {"dq": p[0] * per * _t_law(X, p[1]) * X["t_int"]}
 
 
-def _charge_injection(X, p):  # clock feedthrough / injection: per array (its FD and PD capacitances differ)
-    prim = X["arr"] == 0
-    # the coupling capacitance that injects also loads the FD: a relative signal loss (both probes)
-    return {"dv_col": np.where(prim, p[0], p[1]) * (~X["afe"]), "dv_afe": np.where(prim, p[2], p[3]),
-            "dv_pix": -np.where(prim, p[4], p[5]) * X["signal"]}
+def _charge_injection(X, p):  # clock coupling onto FD (RST) and onto the AFE's virtual ground (p1)
+    return {"rst_fd": p[0], "p1_vm": p[1]}
 
 
-def _sf_gain(X, p):        # chain gain: linear loss and compression, pivoting at the reset level
-    # a load on the column costs G / (gm + G): per array, each array's follower has its own gm
-    s = X["signal"]
-    return {"dv_pix": -np.where(X["arr"] == 0, p[0], p[2]) * s - p[1] * s ** 2}
+def _sf_gain(X, p):        # a load on the column during the read (a conductance to the reset level)
+    return {"col_g": p[0]}
+
+
+def _column_load(X, p):    # the column load's current, the same on every column
+    return {"load": p[0]}
 
 
 def _afe_gain(X, p):       # SC stage gain lower than designed (C13 larger, finite A): extra eps
@@ -106,10 +107,22 @@ def _settling(X, p):       # column settling within the sample window (0.3 t_row
     return {"dv_pix": -X["signal"] * np.exp(-0.3 / (X["f_read"] * p[0]))}
 
 
-def column_shift(X, gain_afe, offset_pix, offset_afe, gain_afe_col, gain_pix=0.0):
-    """Per-stage column terms: pixel-probe offset and signal gain; AFE offset and relative gain error."""
-    s = X["signal"]
-    return np.where(X["afe"], offset_afe + (gain_afe_col - gain_pix) * gain_afe * s, offset_pix - gain_pix * s)
+@dataclass(frozen=True)
+class ColumnParam:
+    """One per-column parameter: bounds, typical size and the width of its zero-mean prior."""
+    name: str
+    lo: float
+    hi: float
+    scale: float
+    prior: float
+
+
+# per-column effects: mismatch drawn around zero, one value per column of each parameter
+COLUMN_EFFECTS = {
+    "column_pixel": ((ColumnParam("load", -0.3, 0.3, 1e-2, 0.05),), lambda X, p: {"load": p[0]}),
+    "column_afe": ((ColumnParam("eps", -0.05, 0.05, 1e-3, 0.01), ColumnParam("p1_vm_F", -3e-15, 3e-15, 1e-16, 1e-15)),
+                   lambda X, p: {"deps": p[0], "p1_vm": p[1]}),
+}
 
 
 EFFECTS = {
@@ -118,25 +131,22 @@ EFFECTS = {
                    _fd_leakage),
     "dark_current": ((Param("i_d_A", 0.0, 1e-11, 1e-14, 1e-15), Param("t_double_K", 3.0, 15.0, 1.0, 7.0)),
                      _dark_current),
-    "charge_injection": ((Param("pixel_level_primary_V", -0.15, 0.15, 1e-2, 0.0),
-                          Param("pixel_level_secondary_V", -0.15, 0.15, 1e-2, 0.0),
-                          Param("afe_offset_primary_V", -0.03, 0.03, 1e-2, 0.0),
-                          Param("afe_offset_secondary_V", -0.03, 0.03, 1e-2, 0.0),
-                          Param("fd_load_primary", -0.05, 0.05, 1e-2, 0.0),
-                          Param("fd_load_secondary", -0.05, 0.05, 1e-2, 0.0)), _charge_injection),
-    "sf_gain": ((Param("loss", -0.3, 0.5, 1e-2, 0.0), Param("k_per_V", -1.0, 1.0, 1e-2, 0.0),
-                 Param("loss_secondary", -0.3, 0.5, 1e-2, 0.0)), _sf_gain),
+    "charge_injection": ((Param("c_rst_fd_F", 0.0, 4.5e-17, 1e-17, 1e-17),
+                          Param("c_p1_vm_F", -3e-15, 3e-15, 1e-15, 0.0)), _charge_injection),
+    "sf_gain": ((Param("g_col_S", 0.0, 2.5e-7, 1e-7, 5e-8),), _sf_gain),
+    "column_load": ((Param("load_rel", -0.22, 0.22, 1e-2, 0.0),), _column_load),
     "afe_gain": ((Param("eps_extra", -0.05, 1.0, 1e-2, 0.0),), _afe_gain),
     # the vm response has the op-amp clamp's steps in the current: a decade grid of starts over the bounds
     "readout_light": ((Param("a_junction_m2", -3e-9, 3e-9, 1e-11, 0.0, (-1e-9, -1e-10, -1e-11, 1e-11, 1e-10, 1e-9)),
                        Param("out_V_per_A_m2", -1.0, 1.0, 1e-5, 0.0)), _readout_light),
     "crosstalk": ((Param("k_xt", 0.0, 0.5, 1e-3, 1e-4),), _crosstalk),
-    "column_pixel": ((), None),   # per-column terms: built from the data (fit.py)
+    "column_pixel": ((), None),   # per-column terms: COLUMN_EFFECTS
     "column_afe": ((), None),
     "lag": ((Param("lag", 0.0, 0.5, 1e-2, 1e-3),), _lag),
     "supply": ((Param("pixel_V_per_V", -1.0, 1.0, 1e-2, 0.0), Param("afe_V_per_V", -1.0, 1.0, 1e-2, 0.0)), _supply),
     "settling": ((Param("tau_s", 1e-9, 1e-5, 1e-7, 5e-8),), _settling),
 }
+
 
 NAMES = tuple(EFFECTS)
 

@@ -1,20 +1,22 @@
-"""Fitting candidate effects: weighted least squares with the test set-up's gain and offset.
+"""Fitting candidate effects: weighted least squares with the test set-up's gain and offset per probe.
 
 Every model, the nominal one included, carries the test set-up's unknown gain
-and offset (v_meas = a + b v_model; one pair for the whole dataset), bounded to
-a stated plausible range (``SetupBounds``; default gain 1 +- 5 %, offset +- 25
-mV): a fit that needs more sits on the bound, and the result says so instead of
-silently accepting a set-up gain of 0.9. Rows are weighted by their noise
-``sigma`` (measurement noise of the averaged value plus the surrogate's own
-error). Parameter intervals come from the Jacobian at the optimum (95 %); a
-parameter whose interval spans more than its own value, or which sits on a
-bound, is flagged as not identifiable. Per-column terms (``column_pixel``,
-``column_afe``) are mismatch drawn around zero: they carry a Gaussian prior
-(``COLUMN_PRIOR``), so a column seen in one or two training rows is not given
-a wild value that no held-out row supports. Each fit starts from the parameters'
-``x0`` and one typical size away, and from a parameter's ``starts`` where its
-response is not monotone (readout light: the op-amp clamp's steps); the lowest
-cost wins.
+and offset for each probe (v_meas = a + b v_model; the pixel probe and the AFE
+probe are read through different paths), bounded to a stated plausible range
+(``SetupBounds``; default gain 1 +- 5 %, offset +- 25 mV): a fit that needs
+more sits on the bound, and the result says so instead of silently accepting
+a set-up gain of 0.9. The set-up's parameters are reported apart and are not
+counted as the effect's. Rows are weighted by their noise ``sigma``
+(measurement noise of the averaged value plus the surrogate's own error).
+Parameter intervals come from the Jacobian at the optimum (95 %); a parameter
+whose interval spans more than its own value, or which sits on a bound, is
+flagged as not identifiable. Per-column terms (``effects.COLUMN_EFFECTS``)
+carry a zero-mean Gaussian prior, so a column seen in one or two training rows
+is not given a wild value that no held-out row supports; ``uniform=True`` fits
+the same parameters with one value for every column (the nested model of the
+column-spread test). Each fit starts from the parameters' ``x0`` and one
+typical size away, and from a parameter's ``starts`` where its response is not
+monotone (readout light: the op-amp clamp's steps); the lowest cost wins.
 """
 from __future__ import annotations
 
@@ -24,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
-from .effects import EFFECTS, column_shift
+from .effects import COLUMN_EFFECTS, EFFECTS
 from .nominal import predict
 
 
@@ -39,80 +41,98 @@ def column_keys(X):
     return X["arr"] * 100000 + X["col"].astype(int)
 
 
-# Per-column terms are mismatch, drawn around zero: a Gaussian prior of this width keeps a
-# column seen in one or two rows from taking a wild value (a random-effects fit, not free constants).
-COLUMN_PRIOR = {"offset_pix": 0.01, "gain_pix": 0.02, "offset_afe": 0.01, "gain_afe": 0.02}
+# the set-up's parameters, per probe: offset and gain of the pixel probe, then of the AFE probe
+SETUP = ("offset_pixel_V", "gain_pixel", "offset_afe_V", "gain_afe")
+N_SETUP = len(SETUP)
 
 
-def _column_specs(name, cols):
-    n = len(cols)
-    if name == "column_pixel":
-        kinds = ("offset_pix", "gain_pix")
-    else:
-        kinds = ("offset_afe", "gain_afe", "offset_pix")
-    return [(k, -0.3, 0.3, 1e-3) for k in kinds for _ in range(n)]
+def _setup(theta, afe, v):
+    return np.where(afe, theta[2] + theta[3] * v, theta[0] + theta[1] * v)
 
 
-def model_fn(name, nom, X, cols=None):
-    """(function of full parameter vector -> prediction, parameter specs) for candidate ``name``."""
+def model_fn(name, nom, X, cols=None, uniform=False):
+    """(function of full parameter vector -> prediction, parameter specs) for candidate ``name``.
+
+    Specs are (name, lo, hi, scale, prior width or None). ``uniform``: a per-column effect with one
+    value of each parameter for every column (its uniform counterpart, no prior)."""
+    afe = X["afe"]
     if name == "none":
         specs = []
         base = predict(nom, X)
 
         def f(theta):
-            return theta[0] + theta[1] * base
-    elif name in ("column_pixel", "column_afe"):
-        idx = np.searchsorted(cols, column_keys(X))
-        specs = _column_specs(name, cols)
-        base = predict(nom, X)
-        n = len(cols)
-        zero = np.zeros(X["afe"].size)
+            return _setup(theta, afe, base)
+    elif name in COLUMN_EFFECTS:
+        params, fn = COLUMN_EFFECTS[name]
+        if uniform:
+            idx, n = np.zeros(X["afe"].size, int), 1
+            specs = [(f"{p.name}[all]", p.lo, p.hi, p.scale, None) for p in params]
+        else:
+            idx, n = np.searchsorted(cols, column_keys(X)), len(cols)
+            specs = [(f"{p.name}[{c}]", p.lo, p.hi, p.scale, p.prior) for p in params for c in cols]
+
+        @_memo
+        def g(p):
+            return predict(nom, X, fn(X, [p[j * n:(j + 1) * n][idx] for j in range(len(params))]))
 
         def f(theta):
-            p = theta[2:]
-            if name == "column_pixel":
-                sh = column_shift(X, nom.gain_afe, p[:n][idx], zero, zero, p[n:][idx])
-            else:
-                sh = column_shift(X, nom.gain_afe, p[2 * n:][idx], p[:n][idx], -p[n:2 * n][idx])
-            return theta[0] + theta[1] * (base + sh)
+            return _setup(theta, afe, g(theta[N_SETUP:]))
     else:
         params, fn = EFFECTS[name]
-        specs = [(p.name, p.lo, p.hi, p.scale) for p in params]
+        specs = [(p.name, p.lo, p.hi, p.scale, None) for p in params]
+
+        @_memo
+        def g(p):
+            return predict(nom, X, fn(X, p))
 
         def f(theta):
-            return theta[0] + theta[1] * predict(nom, X, fn(X, theta[2:]))
+            return _setup(theta, afe, g(theta[N_SETUP:]))
     return f, specs
 
 
-def fit(name, nom, X_train, y_train, sigma, cols=None, setup: SetupBounds = SetupBounds()):
-    f, specs = model_fn(name, nom, X_train, cols)
-    scales = np.array([1e-3, 1e-2] + [s[3] for s in specs])
-    lo = np.array([-setup.offset_V, 1 - setup.gain_tol] + [s[1] for s in specs]) / scales
-    hi = np.array([setup.offset_V, 1 + setup.gain_tol] + [s[2] for s in specs]) / scales
-    if name in EFFECTS and EFFECTS[name][1] is not None:
-        x0 = np.array([0.0, 1.0] + [p.x0 for p in EFFECTS[name][0]]) / scales
-    else:
-        x0 = np.array([0.0, 1.0] + [0.0] * len(specs)) / scales
+def _memo(fn):
+    """Remember the last prediction: the set-up's parameters are linear, so the Jacobian's columns for
+    them (and the optimiser's set-up-only steps) need no new prediction."""
+    last = [None, None]
+
+    def g(p):
+        key = np.asarray(p, float).tobytes()
+        if last[0] != key:
+            last[0], last[1] = key, fn(p)
+        return last[1]
+    return g
+
+
+def fit(name, nom, X_train, y_train, sigma, cols=None, setup: SetupBounds = SetupBounds(), uniform=False):
+    f, specs = model_fn(name, nom, X_train, cols, uniform)
+    s_lo = [-setup.offset_V, 1 - setup.gain_tol] * 2
+    s_hi = [setup.offset_V, 1 + setup.gain_tol] * 2
+    scales = np.array([1e-3, 1e-2] * 2 + [s[3] for s in specs])
+    lo = np.array(s_lo + [s[1] for s in specs]) / scales
+    hi = np.array(s_hi + [s[2] for s in specs]) / scales
+    plain = name in EFFECTS and EFFECTS[name][1] is not None
+    x0 = np.array([0.0, 1.0] * 2 + ([p.x0 for p in EFFECTS[name][0]] if plain else [0.0] * len(specs))) / scales
     x0 = np.clip(x0, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
 
-    prior = np.array([COLUMN_PRIOR.get(sp[0], np.inf) for sp in specs])
+    prior = np.array([np.inf if sp[4] is None else sp[4] for sp in specs])
     has_prior = bool(np.isfinite(prior).any())
-    prior_w = np.where(np.isfinite(prior), scales[2:] / prior, 0.0)
+    prior_w = np.where(np.isfinite(prior), scales[N_SETUP:] / prior, 0.0)
 
     def resid(u):
         r = (f(u * scales) - y_train) / sigma
-        return np.concatenate([r, u[2:] * prior_w]) if has_prior else r
+        return np.concatenate([r, u[N_SETUP:] * prior_w]) if has_prior else r
 
     starts = [x0]
-    if specs and name in EFFECTS and EFFECTS[name][1] is not None:
+    if specs and plain:
         s = x0.copy()   # a second start one typical size away (downwards when the parameter may be negative)
         sign = np.where(np.array([sp[1] for sp in specs]) < 0, -1.0, 1.0)
-        s[2:] = np.clip(sign * np.array([sp[3] for sp in specs]) / scales[2:], lo[2:] + 1e-9, hi[2:] - 1e-9)
+        s[N_SETUP:] = np.clip(sign * np.array([sp[3] for sp in specs]) / scales[N_SETUP:], lo[N_SETUP:] + 1e-9,
+                              hi[N_SETUP:] - 1e-9)
         starts.append(s)
         for j, prm in enumerate(EFFECTS[name][0]):
             for v in prm.starts:
                 s = x0.copy()
-                s[2 + j] = np.clip(v / scales[2 + j], lo[2 + j] + 1e-9, hi[2 + j] - 1e-9)
+                s[N_SETUP + j] = np.clip(v / scales[N_SETUP + j], lo[N_SETUP + j] + 1e-9, hi[N_SETUP + j] - 1e-9)
                 starts.append(s)
     best = None
     for s in starts:
@@ -121,13 +141,14 @@ def fit(name, nom, X_train, y_train, sigma, cols=None, setup: SetupBounds = Setu
             best = r
     theta = best.x * scales
     n, k = len(y_train), len(theta)
-    chi2 = float(np.sum(best.fun ** 2))
+    chi2 = float(np.sum(best.fun[:n] ** 2))
     info = _intervals(best, scales, n, k, lo * scales, hi * scales, theta)
-    setup_at_bound = bool(np.isclose(abs(theta[1] - 1), setup.gain_tol, rtol=1e-3)
-                          or np.isclose(abs(theta[0]), setup.offset_V, rtol=1e-3))
+    at = [bool(np.isclose(abs(theta[i] - 1), setup.gain_tol, rtol=1e-3)) for i in (1, 3)] + \
+         [bool(np.isclose(abs(theta[i]), setup.offset_V, rtol=1e-3)) for i in (0, 2)]
     return {"theta": theta, "chi2": chi2, "k": k, "n": n,
             "bic": chi2 + k * math.log(n),
-            "specs": specs, "intervals": info, "setup_at_bound": setup_at_bound}
+            "specs": specs, "intervals": info, "setup_at_bound": any(at),
+            "setup": dict(zip(SETUP, map(float, theta[:N_SETUP]))), "uniform": uniform}
 
 
 def _intervals(res, scales, n, k, lo, hi, theta):
@@ -140,7 +161,7 @@ def _intervals(res, scales, n, k, lo, hi, theta):
         sd = np.sqrt(np.maximum(np.diag(cov), 0.0))
     except np.linalg.LinAlgError:
         cond, sd = np.inf, np.full(k, np.inf)
-    for i in range(2, k):
+    for i in range(N_SETUP, k):
         at_bound = bool(np.isclose(theta[i], lo[i], rtol=0, atol=1e-6 * scales[i])
                         or np.isclose(theta[i], hi[i], rtol=0, atol=1e-6 * scales[i]))
         half = 1.96 * sd[i]
@@ -151,5 +172,5 @@ def _intervals(res, scales, n, k, lo, hi, theta):
 
 
 def evaluate(name, nom, X, fitres, cols=None):
-    f, _ = model_fn(name, nom, X, cols)
+    f, _ = model_fn(name, nom, X, cols, fitres.get("uniform", False))
     return f(fitres["theta"])

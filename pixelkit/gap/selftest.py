@@ -18,7 +18,7 @@ import numpy as np
 
 from .data import Table
 from .diagnose import diagnose
-from .effects import EFFECTS, NAMES, column_shift
+from .effects import COLUMN_EFFECTS, EFFECTS, NAMES
 from .nominal import ARRAYS, features, predict
 
 NOISE_V = 0.6e-3      # per-frame temporal noise written in v_std_V
@@ -35,15 +35,14 @@ RANGES = {
     "gse": lambda g: [1.0 / _u(g, 300, 10000)],                             # GSE 300:1 .. 1e4:1
     "fd_leakage": lambda g: [_u(g, 5e-17, 5e-16), _u(g, 6.0, 8.0)],          # ~10 - 100 mV/s on C_FD at 25 C
     "dark_current": lambda g: [_u(g, 2e-16, 2e-15), _u(g, 5.0, 9.0)],        # 1.3 - 13 ke-/s (primary)
-    "charge_injection": lambda g: [g.choice([-1, 1]) * _u(g, 0.002, 0.02), g.choice([-1, 1]) * _u(g, 0.002, 0.02),
-                                   g.choice([-1, 1]) * _u(g, 0.001, 0.01), g.choice([-1, 1]) * _u(g, 0.001, 0.01),
-                                   _u(g, 0.0, 0.02), _u(g, 0.0, 0.02)],            # + FD loading by the coupling C
-    "sf_gain": lambda g: [_u(g, 0.03, 0.10), _u(g, 0.0, 0.05), _u(g, 0.03, 0.10)],   # A_SF loss per array, ~1 % INL
+    "charge_injection": lambda g: [_u(g, 3e-18, 3e-17), g.choice([-1, 1]) * _u(g, 0.3e-15, 3e-15)],  # RST-FD, p1-vm
+    "sf_gain": lambda g: [1.0 / _u(g, 6e6, 2.5e7)],                           # 3 - 10 % chain gain loss
+    "column_load": lambda g: [g.choice([-1, 1]) * _u(g, 0.05, 0.2)],          # load current 5 - 20 % off
     "afe_gain": lambda g: [_u(g, 0.01, 0.05)],
     "readout_light": None,                                                   # scaled to the campaign (below)
     "crosstalk": lambda g: [_u(g, 0.003, 0.03)],
-    "column_pixel": lambda g: [_u(g, 0.002, 0.01), _u(g, 0.002, 0.01)],
-    "column_afe": lambda g: [_u(g, 0.001, 0.005), _u(g, 0.003, 0.01)],
+    "column_pixel": lambda g: [_u(g, 0.02, 0.08)],                            # load current mismatch (sd)
+    "column_afe": lambda g: [_u(g, 0.003, 0.01), _u(g, 0.3e-15, 1.5e-15)],    # gain (eps) and p1 coupling (sd)
     "lag": lambda g: [_u(g, 0.01, 0.05)],
     "supply": lambda g: [g.choice([-1, 1]) * _u(g, 0.01, 0.05), g.choice([-1, 1]) * _u(g, 0.01, 0.05)],
     "settling": None,                                                        # scaled to the design's read rate
@@ -102,18 +101,14 @@ def measure(design, nom, table: Table, effect: str | None, rng, params=None) -> 
     truth = {"effect": effect or "none"}
     if effect is None:
         v = predict(nom, X)
-    elif effect in ("column_pixel", "column_afe"):
+    elif effect in COLUMN_EFFECTS:
         s = RANGES[effect](rng) if params is None else params
+        kinds, fn = COLUMN_EFFECTS[effect]
         keys = X["arr"] * 100000 + X["col"].astype(int)
         uk = np.unique(keys)
-        o = dict(zip(uk, rng.normal(0, s[0], uk.size)))
-        g = dict(zip(uk, rng.normal(0, s[1] if len(s) > 1 else 0.0, uk.size)))
-        ov, gv = np.array([o[k] for k in keys]), np.array([g[k] for k in keys])
-        zero = np.zeros_like(ov)
-        sh = column_shift(X, nom.gain_afe, ov, zero, zero, gv) if effect == "column_pixel" else \
-            column_shift(X, nom.gain_afe, zero, ov, gv)
-        v = predict(nom, X) + sh
-        truth["params"] = dict(zip(("offset_rms_V", "gain_rms"), s))
+        draws = [dict(zip(uk, rng.normal(0, sd, uk.size))) for sd in s]
+        v = predict(nom, X, fn(X, [np.array([d[k] for k in keys]) for d in draws]))
+        truth["params"] = {f"{k.name}_sd": sd for k, sd in zip(kinds, s)}
     else:
         if params is not None:
             p = np.array(params)
@@ -157,12 +152,47 @@ def score(cases: list) -> dict:
     }
 
 
-def run(design, nom, n_per_effect: int = 10, n_clean: int = 20, seed: int = 1) -> dict:
+def stratified_sample(truths: dict, fraction: float, other: float = 0.25, minimum: int = 3) -> list:
+    """Case ids: per kind (``circuit`` in truth.json), the first ceil(fraction x its count) cases of an
+    in-library kind (``other`` for effect-free and out-of-library kinds), at least ``minimum`` (cases of a
+    kind are independent draws, so the first ones are a random sample of it)."""
+    by = {}
+    for cid, t in truths.items():
+        by.setdefault((t["circuit"], t["effect"] in ("none", "out_of_library")), []).append(cid)
+    out = []
+    for (_, rest), ids in by.items():
+        out += ids[:min(len(ids), max(minimum, int(np.ceil((other if rest else fraction) * len(ids)))))]
+    return out
+
+
+def stratified_rate(cases: list, population: dict, ok) -> dict:
+    """Estimate, over the whole committed set, the rate of ``ok`` on the diagnosed sample ``cases``
+    (stratified by ``circuit``; ``population``: cases per circuit in the set), with its 95 % interval
+    (normal approximation, finite-population correction per stratum). ``half_width_worst``: the interval's
+    half width were every stratum's rate 0.5 (what the sample's size guarantees whatever the outcome)."""
+    strata = {}
+    for c in cases:
+        strata.setdefault(c["circuit"], []).append(bool(ok(c)))
+    n_all = sum(population[k] for k in strata)
+    est, var, worst = 0.0, 0.0, 0.0
+    for k, xs in strata.items():
+        w, n, big_n = population[k] / n_all, len(xs), population[k]
+        p = float(np.mean(xs))
+        est += w * p
+        if n > 1:
+            var += w ** 2 * (1 - n / big_n) * p * (1 - p) / (n - 1)
+            worst += w ** 2 * (1 - n / big_n) * 0.25 / (n - 1)
+    half = 1.96 * float(np.sqrt(var))
+    return {"rate": est, "ci95": [est - half, est + half], "half_width": half, "n": len(cases),
+            "population": n_all, "half_width_worst": 1.96 * float(np.sqrt(worst))}
+
+
+def run(design, nom, n_per_effect: int = 10, n_clean: int = 20, seed: int = 1, rows: int = ROWS_PER_CASE) -> dict:
     rng = np.random.default_rng(seed)
     labels = [e for e in NAMES for _ in range(n_per_effect)] + [None] * n_clean
     cases = []
     for k, eff in enumerate(labels):
-        table = campaign(design, nom, rng)
+        table = campaign(design, nom, rng, n=rows)
         v, truth = measure(design, nom, table, eff, rng)
         table.columns["v_V"] = v
         d = diagnose(design, table, nom, seed=k)
@@ -171,5 +201,5 @@ def run(design, nom, n_per_effect: int = 10, n_clean: int = 20, seed: int = 1) -
                       "before_V": d["gap_before_rms_V"], "after_V": d["gap_after_rms_V"]})
     out = score(cases)
     out.update({"kind": "surrogate-generated", "noise_V": NOISE_V, "n_avg": N_AVG,
-                "rows_per_case": ROWS_PER_CASE, "cases": cases})
+                "rows_per_case": rows, "cases": cases})
     return out

@@ -214,14 +214,9 @@ def deck(design, nom, op, effect, p, colp, title):
             net = _scale_c11(ce.add_to_subckt(net, afe, Element("Ccc", (c["line"], "vm"), max(c["cc"], 1e-18))),
                              afe, c["c11"])
         elif effect == "column_pixel":
-            w = colp[(arr, _col_label(s, op))]["w"]
-            net = ce.set_param(net, f"ld_{col}", "w", lambda v, w=w: v * w)
-        elif effect == "sf_gain":
-            vr = float(nom.v_rst[arr].mean())
-            gate = "rs_p" if arr == "primary" else "rs_s"   # connected while the row is selected
-            net = ce.add_top(net, Element(f"Vpiv_{col}", (f"piv_{col}", "0"), vr),
-                             mosfet(f"sw_{col}", col, gate, f"m_{col}", "0", 1e-6, 0.35e-6, design.tech),
-                             Element(f"Rsf_{col}", (f"m_{col}", f"piv_{col}"), p["r_col_ohm"]))
+            net = ce.scale_load(net, col, colp[(arr, _col_label(s, op))]["w"])
+        elif effect == "sf_gain":   # connected while the row is selected
+            net = ce.column_conductance(net, design, col, float(nom.v_rst[arr].mean()), 1.0 / p["r_col_ohm"])
         elif effect == "col_clamp":
             v_lo = float(np.interp(p["clamp_at_frac"], np.linspace(0, 1, nom.v_sig[arr].size), nom.v_sig[arr]))
             gate = "rs_p" if arr == "primary" else "rs_s"
@@ -357,15 +352,15 @@ def table_of(design, rows, source):
     return validate(header, rows, design, True, source)
 
 
-def run_committed(design, nom, folder: Path = CASES_DIR, only=None) -> dict:
-    """Diagnose every committed SPICE case (blind); score by kind."""
+def run_committed(design, nom, folder: Path = CASES_DIR, only=None, only_ids=None) -> dict:
+    """Diagnose every committed SPICE case (blind; ``only``: these kinds, ``only_ids``: these cases); score."""
     from .diagnose import diagnose
     from .selftest import score
     cases, truths = load_cases(folder)
     out = []
     for cid, rows in cases.items():
         t = truths[cid]
-        if only and t["effect"] not in only:
+        if (only and t["effect"] not in only) or (only_ids is not None and cid not in only_ids):
             continue
         d = diagnose(design, table_of(design, rows, f"{folder}/cases.csv#{cid}"), nom)
         out.append({"case": cid, "truth": t["effect"], "circuit": t["circuit"], "found": d["best"],

@@ -67,6 +67,16 @@ def files_fingerprint(files: tuple[str, ...]) -> str:
     return _fingerprint(tuple(files), _closure(tuple(files)))
 
 
+def content_fingerprint(files: tuple[str, ...]) -> str:
+    """Hash of the content (and base names) of the model files and of the files they include,
+    independent of where they lie: the same library on two machines gives the same value."""
+    h = hashlib.sha256()
+    for f, st, _ in _walk(tuple(sorted(files)), "/"):
+        h.update(Path(f).name.encode() + b"\0")
+        h.update(b"(missing)" if isinstance(st, OSError) else Path(f).read_bytes())
+    return h.hexdigest()
+
+
 def _closure(files: tuple[str, ...]) -> tuple:
     """(path, size, mtime) of the files and of the files they include, stated before reading."""
     return tuple((str(f), -1, -1) if isinstance(st, (OSError, FileRefused)) else (str(f), st.st_size, st.st_mtime_ns)

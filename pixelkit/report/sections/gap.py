@@ -19,12 +19,12 @@ def build(ctx) -> Section:
                                    "pixelkit gap diagnose: adds the sim-to-real diagnosis")
     from ...gap.data import read_table
     from ...gap.diagnose import analyse
-    from ...gap.nominal import build_nominal
+    from ...gap.store import load_nominal
     from ...gap.report import write_section
     d = ctx.design
     table = read_table(ctx.measured, d, measured=True)
     ctx.progress("gap: SPICE-calibrated surrogate of the design")
-    nom = build_nominal(d, backend=ctx.backend)
+    nom = load_nominal(d, backend=ctx.backend)
     ctx.progress("gap: fitting the candidate effects")
     r, X, resid = analyse(d, table, nom)
     html = write_section(r, d.name, X, resid, ctx.out_dir)

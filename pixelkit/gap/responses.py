@@ -1,0 +1,212 @@
+"""Responses of the nominal circuit to a perturbation at one physical site, measured by SPICE.
+
+The effects of the library act at a few sites of the full chain; how a
+perturbation there reaches the two probes is not a closed form where the
+column slews (a bright signal on the primary is still slewing when S1X opens,
+so a load or a kick on the column changes how far it gets: 12 mV at 0.42 V of
+signal and 49 mV at 0.58 V for the same conductance). So, like the nominal
+levels, each site's response is measured on the nominal full-chain deck with
+one perturbation element at that site, at ``Q_PICK`` charges of the sweep and
+two amplitudes per site:
+
+- ``fd``: a charge on each FD during its hold (``circuit_edits.fd_current``;
+  stray light, leakage). Kind ``charge``: the response is written as the PD
+  charge that gives the same signal level (inverted through the nominal sweep),
+  which is exact for both probes, since everything after the hold depends only
+  on the FD's voltage;
+- ``col_g``: a conductance from the column to its reset level, switched in with
+  the row select (a load on the column during the read);
+- ``load``: the column load's width (so its current) scaled by 1 + a;
+- ``rst_fd``: a coupling capacitance from the RST clock line to FD;
+- ``p1_vm``: a coupling capacitance from the AFE's p1 clock (a > 0) or its
+  complement (a < 0) to the virtual ground vm.
+
+Kind ``level``: the table holds the shift of the pixel probe and of the AFE
+probe. Between the charges, cubic splines; in the amplitude, the polynomial
+through zero and the two measured amplitudes (quadratic; beyond the largest
+amplitude the same polynomial, so the library bounds its parameters to
+``EXTRAPOLATE`` times it). ``tests/test_gap_responses.py`` checks the
+interpolation against decks at charges and amplitudes the table was not built on.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+from . import circuit_edits as ce
+
+SUBS = ("primary", "s0", "s1", "s2")
+ARRAYS = ("primary", "secondary")
+Q_PICK = (0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 21)
+EXTRAPOLATE = 1.5
+
+
+def _arr(which):
+    return "primary" if which == "primary" else "secondary"
+
+
+def _col(which):
+    return "col_p" if which == "primary" else f"col_{which}"
+
+
+def _fd(net, design, which, amp, v_rst):
+    return ce.add_to_subckt(net, ce.pixel_subckt(which), ce.fd_current(design, _arr(which), amp, which, "site"))
+
+
+def _col_g(net, design, which, amp, v_rst):
+    return ce.column_conductance(net, design, _col(which), v_rst[_arr(which)], amp, "site")
+
+
+def _load(net, design, which, amp, v_rst):
+    return ce.scale_load(net, _col(which), 1.0 + amp)
+
+
+def _rst_fd(net, design, which, amp, v_rst):
+    from ..spice.netlist import Element
+    return ce.add_to_subckt(net, ce.pixel_subckt(which), Element("Csite", ("rst", "fd"), amp))
+
+
+def _p1_vm(net, design, which, amp, v_rst):
+    return ce.add_to_subckt(net, f"scafe_{_col(which)}", ce.afe_coupling(amp, "Csite"))
+
+
+@dataclass(frozen=True)
+class Site:
+    kind: str            # "charge" (equivalent PD charge) or "level" (probe shifts)
+    edit: object         # (net, design, which, amplitude, reset levels) -> net
+    amps: object         # (array, q_max) -> two amplitudes
+
+
+SITES = {
+    "fd": Site("charge", _fd, lambda arr, q_max: (0.005 * q_max, 0.015 * q_max)),
+    "col_g": Site("level", _col_g, lambda arr, q_max: (1 / 16e6, 1 / 6e6)),
+    "load": Site("level", _load, lambda arr, q_max: (-0.15, 0.15)),
+    "rst_fd": Site("level", _rst_fd, lambda arr, q_max: (1e-17, 3e-17)),
+    "p1_vm": Site("level", _p1_vm, lambda arr, q_max: (-3e-15, -1.5e-15, -0.6e-15, 0.6e-15, 1.5e-15, 3e-15)),
+}
+
+
+def decks(design, q_grid: dict, v_rst: dict, sites=tuple(SITES)) -> list:
+    """(site, amplitude index, grid index, netlist) of every response deck."""
+    from ..circuits.testbench import dual_pixel_bench
+    t_w = design.experiment.t_window
+    n = design.secondary_per_pixel
+    out = []
+    for name in sites:
+        s = SITES[name]
+        amps = {a: s.amps(a, q_grid[a][-1]) for a in ARRAYS}
+        for j in range(len(amps["primary"])):
+            for k in Q_PICK:
+                net = ce.specialise(dual_pixel_bench(design, q_grid["primary"][k] / t_w, q_grid["secondary"][k] / t_w,
+                                                     with_afe=True, title=f"gapsite_{name}{j}_{k}"), n)
+                for which in ("primary",) + tuple(f"s{i}" for i in range(n)):
+                    net = s.edit(net, design, which, amps[_arr(which)][j], v_rst)
+                out.append((name, j, k, net))
+    return out
+
+
+@dataclass
+class Response:
+    """One site's measured response: per array, the grid charges, the amplitudes and the table(s)."""
+    kind: str
+    q: dict          # array -> grid charges (C)
+    amps: dict       # array -> (a1, a2)
+    tables: dict     # array -> {"pix": [nq, 2], "afe": [nq, 2]} or {"dq": [nq, 2]}
+
+    def __post_init__(self):
+        self._coef, self._spl = {}, {}
+        for a in ARRAYS:
+            amps = np.asarray(self.amps[a], float)
+            if amps.size == 2:   # quadratic through zero
+                inv = np.linalg.inv(np.array([amps, amps ** 2]).T)
+                self._coef[a] = {key: [CubicSpline(self.q[a], c) for c in (np.asarray(tab) @ inv.T).T]
+                                 for key, tab in self.tables[a].items()}
+            else:                # piecewise linear through zero and the amplitudes (sorted)
+                order = np.argsort(amps)
+                self._spl[a] = (amps[order], {key: [CubicSpline(self.q[a], np.asarray(tab)[:, j]) for j in order]
+                                              for key, tab in self.tables[a].items()})
+
+    def _columns(self, key, a, qq):
+        """The table's splines at charges ``qq`` (remembered: most fits keep the charges fixed)."""
+        ck = (key, a, qq.tobytes())
+        cache = self.__dict__.setdefault("_cache", {})
+        if ck not in cache:
+            if len(cache) > 256:
+                cache.clear()
+            if a in self._coef:
+                cache[ck] = [f(qq) for f in self._coef[a][key]]
+            else:
+                amps, spl = self._spl[a]
+                k0 = int(np.searchsorted(amps, 0.0))
+                cache[ck] = (np.insert(amps, k0, 0.0),
+                             np.insert(np.array([f(qq) for f in spl[key]]), k0, 0.0, axis=0))   # [n_amp + 1, rows]
+        return cache[ck]
+
+    def bound(self, arr: str) -> float:
+        return EXTRAPOLATE * max(abs(x) for x in self.amps[arr])
+
+    def at(self, key: str, arr_idx, q, amp):
+        """The table ``key`` at each row's array, charge and amplitude."""
+        out = np.zeros(np.shape(q))
+        amp = np.broadcast_to(amp, np.shape(q))
+        for k, a in enumerate(ARRAYS):
+            m = arr_idx == k
+            if not m.any():
+                continue
+            qq = np.clip(q[m], self.q[a][0], self.q[a][-1])
+            cols = self._columns(key, a, qq)
+            if a in self._coef:
+                out[m] = cols[0] * amp[m] + cols[1] * amp[m] ** 2
+                continue
+            xs, ys = cols
+            x = amp[m]
+            j = np.clip(np.searchsorted(xs, x) - 1, 0, xs.size - 2)
+            cols = np.arange(x.size)
+            w = (x - xs[j]) / (xs[j + 1] - xs[j])
+            out[m] = ys[j, cols] * (1 - w) + ys[j + 1, cols] * w
+        return out
+
+    def as_dict(self) -> dict:
+        return {"kind": self.kind, "q": {a: list(map(float, v)) for a, v in self.q.items()},
+                "amps": {a: list(map(float, v)) for a, v in self.amps.items()},
+                "tables": {a: {k: np.asarray(v).tolist() for k, v in t.items()} for a, t in self.tables.items()}}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "Response":
+        return cls(d["kind"], {a: np.array(v) for a, v in d["q"].items()}, {a: tuple(v) for a, v in d["amps"].items()},
+                   {a: {k: np.array(v) for k, v in t.items()} for a, t in d["tables"].items()})
+
+
+def tables(design, plan: list, results: list, q_grid: dict, sweep_levels: dict, sweep_out: dict,
+           invert) -> dict:
+    """Site -> ``Response`` from the decks of ``decks`` and their results.
+
+    ``sweep_levels[arr]``: (signal level, reset level) of the nominal sweep at every grid charge;
+    ``sweep_out[arr]``: its AFE output; ``invert(arr, level)``: the grid charge giving a signal level.
+    """
+    from ..circuits.testbench import timings
+    from ..measure.pixel import levels
+    tm = timings(design, design.experiment.t_window)
+    out = {}
+    for name in dict.fromkeys(p[0] for p in plan):
+        s = SITES[name]
+        tabs = {}
+        for a, col in (("primary", "col_p"), ("secondary", "col_s0")):
+            key = ("dq",) if s.kind == "charge" else ("pix", "afe")
+            tab = {k: np.zeros((len(Q_PICK), len(s.amps(a, q_grid[a][-1])))) for k in key}
+            for (site, j, k, _), r in zip(plan, results):
+                if site != name:
+                    continue
+                i = Q_PICK.index(k)
+                sig, _rst = levels(r, col, tm[a])
+                if s.kind == "charge":
+                    tab["dq"][i, j] = invert(a, sig) - q_grid[a][k]
+                else:
+                    tab["pix"][i, j] = sig - sweep_levels[a][k, 0]
+                    tab["afe"][i, j] = float(r.at(f"out_{col}", tm[a].t_reset_level(0))) - sweep_out[a][k]
+            tabs[a] = tab
+        amps = {a: SITES[name].amps(a, q_grid[a][-1]) for a in ARRAYS}
+        out[name] = Response(s.kind, {a: np.asarray(q_grid[a])[list(Q_PICK)] for a in ARRAYS}, amps, tabs)
+    return out
