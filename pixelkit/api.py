@@ -29,12 +29,19 @@ class WorkingRangeWarning(UserWarning):
     """A design value that loads but puts the circuit outside its working range."""
 
 
-def load_design(path, warn=None):
-    """Load and validate a design file; working-range findings go to ``warn`` (default: warnings.warn)."""
+def load_design(path, warn=None, drawable: bool = True):
+    """Load and validate a design file; working-range findings go to ``warn`` (default: warnings.warn),
+    and so (``drawable``) does a layout rule the design breaks (circuit commands run it anyway)."""
     from .design import load_design as _load
     from .working_range import check
     d = _load(path)
-    for message in check(d):
+    messages = list(check(d))
+    from .layout.fit import drawing_problem
+    problem = drawing_problem(d) if drawable else None
+    if problem is not None:
+        messages.append(f"{problem} - `pixelkit layout` refuses this design until it is fixed; the circuit "
+                        "commands run it as it is")
+    for message in messages:
         if warn is None:
             _warnings.warn(message, WorkingRangeWarning, stacklevel=2)
         else:

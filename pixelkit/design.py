@@ -267,23 +267,9 @@ def load_design(path: str | Path) -> Design:
                           f"one of {', '.join(sorted(tech.models.corners))}")
     design = replace(design, tech=tech, source=str(path), raw=raw)
     check_conditions(design, tech)
-    _check_layout_rules(design)
     if design.layout is not None:
         design = with_layout(design, path.parent / design.layout.gds)
     return design
-
-
-def _check_layout_rules(design: Design) -> None:
-    """The geometry and layer rules that the design file alone decides, for every command
-    (not only ``layout``): a PD too large for its cell, transistors that do not fit, an
-    opening the grid cannot draw, two layers on one GDS layer."""
-    from .layout.cells import check_at_load
-    from .layout.rules import RuleError
-    try:
-        check_at_load(design)
-    except RuleError as exc:
-        raise ConfigError(design.source, exc.field, as_written(design.raw, exc.field, exc.value),
-                          f"a value that keeps layout rule {exc.rule} in the {exc.place} ({exc.detail})") from None
 
 
 def with_layout(design: Design, gds: Path) -> Design:

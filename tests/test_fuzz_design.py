@@ -239,24 +239,35 @@ def _tech_variant(tmp_path, **edits):
     return d
 
 
-@pytest.mark.parametrize("edits,rule", [
-    ({"layers__shield": {"layer": 21, "datatype": 0}}, "distinct_layers"),   # pd and shield on one layer
-    ({"rules__grid": "1 um"}, "grid_resolves_opening"),                       # 0.64 um2 drawn as 1 um2
-])
-def test_layout_rules_refused_at_load_with_the_rule_name(tmp_path, edits, rule):
+def test_two_layers_on_one_gds_layer_are_refused_at_load(tmp_path):
     with pytest.raises(PixelkitError) as e:
-        load_design(_tech_variant(tmp_path, **edits))
-    assert rule in str(e.value)
+        load_design(_tech_variant(tmp_path, layers__shield={"layer": 21, "datatype": 0}))  # the PD's n-well
+    assert "distinct_layers" in str(e.value)
 
 
-def test_pd_that_leaves_no_room_for_transistors_is_refused_by_every_command(tmp_path, cli):
-    """A 6 x 6 um PD in the 8 um secondary cell: the five transistors do not fit (the layout
-    generator's rule), refused by `models` too, not only by `layout`."""
+def test_a_grid_that_cannot_draw_the_opening_is_a_layout_error(tmp_path, cli):
+    """A 1 um grid draws the 0.64 um2 opening as 1 um2: `layout` refuses with the rule; the
+    circuit commands run the design with that warning."""
+    p = _tech_variant(tmp_path, rules__grid="1 um")
+    code, out, err = cli("layout", p, "--out", tmp_path / "o")
+    assert code == 2 and "grid_resolves_opening" in err and len(err.strip().splitlines()) == 1
+    code, out, err = cli("models", p)
+    assert code == 0 and "grid_resolves_opening" in err
+
+
+def test_pd_that_leaves_no_room_for_transistors_is_a_layout_error(tmp_path, cli):
+    """A 6 x 6 um PD in the 8 um secondary cell: the transistors do not fit beside it (the
+    generator's rule). `layout` refuses it naming the PD (not the pitch, not a transistor: the
+    devices would fit beside a PD of the technology's smallest side); `models` runs it with a
+    warning, so a designer can ask "what if"."""
     p = tmp_path / "d.toml"
     p.write_text(re.sub(r'^pd_width = "5 um"\npd_height = "5 um"', 'pd_width = "6 um"\npd_height = "6 um"',
                         REF.read_text(), flags=re.M))
+    code, out, err = cli("layout", p, "--out", tmp_path / "o")
+    assert code == 2 and "transistors_fit" in err and "secondary.pd_width" in err
+    assert len(err.strip().splitlines()) == 1
     code, out, err = cli("models", p)
-    assert code == 2 and "transistors_fit" in err and len(err.strip().splitlines()) == 1
+    assert code == 0 and "transistors_fit" in err and "warning" in err
 
 
 def test_size_writer_output_loads_again_from_another_folder(tmp_path):

@@ -62,7 +62,7 @@ def test_written_files_honour_the_umask(tmp_path):
 
 
 def test_gds_writing_is_deterministic(tmp_path, ref_design):
-    from pixelkit.layout.cells import build_library
+    from pixelkit.layout.library import build_library
     from pixelkit.layout.flow import write_gds
     a = write_gds(build_library(ref_design, 2, 2), tmp_path / "a.gds")
     mtime = a.stat().st_mtime_ns

@@ -32,3 +32,33 @@ def sampler(design, col: str, out: str, s1: str = "s1", s2: str = "s2") -> tuple
     dev, t = design.pixel.devices, design.tech
     return (*tgate(f"s1_{col}", col, out, s1, f"{s1}b", dev.sw_w, dev.sw_l, t),
             *tgate(f"s2_{col}", col, out, s2, f"{s2}b", dev.sw_w, dev.sw_l, t))
+
+
+CELL_PORTS = ("vdd", "col", "nbias", "out", "s1", "s1b", "s2", "s2b")
+
+
+def column_cell(design, kind: str):
+    """One column's circuit as a subcircuit ``column_<kind>`` (the cell the layout draws under /
+    over each column line): the load bias NMOS (its reference current comes in at ``nbias``),
+    the current-source load of the line and the S1X / S2X samplers to ``out``."""
+    from ..spice.netlist import Subckt
+    return Subckt(f"column_{kind}", CELL_PORTS,
+                  (*bias(design)[1:], *load(design, "col"), *sampler(design, "col", "out")))
+
+
+def dual_pixel_column(design):
+    """The dual pixel with its column circuits (``dualpix_col``): the primary's above it, one
+    per secondary column under it; each array's samplers on its own clocks."""
+    from ..spice.netlist import Element, Subckt
+    from .dual_pixel import ports
+    n = design.secondary_per_pixel
+    pix = ports(n)
+    outer = (*pix, "nbias_p", "out_p", "s1_p", "s1b_p", "s2_p", "s2b_p",
+             *(f"nbias_s{k}" for k in range(n)), *(f"out_s{k}" for k in range(n)),
+             "s1_s", "s1b_s", "s2_s", "s2b_s")
+    elems = [Element("Xpix", pix, "dualpix"),
+             Element("Xcp", ("vdd", "col_p", "nbias_p", "out_p", "s1_p", "s1b_p", "s2_p", "s2b_p"), "column_primary")]
+    for k in range(n):
+        elems.append(Element(f"Xcs{k}", ("vdd", f"col_s{k}", f"nbias_s{k}", f"out_s{k}", "s1_s", "s1b_s", "s2_s",
+                                          "s2b_s"), "column_secondary"))
+    return Subckt("dualpix_col", outer, tuple(elems))

@@ -135,12 +135,13 @@ def output_path(out, design, default_name: str) -> Path:
     return check_output(reports_root() / name / default_name)
 
 
-def load(design_path: str):
-    """Load a design for a command: warnings on stderr, failed decks kept under its reports folder."""
+def load(design_path: str, drawable: bool = True):
+    """Load a design for a command: warnings on stderr, failed decks kept under its reports folder
+    (``drawable=False``: no warning that the layout cannot be drawn - ``layout`` says it as an error)."""
     from ..api import load_design
     from ..fileio import reports_root
     from ..spice.failures import set_root
-    d = load_design(design_path, warn=warn)
+    d = load_design(design_path, warn=warn, drawable=drawable)
     set_root(reports_root() / d.name / "failed")
     return d
 

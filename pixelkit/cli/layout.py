@@ -1,6 +1,7 @@
-"""``pixelkit layout``: GDS, extraction and pictures."""
+"""``pixelkit layout``: GDS, netlists of the drawn cells, extraction, pictures; ``--drc`` / ``--lvs``."""
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import click
@@ -8,25 +9,56 @@ import click
 from .common import design_arg, emit, json_opt, load, main, out_opt, output_path
 
 
+def _render(x: dict) -> str:
+    lines = [f"GDS: {x['gds']} (cells {', '.join(x['cells'])})",
+             f"netlists: {', '.join(Path(p).name for p in x['spice'].values())}"]
+    if "png" in x:
+        lines.append(f"pictures: {x['png']}, {x['png_3d']}")
+    lines += [f"  {w}: PD {x[w]['pd_area_m2'] * 1e12:.3f} um2, perimeter {x[w]['pd_perimeter_m'] * 1e6:.2f} um, "
+              f"photoactive {x[w]['photoactive_area_m2'] * 1e12:.4f} um2" for w in ("primary", "secondary")]
+    lines.append(f"  C_A = {x['c_a']:.4f}")
+    if "drc" in x:
+        d = x["drc"]
+        head = f"DRC ({Path(d['deck']).name}, {d['top']}, {d['klayout']}, {d['seconds']:g} s): "
+        lines.append(head + ("clean" if d["clean"] else f"{d['total']} violation(s)"))
+        lines += [f"  {v['rule']} x{v['count']} in {v['cell']}: {v['description']} (first at {v['where']})"
+                  for v in d["violations"]]
+    if "lvs" in x:
+        v = x["lvs"]
+        lines.append(f"LVS ({v['top']}, kit extraction, {v['seconds']:g} s): "
+                     + ("match" if v["match"] else f"{len(v['mismatches'])} mismatch(es)"))
+        lines += [f"  {m}" for m in v["mismatches"]]
+    return "\n".join(lines)
+
+
 @main.command()
 @design_arg
 @out_opt("output folder (default: reports/<design>/layout)", folder=True)
 @click.option("--rows", type=click.IntRange(1, 1000), default=2, show_default=True)
 @click.option("--cols", type=click.IntRange(1, 1000), default=2, show_default=True)
+@click.option("--drc", is_flag=True, help="run the technology's DRC deck (KLayout batch) on the dual pixel "
+              "with its columns; exit 1 when it finds a violation")
+@click.option("--lvs", is_flag=True, help="compare the layout's extracted netlist with the kit's netlist "
+              "(KLayout Python API); exit 1 on a mismatch")
+@click.option("--pictures/--no-pictures", default=True, show_default=True, help="2D and 3D pictures")
 @click.option("--golden", is_flag=True, help="(re)write layouts/golden/<design>.gds, the geometry baseline")
 @json_opt
-def layout(design, out, rows, cols, golden, as_json):
-    """Write the GDS (dual pixel + array), extract PD area/perimeter/photoactive area, draw 2D and 3D views."""
-    from ..layout.cells import build_library
+def layout(design, out, rows, cols, drc, lvs, pictures, golden, as_json):
+    """Write the GDS (dual pixel, its column circuits, an array) and each cell's SPICE netlist, extract
+    PD area / perimeter / photoactive area, draw 2D and 3D views; --drc / --lvs sign it off."""
+    from ..layout.fit import as_config_error
     from ..layout.flow import layout_design, write_gds
-    d = load(design)
-    if golden:
-        path = write_gds(build_library(d, 2, 2), Path("layouts/golden") / f"{d.name}.gds")
-        emit({"gds": str(path)}, as_json, lambda x: f"wrote {x['gds']}")
-        return
-    r = layout_design(d, output_path(out, d, "layout"), rows, cols)
-    emit(r, as_json, lambda x: "\n".join([
-        f"GDS: {x['gds']} (cells {', '.join(x['cells'])})", f"pictures: {x['png']}, {x['png_3d']}",
-        *(f"  {w}: PD {x[w]['pd_area_m2'] * 1e12:.3f} um2, perimeter {x[w]['pd_perimeter_m'] * 1e6:.2f} um, "
-          f"photoactive {x[w]['photoactive_area_m2'] * 1e12:.4f} um2" for w in ("primary", "secondary")),
-        f"  C_A = {x['c_a']:.4f}"]))
+    from ..layout.library import build_library
+    from ..layout.rules import RuleError
+    d = load(design, drawable=False)
+    try:
+        if golden:
+            path = write_gds(build_library(d, 2, 2), Path("layouts/golden") / f"{d.name}.gds")
+            emit({"gds": str(path)}, as_json, lambda x: f"wrote {x['gds']}")
+            return
+        r = layout_design(d, output_path(out, d, "layout"), rows, cols, pictures=pictures, drc=drc, lvs=lvs)
+    except RuleError as exc:
+        raise as_config_error(d, exc) from None
+    emit(r, as_json, _render)
+    if (drc and not r["drc"]["clean"]) or (lvs and not r["lvs"]["match"]):
+        sys.exit(1)

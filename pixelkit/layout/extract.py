@@ -1,9 +1,10 @@
 """Extraction from GDS geometry: PD junction area and perimeter, photoactive area.
 
 Reads the file back (it does not trust the generator): for the ``PRIMARY`` and
-``SECONDARY`` cells, the PD layer's polygons are merged and measured (area,
-perimeter of the outline), and the photoactive area is the part of the PD not
-covered by the light shield (``PD and not SHIELD``).
+``SECONDARY`` cells, the photodiode is the n-well under the technology's photodiode
+marker (``nwell and pd_marker``, merged), measured by area and outline perimeter; the
+photoactive area is the part of it no metal covers (``PD not (metal1 or ... or metal5)``):
+the light shield's opening, less any wire the layout runs over the junction.
 """
 from __future__ import annotations
 
@@ -13,6 +14,9 @@ import gdstk
 
 from ..errors import ConfigError
 from ..fileio import path_kind
+
+
+METALS = ("metal1", "metal2", "metal3", "metal4", "metal5")
 
 
 def _on(polys, layer):
@@ -47,12 +51,13 @@ def extract(gds: str | Path, tech) -> dict:
         if cell is None:
             raise ConfigError(str(path), "layout.gds", str(path), f"a GDS with a {which.upper()} cell")
         polys = cell.get_polygons()
-        pd = gdstk.boolean(_on(polys, tech.layers.pd), [], "or")
-        shield = _on(polys, tech.layers.shield)
+        pd = gdstk.boolean(_on(polys, tech.layer("nwell")), _on(polys, tech.layer("pd_marker")), "and")
+        metal = [p for m in METALS for p in _on(polys, tech.layer(m))]
         if not pd:
-            raise ConfigError(str(path), f"{which.upper()} cell", "no PD shapes",
-                              f"PD polygons on layer {tech.layers.pd.layer}/{tech.layers.pd.datatype}")
-        open_ = gdstk.boolean(pd, shield, "not")
+            raise ConfigError(str(path), f"{which.upper()} cell", "no photodiode",
+                              f"an n-well ({tech.layer('nwell')}) under the photodiode marker "
+                              f"({tech.layer('pd_marker')})")
+        open_ = gdstk.boolean(pd, metal, "not")
         out[which] = {"pd_area_m2": _area(pd) * scale ** 2, "pd_perimeter_m": _perimeter(pd) * scale,
                       "photoactive_area_m2": _area(open_) * scale ** 2}
     return out

@@ -1,17 +1,20 @@
-"""The ``pixelkit layout`` flow: GDS under layouts/, extraction, 2D and 3D pictures."""
+"""The ``pixelkit layout`` flow: GDS under the output folder, the SPICE netlist of each drawn cell
+beside it, extraction, pictures, and on request the sign-off (DRC with the technology's deck,
+the kit's LVS)."""
 from __future__ import annotations
 
 import filecmp
 from datetime import datetime
 from pathlib import Path
 
-from ..fileio import atomic_target, commit
-from .cells import build_library
+from ..fileio import atomic_target, commit, write_atomic
 from .extract import extract
-
+from .library import build_cells, to_library
 
 #: GDS headers carry a modification time; a fixed one makes equal geometry give equal bytes.
 GDS_TIMESTAMP = datetime(2000, 1, 1)
+#: The cell the sign-off runs on: the dual pixel with its column circuits (every cell below it).
+SIGNOFF_TOP = "DUALPIX_COL"
 
 
 def write_gds(lib, path: Path) -> Path:
@@ -24,18 +27,39 @@ def write_gds(lib, path: Path) -> Path:
     return commit(path, tmp)
 
 
+def write_netlists(design, cells, folder: Path) -> dict:
+    """``<cell>.spice`` beside the GDS for every cell the kit has a netlist of."""
+    from .signoff.schematic import CELL_CIRCUIT, circuits_of, lvs_view, spice_text
+    out = {}
+    for name in cells:
+        if name in CELL_CIRCUIT:
+            text = spice_text(lvs_view(design, circuits_of(design, name)), f"{design.name} {name}")
+            out[name] = str(write_atomic(Path(folder) / f"{name}.spice", text))
+    return out
+
+
 def layout_design(design, out_dir: Path = Path("layouts"), rows: int = 2, cols: int = 2,
-                  pictures: bool = True) -> dict:
-    from .render import plot_2d, view_3d
-    lib = build_library(design, rows, cols)
+                  pictures: bool = True, drc: bool = False, lvs: bool = False) -> dict:
+    from .rules import check
+    check(design)
+    cells = build_cells(design)          # every rule and route checked before any file is written
+    lib = to_library(design, cells, rows, cols)
     gds = write_gds(lib, Path(out_dir) / f"{design.name}.gds")
+    spice = write_netlists(design, cells, Path(out_dir))
     ex = extract(gds, design.tech)
-    result = {"gds": str(gds), **ex,
+    result = {"gds": str(gds), **ex, "spice": spice,
               "c_a": ex["primary"]["pd_area_m2"] / ex["secondary"]["pd_area_m2"],
               "cells": [c.name for c in lib.cells]}
     if pictures:
+        from .render import plot_2d, view_3d
         dual = next(c for c in lib.cells if c.name == "DUALPIX")
         result["png"] = str(plot_2d(dual, design.tech, Path(out_dir) / f"{design.name}_dualpix.png",
                                     f"{design.name}: integrated dual pixel"))
         result["png_3d"] = str(view_3d(dual, design.tech, Path(out_dir) / f"{design.name}_dualpix_3d.png"))
+    if drc:
+        from .signoff.drc import run_drc
+        result["drc"] = run_drc(gds, SIGNOFF_TOP, design.tech, Path(out_dir) / "drc").as_dict()
+    if lvs:
+        from .signoff.lvs import run_lvs
+        result["lvs"] = run_lvs(gds, SIGNOFF_TOP, design, Path(out_dir) / "lvs").as_dict()
     return result

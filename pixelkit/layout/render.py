@@ -12,15 +12,16 @@ import numpy as np  # noqa: E402
 from ..fileio import atomic_target, commit  # noqa: E402
 
 # layer name -> (colour, z bottom um, z top um) of a schematic cross-section
-STACK = {"pd": ("#4c72b0", -1.0, 0.0), "active": ("#55a868", 0.0, 0.05), "poly": ("#c44e52", 0.05, 0.3),
-         "contact": ("#8c8c8c", 0.3, 0.9), "metal1": ("#dd8452", 0.9, 1.4), "shield": ("#937860", 4.0, 4.6)}
+STACK = {"nwell": ("#4c72b0", -1.0, 0.0), "active": ("#55a868", 0.0, 0.05), "poly": ("#c44e52", 0.05, 0.3),
+         "metal1": ("#dd8452", 0.9, 1.2), "metal2": ("#8172b3", 1.6, 1.9), "metal3": ("#da8bc3", 2.3, 2.6),
+         "metal4": ("#ccb974", 3.0, 3.3), "shield": ("#937860", 4.0, 4.6)}
 
 
 def _by_layer(cell, tech):
     polys = cell.get_polygons()
     out = {}
     for name in STACK:
-        l_ = getattr(tech.layers, name)
+        l_ = tech.layer(name)
         out[name] = [p.points for p in polys if (p.layer, p.datatype) == (l_.layer, l_.datatype)]
     return out
 
@@ -72,7 +73,7 @@ def view_3d(cell, tech, path: Path) -> Path:
     plotter.enable_parallel_projection()
     plotter.view_vector((0.45, -1.0, 1.1))
     plotter.reset_camera()
-    plotter.add_text("PD | active | poly | contact | metal1 | shield", font_size=9)
+    plotter.add_text("n-well (PD) | active | poly | metal1 - metal4 | shield (top metal)", font_size=9)
     path, tmp = atomic_target(path)
     plotter.screenshot(str(tmp))
     plotter.close()

@@ -1,9 +1,9 @@
-"""The layout rules the kit knows, checked on a design before anything is drawn.
+"""The kit's own layout rules on a design (PD and opening sizes), checked before anything is drawn.
 
-Each violation raises :class:`RuleError` naming the rule, the place (cell) and
-the numbers involved. ``cells.check_at_load`` runs every rule the design file
-alone decides - including the layer map, the grid and a dry run of the cells -
-when a design is loaded, so every command refuses what ``layout`` would refuse.
+Each violation raises :class:`RuleError` naming the rule, the place (cell), the numbers
+involved and the design field that breaks it. The generators raise the same error when
+the devices do not fit (``pixel.py``); ``fit.py`` runs both without writing anything. The
+foundry's own rules are the deck's business (``signoff/drc.py``).
 """
 from __future__ import annotations
 
@@ -13,8 +13,6 @@ from ..errors import PixelkitError
 
 #: Largest relative change of the mask-opening area that snapping to the grid may cause.
 GRID_AREA_TOLERANCE = 0.01
-#: Layers that hold real geometry and must each have their own (layer, datatype).
-_DRAWN = ("pd", "active", "poly", "contact", "metal1", "shield", "opening", "boundary")
 
 
 class RuleError(PixelkitError):
@@ -57,16 +55,3 @@ def check(design) -> None:
                                 f"the {r.grid * 1e9:g} nm grid draws the {sub.mask_opening * 1e12:.4g} um2 "
                                 f"opening as {drawn ** 2 * 1e12:.4g} um2 ({change * 100:.1f} % off, more than "
                                 f"{GRID_AREA_TOLERANCE * 100:g} %)", where, sub.mask_opening)
-
-
-def check_layers(tech) -> None:
-    """Every drawn layer on its own (layer, datatype): two on one would merge their shapes."""
-    seen = {}
-    for name in _DRAWN:
-        lay = getattr(tech.layers, name)
-        key = (lay.layer, lay.datatype)
-        if key in seen:
-            raise RuleError("distinct_layers", f"technology {tech.name}",
-                            f"layers.{name} and layers.{seen[key]} are both GDS {key[0]}/{key[1]}",
-                            f"layers.{name}", f"{key[0]}/{key[1]}")
-        seen[key] = name

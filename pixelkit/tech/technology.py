@@ -9,9 +9,10 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..errors import ConfigError
+from ..errors import MISSING, ConfigError
 from ..fileio import path_kind
-from ..schema import flag, ident, integer, load, num, qty, read_toml, table, text
+from ..schema import flag, ident, load, num, qty, read_toml, table, text
+from .layout_data import Layer, LayoutData, Rule, Signoff, parse_layers, parse_rules, parse_signoff
 from .modellib import ModelLibrary, load_model_library
 
 BUILTIN_DIR = Path(__file__).parent / "builtin"
@@ -87,24 +88,6 @@ class LayoutRules:
 
 
 @dataclass(frozen=True)
-class Layer:
-    layer: int = integer(ge=0, le=65535)
-    datatype: int = integer(ge=0, le=65535)
-
-
-@dataclass(frozen=True)
-class LayerMap:
-    pd: Layer = table(Layer, doc="n-well photodiode")
-    active: Layer = table(Layer)
-    poly: Layer = table(Layer)
-    contact: Layer = table(Layer)
-    metal1: Layer = table(Layer)
-    shield: Layer = table(Layer, doc="top metal light shield")
-    opening: Layer = table(Layer, doc="marker: shield openings")
-    boundary: Layer = table(Layer, doc="cell boundary")
-
-
-@dataclass(frozen=True)
 class Mismatch:
     """Matching of what the model library does not vary itself. (The GF180MCU MOSFET
     models carry their own Pelgrom mismatch, switched on by ``sw_stat_mismatch``.)"""
@@ -124,10 +107,31 @@ class Technology:
     photodiode: Photodiode = table(Photodiode)
     mos: Mos = table(Mos)
     rules: LayoutRules = table(LayoutRules)
-    layers: LayerMap = table(LayerMap)
     mismatch: Mismatch | None = table(Mismatch, None)
     models: ModelLibrary = field(default=None, metadata=dict(kind="skip"))
+    layout: LayoutData = field(default=None, metadata=dict(kind="skip"), repr=False)
     source: str = field(default="", metadata=dict(kind="skip"))
+
+    def layer(self, name: str) -> Layer:
+        """The GDS layer the technology draws ``name`` on (aliases resolved)."""
+        lay = self.layout.layers.get(self.layout.aliases.get(name, name))
+        if lay is None:
+            raise ConfigError(self.source, f"layers.{name}", MISSING,
+                              f"a layer {name!r} in the technology's [layers] table (a generator draws on it)")
+        return lay
+
+    def rule(self, key: str) -> Rule:
+        """The geometry rule ``key`` ("active.width", "poly.extension.active", ...)."""
+        r = self.layout.rules.get(key)
+        if r is None:
+            layer, _, rest = key.partition(".")
+            raise ConfigError(self.source, f"rules.{key}", MISSING,
+                              f"a rule {rest!r} in the technology's [rules.{layer}] table (a generator needs it)")
+        return r
+
+    @property
+    def signoff(self) -> Signoff:
+        return self.layout.signoff
 
     def qe(self, wavelength_m):
         """Quantum efficiency at ``wavelength_m`` (linear interpolation of the table)."""
@@ -185,11 +189,15 @@ def load_technology(name_or_path: str | Path, relative_to: Path | None = None, s
     models_raw = raw.pop("models", None)
     pd_raw = raw.get("photodiode")
     qe = _qe_curve(pd_raw, source) if isinstance(pd_raw, dict) else ((), ())
+    layers, aliases = parse_layers(raw.pop("layers", None), source)
+    rules = parse_rules(raw["rules"], source) if isinstance(raw.get("rules"), dict) else {}
+    signoff = parse_signoff(raw.pop("signoff", None), source, str(path.parent))
     tech = load(Technology, raw, "", source)
     models = load_model_library(models_raw, path.parent, source)
     pd = tech.photodiode
     object.__setattr__(pd, "qe_wavelength_nm", qe[0])
     object.__setattr__(pd, "qe_value", qe[1])
     object.__setattr__(tech, "models", models)
+    object.__setattr__(tech, "layout", LayoutData(layers, aliases, rules, signoff))
     object.__setattr__(tech, "source", source)
     return tech

@@ -1,0 +1,188 @@
+"""The column circuit drawn from ``circuits.column.column_cell`` - the load bias NMOS, the line's
+current-source load and the S1X / S2X transmission gates - and the dual pixel with its columns.
+
+A column cell is as wide as the column pitch it serves (8 um under a secondary column, 24 um
+over the primary one: column-parallel circuits are tall and narrow). From the edge away from
+the array: the P+ substrate tap, the load / bias strip (col | LOAD | vss | BIAS | nbias), the
+N-channel sampler strip (out | S1 | col | S2 | out) and the P-channel one in its n-well (with
+the well's N+ tap). The clocks and supplies (s1, s1b, s2, s2b, vdd, vss) are full-width metal3
+lines; ``col`` continues the array's column line (metal4, same x) and ``out`` / ``nbias`` leave
+on metal4 tracks on the other side, at x the dual pixel leaves free.
+"""
+from __future__ import annotations
+
+from .canvas import Canvas, box
+from .dual import SUPPLIES
+from .primitives import Mos, mos_strip, pad_side, tap, tap_size, well
+from .route import Lines, RouteError, route_all, stub_to_track, track, via_on
+from .rules import RuleError
+
+LINES = ("s1", "s1b", "s2", "s2b", "vdd", "vss")
+
+
+def _sizes(design, lt):
+    dev = design.pixel.devices
+    out = {}
+    for name, field, mult in (("load", "load", 1), ("sw", "sw", 1), ("swp", "sw", 2)):
+        w, l_ = getattr(dev, f"{field}_w") * mult, getattr(dev, f"{field}_l")
+        for f, v in ((f"{field}_w", getattr(dev, f"{field}_w")), (f"{field}_l", l_)):
+            nm = v * 1e9
+            if abs(nm - round(nm / lt.grid) * lt.grid) > 1e-3:
+                raise RuleError("grid", "column cell", f"{v * 1e6:g} um is not on the {lt.grid:g} nm grid",
+                                f"pixel.devices.{f}", v)
+        out[name] = (lt.snap(w * 1e9), lt.snap(l_ * 1e9))
+    return out
+
+
+def column_cell(design, lt, kind: str, width: int, tracks: dict, reserved: list, array_side: str,
+                place_only: bool = False) -> Canvas:
+    """The column cell of ``kind`` ("primary" / "secondary"), ``width`` nm wide; ``tracks``: the
+    metal4 x of col, out and nbias; ``reserved``: metal4 x ranges to leave free; ``array_side``:
+    "top" (the cell sits under the array) or "bottom"."""
+    name = "COLUMN_P" if kind == "primary" else "COLUMN_S"
+    cv = Canvas(name, lt)
+    sz = _sizes(design, lt)
+    pad4 = pad_side(lt, "metal4")
+    for x0, x1 in reserved:
+        cv.block(["metal4"], box(x0, -10 ** 6, x1, 10 ** 6), "#reserved")
+    x_r = min(tracks.values()) - pad4 // 2 - lt.space("metal4") - pad_side(lt, "metal1")
+    x_r = (x_r // lt.grid) * lt.grid
+    side, iside = tap_size(lt, "p")
+    enc_np = lt.nm("nplus.enclosure.active")
+    y = lt.space("nplus") // 2 + iside // 2
+    tap_p = tap(cv, lt, "p", x_r - side // 2, y, "vss")
+    y = y - side // 2 + max(iside // 2 + enc_np + side // 2, side + lt.space("active"))
+    load = [Mos("ld", *sz["load"]), Mos("bias", *sz["load"])]
+    a = mos_strip(cv, lt, "n", x_r, y, load, ["col", "nbias", "vss", "nbias", "nbias"], [True] * 3, "left")
+    sw = [Mos("s1n", *sz["sw"]), Mos("s2n", *sz["sw"])]
+    b = mos_strip(cv, lt, "n", x_r, a.comp.y1 + lt.space("active"), sw, ["out", "s1", "col", "s2", "out"],
+                  [True] * 3, "left")
+    nw_e = lt.nm("nwell.enclosure.pcomp")
+    swp = [Mos("s1p", *sz["swp"]), Mos("s2p", *sz["swp"])]
+    yc = b.comp.y1 + lt.nm("nwell.space_to.ncomp") + nw_e
+    c = mos_strip(cv, lt, "p", x_r, lt.snap_up(yc), swp, ["out", "s1b", "col", "s2b", "out"], [True] * 3, "left")
+    nside, niside = tap_size(lt, "n")
+    ty = c.comp.y1 + max(lt.space("active"), lt.nm("pplus.enclosure.active") + lt.nm("pplus.space_to.active"),
+                         lt.nm("nplus.space_to.active") + (niside - nside) // 2) + nside // 2
+    ty = lt.snap_up(ty)
+    ntap_comp, tap_n = tap(cv, lt, "n", x_r - nside // 2, ty, "vdd")
+    nw = well(cv, lt, [c.comp, ntap_comp], "vdd")
+    height = lt.snap_up(nw.y1 + lt.space("nwell") // 2 + lt.space("nwell") // 2)
+    if min(a.extent.x0, b.extent.x0, c.extent.x0, nw.x0) < lt.space("nwell") // 2:
+        raise RuleError("transistors_fit", f"{name} cell", f"the column circuit needs "
+                        f"{(width - min(a.extent.x0, nw.x0) + lt.space('nwell')) / 1000:g} um of the "
+                        f"{width / 1000:g} um column pitch", "pixel.devices.sw_w", design.pixel.devices.sw_w)
+    cv.add("boundary", box(0, 0, width, height), "")
+    if place_only:
+        return cv
+    # per-column nets: metal4 tracks; col toward the array, out / nbias away from it
+    terms = {"col": [p for n, p in a.sd + b.sd + c.sd if n == "col"],
+             "out": [p for n, p in b.sd + c.sd if n == "out"], "nbias": [dict(a.sd)["nbias"]]}
+    # nbias: the bias device is diode-connected, its two gates tied to its drain on metal1
+    g_ld, g_bias = a.gates[0][1], a.gates[1][1]
+    w1 = lt.width("metal1")
+    cv.add("metal1", box(g_ld.x0, g_ld.cy, g_ld.x0 + w1, terms["nbias"][0].cy), "nbias")
+    cv.add("metal1", box(g_ld.x0, terms["nbias"][0].y0, terms["nbias"][0].x1, terms["nbias"][0].y1), "nbias")
+    for net, pads in terms.items():
+        x = tracks[net]
+        for p in pads:
+            stub_to_track(cv, lt, net, p, x, "metal4")
+        rows = [p.cy for p in pads]
+        toward = (net == "col") == (array_side == "top")
+        y0, y1 = (min(rows), height) if toward else (0, max(rows))
+        track(cv, lt, net, "metal4", x, y0, y1)
+        cv.label("metal4_label", x, (y0 + y1) // 2, net)
+    half = lt.space("metal3") // 2
+    lines = Lines("metal3", 0, width, [(half, height - half)])
+    terminals = {"s1": b.gates[0][1], "s2": b.gates[1][1], "s1b": c.gates[0][1], "s2b": c.gates[1][1],
+                 "vss": dict(a.sd)["vss"], "vdd": tap_n}
+    route_all(cv, lt, lines, terminals, sorted(terminals, key=lambda n: terminals[n].cy))
+    from .route import route_to_line
+    route_to_line(cv, lt, lines, "vss", tap_p[1])          # the substrate tap onto the vss line
+    cv.ports = {"lines": dict(lines.y), "height": height, "tracks": dict(tracks)}
+    return cv
+
+
+def _edge_tracks(cv: Canvas, y: int, layer: str = "metal4") -> list:
+    """x ranges of the ``layer`` shapes of ``cv`` (with placed cells) that reach height y."""
+    return sorted({(s.box.x0, s.box.x1) for s in cv.shapes_on(layer) if not s.net.startswith("#")
+                   and s.box.y0 <= y <= s.box.y1})
+
+
+def _pick(xs, taken, n, pad):
+    out = []
+    for x in xs:
+        if all(x + pad // 2 + 280 <= a or x - pad // 2 - 280 >= b for a, b in taken):
+            out.append(x)
+            taken = taken + [(x - pad // 2, x + pad // 2)]
+            if len(out) == n:
+                return out
+    raise RouteError("column cell", "out", "no free metal4 track for out / nbias")
+
+
+def dual_pixel_column(design, lt, dual: Canvas) -> tuple[dict, Canvas]:
+    """COLUMN_P, COLUMN_S and DUALPIX_COL around the drawn DUALPIX."""
+    n = design.secondary_per_pixel
+    ps, pp = lt.snap(design.secondary.pitch * 1e9), lt.snap(design.primary.pitch * 1e9)
+    hd = dual.ports["height"]
+    pad4, s4 = pad_side(lt, "metal4"), lt.space("metal4")
+    pitch = pad4 + s4
+    # under the secondaries: what DUALPIX brings down to its bottom edge, in one secondary's x
+    bottom = _edge_tracks(dual, 0)
+    local = [(a - k * ps, b - k * ps) for a, b in bottom for k in range(n) if 0 <= a - k * ps < ps]
+    xcs = dual.ports["col_s0"][1]
+    o, nb = _pick([xcs - pitch * i for i in range(1, 30)], [r for r in local if not (r[0] <= xcs <= r[1])], 2, pad4)
+    cs = column_cell(design, lt, "secondary", ps, {"col": xcs, "out": o, "nbias": nb},
+                     [r for r in local if not (r[0] <= xcs <= r[1])], "top")
+    top_edge = _edge_tracks(dual, hd)
+    xcp = dual.ports["col_p"][1]
+    others = [r for r in top_edge if not (r[0] <= xcp <= r[1])]
+    o, nb = _pick([xcp - pitch * i for i in range(1, 40)], others, 2, pad4)
+    cp = column_cell(design, lt, "primary", pp, {"col": xcp, "out": o, "nbias": nb}, others, "bottom")
+    hs = cs.ports["height"]
+    top = Canvas("DUALPIX_COL", lt)
+    for k in range(n):
+        top.place(cs, k * ps, 0, {"col": f"col_s{k}", "out": f"out_s{k}", "nbias": f"nbias_s{k}",
+                                   "s1": "s1_s", "s1b": "s1b_s", "s2": "s2_s", "s2b": "s2b_s",
+                                   "vdd": "vdd", "vss": "vss"}, name=f"xcs{k}")
+    dual_nets = {p: p for p in ("vdd", "vpdr", "vrst", "vss", "col_p", *(f"col_s{k}" for k in range(n)),
+                                *(f"{c}_{a}" for c in ("ec", "tg", "rst", "rs") for a in ("p", "s")))}
+    top.place(dual, 0, hs, dual_nets, name="xpix")
+    top.place(cp, 0, hs + hd, {"col": "col_p", "out": "out_p", "nbias": "nbias_p", "s1": "s1_p",
+                               "s1b": "s1b_p", "s2": "s2_p", "s2b": "s2b_p", "vdd": "vdd", "vss": "vss"},
+              name="xcp")
+    # vdd and vss: the dual pixel's metal4 verticals on through the column cells, onto their lines
+    for net in ("vdd", "vss"):
+        xs = {s.box.cx for s in dual.shapes_on("metal4") if s.net == net and s.box.y0 == 0 and s.box.y1 == hd}
+        if not xs:
+            raise RouteError("DUALPIX_COL", net, "no supply track in the dual pixel")
+        x = min(xs)
+        k = x // ps
+        track(top, lt, net, "metal4", x, 0, hs)
+        via_on(top, lt, net, x, cs.ports["lines"][net], "metal3", "metal4")
+        hc = cp.ports["height"]
+        track(top, lt, net, "metal4", x, hs + hd, hs + hd + hc)
+        via_on(top, lt, net, x, hs + hd + cp.ports["lines"][net], "metal3", "metal4")
+        del k
+    # the dual pixel's own ports, named again at this level (its row lines and supply tracks)
+    w3 = lt.width("metal3")
+    for c in ("ec", "tg", "rst", "rs"):
+        top.label("metal3_label", w3, hs + dual.ports["lines_s"][c], f"{c}_s")
+        top.label("metal3_label", w3, hs + ps + dual.ports["lines_p"][c], f"{c}_p")
+    for net in ("vpdr", "vrst"):
+        top.label("metal3_label", w3, hs + dual.ports["lines_s"][net], net)
+    for net, y in cs.ports["lines"].items():
+        if net not in SUPPLIES:
+            top.label("metal3_label", lt.width("metal3"), y, f"{net}_s")
+    for net, y in cp.ports["lines"].items():
+        if net not in SUPPLIES:
+            top.label("metal3_label", lt.width("metal3"), hs + hd + y, f"{net}_p")
+    for k in range(n):
+        for net in ("out", "nbias"):
+            top.label("metal4_label", k * ps + cs.ports["tracks"][net], 1, f"{net}_s{k}")
+    for net in ("out", "nbias"):
+        top.label("metal4_label", cp.ports["tracks"][net], hs + hd + cp.ports["height"] - 1, f"{net}_p")
+    total = hs + hd + cp.ports["height"]
+    top.add("boundary", box(0, 0, pp, total), "")
+    top.ports = {"width": pp, "height": total}
+    return {"COLUMN_P": cp, "COLUMN_S": cs}, top

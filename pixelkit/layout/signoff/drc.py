@@ -1,0 +1,131 @@
+"""DRC with the technology's own deck, run by KLayout in batch mode (Debian's ``klayout -b``).
+
+The deck is the judge: the kit only runs it and reads its report, a KLayout marker
+database (XML, one ``<category>`` per rule, one ``<item>`` per violation, each in the
+cell where the deck found it - in deep mode the cell of the hierarchy, with cell-local
+coordinates). No user string reaches the command line: the switches come from the
+technology file (checked to be plain tokens), the paths are the kit's own.
+"""
+from __future__ import annotations
+
+import re
+import shutil
+import subprocess
+import time
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ...errors import PixelkitError
+from .decks import drc_deck
+
+KLAYOUT_HINT = "install Debian's klayout (apt-get install klayout; setup.sh does)"
+
+
+@dataclass(frozen=True)
+class Violation:
+    rule: str
+    description: str
+    cell: str
+    where: str        # first marker of the rule in that cell (its geometry, cell coordinates in um)
+    count: int
+
+
+@dataclass
+class DrcResult:
+    deck: str
+    top: str
+    options: dict
+    seconds: float
+    klayout: str
+    violations: list = field(default_factory=list)
+    report: str = ""
+
+    @property
+    def clean(self) -> bool:
+        return not self.violations
+
+    @property
+    def total(self) -> int:
+        return sum(v.count for v in self.violations)
+
+    def by_rule(self) -> dict:
+        out: dict = {}
+        for v in self.violations:
+            out[v.rule] = out.get(v.rule, 0) + v.count
+        return out
+
+    def in_cell(self, cell: str) -> dict:
+        out: dict = {}
+        for v in self.violations:
+            if v.cell == cell:
+                out[v.rule] = out.get(v.rule, 0) + v.count
+        return out
+
+    def as_dict(self) -> dict:
+        return {"clean": self.clean, "total": self.total, "by_rule": self.by_rule(), "deck": self.deck,
+                "top": self.top, "options": self.options, "seconds": round(self.seconds, 2),
+                "klayout": self.klayout, "report": self.report,
+                "violations": [v.__dict__ for v in self.violations]}
+
+
+def klayout_binary() -> str:
+    exe = shutil.which("klayout")
+    if exe is None:
+        raise PixelkitError(f"KLayout is not installed (no `klayout` on PATH): {KLAYOUT_HINT}")
+    return exe
+
+
+def klayout_version() -> str:
+    p = subprocess.run([klayout_binary(), "-b", "-v"], capture_output=True, text=True, timeout=60)
+    return p.stdout.strip()
+
+
+def parse_report(path: Path) -> list[Violation]:
+    root = ET.parse(path).getroot()
+    desc = {}
+    for c in root.iter("category"):
+        name = c.findtext("name")
+        if name:
+            desc[name] = (c.findtext("description") or "").strip()
+    found: dict = {}
+    for item in root.iter("item"):
+        rule = (item.findtext("category") or "").strip().strip("'")
+        cell = (item.findtext("cell") or "").strip()
+        n = int(item.findtext("multiplicity") or 1)
+        value = (item.findtext("values/value") or "").strip()
+        key = (rule, cell)
+        if key in found:
+            found[key][1] += n
+        else:
+            found[key] = [value, n]
+    return [Violation(rule, desc.get(rule, ""), cell, where, n) for (rule, cell), (where, n) in sorted(found.items())]
+
+
+def run_drc(gds: Path, top: str, tech, workdir: Path, threads: int = 2, mode: str | None = None) -> DrcResult:
+    """Run the technology's DRC deck on cell ``top`` of ``gds``; report and log in ``workdir``."""
+    deck = drc_deck(tech)
+    exe = klayout_binary()
+    workdir = Path(workdir)
+    workdir.mkdir(parents=True, exist_ok=True)
+    report = workdir / f"{top}.lyrdb"
+    log = workdir / f"{top}.drc.log"
+    options = dict(tech.signoff.drc_options)
+    if mode:
+        options["run_mode"] = mode
+    if not re.fullmatch(r"[A-Za-z0-9_]+", top):
+        raise PixelkitError(f"cell name {top!r}: expected letters, digits and '_'")
+    args = [exe, "-b", "-r", str(deck), "-rd", f"input={Path(gds).resolve()}", "-rd", f"report={report.resolve()}",
+            "-rd", f"topcell={top}", "-rd", f"thr={threads}"]
+    for k, v in sorted(options.items()):
+        args += ["-rd", f"{k}={v}"]
+    report.unlink(missing_ok=True)
+    t0 = time.perf_counter()
+    with open(log, "w") as f:
+        p = subprocess.run(args, stdout=f, stderr=subprocess.STDOUT, cwd=workdir)
+    seconds = time.perf_counter() - t0
+    if p.returncode != 0 or not report.is_file():
+        tail = log.read_text(errors="replace").strip().splitlines()[-3:]
+        raise PixelkitError(f"the DRC deck {deck.name} failed on {gds} (exit {p.returncode}): "
+                            f"{' | '.join(tail)}; log: {log}")
+    return DrcResult(str(deck), top, options, seconds, klayout_version(), parse_report(report), str(report))

@@ -1,0 +1,263 @@
+"""The kit's own LVS: extract the layout's netlist with KLayout's Python API and compare it with
+the kit's netlist of the same cell (``schematic.py``).
+
+Extraction (``klayout.db.LayoutVsSchematic``, hierarchical), from the technology's layers by
+name - the generic CMOS derivations the foundry decks make too:
+
+- gates: poly over active; N-channel where N+ outside the n-well, P-channel where P+ inside it;
+  sources / drains the rest of that active (``mos4`` devices named as the technology's
+  ``nmos`` / ``pmos``, W and L in um);
+- the photodiode: the n-well under the photodiode marker, one ``diode`` device whose area and
+  perimeter are those of the well (the junction the models use), anode on the substrate;
+- taps: P+ active outside the well ties the substrate (the global net ``vss``), N+ active in
+  the well ties the well; contacts, metal1 - metal5 and the vias connect the rest; texts on the
+  ``<metal>_label`` layers name nets.
+
+The comparison (``klayout.db.NetlistComparer``) matches W and L within 1 nm and the diode's area
+and perimeter within 0.1 %, and reports each mismatch by its net, device and parameter.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ...errors import PixelkitError
+from .schematic import CELL_CIRCUIT, VSS, circuits_of, lvs_view, to_klayout
+
+METALS = ("metal1", "metal2", "metal3", "metal4", "metal5")
+VIAS = ("via1", "via2", "via3", "via4")
+
+
+@dataclass
+class LvsResult:
+    top: str
+    match: bool
+    seconds: float
+    mismatches: list = field(default_factory=list)
+    devices: int = 0
+    nets: int = 0
+    report: str = ""
+
+    def as_dict(self) -> dict:
+        return {"match": self.match, "top": self.top, "seconds": round(self.seconds, 2), "devices": self.devices,
+                "nets": self.nets, "mismatches": self.mismatches, "report": self.report}
+
+
+def _layers(lvs, layout, tech):
+    import klayout.db as kdb
+    out = {}
+
+    def get(name, kind="poly"):
+        lay = tech.layer(name)
+        idx = layout.find_layer(lay.layer, lay.datatype)
+        if idx is None:
+            idx = layout.insert_layer(kdb.LayerInfo(lay.layer, lay.datatype))
+        if kind == "text":
+            return lvs.make_text_layer(idx, name)
+        return lvs.make_polygon_layer(idx, name)
+
+    for n in ("nwell", "active", "poly", "nplus", "pplus", "contact", "pd_marker", *METALS, *VIAS):
+        out[n] = get(n)
+    for m in METALS:
+        if f"{m}_label" in tech.layout.layers:
+            out[f"{m}_label"] = get(f"{m}_label", "text")
+    return out
+
+
+def extract(lvs, layout, tech):
+    """Devices and connectivity of ``lvs`` (a LayoutVsSchematic over ``layout``)."""
+    import klayout.db as kdb
+    L = _layers(lvs, layout, tech)
+    nwell, active, poly = L["nwell"], L["active"], L["poly"]
+    pd_n = nwell & L["pd_marker"]
+    well = nwell - pd_n                                  # wells of p-channel devices
+    gate = poly & active
+    ngate = (gate & L["nplus"]) - nwell
+    pgate = gate & L["pplus"] & well
+    nsd = ((active & L["nplus"]) - nwell) - gate
+    psd = ((active & L["pplus"]) & well) - gate
+    ptap = ((active & L["pplus"]) - nwell) - gate
+    ntap = (active & L["nplus"]) & nwell
+    bulk = kdb.Region()
+    pd_p = pd_n.dup()
+    for name, reg in (("pd_n", pd_n), ("well", well), ("ngate", ngate), ("pgate", pgate), ("nsd", nsd),
+                      ("psd", psd), ("ptap", ptap), ("ntap", ntap), ("bulk", bulk), ("pd_p", pd_p)):
+        lvs.register(reg, name)
+    mos = tech.mos
+    lvs.extract_devices(kdb.DeviceExtractorMOS4Transistor(mos.nmos),
+                        {"SD": nsd, "G": ngate, "P": poly, "W": bulk})
+    lvs.extract_devices(kdb.DeviceExtractorMOS4Transistor(mos.pmos),
+                        {"SD": psd, "G": pgate, "P": poly, "W": well})
+    lvs.extract_devices(kdb.DeviceExtractorDiode(tech.photodiode.spice_model), {"P": pd_p, "N": pd_n})
+    for r in (nsd, psd, ptap, ntap, poly, L["contact"], well, pd_n):
+        lvs.connect(r)
+    for a, b in (("nsd", "contact"), ("psd", "contact"), ("ptap", "contact"), ("ntap", "contact")):
+        lvs.connect({"nsd": nsd, "psd": psd, "ptap": ptap, "ntap": ntap}[a], L[b])
+    lvs.connect(poly, L["contact"])
+    lvs.connect(well, ntap)
+    lvs.connect(pd_n, ntap)
+    lvs.connect(L["contact"], L["metal1"])
+    for i, v in enumerate(VIAS):
+        lvs.connect(L[METALS[i]], L[v])
+        lvs.connect(L[v], L[METALS[i + 1]])
+    for m in METALS:
+        lvs.connect(L[m])
+        if f"{m}_label" in L:
+            lvs.connect(L[m], L[f"{m}_label"])
+    for r in (ptap, bulk, pd_p):
+        lvs.connect_global(r, VSS)
+    lvs.extract_netlist()
+
+
+def _params(da, db) -> list[str]:
+    diffs = []
+    for p in ("W", "L", "A", "P"):
+        try:
+            va, vb = da.parameter(p), db.parameter(p)
+        except Exception:   # noqa: BLE001 - a class without that parameter
+            continue
+        if abs(va - vb) > 1e-6 * max(1.0, abs(vb)):
+            unit = "um2" if p == "A" else "um"
+            diffs.append(f"{p} {va:.4g} {unit} (layout) vs {vb:.4g} {unit} (netlist)")
+    return diffs
+
+
+def _named(d) -> set:
+    out = set()
+    for t in d.device_class().terminal_definitions():
+        n = d.net_for_terminal(t.id())
+        if n is not None and n.name:
+            out.add((t.name if t.name in ("G", "B") else "SD", n.name))
+    return out
+
+
+def _describe(xref) -> list[str]:
+    """Mismatches from the cross reference: devices (their parameters first), nets, pins."""
+    import klayout.db as kdb
+    bad = (kdb.NetlistCrossReference.Mismatch, kdb.NetlistCrossReference.NoMatch)
+    out = []
+    for cp in xref.each_circuit_pair():
+        a, b = cp.first(), cp.second()
+        cname = (b or a).name if (a or b) else "?"
+        if cp.status() not in bad:
+            continue
+        extra, missing = [], []
+        for dp in xref.each_device_pair(cp):
+            if dp.status() not in bad:
+                continue
+            da, db = dp.first(), dp.second()
+            if da and db:
+                out.append(f"{cname}: device {db.expanded_name()} ({db.device_class().name}): "
+                           + ("; ".join(_params(da, db)) or "its nets differ"))
+            elif db:
+                missing.append(db)
+            elif da:
+                extra.append(da)
+        for db in list(missing):   # the same device, drawn with other sizes: name the parameter
+            twin = next((da for da in extra if da.device_class().name == db.device_class().name
+                         and _named(da) <= _named(db) and _params(da, db)), None)
+            if twin is not None:
+                out.insert(0, f"{cname}: device {db.expanded_name()} ({db.device_class().name}): "
+                              + "; ".join(_params(twin, db)))
+                missing.remove(db)
+                extra.remove(twin)
+        out += [f"{cname}: device {db.expanded_name()} ({db.device_class().name}) of the netlist is missing "
+                "from the layout" for db in missing]
+        out += [f"{cname}: the layout has an extra {da.device_class().name} device ({_terms(da)})" for da in extra]
+        for np_ in xref.each_net_pair(cp):
+            if np_.status() in bad:
+                na, nb = np_.first(), np_.second()
+                if nb and not na:
+                    out.append(f"{cname}: net {nb.expanded_name()} of the netlist has no match in the layout")
+                elif na and not nb:
+                    out.append(f"{cname}: layout net {na.expanded_name()} has no match in the netlist")
+                elif na and nb:
+                    out.append(f"{cname}: net {nb.expanded_name()} is connected differently in the layout "
+                               f"(layout net {na.expanded_name()})")
+        for pp in xref.each_pin_pair(cp):
+            if pp.status() in bad:
+                pa, pb = pp.first(), pp.second()
+                out.append(f"{cname}: pin {(pb or pa).name()} unmatched")
+    return out
+
+
+def _misnamed(xref) -> list[str]:
+    """Nets the comparer paired by topology whose names differ: a pin on the wrong net (two
+    terminals' nets swapped look alike to a graph match, not to the pins' names)."""
+    out = []
+    for cp in xref.each_circuit_pair():
+        a, b = cp.first(), cp.second()
+        if a is None or b is None:
+            continue
+        for np_ in xref.each_net_pair(cp):
+            na, nb = np_.first(), np_.second()
+            if na is not None and nb is not None and na.name and nb.name and na.name != nb.name:
+                out.append(f"{b.name}: net {nb.name} of the netlist is the layout's net {na.name} "
+                           "(a terminal on the wrong net)")
+    return out
+
+
+def _terms(d) -> str:
+    return ", ".join(f"{t.name}={d.net_for_terminal(t.id()).expanded_name() if d.net_for_terminal(t.id()) else '-'}"
+                     for t in d.device_class().terminal_definitions())
+
+
+def run_lvs(gds: Path, top: str, design, workdir: Path | None = None) -> LvsResult:
+    """Extract cell ``top`` of ``gds`` and compare it with the kit's netlist of that cell."""
+    import klayout.db as kdb
+    if top not in CELL_CIRCUIT:
+        raise PixelkitError(f"no kit netlist for cell {top!r} (cells with one: {', '.join(CELL_CIRCUIT)})")
+    t0 = time.perf_counter()
+    layout = kdb.Layout()
+    layout.read(str(gds))
+    cell = layout.cell(top)
+    if cell is None:
+        raise PixelkitError(f"{gds} has no cell {top!r}")
+    lvs = kdb.LayoutVsSchematic(kdb.RecursiveShapeIterator(layout, cell, []))
+    extract(lvs, layout, design.tech)
+    tech = design.tech
+    ref = to_klayout(lvs_view(design, circuits_of(design, top)))
+    lvs.reference = ref
+    nl = lvs.netlist()
+    nl.purge_nets()
+    nl.make_top_level_pins()
+    nl.combine_devices()
+    ref.combine_devices()
+    nl.purge()
+    comparer = kdb.NetlistComparer()
+    for model in (tech.mos.nmos, tech.mos.pmos):
+        dc = ref.device_class_by_name(model)
+        if dc is not None:
+            eq = kdb.EqualDeviceParameters(kdb.DeviceClassMOS4Transistor.PARAM_W, 1e-3, 0.0)
+            eq += kdb.EqualDeviceParameters(kdb.DeviceClassMOS4Transistor.PARAM_L, 1e-3, 0.0)
+            dc.equal_parameters = eq
+    dc = ref.device_class_by_name(tech.photodiode.spice_model)
+    if dc is not None:
+        eq = kdb.EqualDeviceParameters(kdb.DeviceClassDiode.PARAM_A, 0.0, 1e-3)
+        eq += kdb.EqualDeviceParameters(kdb.DeviceClassDiode.PARAM_P, 0.0, 1e-3)
+        dc.equal_parameters = eq
+    for cell_name, circ in CELL_CIRCUIT.items():
+        a, b = _circuit(nl, cell_name), ref.circuit_by_name(circ)
+        if a is not None and b is not None:
+            comparer.same_circuits(a, b)
+    ok = lvs.compare(comparer)
+    mismatches = _describe(lvs.xref()) if not ok else []
+    misnamed = _misnamed(lvs.xref())
+    ok = ok and not misnamed
+    mismatches += misnamed
+    if not ok and not mismatches:
+        mismatches = ["the netlists differ (see the report for the details)"]
+    report = ""
+    if workdir is not None:
+        Path(workdir).mkdir(parents=True, exist_ok=True)
+        report = str(Path(workdir) / f"{top}.lvsdb")
+        lvs.write(report)
+    top_circuit = _circuit(nl, top)
+    return LvsResult(top, ok, time.perf_counter() - t0, mismatches,
+                     sum(1 for _ in top_circuit.each_device()) if top_circuit else 0,
+                     sum(1 for _ in top_circuit.each_net()) if top_circuit else 0, report)
+
+
+def _circuit(nl, name):
+    return nl.circuit_by_name(name)

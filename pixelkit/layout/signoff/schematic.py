@@ -1,0 +1,132 @@
+"""The kit's netlist of a drawn cell, as LVS sees it: the same subcircuits the simulations use
+(``circuits.pixel5t`` ...), reduced to the devices a layout draws.
+
+Kept: the MOSFETs (the technology's device names, W and L), the photodiode junction (area
+and perimeter) and the subcircuit instances. Dropped, because a layout does not draw them:
+ideal sources (the photocurrent ``Iph`` and its sense ``Vph``, the storage node's parasitic
+light ``Fpls``, the bias reference ``Ibias``) and the lumped column-line capacitance
+``C<col>`` (the wire itself is drawn; extraction puts its capacitance back). Ground ``0``
+becomes the net ``vss`` (the substrate), a pin of every circuit.
+
+Two outputs: a ``klayout.db.Netlist`` (the kit's LVS compares against it) and SPICE text
+(``<cell>.spice`` beside the GDS: ``M``/``D`` cards with the PDK's names, W / L in um), which
+any LVS tool - the foundry's fd_pv deck included - reads.
+"""
+from __future__ import annotations
+
+from ...circuits.column import column_cell, dual_pixel_column
+from ...circuits.dual_pixel import dual_pixel
+from ...circuits.pixel5t import pixel5t
+
+VSS = "vss"
+
+
+def circuits_of(design, top: str) -> list:
+    """The kit's subcircuits behind layout cell ``top`` (children first)."""
+    pix = list(dual_pixel(design))                 # primary, secondary, dualpix
+    col = [column_cell(design, "primary"), column_cell(design, "secondary")]
+    table = {"PRIMARY": [pixel5t(design, "primary")], "SECONDARY": [pixel5t(design, "secondary")],
+             "DUALPIX": pix, "COLUMN_P": col[:1], "COLUMN_S": col[1:],
+             "DUALPIX_COL": [*pix, *col, dual_pixel_column(design)]}
+    return table[top]
+
+
+#: layout cell -> the kit's subcircuit of it
+CELL_CIRCUIT = {"PRIMARY": "pix5t_primary", "SECONDARY": "pix5t_secondary", "DUALPIX": "dualpix",
+                "COLUMN_P": "column_primary", "COLUMN_S": "column_secondary", "DUALPIX_COL": "dualpix_col"}
+
+
+def _node(n: str) -> str:
+    return VSS if n == "0" else n
+
+
+def lvs_view(design, subckts) -> list[dict]:
+    """Each subcircuit as {"name", "pins", "mos": [(name, kind, d, g, s, b, w_um, l_um)],
+    "diodes": [(name, anode, cathode, model, area_um2, perim_um)], "subs": [(name, circuit, nets)]}."""
+    t = design.tech
+    names = {s.name for s in subckts}
+    out = []
+    for sc in subckts:
+        c = {"name": sc.name, "pins": [*sc.ports, VSS], "mos": [], "diodes": [], "subs": []}
+        for e in sc.elements:
+            kind = e.name[0].upper()
+            if kind in "XM" and e.value in (t.mos.nmos, t.mos.pmos):
+                p = dict(e.params)
+                d, g, s_, b = (_node(n) for n in e.nodes)
+                c["mos"].append((e.name[1:], e.value, d, g, s_, b, p["w"] * 1e6, p["l"] * 1e6))
+            elif kind == "X" and e.value in names:
+                c["subs"].append((e.name[1:], e.value, [*(_node(n) for n in e.nodes), VSS]))
+            elif kind == "D":
+                p = dict(e.params)
+                c["diodes"].append((e.name[1:], _node(e.nodes[0]), _node(e.nodes[1]), e.value,
+                                    p["area"] * 1e12, p["pj"] * 1e6))
+        out.append(c)
+    return out
+
+
+def to_klayout(view: list[dict]):
+    """A ``klayout.db.Netlist`` of the view (device parameters in um / um2, KLayout's units)."""
+    import klayout.db as kdb
+    nl = kdb.Netlist()
+    classes = {}
+
+    def cls(name, make):
+        if name not in classes:
+            c = make()
+            c.name = name
+            nl.add(c)
+            classes[name] = c
+        return classes[name]
+
+    circuits = {}
+    for c in view:
+        ci = kdb.Circuit()
+        ci.name = c["name"]
+        nl.add(ci)
+        circuits[c["name"]] = ci
+        nets = {}
+
+        def net(n):
+            if n not in nets:
+                x = ci.create_net(n)
+                nets[n] = x
+            return nets[n]
+
+        for p in c["pins"]:
+            pin = ci.create_pin(p)
+            ci.connect_pin(pin, net(p))
+        for name, model, d, g, s, b, w, l_ in c["mos"]:
+            dc = cls(model, kdb.DeviceClassMOS4Transistor)
+            dev = ci.create_device(dc, name)
+            for term, n in (("D", d), ("G", g), ("S", s), ("B", b)):
+                dev.connect_terminal(term, net(n))
+            dev.set_parameter("W", w)
+            dev.set_parameter("L", l_)
+        for name, anode, cathode, model, area, perim in c["diodes"]:
+            dc = cls(model, kdb.DeviceClassDiode)
+            dev = ci.create_device(dc, name)
+            dev.connect_terminal("A", net(anode))
+            dev.connect_terminal("C", net(cathode))
+            dev.set_parameter("A", area)
+            dev.set_parameter("P", perim)
+        for name, target, nets_ in c["subs"]:
+            sub = ci.create_subcircuit(circuits[target], name)
+            for i, n in enumerate(nets_):
+                sub.connect_pin(circuits[target].pin_by_id(i), net(n))
+    return nl
+
+
+def spice_text(view: list[dict], title: str) -> str:
+    """The view as a SPICE netlist for LVS tools (top circuit last)."""
+    lines = [f"* {title}: the kit's netlist of the drawn devices (W, L in um; area in um2)", ""]
+    for c in view:
+        lines.append(f".subckt {c['name']} " + " ".join(c["pins"]))
+        for name, model, d, g, s, b, w, l_ in c["mos"]:
+            lines.append(f"M{name} {d} {g} {s} {b} {model} W={w:.6g}u L={l_:.6g}u")
+        for name, anode, cathode, model, area, perim in c["diodes"]:
+            lines.append(f"D{name} {anode} {cathode} {model} AREA={area:.8g}p PJ={perim:.8g}u")
+        for name, target, nets_ in c["subs"]:
+            lines.append(f"X{name} " + " ".join(nets_) + f" {target}")
+        lines.append(f".ends {c['name']}")
+        lines.append("")
+    return "\n".join(lines) + ".end\n"

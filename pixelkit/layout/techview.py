@@ -1,0 +1,70 @@
+"""The technology as the generators see it: rules by name in whole nm on the grid.
+
+``LayoutTech(tech).nm("poly.extension.active")`` is the rule rounded *up* to the grid
+(a minimum stays a minimum); ``space(layer)`` is the layer's spacing rule, or None for a
+layer without one (markers, implants the generators keep apart by construction).
+"""
+from __future__ import annotations
+
+import math
+from functools import cached_property
+
+
+class LayoutTech:
+    def __init__(self, tech):
+        self.tech = tech
+        self.memo: dict = {}          # derived values (pad sides ...) computed once per technology view
+
+    @cached_property
+    def grid(self) -> int:
+        return max(1, round(self.tech.rules.grid * 1e9))
+
+    def snap_up(self, x: float) -> int:
+        """``x`` nm rounded up to the grid."""
+        g = self.grid
+        return int(math.ceil(round(x, 6) / g - 1e-9)) * g
+
+    def snap(self, x: float) -> int:
+        g = self.grid
+        return int(round(x / g)) * g
+
+    def nm(self, key: str) -> int:
+        v = self.memo.get(key)
+        if v is None:
+            v = self.memo[key] = self.snap_up(self.tech.rule(key).value * 1e9)
+        return v
+
+    def area(self, key: str) -> float:
+        """An area rule in nm^2."""
+        return self.tech.rule(key).value * 1e18
+
+    def cite(self, key: str) -> str:
+        r = self.tech.rule(key)
+        return f"{key} = {r.value * 1e6:g} um{r.cite()}"
+
+    def has(self, key: str) -> bool:
+        return key in self.tech.layout.rules
+
+    def space(self, layer: str):
+        key = f"{layer}.space"
+        return self.nm(key) if self.has(key) else None
+
+    def width(self, layer: str) -> int:
+        return self.nm(f"{layer}.width")
+
+    def cut(self, via: str) -> int:
+        return self.nm(f"{via}.size")
+
+    def enclosure(self, outer: str, inner: str) -> int:
+        return self.nm(f"{outer}.enclosure.{inner}")
+
+    def pad(self, metal: str, via: str) -> int:
+        """Side of a square ``metal`` pad over one ``via`` cut."""
+        return self.cut(via) + 2 * self.enclosure(metal, via)
+
+    def min_side(self, layer: str, side: int) -> int:
+        """The other side a ``side``-wide rectangle needs to meet the layer's area rule."""
+        key = f"{layer}.area"
+        if not self.has(key):
+            return 0
+        return self.snap_up(self.area(key) / side)
