@@ -97,7 +97,8 @@ class Pixel:
     swing: float = qty("V", gt=0, plausible=(0.05, 5.0),
                        doc="pixel swing: the PD / FD voltage range of a full signal (1.5 V in [Thesis2019] table 3.2)")
     sf_bias: float = qty("A", gt=0, le=1e-3, plausible=(1e-9, 1e-3), doc="column current-source load of the SF")
-    column_cap: float = qty("F", 200e-15, ge=0, plausible=(0.0, 1e-8), doc="column-line parasitic capacitance")
+    column_cap: float = qty("F", 200e-15, gt=0, plausible=(1e-16, 1e-8),
+                            doc="column-line parasitic capacitance (a real column line has some: > 0)")
     v_pd_reset: float = qty("V", 2.0, gt=0, plausible=(0.1, 40.0),
                             doc="EC drain: PD reset level (hard reset below VDD - Vth)")
     v_fd_reset: float = qty("V", 2.0, gt=0, plausible=(0.1, 40.0), doc="RST drain: FD reset level")
@@ -173,7 +174,7 @@ class Scene:
 
 @dataclass(frozen=True)
 class Sizing:
-    t_ratio: float = num(0.0, ge=0, plausible=(0.0, 1e6), doc="fixed t_secondary / t_primary; 0 = free")
+    t_ratio: float | None = num(None, gt=0, plausible=(1e-3, 1e6), doc="fixed t_secondary / t_primary; absent = free")
     level: str = text("spice", choices=("analytic", "spice"),
                       doc="which model level's solution is the sized design: the PD node's C(V) or the SPICE curves")
     objective: str = text("trace", choices=("trace", "margin"), doc="trace: longest trace; margin: centre the bounds")
@@ -183,7 +184,8 @@ class Sizing:
     dark_fraction: float = num(0.05, gt=0, lt=1, plausible=(1e-4, 0.99), doc="dark signal over t_secondary at max temperature")
     headlight_max: float = num(0.9, gt=0, le=1, plausible=(0.01, 1.0), doc="headlight signal below this fraction of swing")
     headlight_snr: float = num(10.0, gt=0, plausible=(0.1, 1e6), doc="headlight signal over the secondary's noise floor")
-    margin: float = num(0.05, ge=0, lt=0.5, plausible=(0.0, 0.5), doc="relative margin required on every inequality")
+    margin: float = num(0.05, gt=0, lt=0.5, plausible=(1e-4, 0.5),
+                        doc="relative margin required on every inequality (> 0: a design on a bound has none)")
 
 
 @dataclass(frozen=True)

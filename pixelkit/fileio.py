@@ -1,5 +1,8 @@
 """Writing output files whole or not at all (temporary file, then rename).
 
+A temporary is named ``.<name>.<owner tag>.<random>`` (:mod:`pixelkit.owner`): one left by a
+killed run is removed by the next write of the same file once its owner is gone.
+
 Files get the mode an ordinary ``open(path, "w")`` would give (0666 minus the
 umask), not the 0600 of the temporary file they start as.
 """
@@ -9,6 +12,8 @@ import os
 import tempfile
 import threading
 from pathlib import Path
+
+from . import owner
 
 _UMASK_LOCK = threading.Lock()
 
@@ -95,7 +100,8 @@ def write_atomic(path: str | os.PathLike, data: str | bytes) -> Path:
         path.parent.mkdir(parents=True, exist_ok=True)
         if path.is_dir():
             raise IsADirectoryError(21, "a folder is in the way")
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
+        owner.sweep(path.parent, f".{path.name}.")   # a killed run's temporary of this file
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.{owner.tag()}.", dir=path.parent)
     except OSError as exc:
         raise PixelkitError(f"{path}: cannot write: {exc.strerror or exc}") from None
     mode = "wb" if isinstance(data, bytes) else "w"
@@ -120,7 +126,8 @@ def atomic_target(path: str | os.PathLike) -> tuple[Path, Path]:
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix, dir=path.parent)
+    owner.sweep(path.parent, f".{path.stem}.")
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.{owner.tag()}.", suffix=path.suffix, dir=path.parent)
     os.close(fd)
     return path, Path(tmp)
 

@@ -32,6 +32,7 @@ LIMITS = {
     "csv": 16 * MiB,              # measured / conditions rows (~100 bytes a row: 160,000 rows)
     "descriptor": 4 * MiB,        # EMVA 1288 descriptor (the reference set's: 20 kB for 100 steps)
     "model": 64 * MiB,            # a SPICE model file (GF180's sm141064.ngspice: 1.3 MB)
+    "image": 1 << 40,             # an EMVA 1288 image: bounded by its descriptor (gap/emva.image_limit)
     "scene": 256 * MiB,           # a scene map (.csv, .npy, image) for an array
     "gds": 256 * MiB,             # a layout whose geometry a design uses
     "report": 64 * MiB,           # a file of an earlier report (--baseline)

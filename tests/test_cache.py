@@ -60,8 +60,9 @@ def _damage_copy(a, b):
 
 
 @pytest.mark.parametrize("damage,said", [
-    (_damage_swap, "another key"), (_damage_truncate, "damaged"), (_flip_at(0.05), ""),
-    (_flip_at(0.5), ""), (_flip_at(0.9), ""), (_damage_empty, "damaged"), (_damage_copy, "another key"),
+    (_damage_swap, "another key"), (_damage_truncate, "truncated"), (_flip_at(0.05), ""),
+    (_flip_at(0.5), ""), (_flip_at(0.9), ""), (_damage_empty, "not a pixelkit cache entry"),
+    (_damage_copy, "another key"),
 ], ids=["swap", "truncate", "flip-head", "flip-middle", "flip-tail", "empty", "copy"])
 def test_damaged_entries_give_the_right_numbers(damage, said, capfd):
     a_net, b_net = _rc(1e3), _rc(3e3)
@@ -79,12 +80,18 @@ def test_damaged_entries_give_the_right_numbers(damage, said, capfd):
 
 
 def test_an_entry_stores_its_key_and_checksum():
+    import hashlib
+    import json
     net = _rc(2e3)
     simulate(net)
-    with np.load(_entry(net)) as z:
-        import json
-        meta = json.loads(str(z["__meta__"]))
-        assert meta["__key__"] == _entry(net).stem and len(str(z["__sum__"])) == 64
+    blob = _entry(net).read_bytes()
+    assert blob.startswith(b"pixelkit-entry 1\n")
+    n = int(blob.split(b"\n")[1])
+    start = len(b"pixelkit-entry 1\n") + len(b"%d\n" % n)
+    header = json.loads(blob[start:start + n])
+    assert header["key"] == _entry(net).stem
+    (name, size, digest), = header["files"]
+    assert hashlib.sha256(blob[-size:]).hexdigest() == digest   # the sum is over the bytes held
 
 
 def test_retried_run_is_cached_under_its_own_key():
@@ -99,7 +106,8 @@ def test_retried_run_is_cached_under_its_own_key():
     strict_key = engine._key(strict, ngspice_version(), "batch")
     loose_key = engine._key(engine._prepare(strict, r.meta["retried"]["options"]), ngspice_version(), "batch")
     assert loose_key != strict_key and cache_mod.entry_path(loose_key).exists()
-    with np.load(cache_mod.entry_path(strict_key)) as z:
+    import io
+    with np.load(io.BytesIO(cache_mod.STORE.load(strict_key)["result.npz"])) as z:
         assert "__redirect__" in str(z["__meta__"]) and z["__time__"].size == 0
     again = simulate(net, options=opts)
     assert again.meta["cached"] and again.meta["retried"] and _right(again, 1e3)

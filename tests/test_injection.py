@@ -22,7 +22,8 @@ from pixelkit.spice.netlist import Model, Op, Param, Subckt, Tran, deck_text
 TECH = ROOT / "pixelkit" / "tech" / "builtin" / "c35_thesis.toml"
 SEPARATORS = ["\n", "\r", "\r\n", "\v", "\f", "\x1c", "\x1d", "\x1e", "\x85", "\u2028", "\u2029"]
 BACKENDS = ["batch", "shared"]
-TINY_LIB = "* a tiny model library\n.model dtiny d (is=1e-14)\n"
+TINY_LIB = ("* a tiny model library (with the technology's two MOS names, which a technology must define)\n"
+            ".model dtiny d (is=1e-14)\n.subckt nfet_03v3 d g s b\n.ends\n.subckt pfet_03v3 d g s b\n.ends\n")
 
 
 def payload(sep: str, marker) -> str:

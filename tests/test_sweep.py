@@ -90,7 +90,7 @@ def test_interrupted_sweep_resumes_without_recomputing(tmp_path):
 
     def freeze_a_run_in_flight():
         assert p.poll() is None, "the sweep ended before a point was caught in flight"
-        if len(list(sim.glob("*/*.npz"))) < 3:
+        if len(list(sim.glob("*/*.entry"))) < 3:
             return False
         for m in glob.glob(marks):
             try:
@@ -107,12 +107,12 @@ def test_interrupted_sweep_resumes_without_recomputing(tmp_path):
                 os.kill(int(pid), signal.SIGCONT)
         return False
     wait_for(freeze_a_run_in_flight, "a point in flight after 3 finished")
-    done = len(list(sim.glob("*/*.npz")))
+    done = len(list(sim.glob("*/*.entry")))
     p.send_signal(signal.SIGINT)
     p.communicate(timeout=600)
     assert p.returncode == 130
     assert not _stopped(frozen[0]), "the frozen ngspice was left behind"
-    assert len(list(sim.glob("*/*.npz"))) == done and 3 <= done < 8
+    assert len(list(sim.glob("*/*.entry"))) == done and 3 <= done < 8
     q = subprocess.run(args, cwd=ROOT, env=env, capture_output=True, text=True, timeout=600)
     assert q.returncode == 0, q.stderr
     r = json.loads(q.stdout)
@@ -133,11 +133,11 @@ def test_dask_cluster_gives_the_local_numbers(ref_design, tmp_path, monkeypatch)
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
         remote = run_sweep(ref_design, axes, scheduler=cluster.scheduler_address)
     assert not remote.failures and not any(p["cached"] for p in remote.points)
-    assert len(list((dask_cache / "sim").glob("*/*.npz"))) == 4      # the workers did the work
+    assert len(list((dask_cache / "sim").glob("*/*.entry"))) == 4      # the workers did the work
     monkeypatch.setenv("PIXELKIT_CACHE", str(local_cache))
     local = run_sweep(ref_design, axes, jobs=2)
     assert not local.failures and not any(p["cached"] for p in local.points)  # computed again, here
-    assert len(list((local_cache / "sim").glob("*/*.npz"))) == 4
+    assert len(list((local_cache / "sim").glob("*/*.entry"))) == 4
     for f in ("signal_primary_V", "signal_secondary_V", "reset_primary_V"):
         assert np.allclose(remote.dataset[f].values, local.dataset[f].values, rtol=0, atol=1e-9), f
     assert float(local.dataset["signal_secondary_V"].sel(iph_p=150e-12, iph_s=60e-12)) > \

@@ -3,7 +3,13 @@ from __future__ import annotations
 
 import click
 
-from .common import design_arg, emit, json_opt, load, main, out_opt, output_path, spice_opts
+from .common import design_arg, emit, json_opt, load, main, out_opt, output_path, scheduler_address, spice_opts
+
+
+def _finite(value, param):
+    if value is not None and value != value:   # NaN passes FloatRange's comparisons
+        raise click.BadParameter(f"{value} is not a number", param=param)
+    return value
 
 
 @main.command("array")
@@ -23,10 +29,11 @@ from .common import design_arg, emit, json_opt, load, main, out_opt, output_path
                    "with --afe); none: one deck per array (default with --seed). See pixelkit.chip.frame")
 @click.option("--check", is_flag=True, help="also run the split and the undivided deck of each array at converged "
               "tolerances (reltol 1e-6) and report the largest difference; exit 1 above 0.1 mV or when void")
-@click.option("--seed", type=int, default=None, help="Monte Carlo mismatch draw (GF180 statistical models)")
-@click.option("--t-exp", "t_exp", type=float, default=None,
+@click.option("--seed", type=click.IntRange(0, 2**31 - 1), default=None, help="Monte Carlo mismatch draw (GF180 statistical models)")
+@click.option("--t-exp", "t_exp", type=click.FloatRange(0.0, 10.0, min_open=True), default=None,
+              callback=lambda ctx, param, v: _finite(v, param),
               help="simulated exposure in s (default: the experiment window); charge of t_int kept")
-@click.option("--scheduler", default=None, help="Dask scheduler address (default: local workers)")
+@click.option("--scheduler", default=None, callback=scheduler_address, help="Dask scheduler address (default: local workers)")
 @out_opt("folder for frame.csv and frame.png (default reports/<design>/array_RxC)", folder=True)
 @spice_opts
 @json_opt

@@ -121,6 +121,14 @@ def spice_opts(f):
                         show_default=True, help="ngspice as a process per deck, or the shared library")(f)
 
 
+def scheduler_address(ctx, param, value):
+    """Callback of every ``--scheduler`` option: the address checked before anything runs."""
+    if value is None:
+        return None
+    from ..sweep.executors import check_address
+    return check_address(value)
+
+
 waveforms_opt = click.option("--waveforms", type=click.Path(dir_okay=False), default=None,
                              help="write the simulated waveforms: CSV (time_s, v(node)_V, ...) "
                                   "or ngspice raw when the name ends in .raw")
@@ -136,14 +144,10 @@ def output_path(out, design, default_name: str) -> Path:
 
 
 def load(design_path: str, drawable: bool = True):
-    """Load a design for a command: warnings on stderr, failed decks kept under its reports folder
+    """Load a design for a command: warnings on stderr (and in the JSON output)
     (``drawable=False``: no warning that the layout cannot be drawn - ``layout`` says it as an error)."""
     from ..api import load_design
-    from ..fileio import reports_root
-    from ..spice.failures import set_root
-    d = load_design(design_path, warn=warn, drawable=drawable)
-    set_root(reports_root() / d.name / "failed")
-    return d
+    return load_design(design_path, warn=warn, drawable=drawable)
 
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
@@ -194,6 +198,14 @@ def _on_sigint(_signum, _frame):
     raise Interrupted()
 
 
+def _one_line_warning(message, category, filename, lineno, line=None) -> str:
+    """How a warning that reached the user reads: one line, no source file or line of the kit."""
+    module = "numpy" if "numpy" in filename else "scipy" if "scipy" in filename else Path(filename).stem
+    text = " ".join(str(message).split())
+    WARNINGS.append(f"{category.__name__} ({module}): {text}")
+    return f"pixelkit: warning: {category.__name__} ({module}): {text}\n"
+
+
 def finishing() -> None:
     """The command has computed everything; what is left is writing its output and the summary
     (milliseconds). Ctrl-C from here on is ignored, so a finished run is never reported as
@@ -213,6 +225,8 @@ def run(argv=None):
     as_json = "--json" in args
     if argv is None:  # the console script: Ctrl-C ends with one line and status 130
         signal.signal(signal.SIGINT, _on_sigint)
+    import warnings
+    warnings.formatwarning = _one_line_warning   # a library's warning never shows the kit's source lines
     try:
         main(args=args, standalone_mode=False)
     except Interrupted:

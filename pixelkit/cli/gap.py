@@ -213,15 +213,19 @@ def emva(dataset, as_json):
     emit(r, as_json, _emva_text)
 
 
+def _g(v, fmt):
+    return "n/a" if v is None else format(v, fmt)
+
+
 def _emva_text(x):
     f = x["figures"]
     lines = [f"EMVA 1288 ({f['bits']} bit, exposure in {f['exposure_unit']}): K = {f['K_DN_per_e']:.5g} DN/e-, "
              f"QE = {f['QE_percent']:.1f} %, sigma_d = {f['sigma_d_e']:.3g} e-, saturation {f['u_e_sat']:.0f} e-, "
              f"SNR_max {f['SNR_max_dB']:.1f} dB, DR {f['DR_dB']:.1f} dB, LE {f['LE_min_percent']:+.2f} / "
              f"{f['LE_max_percent']:+.2f} %",
-             f"  dark current: {f['dark_current_mean_e_per_s']:.4g} e-/s from the mean, "
-             f"{f['dark_current_var_e_per_s']:.4g} e-/s from the variance"
-             + (f"; DSNU {f['DSNU_e']:.3g} e-, PRNU {f['PRNU_percent']:.3g} %" if "DSNU_e" in f else "")]
+             f"  dark current: {_g(f['dark_current_mean_e_per_s'], '.4g')} e-/s from the mean, "
+             f"{_g(f['dark_current_var_e_per_s'], '.4g')} e-/s from the variance"
+             + (f"; DSNU {_g(f['DSNU_e'], '.3g')} e-, PRNU {_g(f['PRNU_percent'], '.3g')} %" if "DSNU_e" in f else "")]
     if x["dark_noise"]:
         lines.append(f"  {x['dark_noise']['effect']}: {x['dark_noise']['text']}")
     lines += [f"  {w['region']:<26} n={w['n']:<3} mean residual {w['mean_resid_DN']:+.3f} DN, "

@@ -5,7 +5,7 @@ import json
 
 import click
 
-from .common import design_arg, emit, json_opt, load, main, out_opt, output_path, spice_opts
+from .common import design_arg, emit, json_opt, load, main, out_opt, output_path, scheduler_address, spice_opts
 
 
 @main.command("mc")
@@ -16,7 +16,7 @@ from .common import design_arg, emit, json_opt, load, main, out_opt, output_path
               help="one seed = one chip; the same seed gives the same numbers")
 @click.option("--corner", "corners", multiple=True, help="process corner(s) to run (default: the design's)")
 @click.option("--afe", "with_afe", is_flag=True, help="include the column AFEs (column FPN at the AFE output)")
-@click.option("--scheduler", default=None, help="Dask scheduler address (default: local workers)")
+@click.option("--scheduler", default=None, callback=scheduler_address, help="Dask scheduler address (default: local workers)")
 @out_opt("folder for mc.json (default reports/<design>/mc)", folder=True)
 @spice_opts
 @json_opt

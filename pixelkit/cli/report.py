@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from .common import design_arg, emit, json_opt, main, quiet_opt
+from .common import design_arg, emit, finishing, json_opt, main, quiet_opt
 
 
 @main.command("report")
@@ -32,6 +32,7 @@ def report(design, out, baseline, measured, quick, no_cache, backend, jobs, as_j
     out = Path(out) if out else Path("reports") / d.name
     r = build_report(d, out, quick=quick, backend=backend, jobs=jobs, measured=measured, baseline=baseline,
                      use_cache=not no_cache, html=not as_json)
+    finishing()  # the report is in place: a Ctrl-C from here no longer calls the run interrupted
     data = {"out": r["out"], "html": r["html"], "failed_sections": r["failed"], **r["summary"]}
     if "diff" in r:
         data["diff"] = r["diff"]

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import click
 
-from .common import design_arg, emit, json_opt, load, main, out_opt, output_path, spice_opts
+from .common import design_arg, emit, json_opt, load, main, out_opt, output_path, scheduler_address, spice_opts
 
 
 @main.command("sweep")
@@ -12,7 +12,7 @@ from .common import design_arg, emit, json_opt, load, main, out_opt, output_path
               help="an axis (repeat for a grid): pixel.sf_bias=300nA,400nA | iph_p=log:10p:2n:8 | "
                    "corner=tt,ff,ss | temperature=0degC,85degC | option.reltol=1e-4,1e-5")
 @click.option("--afe", "with_afe", is_flag=True, help="read through the SC AFEs too (afe_*_V figures)")
-@click.option("--scheduler", default=None,
+@click.option("--scheduler", default=None, callback=scheduler_address,
               help="Dask distributed scheduler address (tcp://host:8786); default: local worker processes")
 @out_opt("folder for sweep.csv and sweep.nc (default reports/<design>/sweep)", folder=True)
 @spice_opts

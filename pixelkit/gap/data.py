@@ -11,11 +11,16 @@ and ``n_avg`` are integers written as digits only (``1_0`` and ``1e1`` are
 refused); a row with more fields than the header, a duplicated column name, a
 file that is not UTF-8 are errors. ``v_std_V`` must be >= 0, ``n_avg`` >= 1.
 
-``check_degenerate`` refuses, before any effect is named, a set that cannot
-support a diagnosis: fewer rows than the candidates' parameters need, a
-constant measured value, mostly duplicated rows, values beyond the physical
-range of the design (a photocurrent that would fill the well more than 100
-times, a level outside the supply rails).
+``validate`` is the one validation of every quantity, shared by ``gap predict``
+(conditions) and ``gap diagnose`` / ``plan`` (measured rows): besides the above,
+times in 0 .. 10 s (the longest integration a design allows), photocurrents
+(this frame's and the previous one's) >= 0 and filling the array's full well
+(analytic model) at most 100 times over t_int.
+
+``check_degenerate`` refuses, before any effect is named, a measured set that
+cannot support a diagnosis: fewer rows than the candidates' parameters need, a
+constant measured value, mostly duplicated rows, a level outside the supply
+rails.
 """
 from __future__ import annotations
 
@@ -38,6 +43,20 @@ NUMERIC = ("row", "col", "i_ph_A", "t_int_s", "t_wait_s", "temp_C", "v_V") + OPT
 # quantities whose unit suffix a user may have got wrong: stem -> the expected column
 _STEMS = {"i_ph": "i_ph_A", "t_int": "t_int_s", "t_wait": "t_wait_s", "temp": "temp_C", "v": "v_V",
           "v_std": "v_std_V", "vdd": "vdd_V", "f_read": "f_read_Hz", "i_ph_prev": "i_ph_prev_A"}
+
+
+#: A photocurrent that fills the well more than this many times over t_int is beyond physical range.
+MAX_WELLS = 100.0
+#: Longest integration or wait time of a row (s): the longest integration a design allows (design.Subpixel).
+MAX_TIME_S = 10.0
+
+
+def full_wells(design) -> dict:
+    """Full-well charge (C) of each array from the analytic model (the bound of the photocurrent check)."""
+    from ..physics.subpixel import model_table
+    from ..constants import Q
+    t = model_table(design)
+    return {a: t[a]["fwc_e"] * Q for a in ("primary", "secondary")}
 
 
 class DataError(PixelkitError):
@@ -136,6 +155,7 @@ def validate(header, rows, design, measured: bool, source: str) -> Table:
             out[h] = vals
         else:
             out[h] = [(v or "").strip() for v in cols[h]]
+    wells = full_wells(design)
     n_rows = {"primary": design.primary.rows, "secondary": design.secondary.rows}
     n_cols = {"primary": design.primary.cols, "secondary": design.secondary.cols}
     for i in range(len(rows)):
@@ -150,10 +170,23 @@ def validate(header, rows, design, measured: bool, source: str) -> Table:
             if math.isfinite(v) and not (v == int(v) and 0 <= v < limit):
                 problems.append(f"row {i + 1}, column '{name}': {v:g} is outside the {arr} array "
                                 f"(0..{limit - 1}): the design cannot simulate it")
-        for name in ("i_ph_A", "t_int_s", "t_wait_s"):
-            v = out[name][i]
+        for name in ("i_ph_A", "t_int_s", "t_wait_s", "i_ph_prev_A"):
+            v = out[name][i] if name in out else math.nan
             if math.isfinite(v) and v < 0:
                 problems.append(f"row {i + 1}, column '{name}': {v:g} is negative")
+        for name in ("t_int_s", "t_wait_s"):
+            v = out[name][i]
+            if math.isfinite(v) and v > MAX_TIME_S:
+                problems.append(f"row {i + 1}, column '{name}': {v:g} s is beyond {MAX_TIME_S:g} s (the longest "
+                                "integration a design allows)")
+        t_int = out["t_int_s"][i]
+        for name in ("i_ph_A", "i_ph_prev_A"):
+            v = out[name][i] if name in out else math.nan
+            fill = float(v) * float(t_int) / wells[arr] if math.isfinite(v) and math.isfinite(t_int) else 0.0
+            if fill > MAX_WELLS:
+                times = f"{fill:.3g} times" if fill < 1e6 else "more than a million times"
+                problems.append(f"row {i + 1}, column '{name}': {v:g} A fills the {arr} well {times} over "
+                                f"t_int (beyond physical range, limit {MAX_WELLS:g} x)")
         if "v_std_V" in out and math.isfinite(out["v_std_V"][i]) and out["v_std_V"][i] < 0:
             problems.append(f"row {i + 1}, column 'v_std_V': {out['v_std_V'][i]:g} is negative (a standard deviation)")
         if "n_avg" in out and math.isfinite(out["n_avg"][i]) and out["n_avg"][i] < 1:
@@ -171,7 +204,6 @@ def validate(header, rows, design, measured: bool, source: str) -> Table:
     return Table(out, source)
 
 
-MAX_WELLS = 100.0
 
 
 def check_degenerate(table: Table, X, nom, candidates) -> None:
@@ -193,13 +225,6 @@ def check_degenerate(table: Table, X, nom, candidates) -> None:
     cond = [tuple(_fmt(table.columns[c][i]) for c in REQUIRED) for i in range(n)]
     if n and len(set(cond)) < need:
         problems.append(f"only {len(set(cond))} distinct operating points: too few for the candidates' parameters")
-    for a, name in enumerate(("primary", "secondary")):
-        q_max = nom.q_grid[name][-1]
-        bad = np.nonzero((X["arr"] == a) & (X["q"] > MAX_WELLS * q_max))[0]
-        for i in bad[:5]:
-            problems.append(f"row {i + 1}, column 'i_ph_A': {X['i'][i]:g} A fills the {name} well "
-                            f"{X['q'][i] / q_max:.3g} times over t_int (beyond physical range, limit "
-                            f"{MAX_WELLS:g} x)")
     top = float(X["vdd"].max()) + 0.5
     bad = np.nonzero((y < -0.5) | (y > top))[0]
     for i in bad[:5]:

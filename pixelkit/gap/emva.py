@@ -51,7 +51,7 @@ from scipy.stats import norm
 
 from ..errors import PixelkitError
 from ..fileio import path_kind
-from ..readfile import FileRefused, read_bytes
+from ..readfile import FileRefused, check_file, open_file, read_bytes
 
 UNITS = {"ns": 1e-9, "us": 1e-6, "µs": 1e-6, "ms": 1e-3, "s": 1.0}
 _UNIT_RE = re.compile(r"exposure[^\n]*?\bin\s+(ns|us|µs|ms|s)\b", re.I)
@@ -68,8 +68,10 @@ def _num(tok, line_no, path, what, integer=False):
         v = int(tok) if integer else float(tok)
     except ValueError:
         raise EmvaError(f"{path}:{line_no}", f"{what} '{tok}' is not a{'n integer' if integer else ' number'}") from None
+    if integer and not 0 <= v <= 10 ** 9:
+        raise EmvaError(f"{path}:{line_no}", f"{what} {tok[:20]} must be a whole number 0 .. 1e9")
     if not np.isfinite(v) or v < 0:
-        raise EmvaError(f"{path}:{line_no}", f"{what} {tok} must be finite and >= 0")
+        raise EmvaError(f"{path}:{line_no}", f"{what} {tok[:20]} must be finite and >= 0")
     return v
 
 
@@ -107,8 +109,9 @@ def read_descriptor(folder: str | Path) -> dict:
             if fmt is not None:
                 raise EmvaError(f"{path}:{k}", "a second 'n' line")
             bits, w, h = (_num(x, k, path, name, True) for x, name in zip(f[1:], ("bits", "width", "height")))
-            if not 1 <= bits <= 16 or w < 1 or h < 1:
-                raise EmvaError(f"{path}:{k}", f"'{line.strip()}': bits must be 1..16, width and height >= 1")
+            if not 1 <= bits <= 16 or w < 1 or h < 1 or w * h > MAX_PIXELS:
+                raise EmvaError(f"{path}:{k}", f"'{line.strip()}': bits must be 1..16, width and height >= 1, "
+                                               f"width x height at most {MAX_PIXELS} pixels")
             fmt = {"bits": bits, "width": w, "height": h}
         elif f[0] in ("b", "d"):
             want = 3 if f[0] == "b" else 2
@@ -125,11 +128,17 @@ def read_descriptor(folder: str | Path) -> dict:
                 raise EmvaError(f"{path}:{k}", "an 'i' line before any 'b' or 'd' line")
             if len(f) != 2:
                 raise EmvaError(f"{path}:{k}", f"'{line.strip()}' should be 'i relative/path.png'")
-            p = (base / Path(*f[1].replace("\\", "/").split("/"))).resolve()
+            try:
+                p = (base / Path(*f[1].replace("\\", "/").split("/"))).resolve()
+            except (RuntimeError, OSError):   # Python 3.11 raises RuntimeError on a loop
+                raise EmvaError(f"{path}:{k}", f"image '{f[1]}' is a loop of symbolic links") from None
             if not p.is_relative_to(base):
                 raise EmvaError(f"{path}:{k}", f"image path '{f[1]}' leaves the dataset folder")
-            if path_kind(p) != "file":
-                raise EmvaError(f"{path}:{k}", f"image '{f[1]}' not found")
+            try:
+                check_file(p, "image", "image", limit=1 << 62)   # its size is checked when it is read
+            except FileRefused as exc:
+                why = "not found" if exc.missing else f"is {exc.value}, not a regular file"
+                raise EmvaError(f"{path}:{k}", f"image '{f[1]}' {why}") from None
             cur["imgs"].append(p)
         else:
             raise EmvaError(f"{path}:{k}", f"unknown line '{line.strip()[:40]}' (allowed: v, n, b, d, i, #)")
@@ -147,22 +156,45 @@ def read_descriptor(folder: str | Path) -> dict:
             "source": str(path), "exposure_unit": unit}
 
 
+#: Largest image the kit decodes (a 268-megapixel sensor); the descriptor's size must not exceed it.
+MAX_PIXELS = 1 << 28
+
+
+def image_limit(desc: dict) -> int:
+    """Largest file an image of the descriptor's size can be: raw bytes twice over plus 1 MiB of
+    metadata (PNG stores incompressible data with a few bytes per 64 kB, and each row one filter byte)."""
+    return 2 * desc["width"] * desc["height"] * (1 if desc["bits"] <= 8 else 2) + (1 << 20)
+
+
 def load_image(p: Path, desc: dict) -> np.ndarray:
-    """One image as the integers it holds; checked against the descriptor's size and bit depth."""
+    """One image as the integers it holds; checked against the descriptor's size and bit depth,
+    its file size and its stated dimensions checked before anything is decoded."""
+    import warnings
+
     from PIL import Image, UnidentifiedImageError
+    want = (desc["width"], desc["height"])
     try:
-        with Image.open(p) as im:
-            im.load()
-            a = np.asarray(im)
+        with open_file(p, "image", "image", limit=image_limit(desc)) as fh, warnings.catch_warnings():
+            warnings.simplefilter("ignore", Image.DecompressionBombWarning)   # the size is checked below
+            with Image.open(fh) as im:
+                if im.size != want:
+                    raise EmvaError(str(p), f"size {im.size[0]} x {im.size[1]} differs from the descriptor's "
+                                            f"{want[0]} x {want[1]} (not decoded)")
+                im.load()
+                a = np.asarray(im)
+    except FileRefused as exc:
+        raise EmvaError(str(p), f"{exc.value}: expected {exc.allowed} (the descriptor states {want[0]} x "
+                                f"{want[1]} at {desc['bits']} bits)") from None
+    except Image.DecompressionBombError:
+        raise EmvaError(str(p), f"states more pixels than Pillow decodes safely; the descriptor states "
+                                f"{want[0]} x {want[1]} (not decoded)") from None
     except (UnidentifiedImageError, OSError, SyntaxError, ValueError) as e:
         raise EmvaError(str(p), f"unreadable or truncated image ({e})") from None
     if a.ndim != 2 or not np.issubdtype(a.dtype, np.integer):
         raise EmvaError(str(p), f"not a grayscale integer image (shape {a.shape}, {a.dtype})")
-    if a.shape != (desc["height"], desc["width"]):
-        raise EmvaError(str(p), f"size {a.shape[1]} x {a.shape[0]} differs from the descriptor's "
-                                f"{desc['width']} x {desc['height']}")
     if int(a.max()) >= 2 ** desc["bits"]:
         raise EmvaError(str(p), f"value {int(a.max())} does not fit the stated {desc['bits']} bits")
+    desc["max_seen"] = max(desc.get("max_seen", 0), int(a.max()))   # check_data compares it with the bits
     return a.astype(np.int64)
 
 
@@ -279,9 +311,13 @@ def figures(desc: dict, tp: dict | None = None) -> dict:
 
 def _dark_noise_verdict(fig) -> dict | None:
     m, v = fig["dark_current_mean_e_per_s"], fig["dark_current_var_e_per_s"]
-    if not (np.isfinite(m) and np.isfinite(v)) or v <= 0:
+    if m is None or v is None or v <= 0:
         return None
-    ratio = v / m if m != 0 else float("inf")
+    if m <= 0:   # the dark variance grows while the dark mean does not
+        return {"effect": "non_poisson_dark_noise", "ratio_var_to_mean": None,
+                "text": "the dark variance grows with exposure while the dark mean does not: the dark signal is "
+                        "not shot-noise limited (RTS / hot pixels, or a drifting dark offset)"}
+    ratio = v / m
     if 1 / 1.5 <= ratio <= 1.5:
         return None
     return {"effect": "non_poisson_dark_noise", "ratio_var_to_mean": float(ratio),
@@ -331,11 +367,70 @@ CANDIDATES = {"nonlinearity": ([1e-4], [0.0], [1e-2]), "soft_saturation": ([0.02
               "dark_current": ([0.0], [-1e3], [1e3])}
 
 
+#: Figures a dataset may not determine (one or two exposures; a negative variance slope; no
+#: spatial stacks): None in the answer, "n/a" in the text, never NaN.
+OPTIONAL = ("dark_current_mean_DN_per_s", "dark_current_mean_e_per_s", "dark_current_var_DN_per_s",
+            "dark_current_var_e_per_s", "DSNU_e", "PRNU_percent")
+
+
+def check_data(desc: dict, tp: dict) -> None:
+    """Refuse, naming what is missing, data from which the figures cannot be computed: no exposure,
+    photon counts that do not grow with exposure, a bit depth the data do not use, every bright
+    step saturated, no signal above the dark level, no photon-transfer range below saturation."""
+    src = desc["source"]
+    bright = [s_ for s_ in desc["steps"] if s_["kind"] == "b" and len(s_["imgs"]) == 2]
+    if all(s_["t"] == 0 for s_ in desc["steps"]):
+        raise EmvaError(src, "every exposure is 0: no photons can be collected (check the 'b' and 'd' lines)")
+    by_t = {}
+    for s_ in bright:
+        by_t.setdefault(s_["t"], []).append(s_)
+    if len(by_t) > 1 and all(len(v) == 1 for v in by_t.values()):   # the exposure-variation method
+        steps = [v[0] for _, v in sorted(by_t.items())]
+        for a, b in zip(steps, steps[1:]):
+            if b["mu_p"] <= a["mu_p"]:
+                raise EmvaError(f"{src}:{b['line']}", f"photons {b['mu_p']:g} at exposure {b['t_raw']:g} do not exceed "
+                                f"{a['mu_p']:g} at the shorter exposure {a['t_raw']:g} (line {a['line']}): photon "
+                                "counts must grow with exposure")
+    fs = 2 ** desc["bits"] - 1
+    if np.all(tp["u_y"] >= fs - 0.5):
+        raise EmvaError(src, f"every bright step is saturated (mean at the full scale {fs} DN): no signal range")
+    Y = tp["u_y"] - tp["u_ydark"]
+    floor = max(1.0, 3.0 * float(np.sqrt(max(np.mean(tp["s2_ydark"]), 0.0))))
+    if Y.max() <= floor:
+        raise EmvaError(src, f"no signal range: the bright means exceed the dark means by at most {Y.max():.3g} DN "
+                             f"(noise floor {floor:.3g} DN)")
+    if np.all(tp["s2_y"] - tp["s2_ydark"] <= 0):
+        raise EmvaError(src, "no photon noise: the two images of every bright step vary no more than the dark "
+                             "ones (identical or synthetic images?)")
+    bits, top = desc["bits"], desc.get("max_seen", 0)
+    if bits >= 5 and top < 2 ** (bits - 4):
+        used = max(int(top).bit_length(), 1)
+        raise EmvaError(src, f"the descriptor states {bits} bits, but the largest value in the images is {top} "
+                             f"({used} bits): state the camera's bit depth")
+
+
 def analyse(folder) -> dict:
     """EMVA 1288 figures plus the camera-level gap: where the data leave the linear model, and why."""
+    import warnings
     desc = read_descriptor(folder)
     tp = temporal_data(desc)
+    check_data(desc, tp)
+    with np.errstate(all="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore")   # degenerate fits are refused below, by name, not as warnings
+        return _analyse(desc, tp)
+
+
+def _analyse(desc: dict, tp: dict) -> dict:
     fig = figures(desc, tp)
+    for k in OPTIONAL:
+        if k in fig and not np.isfinite(fig[k]):
+            fig[k] = None
+    bad = [k for k, v in fig.items() if isinstance(v, float) and not np.isfinite(v)]
+    if bad or not fig["K_DN_per_e"] > 0 or not fig["R_DN_per_photon"] > 0:
+        raise EmvaError(desc["source"], f"the photon transfer cannot be computed from these data "
+                                        f"(K = {fig['K_DN_per_e']:.3g} DN/e-, R = {fig['R_DN_per_photon']:.3g}"
+                                        f"{'; not finite: ' + ', '.join(bad) if bad else ''}): fewer than two "
+                                        "bright steps with signal below 70 % of saturation?")
     m = measure_steps(desc, tp)
     fs = 2 ** desc["bits"] - 1
     nom = nominal_fit(m, float(fs), fig)

@@ -51,11 +51,12 @@ def breakdown(X, resid) -> list[dict]:
     for var in ("signal", "t_int", "t_wait", "T", "i", "row"):
         for stage, m in stages:
             x, r_ = X[var][m], resid[m]
-            if x.size < 5 or np.ptp(x) == 0:
+            if x.size < 5 or np.ptp(x) == 0 or np.ptp(r_) == 0:
                 continue
-            r, p = stats.pearsonr(x, r_)
+            u = (x - x.mean()) / np.ptp(x)   # scaled to a span of 1: pA and ms fit as well as volts
+            r, p = stats.pearsonr(u, r_)
             rows.append({"factor": f"trend vs {var}", "level": f"{stage}: r = {r:+.2f}", "n": int(x.size),
-                         "mean_V": float(np.polyfit(x, r_, 1)[0] * np.ptp(x)), "std_V": float(np.std(r_)),
+                         "mean_V": float(np.polyfit(u, r_, 1)[0]), "std_V": float(np.std(r_)),
                          "p": float(p), "significant": bool(p < P_SIGNIFICANT)})
     rows.sort(key=lambda r: (not r["significant"], -abs(r["mean_V"])))
     return rows

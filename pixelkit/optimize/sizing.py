@@ -107,7 +107,7 @@ def _feasibility(design, ts, tp, checks):
     lo = {k: v for k, (kind, v) in ts.items() if kind == "lo"}
     hi = {k: v for k, (kind, v) in ts.items() if kind == "hi"}
     ratio = design.sizing.t_ratio
-    if ratio > 0:
+    if ratio:
         fixed = ratio * tp["criterion"][1]
         broken = [k for k, v in lo.items() if fixed < v] + [k for k, v in hi.items() if fixed > v]
         if broken:
@@ -146,7 +146,7 @@ def solve(design, curves: Curves) -> dict:
     opti.subject_to(math.log(tp["motion"][1]) - ltp >= 0)
     opti.subject_to(la >= math.log(q["min_open"] * (1 + sz.margin)))
     opti.subject_to(la <= math.log(d.secondary.area))
-    if sz.t_ratio > 0:
+    if sz.t_ratio:
         opti.subject_to(lts - ltp == math.log(sz.t_ratio))
     opti.minimize(-slack if sz.objective == "margin" else -lts)
     t_guess = tp["criterion"][1]

@@ -15,6 +15,7 @@ import time
 import traceback
 from pathlib import Path
 
+from .. import owner as owners
 from ..errors import ConfigError, PixelkitError
 from ..fileio import honour_umask_tree, json_default, path_kind, staging_dir
 from ..spice.counter import SpiceCounter
@@ -97,15 +98,34 @@ def _write_outputs(stage: Path, design, sections, meta: dict) -> dict:
 
 
 def _swap_into_place(stage: Path, out: Path) -> None:
+    """Rename the finished stage to ``out`` (the earlier report, if any, moved aside and removed).
+    Ctrl-C is held off between the two renames, so ``out`` is never left missing by it."""
+    import signal
     old = None
     if path_kind(out) is not None:
         if path_kind(out / "summary.json") is None and any(out.iterdir()):
             raise ConfigError("", "--out", str(out), "a new folder or an earlier report folder (it has no summary.json)")
-        old = out.with_name(f".{out.name}.old-{os.getpid()}")
-        os.replace(out, old)
-    os.replace(stage, out)
+        old = out.with_name(f".{out.name}.old-{owners.tag()}")
+    held = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        if old is not None:
+            os.replace(out, old)
+        os.replace(stage, out)
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, held)
     if old is not None:
         shutil.rmtree(old, ignore_errors=True)
+
+
+def _clear_debris(out: Path) -> None:
+    """What killed runs left beside ``out``: an earlier report moved aside by a run killed between
+    its two renames is put back; staging folders of runs that are gone are removed."""
+    if path_kind(out) is None:
+        for p in sorted(out.parent.glob(f".{out.name}.old-pk*")):
+            if not owners.alive(owners.owner_of(p.name) or ""):
+                os.replace(p, out)
+                break
+    owners.sweep(out.parent, f".{out.name}.")
 
 
 def build_report(design, out: Path, *, quick: bool = False, backend: str = "batch", jobs: int | None = None,
@@ -119,7 +139,8 @@ def build_report(design, out: Path, *, quick: bool = False, backend: str = "batc
     if measured is not None and path_kind(measured) != "file":
         raise ConfigError("", "--measured", str(measured), "an existing CSV file of measured rows")
     out.parent.mkdir(parents=True, exist_ok=True)
-    stage = staging_dir(out.parent, f".{out.name}.new-")
+    _clear_debris(out)
+    stage = staging_dir(out.parent, f".{out.name}.new-{owners.tag()}-")
     try:
         sections, how = [], {}
         with command_bar("report", total=len(REGISTRY), unit="sections") as bar:

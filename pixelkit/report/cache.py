@@ -4,27 +4,34 @@ The key hashes everything a section's output depends on: the pixelkit source tre
 (every ``.py`` and template), the loaded design (its full repr, technology included),
 the bytes of the model files it includes, the ngspice version, the report options
 and the measured-data file. An entry is the section as JSON plus its figure files,
-under ``$PIXELKIT_CACHE/report/<key>/`` (written through a temporary folder, then
-renamed, so a half-written entry is never read).
+kept in the kit's one checked store (:mod:`pixelkit.cachestore`, folder
+``$PIXELKIT_CACHE/report``), as the simulation results are: a checksum over every
+file it holds, verified before anything is used; a changed, truncated or swapped
+entry, or anything but a regular file in its place, is said on stderr, removed and
+the section rebuilt.
 """
 from __future__ import annotations
 
 import dataclasses
 import hashlib
 import json
-import os
-import shutil
-import tempfile
+import sys
 from functools import lru_cache
 from pathlib import Path
 
+from ..cachestore import Store
+from ..fileio import write_atomic
+from ..readfile import is_regular, read_bytes
 from .sections import Checked, Figure, Section, Table
 
 _PKG = Path(__file__).resolve().parents[1]
 
 
+STORE = Store("report", "report-cache", "rebuilding the section")
+
+
 def cache_dir() -> Path:
-    return Path(os.environ.get("PIXELKIT_CACHE", Path.home() / ".cache" / "pixelkit")) / "report"
+    return STORE.root()
 
 
 @lru_cache(maxsize=1)
@@ -65,35 +72,33 @@ def section_key(key: str, design, options: dict) -> str:
 
 
 def load(k: str, out_dir: Path) -> Section | None:
-    """The cached section ``k`` with its files copied into ``out_dir``, or None."""
-    entry = cache_dir() / k
-    try:
-        raw = json.loads((entry / "section.json").read_text())
-        s = _from_dict(raw)
-        for name in raw["files"]:
-            (out_dir / name).parent.mkdir(parents=True, exist_ok=True)
-            shutil.copy2(entry / name, out_dir / name)
-    except (OSError, ValueError, KeyError, TypeError):
+    """The cached section ``k`` with its files written into ``out_dir``, or None."""
+    files = STORE.load(k)
+    if files is None:
         return None
+    try:
+        raw = json.loads(files.pop("section.json"))
+        s = _from_dict(raw)
+        if sorted(raw["files"]) != sorted(files):
+            raise ValueError("the files listed are not the files held")
+        if any(Path(n).is_absolute() or ".." in Path(n).parts for n in files):
+            raise ValueError("a file name outside the report folder")
+    except (KeyError, ValueError, TypeError) as exc:   # checksummed, yet not a section: another version
+        sys.stderr.write(f"pixelkit: warning: cache entry {STORE.path(k)} holds no section ({exc}); "
+                         "rebuilding the section\n")
+        STORE.drop(k)
+        return None
+    for name, blob in files.items():
+        write_atomic(out_dir / name, blob)
     return s
 
 
 def save(k: str, section: Section, out_dir: Path) -> None:
-    files = [f.file for f in section.figures if (out_dir / f.file).exists()]
-    files += [n for n in section.files if (out_dir / n).exists()]
-    root = cache_dir()
-    root.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{k}.", dir=root))
-    try:
-        for name in files:
-            (tmp / name).parent.mkdir(parents=True, exist_ok=True)
-            shutil.copy2(out_dir / name, tmp / name)
-        (tmp / "section.json").write_text(json.dumps(dict(dataclasses.asdict(section), files=files)))
-        if (root / k).exists():
-            shutil.rmtree(root / k, ignore_errors=True)
-        os.replace(tmp, root / k)
-    except OSError:
-        shutil.rmtree(tmp, ignore_errors=True)  # a cache that cannot be written is only slower
+    names = [f.file for f in section.figures if is_regular(out_dir / f.file)]
+    names += [n for n in section.files if is_regular(out_dir / n)]
+    files = {n: read_bytes(out_dir / n, "section file", "report-cache") for n in dict.fromkeys(names)}
+    files["section.json"] = json.dumps(dict(dataclasses.asdict(section), files=list(files))).encode()
+    STORE.save(k, files)
 
 
 def _from_dict(raw: dict) -> Section:

@@ -1,36 +1,30 @@
-"""Keeping a failed simulation: its deck and ngspice's log in a named folder, and advice.
+"""Keeping a failed simulation: its deck and ngspice's log in a folder of its own, and advice.
 
 The engine calls :func:`keep` when a deck still fails after every retry. The
-folder is ``<root>/<deck title>-<hash>/`` with ``deck.cir`` (the deck as last
-run, options included, so ``ngspice -b deck.cir`` reproduces the failure),
-``ngspice.log`` (ngspice's output of every attempt), a ``models`` link to the
-model folder and ``what.txt`` (which
-bench and operating point, in the user's terms). ``root`` is
-``reports/<design>/failed`` for the command line (``set_root``), else (the
-Python API, tests) ``failed/`` in the kit's cache folder (``$PIXELKIT_CACHE``,
-default ``~/.cache/pixelkit``): library code does not write into the current
-folder on its own.
+folder is ``$PIXELKIT_CACHE/failed/<deck title>-<deck hash>-<time>-<random>/``
+(default cache ``~/.cache/pixelkit``; never the current folder), one per failure,
+so two failures of the same deck (with different model folders, say) never
+overwrite each other; its path is in the error message. It holds ``deck.cir`` (the
+deck as last run, options included, so ``ngspice -b deck.cir`` reproduces the
+failure), ``ngspice.log`` (ngspice's output of every attempt), a ``models`` link to
+the model folder and ``what.txt`` (which bench and operating point, in the user's
+terms). The newest ``KEEP`` folders are kept; older ones are removed.
 """
 from __future__ import annotations
 
 import hashlib
+import shutil
+import time
 from pathlib import Path
 
-from ..fileio import write_atomic
+from ..cachestore import cache_root
+from ..fileio import staging_dir, write_atomic
 
-_ROOT: Path | None = None
-
-
-def set_root(folder) -> None:
-    global _ROOT
-    _ROOT = Path(folder)
+KEEP = 100
 
 
 def root() -> Path:
-    if _ROOT is not None:
-        return _ROOT
-    from .cache import cache_dir
-    return cache_dir().parent / "failed"
+    return cache_root() / "failed"
 
 
 def describe(net) -> str:
@@ -58,7 +52,9 @@ def keep(net, deck_text: str, logs: list[tuple[str, list[str]]]) -> Path:
     """Write the failed deck (runnable there: ``models`` link beside it), the logs and the description."""
     from .export import export_deck
     tag = hashlib.sha256(deck_text.encode()).hexdigest()[:8]
-    folder = root() / f"{net.title}-{tag}"
+    root().mkdir(parents=True, exist_ok=True)
+    folder = staging_dir(root(), f"{net.title}-{tag}-{time.strftime('%Y%m%d-%H%M%S')}-")
+    _prune()
     export_deck(net, folder / "deck.cir", models="link")
     log = []
     for label, lines in logs:
@@ -66,3 +62,14 @@ def keep(net, deck_text: str, logs: list[tuple[str, list[str]]]) -> Path:
     write_atomic(folder / "ngspice.log", "\n".join(log) + "\n")
     write_atomic(folder / "what.txt", describe(net) + "\n")
     return folder
+
+
+def _prune() -> None:
+    """Keep the newest KEEP failure folders."""
+    try:
+        folders = sorted((p for p in root().iterdir() if p.is_dir() and not p.is_symlink()),
+                         key=lambda p: p.stat().st_mtime)
+    except OSError:
+        return
+    for p in folders[:-KEEP]:
+        shutil.rmtree(p, ignore_errors=True)

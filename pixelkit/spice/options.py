@@ -24,9 +24,12 @@ RETRIES = (
      ("itl4", 100)),
 )
 
-FAILURE_MARKERS = ("can't find model", "error on line", "timestep too small", "simulation(s) aborted", "doanalyses", "singular matrix",
-                   "no convergence", "error:", "could not find", "unknown model", "fatal",
-                   "unknown subckt", "gmin stepping failed", "source stepping failed")
+FAILURE_MARKERS = ("can't find model", "error", "timestep too small", "simulation(s) aborted", "doanalyses",
+                   "singular matrix", "no convergence", "could not find", "unknown model", "fatal", "not found",
+                   "unknown subckt", "gmin stepping failed", "source stepping failed", "netlist line no")
+#: ngspice's closing line after any error: said last, after the line that names the cause.
+_GENERIC = ("fatal error in ngspice", "ngspice exited with status", "circuit not parsed", "simulation(s) aborted",
+            "cannot recover", "refused the deck", "interrupted due to error")
 
 
 def merged(base, override) -> tuple:
@@ -36,13 +39,22 @@ def merged(base, override) -> tuple:
 
 
 def failure_lines(lines) -> list[str]:
-    """The lines of ngspice output that say a run failed (case-insensitive markers)."""
+    """The lines of ngspice output that say a run failed (case-insensitive markers), ngspice's own
+    first error line first (a line ending in ':', such as 'Netlist line no. 2:', joined with the
+    line it introduces) and its generic closing lines ('fatal error in ngspice') last."""
     out = []
     lines = list(lines)
+    skip = False
     for k, line in enumerate(lines):
+        if skip:
+            skip = False
+            continue
         low = line.lower()
         if any(m in low for m in FAILURE_MARKERS):
-            out.append(line.strip())
+            text = line.strip()
             if low.rstrip().endswith((":", "from line")) and k + 1 < len(lines):
-                out.append(lines[k + 1].strip())  # the offending deck line
-    return out
+                text = f"{text} {lines[k + 1].strip()}"  # the offending deck line, or the cause
+                skip = True
+            out.append(text)
+    specific = [x for x in out if not any(g in x.lower() for g in _GENERIC)]
+    return specific + [x for x in out if x not in specific]

@@ -32,6 +32,8 @@ import threading
 import time
 from pathlib import Path
 
+from .. import owner
+
 SPICEINIT = "set num_threads=1\n"
 PREFIX = "pixelkit-"
 _OWNER = "owner.pid"
@@ -54,7 +56,7 @@ def root() -> Path:
             base = Path(tempfile.gettempdir())
             _sweep_stale(base)
             r = Path(tempfile.mkdtemp(prefix=f"{PREFIX}{os.getpid()}-", dir=base))
-            (r / _OWNER).write_text(str(os.getpid()))
+            (r / _OWNER).write_text(owner.tag())   # pid and start time (a reused pid is not the owner)
             _start_watchdog(r)
             atexit.register(shutil.rmtree, r, True)
             _ROOT = r
@@ -80,21 +82,11 @@ def _start_watchdog(r: Path) -> None:
 def _sweep_stale(base: Path) -> None:
     for d in base.glob(f"{PREFIX}*-*"):
         try:
-            pid = int((d / _OWNER).read_text())
-        except (OSError, ValueError):
+            tag = (d / _OWNER).read_text(errors="replace").strip()
+        except OSError:
             continue  # not a kit root (or not ours to judge)
-        if not _alive(pid):
+        if not owner.alive(f"pk{tag}-0" if tag.isdigit() else tag):   # a bare pid: written by an older kit
             shutil.rmtree(d, ignore_errors=True)
-
-
-def _alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True
 
 
 def run_folder() -> Path:

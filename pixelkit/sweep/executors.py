@@ -14,6 +14,7 @@ tasks that were running.
 """
 from __future__ import annotations
 
+import re
 from concurrent.futures import ThreadPoolExecutor, as_completed
 
 from ..errors import ConfigError
@@ -48,6 +49,20 @@ def run_tasks(fn, tasks, jobs: int | None = None, scheduler=None, desc: str = "s
                 raise
 
 
+_ADDRESS = re.compile(r"^(?:(?:tcp|tls|ucx)://)?(\[[0-9A-Fa-f:.]{2,45}\]|[A-Za-z0-9][A-Za-z0-9.-]{0,252}):([0-9]{1,5})$")
+
+
+def check_address(scheduler) -> str:
+    """``scheduler`` if it is a Dask scheduler address (``[tcp|tls|ucx://]HOST:PORT``, port 1-65535):
+    checked before anything connects, so a malformed address never reaches the network layer."""
+    m = _ADDRESS.match(scheduler) if isinstance(scheduler, str) else None
+    if not m or not 1 <= int(m.group(2)) <= 65535:
+        raise ConfigError("", "--scheduler", scheduler,
+                          "a Dask scheduler address [tcp://|tls://|ucx://]HOST:PORT (port 1-65535), "
+                          "e.g. tcp://127.0.0.1:8786")
+    return scheduler
+
+
 def _client(scheduler):
     try:
         from dask.distributed import Client
@@ -55,8 +70,7 @@ def _client(scheduler):
         raise ConfigError("", "scheduler", scheduler, "dask[distributed] installed") from None
     if isinstance(scheduler, Client):
         return scheduler, False
-    if not isinstance(scheduler, str) or "://" not in scheduler and ":" not in scheduler:
-        raise ConfigError("", "scheduler", scheduler, "a Dask scheduler address such as tcp://host:8786")
+    check_address(scheduler)
     try:
         return Client(scheduler, timeout="20s"), True
     except (OSError, TimeoutError) as exc:

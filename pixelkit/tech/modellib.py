@@ -159,8 +159,9 @@ def load_model_library(raw, base: Path, source: str) -> ModelLibrary:
     for name, lines in corners_raw.items():
         if not _SECTION.match(name):
             raise ConfigError(source, f"models.corners.{name}", name, "a corner name of letters, digits, '_'")
-        if not isinstance(lines, list) or not all(isinstance(x, str) for x in lines):
-            raise ConfigError(source, f"models.corners.{name}", lines, "a list of strings")
+        if not isinstance(lines, list) or not lines or not all(isinstance(x, str) for x in lines):
+            raise ConfigError(source, f"models.corners.{name}", lines,
+                              'a non-empty list of strings ("lib FILE SECTION" or "include FILE")')
         corners[name] = tuple(_parse_include(x, folder, source, f"models.corners.{name}") for x in lines)
     default = raw.get("default_corner")
     if not isinstance(default, str) or default not in corners:

@@ -6,6 +6,7 @@ model library the user holds, such as the real AMS C35 models under NDA).
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -13,6 +14,7 @@ from ..errors import MISSING, ConfigError
 from ..fileio import path_kind
 from ..schema import flag, ident, load, num, qty, read_toml, table, text
 from .layout_data import Layer, LayoutData, Rule, Signoff, parse_layers, parse_rules, parse_signoff
+from .libcheck import check_devices
 from .modellib import ModelLibrary, load_model_library
 
 BUILTIN_DIR = Path(__file__).parent / "builtin"
@@ -159,6 +161,8 @@ def _qe_curve(raw, source):
                           "a list of at least two [wavelength_nm, qe] pairs of numbers")
     wl = [float(p[0]) for p in curve]
     qe = [float(p[1]) for p in curve]
+    if not all(math.isfinite(x) for x in wl + qe):
+        raise ConfigError(source, "photodiode.qe_curve", curve, "finite wavelengths (nm) and QE values")
     if any(b <= a for a, b in zip(wl, wl[1:])) or wl[0] <= 0:
         raise ConfigError(source, "photodiode.qe_curve", curve, "wavelengths > 0 in increasing order")
     if any(not 0 <= q <= 1 for q in qe):
@@ -200,4 +204,5 @@ def load_technology(name_or_path: str | Path, relative_to: Path | None = None, s
     object.__setattr__(tech, "models", models)
     object.__setattr__(tech, "layout", LayoutData(layers, aliases, rules, signoff))
     object.__setattr__(tech, "source", source)
+    check_devices(tech, source)   # every device name resolves in every corner (tech/libcheck.py)
     return tech

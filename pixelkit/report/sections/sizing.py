@@ -39,7 +39,7 @@ def _slacks(design, curves, s: dict) -> list[list]:
     rows.append(["opening_min (A_open >=)", lo * 1e12, a * 1e12, "um2", a / lo - 1])
     rows.append(["opening_max (A_open <= A_pd)", design.secondary.area * 1e12, a * 1e12, "um2",
                  design.secondary.area / a - 1])
-    if design.sizing.t_ratio > 0:
+    if design.sizing.t_ratio:
         rows.append(["t_ratio (t_s = ratio t_p)", design.sizing.t_ratio, s["t_ratio"], "", 0.0])
     hmax = q["q_head_max"] * (1 - m)
     rows.append(["headlight_max (Q_head <=)", hmax * 1e15, q["q_head"] * 1e15, "fC", hmax / q["q_head"] - 1])
