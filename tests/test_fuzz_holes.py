@@ -94,7 +94,7 @@ def test_a_warning_that_reaches_the_user_is_one_line_without_source(tmp_path):
     import sys
     code = ("import warnings, numpy as np\nfrom pixelkit.cli import common\n"
             "common.main.command('warnme')(lambda: np.polyfit(np.array([1e-12, 1e-12, 2e-12]), np.ones(3), 2))\n"
-            "common.entry(['warnme'])\n")
+            "common.run(['warnme'])\n")
     p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120,
                        env={**__import__("os").environ, "PYTHONPATH": str(ROOT)})
     lines = p.stderr.strip().splitlines()

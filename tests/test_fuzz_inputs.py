@@ -118,13 +118,13 @@ def _run(argv, monkeypatch, capfd):
     import pixelkit.chip.frame
     import pixelkit.mc.montecarlo
     import pixelkit.sweep.run
-    from pixelkit.cli import common
+    from pixelkit.cli import common, entry
     monkeypatch.setattr(pixelkit.sweep.run, "run_tasks", _stub)          # after the axes are validated
     monkeypatch.setattr(pixelkit.mc.montecarlo, "simulate_frame", _stub)  # after the corner is applied
     monkeypatch.setattr(pixelkit.chip.frame, "simulate_frame", _stub)
     common.WARNINGS.clear()
     try:
-        common.entry([str(a) for a in argv])
+        entry([str(a) for a in argv])
         code = 0
     except Accepted:
         code = 0

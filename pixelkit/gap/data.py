@@ -53,10 +53,9 @@ MAX_TIME_S = 10.0
 
 def full_wells(design) -> dict:
     """Full-well charge (C) of each array from the analytic model (the bound of the photocurrent check)."""
-    from ..physics.subpixel import model_table
     from ..constants import Q
-    t = model_table(design)
-    return {a: t[a]["fwc_e"] * Q for a in ("primary", "secondary")}
+    from ..physics.subpixel import figures
+    return {a: figures(design, a)["fwc_e"] * Q for a in ("primary", "secondary")}
 
 
 class DataError(PixelkitError):
