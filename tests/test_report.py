@@ -144,23 +144,27 @@ def test_report_renders_in_chromium_images_tables_no_errors(quick_report):
     assert not console, console
 
 
-def test_revision_diff_names_the_changed_device_and_exits_1(quick_report, tmp_path):
-    """A narrower SF (0.6 um; 1 um in revA, a wider one breaks the layout rule transistors_fit):
-    the diff names pixel.devices.sf_w, the figures it moved and the netlists it changed."""
+def test_revision_diff_names_the_changed_device_and_fails_on_specs(quick_report, tmp_path):
+    """A narrower SF (0.6 um; 1 um in revA, a wider one breaks the layout rule transistors_fit) and a
+    30 dB op-amp: the diff names both fields, the figures they moved and the netlists they changed,
+    and (revA has specs) fails on the spec the low gain breaks (AFE gain error 6 % > 0.5 %), ranked
+    first, not on the figures that moved."""
     base, _ = quick_report
     changed = tmp_path / "revB.toml"
     text = re.sub(r'^sf_w = "1 um"', 'sf_w = "0.6 um"', REF.read_text(), flags=re.M)
-    assert text != REF.read_text()
+    text = re.sub(r'^gain = "60 dB"', 'gain = "30 dB"', text, flags=re.M)
+    assert text.count("0.6 um") > REF.read_text().count("0.6 um") and "30 dB" in text
     changed.write_text(text)
     code, stdout, err = run_cli("report", changed, "--quick", "--out", tmp_path / "revB", "--baseline", base)
     assert code == 1, err + stdout
     diff = json.loads((tmp_path / "revB" / "diff.json").read_text())
-    assert [c["field"] for c in diff["design_changes"]] == ["pixel.devices.sf_w"]
-    assert diff["moved"] and not diff["passed"]
+    assert [c["field"] for c in diff["design_changes"]] == ["afe.gain", "pixel.devices.sf_w"]
+    assert diff["by_specs"] and not diff["passed"] and diff["newly_failing"] == ["afe_gain_error"]
+    assert diff["specs"][0]["spec"] == "afe_gain_error" and diff["specs"][0]["verdict"] == "newly failing"
     # the SF's gain sets the output-referred conversion gain: it must be among what moved
     assert any("cg_out" in name for name in diff["moved"]), diff["moved"]
     assert any(n["status"] == "changed" for n in diff["netlists"]), "no generated netlist changed"
-    assert "pixel.devices.sf_w" in stdout and "moved" in stdout.lower()
+    assert "pixel.devices.sf_w" in stdout and "NEWLY FAILING  afe_gain_error" in stdout
     assert (tmp_path / "revB" / "index.html").is_file()
 
 

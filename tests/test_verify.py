@@ -69,7 +69,7 @@ def test_settling_slower_at_ss_than_ff(ref_design):
     assert measure.settling(_at(ref_design, "ff")) == ff
 
 
-def test_dark_signal_and_ktc_grow_with_temperature(ref_design):
+def test_pd_dark_drop_and_ktc_grow_with_temperature(ref_design):
     dark = [measure.dark(_at(ref_design, "tt", t)) for t in (-20.0, 27.0, 85.0)]
     noise = [measure.noise(_at(ref_design, "tt", t)) for t in (-20.0, 27.0, 85.0)]
     for kind in ("primary", "secondary"):
@@ -196,3 +196,22 @@ def test_no_mismatch_anywhere_is_refused_before_running(tmp_path):
     with pytest.raises(ConfigError) as err:
         verify(d, corners=("tt",), temperatures=(300.15,), supplies=(0.0,), mc=4)
     assert err.value.field == "mismatch.mos_avt_n" and "zero spread" in err.value.allowed
+
+
+def test_dask_cluster_gives_the_local_table(tmp_path, monkeypatch):
+    """The same grid on a Dask LocalCluster (2 worker processes, their own empty cache) and on the
+    local threads (a second empty cache): the same values at every condition, and the workers did
+    the simulating."""
+    from dask.distributed import LocalCluster
+    d = load_design(_design(tmp_path, {"afe_gain_error": {"max": "1 %"}, "pd_dark_drop_primary": {"max": "10 mV"}},
+                            {"mc": 2, "seed": 4}))
+    kw = dict(corners=("tt", "ss"), temperatures=(300.15,), supplies=(0.0, 0.1))
+    dask_cache, local_cache = tmp_path / "dask_cache", tmp_path / "local_cache"
+    monkeypatch.setenv("PIXELKIT_CACHE", str(dask_cache))
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        remote = verify(d, scheduler=cluster.scheduler_address, **kw)
+    assert len(list((dask_cache / "sim").glob("*/*.npz"))) > 4
+    monkeypatch.setenv("PIXELKIT_CACHE", str(local_cache))
+    local = verify(d, jobs=2, **kw)
+    assert [c["figures"] for c in remote["conditions"]] == [c["figures"] for c in local["conditions"]]
+    assert remote["mc_values"] == local["mc_values"] and len(local["mc_values"]["afe_gain_error"]) == 2

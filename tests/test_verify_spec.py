@@ -155,3 +155,41 @@ def test_verify_options_are_checked(tmp_path):
         assert json.loads(out)["field"] == field, (args, out)
     code, out, err = run_cli("verify", f, "--post-layout", timeout=120)
     assert code == 2 and "post-layout extraction not available yet" in err
+
+
+def _report_folder(path: Path, checked: dict, rows: list | None):
+    path.mkdir(parents=True)
+    (path / "summary.json").write_text(json.dumps({"design": "d", "profile": "quick", "checked": {
+        k: {"value": v, "unit": "V", "tol_rel": 0.0, "tol_abs": 1e-3, "section": "x", "note": ""}
+        for k, v in checked.items()}}))
+    if rows is not None:
+        (path / "data_signoff.json").write_text(json.dumps({"rows": rows}))
+    return path
+
+
+def _row(name, value, margin_pct, status):
+    return {"spec": name, "limit": "<= 1 V", "unit": "V", "value": value, "margin_pct": margin_pct,
+            "status": status, "worst": "tt 27degC +0%"}
+
+
+def test_revision_diff_fails_on_specs_and_ranks_by_margin_used(tmp_path):
+    """With specs, figures that moved are listed and do not fail the diff; a spec that passed and
+    now fails does; specs are ranked by the margin the revision used. Without specs, a figure that
+    moved beyond its tolerance fails it (the former semantics)."""
+    from pixelkit.report.diff import diff_reports, load_report
+    a = _report_folder(tmp_path / "a", {"x.v": 1.0, "y.v": 2.0},
+                       [_row("s1", 0.5, 50.0, "pass"), _row("s2", 0.2, 80.0, "pass"), _row("s3", 2.0, -100, "fail")])
+    moved = _report_folder(tmp_path / "b", {"x.v": 1.5, "y.v": 2.0},
+                           [_row("s1", 0.7, 30.0, "pass"), _row("s2", 0.6, 40.0, "pass"), _row("s3", 2.0, -100, "fail")])
+    d = diff_reports(load_report(a), moved)
+    assert d["by_specs"] and d["passed"] and d["moved"] == ["x.v"] and d["newly_failing"] == []
+    assert [r["spec"] for r in d["specs"]] == ["s2", "s1", "s3"]          # 40 points used, then 20, then 0
+    assert d["specs"][2]["verdict"] == "still failing"
+    broke = _report_folder(tmp_path / "c", {"x.v": 1.0, "y.v": 2.0},
+                           [_row("s1", 1.2, -20.0, "fail"), _row("s2", 0.2, 80.0, "pass"), _row("s3", 2.0, -100, "fail")])
+    d = diff_reports(load_report(a), broke)
+    assert not d["passed"] and d["newly_failing"] == ["s1"] and d["specs"][0]["spec"] == "s1"
+    plain_a = _report_folder(tmp_path / "pa", {"x.v": 1.0}, None)
+    plain_b = _report_folder(tmp_path / "pb", {"x.v": 1.5}, None)
+    d = diff_reports(load_report(plain_a), plain_b)
+    assert not d["by_specs"] and not d["passed"] and d["moved"] == ["x.v"]

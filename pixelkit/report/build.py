@@ -92,6 +92,10 @@ def _write_outputs(stage: Path, design, sections, meta: dict) -> dict:
                "needs": {s.key: {"input": s.needs, "why": s.why} for s in sections if s.needs},
                "flags": {s.key: list(s.flags) for s in sections if s.flags},
                "checked": _checked(sections)}
+    signoff = next((s.data.get("rows") for s in sections if s.key == "signoff" and s.available), None)
+    if signoff:   # the verdict of the sign-off section, for the terminal and the diff
+        summary["signoff"] = {"specs": len(signoff), "failed": [r["spec"] for r in signoff if r["status"] == "fail"],
+                              "not_measured": [r["spec"] for r in signoff if r["status"] == "not measured"]}
     (stage / "summary.json").write_text(json.dumps(summary, indent=1) + "\n")
     (stage / "tables.json").write_text(json.dumps(tables, indent=1, default=json_default) + "\n")
     return summary

@@ -8,7 +8,14 @@
   changed lines;
 - figures (pictures): every picture file whose bytes changed;
 - design parameters (``design.json``): every field that differs (this is what names the
-  changed device size).
+  changed device size);
+- specs (``data_signoff.json``, the sign-off section): each spec's worst value and margin in
+  both revisions, ranked by how much of its margin the revision used (in % of the limit).
+
+Pass / fail: a design with specs fails the diff on its specs, when one fails in this revision
+that did not in the baseline (newly failing, or a new spec that fails); checked figures that
+moved are listed, ranked, and do not fail it (``regress`` keeps the strict any-move
+semantics). A design without specs fails when a checked figure moved beyond its tolerance.
 """
 from __future__ import annotations
 
@@ -38,6 +45,7 @@ def load_report(folder: Path) -> dict:
                           "a summary.json written by 'pixelkit report'") from None
     return {"folder": str(folder), "summary": summary,
             "tables": _json(folder / "tables.json"), "design": _json(folder / "design.json"),
+            "signoff": _json(folder / "data_signoff.json").get("rows") or [],
             "netlists": {p.name: read_text(p, "--baseline", "report")
                          for p in sorted((folder / "netlists").glob("*.cir"))},
             "pictures": {p.name: sha256_file(p, "--baseline", "report")
@@ -150,6 +158,28 @@ def _design(old: dict, new: dict) -> list[dict]:
     return [{"field": k, "old": a.get(k), "new": b.get(k)} for k in sorted(set(a) | set(b)) if a.get(k) != b.get(k)]
 
 
+def _specs(old: list, new: list) -> list[dict]:
+    """Each spec in either revision: worst values, margins and status, ranked by margin used."""
+    a, b = {r["spec"]: r for r in old}, {r["spec"]: r for r in new}
+    out = []
+    for name in list(b) + [n for n in a if n not in b]:
+        o, n = a.get(name), b.get(name)
+        row = {"spec": name, "limit": (n or o)["limit"], "unit": (n or o)["unit"],
+               "old_value": o and o.get("value"), "new_value": n and n.get("value"),
+               "old_margin_pct": o and o.get("margin_pct"), "new_margin_pct": n and n.get("margin_pct"),
+               "old_status": o["status"] if o else "absent", "new_status": n["status"] if n else "removed",
+               "new_worst": n and n.get("worst")}
+        if o and n and o["limit"] != n["limit"]:
+            row["note"] = f"limit changed from {o['limit']}"
+        if row["old_margin_pct"] is not None and row["new_margin_pct"] is not None:
+            row["margin_used_pct"] = row["old_margin_pct"] - row["new_margin_pct"]
+        row["verdict"] = ("newly failing" if row["new_status"] == "fail" and row["old_status"] != "fail" else
+                          "still failing" if row["new_status"] == "fail" else
+                          "fixed" if row["old_status"] == "fail" else row["new_status"])
+        out.append(row)
+    return sorted(out, key=lambda r: (r["verdict"] != "newly failing", -(r.get("margin_used_pct") or 0.0)))
+
+
 def diff_reports(base: dict, folder: Path) -> dict:
     """Diff the report in ``folder`` against the loaded baseline report ``base``."""
     new = load_report(folder)
@@ -161,9 +191,13 @@ def diff_reports(base: dict, folder: Path) -> dict:
     if base["summary"].get("profile") != new["summary"].get("profile"):
         notes.append(f"profiles differ: baseline {base['summary'].get('profile')}, this report "
                      f"{new['summary'].get('profile')} (sweep densities differ, so small moves are expected)")
+    specs = _specs(base.get("signoff", []), new["signoff"])
+    newly = [r["spec"] for r in specs if r["verdict"] == "newly failing"]
+    by_specs = bool(new["signoff"])
     return {"baseline": base["folder"], "baseline_design": base["summary"].get("design"),
             "design_changes": _design(base["design"], new["design"]),
-            "checked": checked, "moved": moved, "passed": not moved,
+            "checked": checked, "moved": moved, "passed": not newly if by_specs else not moved,
+            "by_specs": by_specs, "specs": specs, "newly_failing": newly,
             "tables": _tables(base["tables"], new["tables"]),
             "netlists": _netlists(base["netlists"], new["netlists"]),
             "pictures": pictures, "notes": notes}

@@ -1,6 +1,8 @@
 """Plain-text renderings of the figures the CLI prints (units converted at this edge)."""
 from __future__ import annotations
 
+import math
+
 
 def _row(label, *cells):
     return f"  {label:<44}" + "".join(f"{c:>12}" for c in cells)
@@ -111,6 +113,11 @@ def report_text(r: dict) -> str:
                         ("sizing.c_m", "C_M (sized)"), ("afe.gain_error_frac", "AFE gain error")):
         if name in c:
             lines.append(f"  {label:<24} {fmt(c[name]['value'])} {unit(c[name]['unit'])}".rstrip())
+    so = r.get("signoff")
+    if so:
+        lines.append(f"  sign-off: {so['specs'] - len(so['failed'])} of {so['specs']} specs pass"
+                     + (f"; FAIL: {', '.join(so['failed'])}" if so["failed"] else "")
+                     + (f"; not measured: {', '.join(so['not_measured'])}" if so["not_measured"] else ""))
     for key, n in r.get("needs", {}).items():
         lines.append(f"  {key}: give {n['input']} ({n['why']})")
     failed = [k for k, v in r["sections"].items() if v in ("failed", "not yet available")]
@@ -120,13 +127,38 @@ def report_text(r: dict) -> str:
         lines += [f"  flag ({key}): {x.split('. ')[0].rstrip('.')}." for x in flags]
     d = r.get("diff")
     if d:
-        lines.append(f"diff against {d['baseline']}: " + ("no checked figure moved beyond tolerance" if d["passed"]
-                     else f"{len(d['moved'])} checked figure(s) moved beyond tolerance"))
-        lines += [f"  design: {x['field']}: {x['old']} -> {x['new']}" for x in d["design_changes"]]
-        for x in d["checked"]:
-            if x["status"] in ("moved", "removed"):
-                new = "removed" if x["new"] is None else f"{x['new']:.4g}"
-                lines.append(f"  FAIL {x['figure']}: {x['old']:.4g} -> {new} {unit(x['unit'])} "
-                             f"(tolerance {x.get('tolerance', 0):.3g})".rstrip())
-        lines += [f"  netlist changed: {n['netlist']}" for n in d["netlists"]]
+        lines += diff_lines(d, unit)
     return "\n".join(lines)
+
+
+def diff_lines(d: dict, unit) -> list[str]:
+    """The revision diff's verdict: on specs (ranked by the margin each used) when the design has
+    them, else on the checked figures."""
+    if d.get("by_specs"):
+        head = (f"diff against {d['baseline']}: " + (f"{len(d['newly_failing'])} spec(s) newly failing: "
+                + ", ".join(d["newly_failing"]) if d["newly_failing"] else "no spec newly failing"))
+    else:
+        head = f"diff against {d['baseline']}: " + ("no checked figure moved beyond tolerance" if d["passed"]
+                                                   else f"{len(d['moved'])} checked figure(s) moved beyond tolerance")
+    lines = [head]
+    lines += [f"  design: {x['field']}: {x['old']} -> {x['new']}" for x in d["design_changes"]]
+    for x in d.get("specs", []):
+        used = x.get("margin_used_pct")
+        if x["verdict"] in ("pass", "not measured", "not run") and not used:
+            continue
+        lines.append(f"  {x['verdict'].upper():14s} {x['spec']}: {_num(x['old_value'])} -> {_num(x['new_value'])} "
+                     f"{x['unit']} ({x['limit']}; margin {_num(x['old_margin_pct'])} -> {_num(x['new_margin_pct'])} %"
+                     + (f", used {used:+.3g} points" if used is not None else "") + ")")
+    word = "moved" if d.get("by_specs") else "FAIL"
+    moved = [x for x in d["checked"] if x["status"] in ("moved", "removed")]
+    moved.sort(key=lambda x: -(abs(x.get("delta", 0.0)) / x["tolerance"] if x.get("tolerance") else math.inf))
+    for x in moved:
+        new = "removed" if x["new"] is None else f"{x['new']:.4g}"
+        lines.append(f"  {word} {x['figure']}: {x['old']:.4g} -> {new} {unit(x['unit'])} "
+                     f"(tolerance {x.get('tolerance', 0):.3g})".rstrip())
+    lines += [f"  netlist changed: {n['netlist']}" for n in d["netlists"]]
+    return lines
+
+
+def _num(x) -> str:
+    return "-" if x is None else f"{x:.4g}"

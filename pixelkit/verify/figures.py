@@ -61,9 +61,9 @@ _LIST = [
     *_per_kind("dynamic_range", "1", "dB", "pixel+noise",
                "dynamic range of the {kind} subpixel: 20 log10(full well / read noise)",
                "the two figures it is made of"),
-    *_per_kind("dark_signal", "V", "mV", "dark",
-               "dark signal of the {kind} PD over its integration time t_int: drop of the PD node in the "
-               "dark (SPICE: the diode card's dark current and the EC/TG junction leakage)",
+    *_per_kind("pd_dark_drop", "V", "mV", "dark",
+               "drop of the {kind} PD node in the dark over its integration time t_int (its dark current; "
+               "SPICE: the diode card's dark current and the EC/TG junction leakage)",
                "physics.dark.dark_current x t_int / C(V) of the PD node"),
     *_per_kind("image_lag", "1", "%", "lag",
                "image lag of the {kind} subpixel: a dark frame after a saturated one minus a dark frame after "

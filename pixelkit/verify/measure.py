@@ -272,7 +272,7 @@ def figures(raw: dict) -> dict:
         if raw.get("lag"):
             out[f"image_lag_{kind}"] = abs(raw["lag"]["lag_V"][i]) / raw["lag"]["swing_V"][i]
         if raw.get("dark"):
-            out[f"dark_signal_{kind}"] = raw["dark"][kind]
+            out[f"pd_dark_drop_{kind}"] = raw["dark"][kind]
         if raw.get("settling"):
             out[f"settling_{kind}"] = raw["settling"][kind]
     if px:

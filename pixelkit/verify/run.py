@@ -10,6 +10,7 @@ simulation fails is kept with ngspice's message; the specs it feeds are reported
 """
 from __future__ import annotations
 
+import math
 import time
 
 from ..errors import ConfigError, PixelkitError, SimulationError
@@ -17,13 +18,19 @@ from . import conditions, measure, mismatch
 
 
 def _task(task):
-    """One group at one condition (and draw). Runs in a worker."""
-    design, cond, group, draw, backend = task
+    """The groups of one condition (and draw), in one worker: groups that share decks (the
+    pixel, lag and gse groups start from the same dark / small / saturated decks) find them
+    in the cache instead of simulating them twice at once. A group whose simulation fails is
+    kept with ngspice's message; the others still run."""
+    design, cond, groups, draw, backend = task
     d = conditions.at(design, cond)
-    try:
-        return {"ok": True, "raw": measure.run_group(group, d, draw, backend)}
-    except SimulationError as exc:
-        return {"ok": False, "error": f"{exc.what or exc.deck}: {exc.message}"}
+    out = {}
+    for group in groups:
+        try:
+            out[group] = {"ok": True, "raw": measure.run_group(group, d, draw, backend)}
+        except SimulationError as exc:
+            out[group] = {"ok": False, "error": f"{exc.what or exc.deck}: {exc.message}"}
+    return out
 
 
 def post_layout_view(design):
@@ -44,7 +51,7 @@ def spec_conditions(spec, grid: list) -> list:
 
 
 def plan(design, grid: list, mc: int) -> tuple[list, list]:
-    """(condition tasks, Monte Carlo specs): which groups run where. The Monte Carlo runs at the
+    """([(condition, its groups)], Monte Carlo specs): which groups run where. The Monte Carlo runs at the
     nominal condition, so it serves the specs that hold there and whose figure mismatch moves."""
     need: dict = {}
     for s in design.spec:
@@ -53,7 +60,8 @@ def plan(design, grid: list, mc: int) -> tuple[list, list]:
                 need.setdefault(c, set()).add(g)
     nominal = [conditions.nominal(design)]
     mc_specs = [s for s in design.spec if mc and s.mc and s.fig.mc and spec_conditions(s, nominal)]
-    return sorted((c, g) for c, gs in need.items() for g in sorted(gs)), mc_specs
+    order = list(measure.GROUPS)
+    return [(c, tuple(sorted(gs, key=order.index))) for c, gs in sorted(need.items())], mc_specs
 
 
 def verify(design, corners=None, temperatures=None, supplies=None, mc: int | None = None, seed: int | None = None,
@@ -74,9 +82,9 @@ def verify(design, corners=None, temperatures=None, supplies=None, mc: int | Non
     src, mc_groups, nominal = None, [], conditions.nominal(design)
     if mc_specs:
         src = mismatch.source(design)
-        mc_groups = measure.groups_for([s.fig.name for s in mc_specs])
-    tasks = [(design, c, g, None, backend) for c, g in cond_tasks]
-    tasks += [(design, nominal, g, mismatch.Draw(seed, i, src), backend) for i in range(mc) for g in mc_groups
+        mc_groups = sorted(measure.groups_for([s.fig.name for s in mc_specs]), key=list(measure.GROUPS).index)
+    tasks = [(design, c, gs, None, backend) for c, gs in cond_tasks]
+    tasks += [(design, nominal, tuple(mc_groups), mismatch.Draw(seed, i, src), backend) for i in range(mc)
               if mc_specs]
     outs = [None] * len(tasks)
     for i, out in run_tasks(_task, tasks, jobs=jobs, scheduler=scheduler, desc="verify"):
@@ -84,15 +92,16 @@ def verify(design, corners=None, temperatures=None, supplies=None, mc: int | Non
     raw_cond: dict = {}
     raw_mc: dict = {}
     errors = []
-    for (d, c, g, draw, _), out in zip(tasks, outs):
+    for (d, c, _gs, draw, _), outcome in zip(tasks, outs):
         where = raw_cond.setdefault(c, {}) if draw is None else raw_mc.setdefault(draw.sample, {})
-        if out["ok"]:
-            where[g] = out["raw"]
-        else:
-            errors.append({"condition": c.label, "group": g, "sample": None if draw is None else draw.sample,
-                           "error": out["error"]})
-    values = {c: measure.figures(r) for c, r in raw_cond.items()}
-    samples = [measure.figures(raw_mc[i]) for i in sorted(raw_mc)]
+        for g, out in outcome.items():
+            if out["ok"]:
+                where[g] = out["raw"]
+            else:
+                errors.append({"condition": c.label, "group": g, "sample": None if draw is None else draw.sample,
+                               "error": out["error"]})
+    values = {c: _finite(measure.figures(r)) for c, r in raw_cond.items()}
+    samples = [_finite(measure.figures(raw_mc[i])) for i in sorted(raw_mc)]
     rows = table(design, grid, values, samples, mc_specs)
     _refuse_zero_spread(rows, len(samples))
     return {"design": design.name, "revision": design.revision, "rows": rows,
@@ -107,10 +116,25 @@ def verify(design, corners=None, temperatures=None, supplies=None, mc: int | Non
                                                                           if k in {s.fig.name for s in design.spec}}}
                            for c in grid],
             "mc_values": {s.name: [x.get(s.fig.name) for x in samples] for s in mc_specs},
-            "raw": {c.label: raw_cond.get(c, {}) for c in grid},
+            "raw": _clean({c.label: raw_cond.get(c, {}) for c in grid}),
             "errors": errors, "tasks": len(tasks), "wall_s": time.perf_counter() - t0,
             "failed": [r["spec"] for r in rows if r["status"] == "fail"],
             "unmeasured": [r["spec"] for r in rows if r["status"] == "not measured"]}
+
+
+def _finite(figs: dict) -> dict:
+    """A figure that came out infinite or NaN (a storage signal of zero makes GSE infinite) is
+    not a measurement: None, reported as "not measured" at that condition."""
+    return {k: (v if isinstance(v, float) and math.isfinite(v) else None) for k, v in figs.items()}
+
+
+def _clean(x):
+    """Raw measurements with every non-finite number as None (JSON has no Infinity)."""
+    if isinstance(x, dict):
+        return {k: _clean(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_clean(v) for v in x]
+    return None if isinstance(x, float) and not math.isfinite(x) else x
 
 
 def _refuse_zero_spread(rows, n: int) -> None:

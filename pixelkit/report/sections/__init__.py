@@ -69,6 +69,7 @@ from typing import Any, Callable
 #: Reading order of the report: (module key, title, who provides it).
 #: A planned section whose module does not exist yet says "not yet available".
 REGISTRY: list[tuple[str, str, str]] = [
+    ("signoff", "Sign-off: specs over corners, Monte Carlo yield, power", "report"),
     ("summary", "Design summary", "report"),
     ("schematics", "Schematics of the generated circuits", "report"),
     ("model_vs_spice", "Analytic model vs SPICE (fig. A.1 - A.3)", "report"),

@@ -1,0 +1,57 @@
+"""Sign-off section, first in the report: every spec of the design's ``[spec]`` table, its worst
+condition over the ``[verify]`` grid, margin, pass / fail and Monte Carlo yield (``pixelkit.verify``).
+
+The full profile runs the design's own grid and Monte Carlo (what ``pixelkit verify`` runs,
+through the same simulation cache, so a report after a verify simulates nothing); the quick
+profile runs the nominal condition only, without Monte Carlo, and says so.
+"""
+from __future__ import annotations
+
+from . import Checked, Section, Table
+
+TITLE = "Sign-off: specs over corners, Monte Carlo yield, power"
+
+
+def build(ctx) -> Section:
+    from ...verify import conditions
+    from ...verify.run import verify
+    from ...verify.signoff import COLUMNS, csv_rows, where
+    d = ctx.design
+    if not d.spec:
+        return Section.unavailable(TITLE, "the design has no [spec] table (docs/verify.md)")
+    ctx.progress("sign-off")
+    if ctx.quick:
+        n = conditions.nominal(d)
+        r = verify(d, corners=(n.corner,), temperatures=(n.temperature,), supplies=(0.0,), mc=0,
+                   backend=ctx.backend, jobs=ctx.jobs)
+    else:
+        r = verify(d, backend=ctx.backend, jobs=ctx.jobs)
+    g, mc = r["grid"], r["mc"]
+    text = [f"Every spec of the design file at {g['conditions']} condition(s): process corners "
+            f"{', '.join(g['corners'])}, {', '.join(f'{t:g}' for t in g['temperatures_C'])} degC, supply "
+            f"{', '.join(f'{100 * s:+g} %' for s in g['supplies'])} of {r['supply_V']:g} V"
+            + (" (quick profile: the nominal condition only; the full report and 'pixelkit verify' run the "
+               "design's grid)" if ctx.quick else "") + ". A spec passes when it holds at every condition (the worst "
+            "case, as a CACE datasheet decides); the margin is the distance to the nearer limit at the worst "
+            "condition.",
+            (f"Monte Carlo: {mc['samples']} samples at {mc['condition']}, seed {mc['seed']}, drawn from "
+             f"{mc['draws']}; yield with its {100 * mc['confidence']:g} % Clopper-Pearson interval and the margin "
+             "of the mean in sample sigmas." if mc["samples"] else "No Monte Carlo in this profile.")]
+    fails = [f"{x['spec']} {where(x)}" for x in r["rows"] if x["status"] == "fail"]
+    text.append(("FAIL: " + "; ".join(fails)) if fails else "Every spec passes at every condition.")
+    text += [f"Simulation failed at {e['condition']} ({e['group']}): {e['error']}" for e in r["errors"][:5]]
+    tables = [Table("signoff", "Sign-off table", list(COLUMNS), csv_rows(r["rows"]))]
+    power = next((v.get("power") for v in r["raw"].values() if v.get("power")), None)
+    if power:
+        pc = power["per_column_W"]
+        tables.append(Table("signoff_power", "Power per block at the first condition of the grid (W): per column of "
+                            f"each array and the chip, over a {power['frame_period_s'] * 1e3:.4g} ms frame; the "
+                            "estimate is bias currents x supply x duty",
+                            ["block", "primary column", "secondary column", "chip", "chip, estimate"],
+                            [[b, pc["primary"][b], pc["secondary"][b], power["chip_blocks_W"][b],
+                              power["estimate"]["chip_blocks_W"][b]] for b in power["chip_blocks_W"]]))
+    checked = [Checked(f"signoff.{x['spec']}", x["value"], x["unit"], tol_rel=0.01,
+                       note=f"worst at {x.get('worst')}; limit {x['limit']}") for x in r["rows"] if x.get("value") is not None]
+    data = {"rows": r["rows"], "grid": g, "mc": mc, "errors": r["errors"], "conditions": r["conditions"],
+            "mc_values": r["mc_values"]}
+    return Section(TITLE, text=text, tables=tables, checked=checked, data=data)
