@@ -34,7 +34,7 @@ def run(env: dict, out: Path, mc: str | None) -> tuple[float, dict, int]:
 
 
 def _decks(cache: Path) -> int:
-    return sum(1 for _ in (cache / "sim").rglob("*.npz")) if (cache / "sim").is_dir() else 0
+    return sum(1 for _ in (cache / "sim").rglob("*.entry")) if (cache / "sim").is_dir() else 0
 
 
 def measure(mc: str | None = None) -> dict:

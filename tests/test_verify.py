@@ -210,7 +210,7 @@ def test_dask_cluster_gives_the_local_table(tmp_path, monkeypatch):
     monkeypatch.setenv("PIXELKIT_CACHE", str(dask_cache))
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
         remote = verify(d, scheduler=cluster.scheduler_address, **kw)
-    assert len(list((dask_cache / "sim").glob("*/*.npz"))) > 4
+    assert len(list((dask_cache / "sim").glob("*/*.entry"))) > 4
     monkeypatch.setenv("PIXELKIT_CACHE", str(local_cache))
     local = verify(d, jobs=2, **kw)
     assert [c["figures"] for c in remote["conditions"]] == [c["figures"] for c in local["conditions"]]

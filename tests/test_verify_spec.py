@@ -73,7 +73,7 @@ def test_bad_spec_refused_by_verify_before_any_simulation(tmp_path):
     obj = json.loads(p.stdout)
     assert obj["field"] == "spec.swing_primary.corners" and "ff, fs, sf, ss, tt" in obj["allowed"]
     assert len(p.stderr.strip().splitlines()) == 1
-    assert not any(cache.rglob("*.npz"))
+    assert not any(cache.rglob("*.entry"))
 
 
 def test_spec_values_in_si_and_in_their_unit(tmp_path):
