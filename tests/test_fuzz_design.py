@@ -74,6 +74,9 @@ def _leaves(cls, prefix=""):
         path = f"{prefix}{f.name}"
         if kind == "table":
             yield from _leaves(f.metadata["cls"], path + ".")
+        elif kind == "map":   # named tables ([spec.<name>]): the fields of the reference design's first one
+            first = next(iter(tomllib.loads(REF.read_text()).get(f.name, {"x": None})))
+            yield from _leaves(f.metadata["cls"], f"{path}.{first}.")
         elif kind == "map":   # [spec.<name>]: the fields of a spec the reference design has
             yield path, dict(f.metadata)
             yield from _leaves(f.metadata["cls"], path + ".criterion_secondary.")

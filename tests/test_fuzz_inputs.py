@@ -1,5 +1,5 @@
 """Seeded fuzz of the inputs added since the design-file fuzz: sweep axes, corners, Monte Carlo
-settings, --scheduler addresses, array exposure and scene, EMVA 1288 descriptors, family design files.
+settings, --scheduler addresses, array exposure and scene, the verify grid, EMVA 1288 descriptors, family design files.
 
 INPUTS is the one table of inputs: a row names an input and says how a hostile value reaches it
 (the command line it builds from the value). To fuzz a new input (a timing key, a layout option,
@@ -98,6 +98,11 @@ INPUTS = {
     "array --t-exp": lambda tmp, v: ["array", REF, "--t-exp", v],
     "array --scheduler": lambda tmp, v: ["array", REF, "--scheduler", v],
     "array --scene": lambda tmp, v: ["array", REF, "--scene", v],
+    "verify --corners": lambda tmp, v: ["verify", REF, "--corners", v],
+    "verify --temperatures": lambda tmp, v: ["verify", REF, "--temperatures", v],
+    "verify --supplies": lambda tmp, v: ["verify", REF, "--supplies", v],
+    "verify --mc": lambda tmp, v: ["verify", REF, "--mc", v],
+    "verify --scheduler": lambda tmp, v: ["verify", REF, "--scheduler", v],
     **{f"emva '{t}'": (lambda t: lambda tmp, v: ["gap", "emva", _emva(tmp, t, v)])(t) for t in EMVA_LINES},
 }
 FAMILIES = ("ratio_pixel.toml", "wdr_pixel.toml")
@@ -117,9 +122,11 @@ def _cases():
 def _run(argv, monkeypatch, capfd):
     import pixelkit.chip.frame
     import pixelkit.mc.montecarlo
+    import pixelkit.sweep.executors
     import pixelkit.sweep.run
     from pixelkit.cli import common, entry
     monkeypatch.setattr(pixelkit.sweep.run, "run_tasks", _stub)          # after the axes are validated
+    monkeypatch.setattr(pixelkit.sweep.executors, "run_tasks", _stub)    # verify: after its grid is built
     monkeypatch.setattr(pixelkit.mc.montecarlo, "simulate_frame", _stub)  # after the corner is applied
     monkeypatch.setattr(pixelkit.chip.frame, "simulate_frame", _stub)
     common.WARNINGS.clear()
