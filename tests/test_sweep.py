@@ -57,67 +57,50 @@ def test_design_axes_and_bad_axes(ref_design):
     assert float(rst.sel(corner="ss")) < float(rst.sel(corner="ff")) - 0.02
 
 
-def _status(pid: str, field: str) -> str:
-    """A field of /proc/PID/status ('' once the process has gone)."""
-    try:
-        with open(f"/proc/{pid}/status") as f:
-            return next((ln.split()[1] for ln in f if ln.startswith(field + ":")), "")
-    except (FileNotFoundError, ProcessLookupError):
-        return ""
-
-
-def _stopped(pid: str) -> bool:
-    """True once process ``pid`` is stopped (SIGSTOP): the run it does cannot finish."""
-    return _status(pid, "State") in ("T", "t")
+_GATE = """#!/bin/sh
+# ngspice on the sweep's PATH: simulations 1-3 run the real ngspice; the 4th marks itself in
+# flight and waits to be killed, so the interrupt lands with exactly 3 points finished.
+case "$1" in -b) ;; *) exec "{real}" "$@" ;; esac
+n=$(flock "{d}/lock" sh -c 'n=$(( $(cat "{d}/count" 2>/dev/null || echo 0) + 1 )); echo $n > "{d}/count"; echo $n')
+[ "$n" -le 3 ] && exec "{real}" "$@"
+touch "{d}/held.$$"
+exec tail -f /dev/null
+"""
 
 
 def test_interrupted_sweep_resumes_without_recomputing(tmp_path):
-    """Interrupt a real `pixelkit sweep` after some points have finished, run it again: the
-    second run simulates exactly the points the first did not finish (cache entries counted
-    on disk: the independent record of what finished). No timing: the test waits for 3 finished
-    points and a run in flight (the engine's ``running`` mark, spice/scratch.py), freezes that
-    ngspice (SIGSTOP), so the interrupt lands with a known number of points done, then sends Ctrl-C."""
-    import glob
-
+    """Interrupt a real `pixelkit sweep`, run it again: the second run simulates exactly the
+    points the first did not finish (cache entries counted on disk: the independent record of
+    what finished). No timing: an ngspice gate on the sweep's PATH lets 3 simulations through and
+    holds the 4th until it is killed; the test waits for that hold, then sends Ctrl-C."""
+    import shutil
     from conftest import wait_for
+    gate = tmp_path / "gate"
+    gate.mkdir()
+    (gate / "ngspice").write_text(_GATE.format(real=shutil.which("ngspice"), d=gate))
+    (gate / "ngspice").chmod(0o755)
     env = dict(os.environ, PIXELKIT_CACHE=str(tmp_path / "cache"), PIXELKIT_PROGRESS="0")
     args = [sys.executable, "-m", "pixelkit", "sweep", "designs/dual_pixel_revA.toml", "--over",
             "iph_p=lin:100p:1.5n:8", "--jobs", "1", "--out", str(tmp_path / "o"), "--json"]
-    p = subprocess.Popen(args, cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-    sim = tmp_path / "cache" / "sim"
-    marks = f"/tmp/pixelkit-{p.pid}-*/*/running"
-    frozen = []
+    p = subprocess.Popen(args, cwd=ROOT, env=dict(env, PATH=f"{gate}:{env['PATH']}"),
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE)
 
-    def freeze_a_run_in_flight():
-        assert p.poll() is None, "the sweep ended before a point was caught in flight"
-        if len(list(sim.glob("*/*.entry"))) < 3:
-            return False
-        for m in glob.glob(marks):
-            try:
-                pid = open(m).read()
-                if _status(pid, "PPid") != str(p.pid):
-                    continue   # that run ended meanwhile (never stop anything but the sweep's own ngspice)
-                os.kill(int(pid), signal.SIGSTOP)
-            except (FileNotFoundError, ValueError, ProcessLookupError):
-                continue
-            if _stopped(pid) and os.path.exists(m):
-                frozen.append(pid)   # stopped while still marked in flight: its point cannot finish
-                return True
-            if os.path.exists(f"/proc/{pid}"):
-                os.kill(int(pid), signal.SIGCONT)
-        return False
-    wait_for(freeze_a_run_in_flight, "a point in flight after 3 finished")
-    done = len(list(sim.glob("*/*.entry")))
+    def held():
+        assert p.poll() is None, "the sweep ended before its 4th simulation"
+        return any(gate.glob("held.*"))
+    wait_for(held, "the 4th simulation held by the gate")
+    held_pid = next(gate.glob("held.*")).name.split(".")[1]
     p.send_signal(signal.SIGINT)
     p.communicate(timeout=600)
     assert p.returncode == 130
-    assert not _stopped(frozen[0]), "the frozen ngspice was left behind"
-    assert len(list(sim.glob("*/*.entry"))) == done and 3 <= done < 8
+    wait_for(lambda: not os.path.exists(f"/proc/{held_pid}"), "the held ngspice to be killed")
+    sim = tmp_path / "cache" / "sim"
+    assert len(list(sim.glob("*/*.entry"))) == 3
     q = subprocess.run(args, cwd=ROOT, env=env, capture_output=True, text=True, timeout=600)
     assert q.returncode == 0, q.stderr
     r = json.loads(q.stdout)
-    assert r["computed"] == 8 - done
-    assert sum(pt["cached"] for pt in r["points"]) == done
+    assert r["computed"] == 5
+    assert sum(pt["cached"] for pt in r["points"]) == 3
     sig = [pt["signal_primary_V"] for pt in r["points"]]
     assert np.all(np.diff(sig) > 0)
 
