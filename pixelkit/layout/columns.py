@@ -169,7 +169,7 @@ def dual_pixel_column(design, lt, dual: Canvas) -> tuple[dict, Canvas]:
     for c in ("ec", "tg", "rst", "rs"):
         top.label("metal3_label", w3, hs + dual.ports["lines_s"][c], f"{c}_s")
         top.label("metal3_label", w3, hs + ps + dual.ports["lines_p"][c], f"{c}_p")
-    for net in ("vpdr", "vrst"):
+    for net in SUPPLIES:
         top.label("metal3_label", w3, hs + dual.ports["lines_s"][net], net)
     for net, y in cs.ports["lines"].items():
         if net not in SUPPLIES:

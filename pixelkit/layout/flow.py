@@ -29,12 +29,16 @@ def write_gds(lib, path: Path) -> Path:
 
 def write_netlists(design, cells, folder: Path) -> dict:
     """``<cell>.spice`` beside the GDS for every cell the kit has a netlist of."""
-    from .signoff.schematic import CELL_CIRCUIT, circuits_of, lvs_view, spice_text
+    from .signoff.schematic import CELL_CIRCUIT, circuits_of, flat_view, lvs_view, spice_text
     out = {}
     for name in cells:
         if name in CELL_CIRCUIT:
-            text = spice_text(lvs_view(design, circuits_of(design, name)), f"{design.name} {name}")
-            out[name] = str(write_atomic(Path(folder) / f"{name}.spice", text))
+            view = lvs_view(design, circuits_of(design, name))
+            out[name] = str(write_atomic(Path(folder) / f"{name}.spice", spice_text(view, f"{design.name} {name}")))
+    # the sign-off cell also flat, for LVS decks that compare a flattened layout
+    view = flat_view(lvs_view(design, circuits_of(design, SIGNOFF_TOP)))
+    out[f"{SIGNOFF_TOP}.flat"] = str(write_atomic(Path(folder) / f"{SIGNOFF_TOP}.flat.spice",
+                                                  spice_text(view, f"{design.name} {SIGNOFF_TOP}, flattened")))
     return out
 
 

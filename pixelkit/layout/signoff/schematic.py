@@ -64,6 +64,35 @@ def lvs_view(design, subckts) -> list[dict]:
     return out
 
 
+def flat_view(view: list[dict]) -> list[dict]:
+    """The top circuit of ``view`` with every subcircuit instance expanded (names ``inst.name``,
+    inner nets ``inst.net``): for LVS tools that compare a flat layout."""
+    by = {c["name"]: c for c in view}
+
+    def expand(c, prefix, nets):
+        mos, diodes = [], []
+        m = {p: nets[i] for i, p in enumerate(c["pins"])}
+
+        def n(x):
+            return m.get(x, f"{prefix}{x}")
+        for name, model, d, g, s_, b, w, l_ in c["mos"]:
+            mos.append((f"{prefix}{name}", model, n(d), n(g), n(s_), n(b), w, l_))
+        for name, a, k, model, area, perim in c["diodes"]:
+            diodes.append((f"{prefix}{name}", n(a), n(k), model, area, perim))
+        for name, target, nets_ in c["subs"]:
+            sm, sd = expand(by[target], f"{prefix}{name}.", [n(x) for x in nets_])
+            mos += sm
+            diodes += sd
+        return mos, diodes
+    top = view[-1]
+    mos, diodes = expand(top, "", list(top["pins"]))
+    clean = str.maketrans({".": "_"})
+    return [{"name": top["name"], "pins": top["pins"], "subs": [],
+             "mos": [(a.translate(clean), *rest[:1], *(x.translate(clean) for x in rest[1:5]), *rest[5:])
+                     for a, *rest in mos],
+             "diodes": [(a.translate(clean), b.translate(clean), c.translate(clean), *rest) for a, b, c, *rest in diodes]}]
+
+
 def to_klayout(view: list[dict]):
     """A ``klayout.db.Netlist`` of the view (device parameters in um / um2, KLayout's units)."""
     import klayout.db as kdb
@@ -117,16 +146,20 @@ def to_klayout(view: list[dict]):
 
 
 def spice_text(view: list[dict], title: str) -> str:
-    """The view as a SPICE netlist for LVS tools (top circuit last)."""
-    lines = [f"* {title}: the kit's netlist of the drawn devices (W, L in um; area in um2)", ""]
+    """The view as a SPICE netlist for LVS tools (top circuit last), each subcircuit named as the
+    layout cell that draws it (LVS tools pair circuits with cells by name)."""
+    cell = {v: k for k, v in CELL_CIRCUIT.items()}
+    lines = [f"* {title}: the kit's netlist of the drawn devices (W, L in um; area in um2)",
+             "* subcircuits named after the layout cells: " +
+             ", ".join(f"{cell.get(c['name'], c['name'])} = {c['name']}" for c in view), ""]
     for c in view:
-        lines.append(f".subckt {c['name']} " + " ".join(c["pins"]))
+        lines.append(f".subckt {cell.get(c['name'], c['name'])} " + " ".join(c["pins"]))
         for name, model, d, g, s, b, w, l_ in c["mos"]:
             lines.append(f"M{name} {d} {g} {s} {b} {model} W={w:.6g}u L={l_:.6g}u")
         for name, anode, cathode, model, area, perim in c["diodes"]:
             lines.append(f"D{name} {anode} {cathode} {model} AREA={area:.8g}p PJ={perim:.8g}u")
         for name, target, nets_ in c["subs"]:
-            lines.append(f"X{name} " + " ".join(nets_) + f" {target}")
-        lines.append(f".ends {c['name']}")
+            lines.append(f"X{name} " + " ".join(nets_) + f" {cell.get(target, target)}")
+        lines.append(f".ends {cell.get(c['name'], c['name'])}")
         lines.append("")
     return "\n".join(lines) + ".end\n"
