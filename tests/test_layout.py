@@ -390,3 +390,25 @@ def test_technology_without_a_layer_a_generator_needs_is_refused(tmp_path, ref_d
     with pytest.raises(PixelkitError) as e:
         build_cells(replace(ref_design, tech=tech))
     assert "layers.pplus" in str(e.value)
+
+
+def test_a_technology_plugs_in_its_own_decks(tmp_path, ref_design):
+    """A user's PDK names its own DRC and LVS decks: the kit runs them, not the GF180 ones, and
+    reads their verdicts (a one-rule DRC deck that the drawn metal1 lanes break; an LVS deck that
+    extracts nothing, so it cannot match)."""
+    from pixelkit.layout.flow import layout_design
+    from pixelkit.tech import load_technology
+    raw = (ROOT / "pixelkit" / "tech" / "builtin" / "c35_thesis.toml").read_text()
+    raw = raw.replace('folder = "../models/gf180mcu"', f'folder = "{ROOT / "pixelkit/tech/models/gf180mcu"}"')
+    raw = raw.replace('drc_deck = "gf180mcu"', 'drc_deck = "decks/mine.drc"\nlvs_deck = "decks/mine.lvs"')
+    (tmp_path / "decks").mkdir()
+    (tmp_path / "decks" / "mine.drc").write_text(
+        'source($input, $topcell)\nreport("mine", $report)\n'
+        'input(34, 0).width(0.30.um).output("M1W", "metal1 narrower than 0.30 um")\n')
+    (tmp_path / "decks" / "mine.lvs").write_text(
+        'source($input, $topcell)\nreport_lvs($report)\nschematic($schematic)\ncompare\n')
+    (tmp_path / "t.toml").write_text(raw)
+    d = replace(ref_design, tech=load_technology(tmp_path / "t.toml"))
+    r = layout_design(d, tmp_path / "out", pictures=False, drc=True, lvs=True)
+    assert r["drc"]["deck"].endswith("mine.drc") and set(r["drc"]["by_rule"]) == {"M1W"}
+    assert not r["lvs"]["match"] and r["lvs"]["report"].endswith(".lvsdb")

@@ -64,6 +64,10 @@ def layout_design(design, out_dir: Path = Path("layouts"), rows: int = 2, cols: 
         from .signoff.drc import run_drc
         result["drc"] = run_drc(gds, SIGNOFF_TOP, design.tech, Path(out_dir) / "drc").as_dict()
     if lvs:
-        from .signoff.lvs import run_lvs
-        result["lvs"] = run_lvs(gds, SIGNOFF_TOP, design, Path(out_dir) / "lvs").as_dict()
+        from .signoff.lvs import run_lvs, run_lvs_deck
+        if design.tech.signoff.lvs_deck:   # the technology's own deck (another PDK's)
+            result["lvs"] = run_lvs_deck(gds, SIGNOFF_TOP, design, Path(out_dir) / "lvs",
+                                         Path(spice[SIGNOFF_TOP])).as_dict()
+        else:
+            result["lvs"] = run_lvs(gds, SIGNOFF_TOP, design, Path(out_dir) / "lvs").as_dict()
     return result

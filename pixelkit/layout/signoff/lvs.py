@@ -261,3 +261,42 @@ def run_lvs(gds: Path, top: str, design, workdir: Path | None = None) -> LvsResu
 
 def _circuit(nl, name):
     return nl.circuit_by_name(name)
+
+
+def run_lvs_deck(gds: Path, top: str, design, workdir: Path, spice: Path) -> LvsResult:
+    """The technology's own LVS deck (``[signoff] lvs_deck``) on cell ``top`` against ``spice``, run
+    by KLayout in batch mode; the verdict is read from the LVS database it writes (the cross
+    reference of the top circuits), not from its log."""
+    import subprocess
+    import klayout.db as kdb
+    from .drc import klayout_binary
+    so = design.tech.signoff
+    deck = Path(so.lvs_deck)
+    if not deck.is_absolute():
+        deck = Path(so.base) / deck
+    if not deck.is_file():
+        raise PixelkitError(f"the LVS deck {so.lvs_deck!r} of technology {design.tech.name} is not there "
+                            f"(looked for {deck}); correct [signoff] lvs_deck in {design.tech.source}")
+    workdir = Path(workdir)
+    workdir.mkdir(parents=True, exist_ok=True)
+    report = workdir / f"{top}.lvsdb"
+    report.unlink(missing_ok=True)
+    args = [klayout_binary(), "-b", "-r", str(deck), "-rd", f"input={Path(gds).resolve()}",
+            "-rd", f"schematic={Path(spice).resolve()}", "-rd", f"report={report.resolve()}",
+            "-rd", f"topcell={top}", "-rd", f"target_netlist={(workdir / f'{top}.ext.cir').resolve()}"]
+    for k, v in so.lvs_options:
+        args += ["-rd", f"{k}={v}"]
+    t0 = time.perf_counter()
+    log = workdir / f"{top}.lvs.log"
+    with open(log, "w") as f:
+        subprocess.run(args, stdout=f, stderr=subprocess.STDOUT, cwd=deck.parent)
+    if not report.is_file():
+        tail = log.read_text(errors="replace").strip().splitlines()[-2:]
+        raise PixelkitError(f"the LVS deck {deck.name} wrote no report: {' | '.join(tail)}; log: {log}")
+    db = kdb.LayoutVsSchematic()
+    db.read(str(report))
+    xref = db.xref()
+    ok = any(cp.first() is not None and cp.first().name == top and cp.status() == kdb.NetlistCrossReference.Match
+             for cp in xref.each_circuit_pair())
+    return LvsResult(top, ok, time.perf_counter() - t0, [] if ok else (_describe(xref) or ["the netlists differ"]),
+                     report=str(report))
