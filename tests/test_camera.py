@@ -1,10 +1,14 @@
 """The virtual camera (issue 11): EMVA 1288 figures of the designed pixel, recovered from its
-own exported dataset by an independent reader.
+own exported dataset by independent readers and compared with SPICE-derived values.
 
 Independent paths: the emva1288 reference implementation (its parser, PIL image loading and
-its Results1288 fits) and the kit's measured-data reader ``gap.emva`` read the images the camera drew (Poisson electrons, C(V) response,
-read noise, mismatch, storage, ADC, 16-bit PNG) and must find the figures that EMVA's
-definitions give on the analytic mean/variance curves (``camera.ptc.analytic``).
+its Results1288 fits) and the kit's measured-data reader ``gap.emva`` read the images the
+camera drew (Poisson electrons, the pixel's transfer, read noise, mismatch, storage, ADC,
+16-bit PNG). What they find is compared with values derived here from SPICE, not from the
+camera's model: K by EMVA's definition (the photon-transfer slope over 0 - 70 % of
+saturation: var = f'(n)^2 n against mean = f(n)) applied to a SPICE sweep of the pixel's
+column signal against the collected charge run here, and the read noise from ngspice's
+``.noise`` analysis of the pixel (BSIM4 noise sources, sampled-noise theory) divided by it.
 """
 import json
 import logging
@@ -14,15 +18,46 @@ import numpy as np
 import pytest
 
 from pixelkit.camera.run import camera
-
-SWINGS = {"primary": 0.85, "secondary": 0.845}   # column swings of the reference design (README)
+from pixelkit.camera.spicenoise import pixel_noise
+from pixelkit.circuits.testbench import dual_pixel_bench, timings
+from pixelkit.constants import Q
+from pixelkit.spice import simulate_many
 
 
 @pytest.fixture(scope="module")
 def exported(ref_design, tmp_path_factory):
     out = tmp_path_factory.mktemp("emva")
-    r = camera(ref_design, seed=3, swings=SWINGS, emva_out=out, shape=(128, 128))
+    r = camera(ref_design, seed=3, emva_out=out, shape=(128, 128))
     return r, out
+
+
+@pytest.fixture(scope="module")
+def spice_emva(ref_design, exported):
+    """{array: (K in DN/e-, sigma_d in e-)} an EMVA measurement of the SPICE pixel finds, derived
+    here: a sweep of the dual-pixel bench of its own (25 currents from dark to the one that
+    takes the PD node through the design swing), var = f'(n)^2 n + sigma_read^2 (finite
+    differences; sigma_read from ngspice .noise), saturation at the variance maximum, K the
+    slope of var - var_dark against the mean over 0 - 70 % of it (EMVA 1288, through the origin),
+    sigma_d = sigma_read / K, all in DN of the camera's ADC."""
+    from pixelkit.experiments.thesis import _i_max
+    d = ref_design
+    t_w = d.experiment.t_window
+    cur = {w: np.linspace(0.0, _i_max(d, w), 25) for w in ("primary", "secondary")}
+    runs = simulate_many([dual_pixel_bench(d, a, b, title=f"emva_ref{k}")
+                          for k, (a, b) in enumerate(zip(cur["primary"], cur["secondary"]))])
+    tm = timings(d, t_w)
+    out = {}
+    for which, col in (("primary", "col_p"), ("secondary", "col_s0")):
+        lsb = exported[0][which]["figures"]["lsb_V"]
+        s = np.array([r.at(col, tm[which].t_reset_level(0)) - r.at(col, tm[which].t_signal(0)) for r in runs])
+        s = (s - s[0]) / lsb
+        n = cur[which] * t_w / Q
+        read = pixel_noise(d, which)["pixel_V"] / lsb
+        var = np.gradient(s, n) ** 2 * n + read ** 2
+        lin = s <= 0.7 * s[int(np.argmax(var))]
+        k = float(np.sum(s[lin] * (var[lin] - var[0])) / np.sum(s[lin] ** 2))
+        out[which] = (k, read / k)
+    return out
 
 
 def _reference_results(folder):
@@ -39,26 +74,37 @@ def _reference_results(folder):
 
 
 @pytest.mark.parametrize("which", ["primary", "secondary"])
-def test_reference_implementation_recovers_the_figures(exported, which):
+def test_reference_implementation_finds_the_spice_k_and_read_noise(exported, spice_emva, which):
+    """Independent reference: SPICE (a sweep of its own, ngspice .noise) through EMVA's
+    definitions written here, against emva1288's reading of the images: K within 5 %, sigma_d
+    within 6 %. Why 5 %: the column compresses before it clips, so the variance peak that
+    marks saturation is broad, and where a reader finds it on noisy data moves the 0 - 70 %
+    fit range (K moves 2.5 % between 60 % and 80 % of saturation); emva1288 finds 0.3 % /
+    3.2 % below. The noise chain the camera draws and SPICE's .noise agree to 0.3 %. QE against
+    the camera's own EMVA figure (the same definition on its curves). Saturation is not
+    compared: on that broad peak emva1288 takes the first local maximum scanning down from the
+    brightest exposure, the camera (and EMVA 1288) the maximum, and the two are 1.8x apart
+    in mu_p.sat."""
     r, out = exported
     want = r[which]["figures"]
     got = _reference_results(out / which)
-    assert got.K == pytest.approx(want["k_dn_per_e"], rel=0.02)
-    assert got.sigma_d == pytest.approx(want["read_noise_e"], rel=0.10)
+    k, sigma_d = spice_emva[which]
+    assert got.K == pytest.approx(k, rel=0.05)
+    assert got.sigma_d == pytest.approx(sigma_d, rel=0.06)
     assert got.QE / 100 == pytest.approx(want["qe"], rel=0.05)
-    assert got.u_e_sat == pytest.approx(want["saturation_e"], rel=0.05)
 
 
 @pytest.mark.parametrize("which", ["primary", "secondary"])
-def test_gap_emva_recovers_the_figures(exported, which):
+def test_gap_emva_finds_the_spice_k_and_read_noise(exported, spice_emva, which):
     """The kit's own EMVA reader (``pixelkit gap emva``, written for measured data) on the
-    virtual camera's dataset: K within 2 %, read noise within 10 % of the analytic inputs."""
+    virtual camera's dataset, against the same SPICE-derived K (5 %) and read noise (6 %)."""
     from pixelkit.gap.emva import analyse
     r, out = exported
     want = r[which]["figures"]
     nom = analyse(out / which)["nominal"]
-    assert nom["K_DN_per_e"] == pytest.approx(want["k_dn_per_e"], rel=0.02)
-    assert nom["sigma_d_e"] == pytest.approx(want["read_noise_e"], rel=0.10)
+    k, sigma_d = spice_emva[which]
+    assert nom["K_DN_per_e"] == pytest.approx(k, rel=0.05)
+    assert nom["sigma_d_e"] == pytest.approx(sigma_d, rel=0.06)
     assert nom["eta"] == pytest.approx(want["qe"], rel=0.05)
 
 
@@ -81,24 +127,34 @@ def test_dataset_layout_matches_the_shared_reference_set(exported):
 
 
 def test_same_seed_same_images(ref_design, tmp_path):
-    a = camera(ref_design, seed=5, swings=SWINGS, emva_out=tmp_path / "a", steps=6)
-    b = camera(ref_design, seed=5, swings=SWINGS, emva_out=tmp_path / "b", steps=6)
-    c = camera(ref_design, seed=6, swings=SWINGS, emva_out=tmp_path / "c", steps=6)
+    a = camera(ref_design, seed=5, emva_out=tmp_path / "a", steps=6)
+    b = camera(ref_design, seed=5, emva_out=tmp_path / "b", steps=6)
+    c = camera(ref_design, seed=6, emva_out=tmp_path / "c", steps=6)
     img = "primary/images/b_003_snap_000.png"
     assert (tmp_path / "a" / img).read_bytes() == (tmp_path / "b" / img).read_bytes()
     assert (tmp_path / "a" / img).read_bytes() != (tmp_path / "c" / img).read_bytes()
     assert a["primary"]["figures"] == b["primary"]["figures"]
 
 
-def test_camera_cli_prints_both_arrays(cli, tmp_path):
+def test_camera_cli_figures_against_spice(cli, tmp_path, spice_emva):
+    """Independent references: the SPICE-derived K and sigma_d (above; the command's figures are
+    EMVA's definitions on the camera's noiseless curves, so within 1.5 % and 2 %: the camera's
+    33-point transfer against the test's 25 points), the output CG of a SPICE charge step (dark
+    vs 20000 / 5000 e- double-sampled at the column) against the analytic zero-signal CG_out(0)
+    within 3 %, and EMVA 1288's SNR_max = sqrt(mu_e,sat)."""
     from conftest import REF
     code, out, err = cli("camera", REF, "--json", "--out", tmp_path / "plots")
     assert code == 0, err
     d = json.loads(out)
     for which in ("primary", "secondary"):
-        for key in ("k_dn_per_e", "cg_out_V_per_e", "read_noise_e", "qe", "saturation_e", "dr_db",
-                    "snr_max_db", "gse"):
-            assert np.isfinite(d[which][key])
+        f = d[which]
+        k, sigma_d = spice_emva[which]
+        assert f["k_dn_per_e"] == pytest.approx(k, rel=0.015)
+        assert f["read_noise_e"] == pytest.approx(sigma_d, rel=0.02)
+        assert f["cg_out_V_per_e"] == pytest.approx(f["cg_out_spice_V_per_e"], rel=0.03)
+        assert f["snr_max_db"] == pytest.approx(10 * np.log10(f["saturation_e"]), rel=1e-9)
+        for key in ("qe", "dr_db", "gse"):
+            assert np.isfinite(f[key])
     assert all((tmp_path / "plots" / f).is_file() for f in ("ptc.png", "snr.png", "noise_breakdown.png"))
 
 

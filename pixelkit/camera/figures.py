@@ -4,7 +4,8 @@
     R        slope of (mean - mean_dark) against mu_p over the same range; eta = R / K
              (both lines through the origin, as the emva1288 reference implementation fits)
     sigma_d  sqrt(var_dark - 1/12) / K  (e-, at the first exposure)
-    sat      mean at the variance maximum: mu_e.sat = (mean_sat - mean_dark) / K
+    sat      at the variance maximum: mu_p.sat there, mu_e.sat = eta mu_p.sat (EMVA 1288 3.0; for a
+             response that compresses before it clips this is above (mean_sat - mean_dark) / K)
     SNR_max  sqrt(mu_e.sat);  DR = mu_p.sat / mu_p.min, mu_p.min = (sigma_d + 1/2) / eta
     LE       (max delta - min delta) / 2, delta = (mean - fit) / fit of a line through the
              origin of (mean - mean_dark) against mu_p over 5 - 95 % of saturation
@@ -34,8 +35,8 @@ def emva_figures(mu_p, mean, var, dark_mean, dark_var) -> dict:
     r = _through_origin(mu_p[lin], sig[lin])
     eta = r / k
     sigma_d = float(np.sqrt(max(vd[0] - 1.0 / 12.0, 0.0)) / k)
-    sat_e = y_sat / k
-    sat_p = sat_e / eta
+    sat_p = float(mu_p[i_sat])
+    sat_e = eta * sat_p
     p_min = (sigma_d + 0.5) / eta
     le_rng = (sig >= 0.05 * y_sat) & (sig <= 0.95 * y_sat)
     slope = _through_origin(mu_p[le_rng], sig[le_rng])

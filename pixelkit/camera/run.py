@@ -13,18 +13,12 @@ from .mismatch import draw
 from .model import ARRAYS, array_camera
 from .ptc import analytic, series
 from .spicenoise import output_cg, pixel_noise, sf_gain
+from .transfer import spice_transfer
 
 
-def measured_swings(design, backend: str = "batch") -> dict:
-    """Column swing of each array from the thesis [Thesis2019] experiment (SPICE, cached)."""
-    from ..experiments.thesis import run_experiment
-    e = run_experiment(design, backend=backend)
-    return {"primary": e["primary"]["swing_V"], "secondary": e["secondary"]["swing_V"]}
-
-
-def array_report(design, which: str, a_sf: float, clip_V: float | None, seed: int, steps: int = 50,
+def array_report(design, which: str, a_sf: float, transfer: dict, seed: int, steps: int = 50,
                  shape: tuple | None = None) -> dict:
-    cam = array_camera(design, which, a_sf, clip_V, shape=shape)
+    cam = array_camera(design, which, a_sf, transfer, shape=shape)
     s = series(cam, steps)
     cur = analytic(cam, s)
     fig = emva_figures(cur["mu_p"], cur["mean_dn"], cur["var_dn"], cur["dark_mean_dn"], cur["dark_var_dn"])
@@ -47,16 +41,16 @@ def array_report(design, which: str, a_sf: float, clip_V: float | None, seed: in
     }
 
 
-def camera(design, seed: int = 1, swings: dict | None = None, emva_out: str | Path | None = None,
-           steps: int = 50, shape: tuple | None = None, backend: str = "batch") -> dict:
-    """Both arrays. ``swings``: column swings (default: measured by the thesis experiment);
-    ``shape``: image size of the virtual sensor (default: each array's own)."""
+def camera(design, seed: int = 1, emva_out: str | Path | None = None, steps: int = 50,
+           shape: tuple | None = None, backend: str = "batch") -> dict:
+    """Both arrays, on the pixel's SPICE transfer (``camera.transfer``); ``shape``: image size
+    of the virtual sensor (default: each array's own)."""
     if emva_out is not None:      # refuse a bad target before anything runs or is written
         for which in ARRAYS:
             check_target(Path(emva_out) / which)
     a_sf = sf_gain(design)
-    swings = measured_swings(design, backend) if swings is None else swings
-    out = {which: array_report(design, which, a_sf, swings.get(which), seed, steps, shape) for which in ARRAYS}
+    transfer = spice_transfer(design, backend)
+    out = {which: array_report(design, which, a_sf, transfer, seed, steps, shape) for which in ARRAYS}
     cg = output_cg(design, backend=backend)
     afe_in = afe_output_noise(design)["total_V2"] * (design.afe.c13 / design.afe.c11) ** 2
     for which in ARRAYS:   # the independent SPICE figures beside the analytic ones

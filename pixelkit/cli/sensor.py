@@ -87,7 +87,7 @@ def rolling(h, window, s, direction, l, out, as_json):
 @design_arg
 @click.option("--speed", "speed_text", default="60 km/h", show_default=True, help="true speed of the car")
 @click.option("--times", type=click.Choice(["sizing", "design"]), default="sizing", show_default=True,
-              help="exposure times and mask opening: pixelkit's sizing (analytic level) or the design file's")
+              help="exposure times and mask opening: pixelkit's sizing (at the design's sizing level) or the design file's")
 @click.option("--dc", "dc_text", default="0.15 m", show_default=True, help="uncertainty of the lateral distance")
 @click.option("--seed", type=int, default=0, show_default=True, help="temporal noise seed")
 @out_opt("picture: superposed, primary and secondary images with the trace (PNG; default reports/<design>/car.png)")

@@ -16,9 +16,14 @@ level) moving past at distance c, side view (gamma = 0: image speed v f / c).
 Charges = exposure integral x photoactive area + dark current x time, plus
 temporal noise (shot noise of signal and dark charge, and the kTC of the PD
 node's hard reset, which the thesis's non-correlated double sampling keeps;
-seeded); signals are fractions of swing through the analytic pixel response
-(``optimize.levels``: the PD node's C(V), clipped at full swing). Times and opening: the sizing result
-(analytic level) by default, or the design file's own.
+seeded); signals are fractions of swing through the pixel response of the design's sizing
+level (``sizing.level``, ``optimize.levels``: by default the SPICE level, the double-sampled
+column signal of the experiment against the collected charge; or the PD node's C(V)), clipped
+at full swing. Times and opening: the sizing result at that level by default, or the design
+file's own. (The analytic level's fraction is of the PD node's drop over ``pixel.swing``; the
+column clips at ground well before it, so on the SPICE level the analytic sizing's background
+sits at 0.64 of the column swing instead of 0.5: a SPICE run at the image's photocurrent and
+times is the check, ``tests/test_sensor_double_exposure.py``.)
 """
 from __future__ import annotations
 
@@ -53,18 +58,27 @@ class PassingCar:
                 raise ConfigError("passing car", name, getattr(self, name), "a value > 0")
 
 
-def exposure_times(design, source: str = "sizing") -> dict:
-    """t_primary, t_secondary and the mask opening: pixelkit's sizing (analytic level) or the design's."""
+def response_curves(design):
+    """The pixel response of the design's sizing level (``optimize.levels.Curves``)."""
+    from ..optimize.levels import analytic_curves, spice_curves
+    if design.sizing.level == "spice":
+        from ..experiments.thesis import run_experiment
+        return spice_curves(design, run_experiment(design))
+    return analytic_curves(design)
+
+
+def exposure_times(design, source: str = "sizing", curves=None) -> dict:
+    """t_primary, t_secondary and the mask opening: pixelkit's sizing (at the design's sizing
+    level, ``curves`` if given) or the design's."""
     if source not in TIME_SOURCES:
         raise ConfigError(design.source, "times", source, f"one of {', '.join(TIME_SOURCES)}")
     if source == "design":
         return {"t_primary_s": design.primary.t_int, "t_secondary_s": design.secondary.t_int,
                 "opening_m2": design.secondary.photoactive_area, "source": "design file"}
-    from ..optimize.levels import analytic_curves
     from ..optimize.sizing import solve
-    r = solve(design, analytic_curves(design))
+    r = solve(design, curves or response_curves(design))
     return {"t_primary_s": r["t_int_primary_s"], "t_secondary_s": r["t_int_secondary_s"],
-            "opening_m2": r["mask_open_m2"], "source": "pixelkit sizing (analytic level)"}
+            "opening_m2": r["mask_open_m2"], "source": f"pixelkit sizing ({r['level']} level)"}
 
 
 def _require(design):
@@ -97,11 +111,9 @@ def _scene(design, car: PassingCar, t_mid: float):
     return [body, head], lt.j_bg, u, w
 
 
-def _signal(design, which, charge):
-    from ..optimize.levels import analytic_curves
-    cv = analytic_curves(design)
-    q, fr = (cv.q_primary, cv.f_primary) if which == "primary" else (cv.q_secondary, cv.f_secondary)
-    return np.interp(charge, q, fr)          # clipped at full swing beyond the curve
+def _signal(curves, which, charge):
+    q, fr = (curves.q_primary, curves.f_primary) if which == "primary" else (curves.q_secondary, curves.f_secondary)
+    return np.interp(charge, q, np.maximum.accumulate(fr))   # clipped at full swing beyond the curve
 
 
 def _noisy(design, geo, q, rng):
@@ -111,12 +123,13 @@ def _noisy(design, geo, q, rng):
     return (rng.poisson(n) + rng.normal(0.0, ktc, n.shape)) * Q
 
 
-def render(design, car: PassingCar, times: dict, seed: int | None = 0) -> dict:
+def render(design, car: PassingCar, times: dict, seed: int | None = 0, curves=None) -> dict:
     """Charges (C) and signals (fraction of swing) of the primary, secondary and superposed images.
 
-    ``seed = None``: noiseless.
+    ``seed = None``: noiseless; ``curves``: the pixel response (default ``response_curves``).
     """
     _require(design)
+    curves = curves or response_curves(design)
     t_p, t_s, opening = times["t_primary_s"], times["t_secondary_s"], times["opening_m2"]
     rects, j_bg, u, w = _scene(design, car, t_s / 2)
     grids = _grids(design, opening)
@@ -138,14 +151,14 @@ def render(design, car: PassingCar, times: dict, seed: int | None = 0) -> dict:
         q = (e + j_bg * open_w) * area[geo] + i_dark * t_open
         if rng is not None:
             q = _noisy(design, geo, q, rng)
-        charges[name], images[name] = q, _signal(design, geo, q)
+        charges[name], images[name] = q, _signal(curves, geo, q)
     return {"charges": charges, "images": images, "grids": grids, "image_speed_m_s": u,
             "headlight_width_m": w, "times": times}
 
 
-def measure(design, car: PassingCar, times: dict, dc: float = 0.15, seed: int | None = 0) -> dict:
+def measure(design, car: PassingCar, times: dict, dc: float = 0.15, seed: int | None = 0, curves=None) -> dict:
     """Speed from the simulated secondary image against the truth, with the eq. 2.6 error budget."""
-    r = render(design, car, times, seed)
+    r = render(design, car, times, seed, curves)
     f, c = design.optics.focal_length, design.scene.distance
     rows_p, cols_p = r["grids"]["primary"]
     rows_s, cols_s = r["grids"]["secondary"]

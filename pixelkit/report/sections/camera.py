@@ -40,9 +40,7 @@ def _rows(s: dict) -> list:
 
 
 def build(ctx) -> Section:
-    e = ctx.experiment()
-    swings = {w: e[w]["swing_V"] for w in _ARR}
-    r = camera(ctx.design, swings=swings, steps=20 if ctx.quick else 50, backend=ctx.backend)
+    r = camera(ctx.design, steps=20 if ctx.quick else 50, backend=ctx.backend)
     s = summary(r)
     f1, f2 = ctx.figure("camera_ptc.png"), ctx.figure("camera_snr.png")
     ptc(r, f1)
@@ -57,7 +55,7 @@ def build(ctx) -> Section:
             "(tests/test_camera.py). QE is per pixel area: the secondary's mask opening is its fill factor.",
             f"sigma_d (EMVA) and the read noise at the column are the same column noise referred to the "
             f"photodiode by two gains: K x LSB = {k_lsb * 1e6:.3f} uV/e- (the photon-transfer slope over 0 - 70 % "
-            f"of saturation, where C(V) has grown) and CG_out(0) = {p['cg_out_V_per_e'] * 1e6:.3f} uV/e- (zero "
+            f"of saturation of the SPICE transfer, where C(V) has grown and the column compresses) and CG_out(0) = {p['cg_out_V_per_e'] * 1e6:.3f} uV/e- (zero "
             f"signal): {p['read_noise_chain_e']:.1f} e- x {p['cg_out_V_per_e'] * 1e6:.3f} / {k_lsb * 1e6:.3f} = "
             f"{p['read_noise_chain_e'] * p['cg_out_V_per_e'] / k_lsb:.1f} e- against sigma_d {p['read_noise_e']:.1f} "
             "e- (primary; the dark shot noise of the first exposure and rounding make the rest).",
