@@ -1,5 +1,6 @@
 """Seeded fuzz of the inputs added since the design-file fuzz: sweep axes, corners, Monte Carlo
-settings, --scheduler addresses, array exposure and scene, the verify grid, EMVA 1288 descriptors, family design files.
+settings, --scheduler addresses, array exposure and scene, EMVA 1288 descriptors, family design files,
+verify's grid options and the [spec] / [verify] keys.
 
 INPUTS is the one table of inputs: a row names an input and says how a hostile value reaches it
 (the command line it builds from the value). To fuzz a new input (a timing key, a layout option,
@@ -47,7 +48,7 @@ def _design_file(tmp, family, key, value):
     for h in head:
         node = node[h]
     node[last] = value
-    p = tmp / f"f{abs(hash((family, key, value))) % 10**8}.toml"
+    p = tmp / f"f{abs(hash((family, key, repr(value)))) % 10**8}.toml"
     p.write_text(to_toml(raw))
     return p
 
@@ -102,7 +103,15 @@ INPUTS = {
     "verify --temperatures": lambda tmp, v: ["verify", REF, "--temperatures", v],
     "verify --supplies": lambda tmp, v: ["verify", REF, "--supplies", v],
     "verify --mc": lambda tmp, v: ["verify", REF, "--mc", v],
+    "verify --seed": lambda tmp, v: ["verify", REF, "--seed", v],
     "verify --scheduler": lambda tmp, v: ["verify", REF, "--scheduler", v],
+    **{f"verify [spec] {k}": (lambda k: lambda tmp, v: ["verify", _design_file(tmp, "dual_pixel_revA.toml", k, v)])(k)
+       for k in ("spec.afe_gain_error.max", "spec.afe_gain_error.figure", "spec.afe_gain_error.unit",
+                 "spec.criterion_secondary.min", "verify.mismatch")},
+    **{f"verify [spec] {k} item": (lambda k: lambda tmp, v: ["verify", _design_file(tmp, "dual_pixel_revA.toml",
+                                                                                     k, [v])])(k)
+       for k in ("spec.afe_gain_error.corners", "spec.afe_gain_error.temperatures", "verify.supplies",
+                 "verify.corners")},
     **{f"emva '{t}'": (lambda t: lambda tmp, v: ["gap", "emva", _emva(tmp, t, v)])(t) for t in EMVA_LINES},
 }
 FAMILIES = ("ratio_pixel.toml", "wdr_pixel.toml")
@@ -126,7 +135,7 @@ def _run(argv, monkeypatch, capfd):
     import pixelkit.sweep.run
     from pixelkit.cli import common, entry
     monkeypatch.setattr(pixelkit.sweep.run, "run_tasks", _stub)          # after the axes are validated
-    monkeypatch.setattr(pixelkit.sweep.executors, "run_tasks", _stub)    # verify: after its grid is built
+    monkeypatch.setattr(pixelkit.sweep.executors, "run_tasks", _stub)    # verify: after specs and grid
     monkeypatch.setattr(pixelkit.mc.montecarlo, "simulate_frame", _stub)  # after the corner is applied
     monkeypatch.setattr(pixelkit.chip.frame, "simulate_frame", _stub)
     common.WARNINGS.clear()

@@ -39,7 +39,8 @@ def _list(kind: str):
               help="Monte Carlo samples at the nominal condition (default: [verify] mc)")
 @click.option("--seed", type=click.IntRange(0, 2**31 - 1), default=None, help="Monte Carlo seed (default: [verify] seed)")
 @click.option("--post-layout", is_flag=True, help="run on the extracted (post-layout) netlists")
-@click.option("--scheduler", default=None, callback=scheduler_address, help="Dask scheduler address (default: local workers)")
+@click.option("--scheduler", default=None, callback=scheduler_address,
+              help="Dask scheduler address (default: local workers)")
 @out_opt("folder for signoff.csv and signoff.json (default reports/<design>/verify)", folder=True)
 @spice_opts
 @json_opt
