@@ -117,9 +117,19 @@ def verify(design, corners=None, temperatures=None, supplies=None, mc: int | Non
                            for c in grid],
             "mc_values": {s.name: [x.get(s.fig.name) for x in samples] for s in mc_specs},
             "raw": _clean({c.label: raw_cond.get(c, {}) for c in grid}),
+            "power": _power(grid, raw_cond, nominal),
             "errors": errors, "tasks": len(tasks), "wall_s": time.perf_counter() - t0,
             "failed": [r["spec"] for r in rows if r["status"] == "fail"],
             "unmeasured": [r["spec"] for r in rows if r["status"] == "not measured"]}
+
+
+def _power(grid, raw_cond: dict, nominal) -> dict | None:
+    """The power measurement at the nominal condition (else the first of the grid that has one)."""
+    for c in [nominal, *grid]:
+        p = raw_cond.get(c, {}).get("power")
+        if p:
+            return {"condition": c.label, **_clean(p)}
+    return None
 
 
 def _finite(figs: dict) -> dict:

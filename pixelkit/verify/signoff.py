@@ -144,6 +144,13 @@ def text(result: dict) -> str:
         elif r["status"] in ("not measured", "not run"):
             lines.append(f"{r['status'].upper()} {r['spec']}: " + (", ".join(r.get("not_measured_at", []))
                                                                   or r.get("why", "")))
+    p = result.get("power")
+    if p:
+        blocks, est = p["chip_blocks_W"], p["estimate"]["chip_blocks_W"]
+        lines.append(f"power at {p['condition']}, frame {1e3 * p['frame_period_s']:.4g} ms: chip "
+                     f"{1e3 * p['chip_W']:.4g} mW (estimate {1e3 * p['estimate']['chip_W']:.4g} mW): "
+                     + ", ".join(f"{b} {1e6 * blocks[b]:.4g} uW ({1e6 * est[b]:.4g})" for b in blocks)
+                     + f"; per dual pixel {1e9 * p['pixel_W']:.4g} nW, per column {1e6 * p['column_W']:.4g} uW")
     for e in result.get("errors", [])[:10]:
         lines.append(f"simulation failed at {e['condition']} ({e['group']}): {e['error']}")
     return "\n".join(lines)
