@@ -127,10 +127,12 @@ def size(design, out=None, sensitivity: bool = False, backend: str = "batch") ->
     return size_design(design, out, sensitivity, backend=backend)
 
 
-def layout_design(design, out_dir="layouts", rows: int = 2, cols: int = 2, pictures: bool = True) -> dict:
-    """GDS of the dual pixel and an array, extracted PD geometry, 2D/3D pictures."""
+def layout_design(design, out_dir="layouts", rows: int = 2, cols: int = 2, pictures: bool = True,
+                  drc: bool = False, lvs: bool = False) -> dict:
+    """GDS of the dual pixel, its column circuits and an array, each cell's SPICE netlist, extracted PD
+    geometry, 2D/3D pictures; ``drc`` / ``lvs``: sign-off results under "drc" / "lvs"."""
     from .layout.flow import layout_design as _layout
-    return _layout(design, Path(out_dir), rows, cols, pictures)
+    return _layout(design, Path(out_dir), rows, cols, pictures, drc=drc, lvs=lvs)
 
 
 def diagnose(design, measured, seed: int = 0) -> dict:
