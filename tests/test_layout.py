@@ -412,3 +412,11 @@ def test_a_technology_plugs_in_its_own_decks(tmp_path, ref_design):
     r = layout_design(d, tmp_path / "out", pictures=False, drc=True, lvs=True)
     assert r["drc"]["deck"].endswith("mine.drc") and set(r["drc"]["by_rule"]) == {"M1W"}
     assert not r["lvs"]["match"] and r["lvs"]["report"].endswith(".lvsdb")
+
+
+def test_lvs_needs_the_photodiode_marker(tmp_path, ref_design, ref_cells):
+    """Without WELL_DIODE_MK the n-well is no photodiode: the netlist's PD is missing."""
+    def unmark(shapes):
+        return [s for s in shapes if s.layer != "pd_marker"]
+    r = _lvs_of_variant(tmp_path, ref_design, ref_cells, unmark)
+    assert not r.match and any("device pd" in m and "missing" in m for m in r.mismatches), r.mismatches
