@@ -110,3 +110,18 @@ def test_cli_simulate_and_models(cli, result):
     code, out, err = cli("models", DESIGN, "--json")
     assert code == 0, err
     assert json.loads(out)["dr_formula_db"] > 100
+
+
+def test_node_dark_current_and_noise_floor_are_derived(result, design):
+    """The node's dark current in SPICE (held at each voltage, gmin 1e-18) is its junctions' (physics/dark.py:
+    the PD's thermal terms and five switch diffusions) within 10 %; the noise floor the DR rests on is the
+    reset and exposure-sample kT/C, the shot noise of SPICE's dark current over the whole 2^N T exposure and
+    the readout after the pixel, added in power (within 2 %: the node C at the mean reset level)."""
+    from pixelkit.constants import K_B, Q
+    from pixelkit.families.wdr.model import dark_current, node_capacitance
+    spice = {r["v_V"]: r["i_dark_A"] for r in result["dark_current_vs_voltage"]}
+    assert spice[2.0] == pytest.approx(dark_current(design), rel=0.10)
+    c, kt = node_capacitance(design, design.pixel.v_reset), K_B * design.temperature
+    n_dark = spice[2.0] * 2 ** design.coding.steps * design.coding.t_unit / Q
+    v2 = kt / c + kt / design.pixel.c_int + n_dark * (Q / c) ** 2 + design.noise.v_read ** 2
+    assert result["v_noise_V"] == pytest.approx(v2 ** 0.5, rel=0.02)

@@ -31,15 +31,14 @@ BSIM4 device models at the read operating point (``camera.spicenoise.sf_gain``, 
 the kit has no closed form for those models. Everything else is closed form.
 
 Storage: FD leaks through its diffusions by the device models' junction law
-(``diffusion_leakage``: BSIM4's, which SPICE applies to the same diffusions), and collects a parasitic photocurrent I_ph / gse (the design's
+(``dark.diffusion_leakage``: BSIM4's, which SPICE applies to the same diffusions), and collects a parasitic photocurrent I_ph / gse (the design's
 ``pixel.gse`` = eta_pd / eta_FD, a charge ratio set by the shielding) while it waits.
 """
 from __future__ import annotations
 
 from ..circuits.geometry import diffusion
-import numpy as np
-
-from ..constants import K_B, Q
+from ..constants import Q
+from .dark import diffusion_leakage
 from .junction import Node
 from .nodes import overlap, pd_node, switch_side
 
@@ -71,27 +70,6 @@ def fd_diffusion(design) -> tuple[float, float]:
     a1, p1 = diffusion(dev.tg_w, ext)
     a2, p2 = diffusion(dev.rst_w, ext)
     return a1 + a2, p1 + p2
-
-
-def _bandgap(t: float) -> float:
-    """Silicon bandgap (eV) at ``t`` (K), the BSIM4 expression."""
-    return 1.16 - 7.02e-4 * t * t / (t + 1108.0)
-
-
-def diffusion_leakage(w: float, tech, temperature_K: float) -> float:
-    """Reverse current (A) of one source/drain diffusion of width ``w``: the device models' own law.
-
-    BSIM4 (tempmod 0): I_s = js A + jsw (P - W), scaled by
-    exp([Eg(T0)/kT0 - Eg(T)/kT + xtis ln(T/T0)] / njs) from the models' tnom T0.
-    SPICE applies exactly this to every MOS diffusion; the analytic model uses it for
-    the FD (its only leak) and for the switch diffusions on the PD node.
-    """
-    mos = tech.mos
-    a, p = diffusion(w, mos.diff_ext)
-    t0, t = mos.t_nom, temperature_K
-    kq = K_B / Q
-    arg = (_bandgap(t0) / (kq * t0) - _bandgap(t) / (kq * t) + mos.xtis * np.log(t / t0)) / mos.njs
-    return (mos.js * a + mos.jsw * (p - w)) * float(np.exp(arg))
 
 
 def leakage(design, temperature_K: float | None = None) -> float:

@@ -35,10 +35,19 @@ class Photodiode:
     reset_bias: float = qty("V", gt=0, plausible=(0.05, 40.0), doc="reverse bias at which the kit quotes C_jdep")
     dark_area: float = qty("A/m2", ge=0, plausible=(0.0, 1e-2), doc="dark current per area at t_ref")
     dark_perimeter: float = qty("A/m", ge=0, plausible=(0.0, 1e-6), doc="dark current per perimeter at t_ref")
-    dark_doubling: float = qty("K", gt=0, plausible=(1.0, 50.0), doc="temperature step that doubles dark current")
     t_ref: float = qty("K", gt=0, plausible=_TEMP, doc="reference temperature of the dark current")
     spice_model: str = ident(doc="diode model name in netlists")
     builtin_model: bool = flag(doc="true: the kit writes the .model card from these fields")
+    dark_doubling: float = qty("K", 7.0, gt=0, plausible=(1.0, 50.0),
+                               doc="temperature step that doubles dark current (dark_law = doubling)")
+    dark_law: str = text("doubling", choices=("doubling", "card"),
+                         doc="doubling: dark_area/perimeter x 2^((T - t_ref)/dark_doubling); card: a foundry "
+                             "card's thermal saturation terms with its own law (xti, eg, n), physics/dark.py")
+    dark_xti: float = num(3.0, ge=0, plausible=(0.0, 10.0), doc="saturation-current temperature exponent (card law)")
+    dark_eg: float = qty("V", 1.11, gt=0, plausible=(0.5, 2.0), doc="activation energy in eV (card law)")
+    dark_n: float = num(1.0, gt=0, plausible=(0.5, 3.0), doc="emission coefficient (card law)")
+    foundry_card: str = text("", doc="the foundry's diode card of this junction, measured and flagged by the kit "
+                                     "when its reverse current is not a thermal one (tech/pdcard.py)")
     qe_wavelength_nm: tuple = field(default=(), metadata=dict(kind="skip"))
     qe_value: tuple = field(default=(), metadata=dict(kind="skip"))
 

@@ -114,5 +114,5 @@ def ratio_bench(design, pairs, i_bias: float, title: str = "ratio_bench") -> Net
     t = design.tech
     return Netlist(title=title, elements=tuple(el), analysis=Tran(EDGE, stop, 0.0, stop / 2000),
                    subckts=(ratio_loop(design), ratio_pixel(), column_readout(design)),
-                   models=photodiode_model(t), includes=t.models.includes(design.corner or None),
+                   models=photodiode_model(t, design.temperature), includes=t.models.includes(design.corner or None),
                    temperature_C=design.temperature - 273.15)

@@ -38,6 +38,9 @@ from .stimulus import signal1, signal2
 PORTS = ("vdd", "vrst", "v0", "vbn", "vwell", "rst", "expo", "sig1", "sig2", "int", "c1", "c2")
 T_RESET = 2e-6
 EDGE = 10e-9
+#: gmin of the bench: ngspice's default 1e-15 S across every junction would leak 7e-15 A from the node at 2 V,
+#: 20 x the node's dark current (physics.dark); 1e-18 S leaks < 1 % of it
+GMIN = 1e-18
 
 
 def _inverter(name, a, y, t):
@@ -104,6 +107,6 @@ def wdr_bench(design, currents, title: str = "wdr_bench") -> Netlist:
     saves = [f"out_{n}_{k}" for k in range(len(currents)) for n in ("s3", "s1", "s2")]
     saves += [f"xp{k}.{n}" for k in range(len(currents)) for n in ("samp", "pd")] + ["sig1", "sig2"]
     return Netlist(title=title, elements=tuple(el), analysis=Tran(100e-9, stop, 0.0, cd.t_unit / 16),
-                   subckts=(wdr_pixel(design),), models=photodiode_model(t),
+                   subckts=(wdr_pixel(design),), models=photodiode_model(t, design.temperature),
                    includes=t.models.includes(design.corner or None),
-                   temperature_C=design.temperature - 273.15, saves=tuple(saves))
+                   temperature_C=design.temperature - 273.15, saves=tuple(saves), options=(("gmin", GMIN),))

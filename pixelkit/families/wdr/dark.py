@@ -1,9 +1,10 @@
 """Dark current of the WDR pixel's integration node as a function of its voltage.
 
 The node (C_int + PD + switches, integration switches closed) is held at each
-voltage by a source and the current it sinks is read after 15 us: the GF180
-n-well diode's dark current falls with the reverse bias (its tunnelling term),
-which is why the decoder models I_dark(V) instead of one dark rate.
+voltage by a source and the current it sinks is read after 15 us: the PD
+junction's and the switch diffusions' reverse currents at that bias (the
+decoder models I_dark(V) rather than one dark rate; with GF180's foundry
+card the tunnelling term made it fall with the bias, ``tech.pdcard``).
 """
 from __future__ import annotations
 

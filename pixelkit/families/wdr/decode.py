@@ -44,17 +44,24 @@ def sample_time(v1: float, v2: float, coding) -> float:
 def dark_model(design, v_start: float, v_half: float, v_end: float) -> tuple[float, float]:
     """Dark current I_d(V) = a + g V from a dark pixel read at half and full exposure.
 
-    The n-well diode's dark current falls with the reverse bias (1.27 pA at 2.0 V,
-    0.32 pA at 1.25 V on the reference design, measured), so one dark rate would
-    over-subtract for pixels that have moved away from the dark pixel's voltage.
-    The two half-frame rates, each at its mean voltage, give the slope g.
+    A dark current that changes with the reverse bias (a tunnelling term does: GF180's
+    foundry card gave 1.27 pA at 2.0 V and 0.32 pA at 1.25 V) would make one dark rate
+    over-subtract for pixels that have moved away from the dark pixel's voltage; the two
+    half-frame rates, each at its mean voltage, give the slope g. When the dark pixel moves
+    less than ``DARK_MIN_MOVE`` over the frame (the thermal dark current: ~20 uV), the
+    half-frame rates differ by SPICE's numerical error only and one rate is used.
     """
     half = (2 ** design.coding.steps) * design.coding.t_unit / 2
     i1 = float(delta_q(design, v_start, v_half)) / half
     i2 = float(delta_q(design, v_half, v_end)) / half
     m1, m2 = (v_start + v_half) / 2, (v_half + v_end) / 2
+    if abs(v_start - v_end) < DARK_MIN_MOVE:
+        return (i1 + i2) / 2, 0.0
     g = (i1 - i2) / (m1 - m2) if abs(m1 - m2) > 1e-6 else 0.0
     return i1 - g * m1, g
+
+
+DARK_MIN_MOVE = 5e-3
 
 
 def low_light_current(design, v_start: float, v3: float, dark: tuple[float, float]) -> float:

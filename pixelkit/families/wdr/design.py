@@ -66,8 +66,10 @@ class Coding:
 
 @dataclass(frozen=True)
 class Noise:
-    """Noise floor of the integration node for CVDR (the simulation is noiseless)."""
-    v_read: float = qty("V", 0.5e-3, ge=0, doc="read-chain noise referred to the node (rms)")
+    """The readout after the pixel (not in the circuit); the pixel's own noise is derived (wdr/model.py)."""
+    v_read: float = qty("V", 0.5e-3, ge=0, doc="noise of the readout after the pixel (column amplifier, ADC), "
+                                                  "referred to the node (rms); reset, exposure sample and dark "
+                                                  "shot noise are derived")
 
 
 @dataclass(frozen=True)
