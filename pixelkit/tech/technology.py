@@ -16,6 +16,7 @@ from ..schema import flag, ident, load, num, qty, read_toml, table, text
 from .layout_data import Layer, LayoutData, Rule, Signoff, parse_layers, parse_rules, parse_signoff
 from .libcheck import check_devices
 from .modellib import ModelLibrary, load_model_library
+from .stack import Stack, parse_stack
 
 BUILTIN_DIR = Path(__file__).parent / "builtin"
 #: Plausibility ranges shared by several fields (SI): built-in potentials, temperatures.
@@ -122,6 +123,7 @@ class Technology:
     models: ModelLibrary = field(default=None, metadata=dict(kind="skip"))
     layout: LayoutData = field(default=None, metadata=dict(kind="skip"), repr=False)
     source: str = field(default="", metadata=dict(kind="skip"))
+    stack: Stack | None = field(default=None, metadata=dict(kind="skip"), repr=False)
 
     def layer(self, name: str) -> Layer:
         """The GDS layer the technology draws ``name`` on (aliases resolved)."""
@@ -205,6 +207,7 @@ def load_technology(name_or_path: str | Path, relative_to: Path | None = None, s
     layers, aliases = parse_layers(raw.pop("layers", None), source)
     rules = parse_rules(raw["rules"], source) if isinstance(raw.get("rules"), dict) else {}
     signoff = parse_signoff(raw.pop("signoff", None), source, str(path.parent))
+    stack = parse_stack(raw.pop("stack", None), source, set(layers) | set(aliases))
     tech = load(Technology, raw, "", source)
     models = load_model_library(models_raw, path.parent, source)
     pd = tech.photodiode
@@ -213,5 +216,6 @@ def load_technology(name_or_path: str | Path, relative_to: Path | None = None, s
     object.__setattr__(tech, "models", models)
     object.__setattr__(tech, "layout", LayoutData(layers, aliases, rules, signoff))
     object.__setattr__(tech, "source", source)
+    object.__setattr__(tech, "stack", stack)
     check_devices(tech, source)   # every device name resolves in every corner (tech/libcheck.py)
     return tech

@@ -65,8 +65,10 @@ def _layers(lvs, layout, tech):
     return out
 
 
-def extract(lvs, layout, tech):
-    """Devices and connectivity of ``lvs`` (a LayoutVsSchematic over ``layout``)."""
+def extract(lvs, layout, tech) -> dict:
+    """Devices and connectivity of ``lvs`` (a LayoutVsSchematic over ``layout``); the layers it
+    connected, by name (drawn and derived: ``nsd``, ``psd``, ``ptap``, ``ntap``, ``well``, ``pd_n``),
+    for what reads the nets' geometry (extraction)."""
     import klayout.db as kdb
     L = _layers(lvs, layout, tech)
     nwell, active, poly = L["nwell"], L["active"], L["poly"]
@@ -108,6 +110,7 @@ def extract(lvs, layout, tech):
     for r in (ptap, bulk, pd_p):
         lvs.connect_global(r, VSS)
     lvs.extract_netlist()
+    return {**L, "nsd": nsd, "psd": psd, "ptap": ptap, "ntap": ntap, "well": well, "pd_n": pd_n}
 
 
 def _params(da, db) -> list[str]:
@@ -203,6 +206,19 @@ def _terms(d) -> str:
                      for t in d.device_class().terminal_definitions())
 
 
+def prepare(lvs, ref):
+    """Set ``ref`` as the reference of ``lvs`` and bring both netlists to the form they are compared
+    in (floating nets purged, top-level pins, parallel devices combined); the extracted netlist."""
+    lvs.reference = ref
+    nl = lvs.netlist()
+    nl.purge_nets()
+    nl.make_top_level_pins()
+    nl.combine_devices()
+    ref.combine_devices()
+    nl.purge()
+    return nl
+
+
 def run_lvs(gds: Path, top: str, design, workdir: Path | None = None) -> LvsResult:
     """Extract cell ``top`` of ``gds`` and compare it with the kit's netlist of that cell."""
     import klayout.db as kdb
@@ -218,13 +234,7 @@ def run_lvs(gds: Path, top: str, design, workdir: Path | None = None) -> LvsResu
     extract(lvs, layout, design.tech)
     tech = design.tech
     ref = to_klayout(lvs_view(design, circuits_of(design, top)))
-    lvs.reference = ref
-    nl = lvs.netlist()
-    nl.purge_nets()
-    nl.make_top_level_pins()
-    nl.combine_devices()
-    ref.combine_devices()
-    nl.purge()
+    nl = prepare(lvs, ref)
     comparer = kdb.NetlistComparer()
     for model in (tech.mos.nmos, tech.mos.pmos):
         dc = ref.device_class_by_name(model)

@@ -1,0 +1,71 @@
+"""Extraction: the kit's 2.5D capacitances against FastCap2 (3D field solver) on the drawn geometry,
+and the time of extracting the dual pixel (target < 10 s).
+
+Compared, each on a window of the dual pixel of ``designs/dual_pixel_gf180.toml`` (both tools see
+the same shapes, cut at the window's edge): the FD node of the primary and of a secondary (total
+and each coupling above 2 %), a column line (col_s0 between its neighbours) and its coupling to
+the next column, the TG row line's coupling to FD. Target: every named figure within 15 %.
+Baseline in the same run: drawing the dual pixel (the GDS generation extraction starts from).
+
+    python3 benchmarks/extraction.py [--mesh UM]
+"""
+from __future__ import annotations
+
+import sys
+import time
+
+from common import ROOT
+
+from pixelkit.design import load_design
+from pixelkit.layout.library import build_library
+from pixelkit.layout.pex import cell_geometry
+from pixelkit.layout.pex.capacitance import capacitances
+from pixelkit.layout.pex.fastcap import clip, compare
+
+
+def window_of(geo, net, margin=1.5e-6):
+    import klayout.db as kdb
+    r = kdb.Region()
+    for nets in geo.wires.values():
+        if net in nets:
+            r += nets[net]
+    b, d = r.bbox(), geo.dbu
+    return (b.left * d - margin, b.bottom * d - margin, b.right * d + margin, b.top * d + margin)
+
+
+def main(mesh=0.25e-6):
+    d = load_design(ROOT / "designs" / "dual_pixel_gf180.toml")
+    t0 = time.perf_counter()
+    build_library(d)
+    t_draw = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    geo = cell_geometry(d, "DUALPIX")
+    capacitances(geo, d.tech.stack)
+    t_ext = time.perf_counter() - t0
+    print(f"dual pixel: drawing {t_draw:.2f} s (baseline), extraction (draw + LVS match + 2.5D) {t_ext:.2f} s "
+          f"(target < 10 s), ratio {t_ext / t_draw:.1f}")
+    cases = [("FD, primary", "p.fd", window_of(geo, "p.fd"), ["tg_p"]),
+             ("FD, secondary", "s0.fd", window_of(geo, "s0.fd"), ["tg_s"]),
+             ("column line col_s0 (4 um of it)", "col_s0", (15e-6, 12e-6, 24.5e-6, 16e-6), ["col_p", "col_s1"])]
+    worst = 0.0
+    for title, net, win, named in cases:
+        t0 = time.perf_counter()
+        r = compare(clip(geo, win), d.tech.stack, net, mesh)
+        dt = time.perf_counter() - t0
+        err = r["total_kit_F"] / r["total_fastcap_F"] - 1
+        worst = max(worst, abs(err))
+        print(f"{title}: kit {r['total_kit_F'] * 1e15:.3f} fF, FastCap2 {r['total_fastcap_F'] * 1e15:.3f} fF, "
+              f"{err * 100:+.1f} % ({dt:.0f} s)")
+        for b, k, f in r["couplings"]:
+            mark = ""
+            if b in named:
+                e = k / f - 1
+                worst = max(worst, abs(e))
+                mark = f"  {e * 100:+.1f} %  <- named"
+            print(f"    to {b:8s} kit {k * 1e15:.4f} fF  FastCap2 {f * 1e15:.4f} fF{mark}")
+    print(f"worst named figure: {worst * 100:.1f} % (target 15 %)")
+
+
+if __name__ == "__main__":
+    mesh = float(sys.argv[sys.argv.index("--mesh") + 1]) * 1e-6 if "--mesh" in sys.argv else 0.25e-6
+    main(mesh)

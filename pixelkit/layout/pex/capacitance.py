@@ -1,0 +1,248 @@
+"""Wiring capacitance of every net, to ground and to every other net, from the geometry and the stack.
+
+A 2.5D model (the decomposition field solvers are checked against; ``fastcap.py`` is that
+check). For each conductor layer (poly off the gates, metal1 - metal5), bottom to top, and
+each net on it:
+
+- **area**: the part of the net's shape over a conductor of another net below (the nearest
+  one; what it covers shields what lies deeper) couples to it as a parallel plate
+  ``eps A / h`` (h: the gap between the two); the rest sees the substrate ``eps A / z``.
+  Diffusions and wells are conductors at the substrate surface (their junction capacitance is
+  the device models', not counted here).
+- **fringe**: each edge of the shape adds ``eps 1.40 (T / h)^0.222`` per length to what lies
+  under the band just outside it (width h): the single-line fringe of T. Sakurai and K. Tamaru,
+  "Simple formulas for two- and three-dimensional capacitances", IEEE Trans. Electron Devices
+  30(2), 1983 (their isolated-line formula less its plate term). A neighbour of another net on
+  the same layer at a spacing S keeps ``S / (S + 0.7 h)`` of that edge's fringe (the rest ends
+  on the neighbour, counted below); the 0.7 was set with FastCap2 on a pair of metal1 lines
+  (docs/post-layout.md, the fit structure; the checks use other geometries).
+- **lateral**: facing edges of two nets on the same layer, S apart over a projected length l
+  (nearest only: a shape between them shields), couple by the coupling formula of J.-H. Chern
+  et al., "Multilevel metal capacitance models for CAD design synthesis systems", IEEE Electron
+  Device Letters 13(1), 1992: ``eps [1.144 (T/S) (H/(H+2.059 S))^0.0944 + 0.7428 (W/(W+1.592
+  S))^1.144 + 1.158 (W/(W+1.874 S))^0.1612 (H/(H+0.9801 S))^1.179] l``.
+
+Every coupling is between two named nets; ``0`` is ground (substrate, and the shield).
+"""
+from __future__ import annotations
+
+from collections import defaultdict
+
+from .nets import GROUND
+
+SHIELD_K = 0.7     # fringe kept beside a neighbour: S / (S + SHIELD_K h)
+
+
+def fringe(eps: float, t: float, h: float) -> float:
+    """Fringe capacitance per length (F/m) of one edge of a conductor of thickness t, h above a plane."""
+    return eps * 1.40 * (t / h) ** 0.222
+
+
+def lateral(eps: float, t: float, h: float, w: float, s: float) -> float:
+    """Coupling per length (F/m) of two lines t thick, w wide, s apart, h over a plane (Chern et al.)."""
+    return eps * (1.144 * (t / s) * (h / (h + 2.059 * s)) ** 0.0944
+                  + 0.7428 * (w / (w + 1.592 * s)) ** 1.144
+                  + 1.158 * (w / (w + 1.874 * s)) ** 0.1612 * (h / (h + 0.9801 * s)) ** 1.179)
+
+
+class Couplings:
+    """Symmetric net-pair capacitances (F); ``(a, a)`` is never stored."""
+
+    def __init__(self):
+        self.c = defaultdict(float)
+
+    def add(self, a: str, b: str, value: float) -> None:
+        if a == b or value <= 0:
+            return
+        self.c[(a, b) if a < b else (b, a)] += value
+
+    def total(self, net: str) -> float:
+        return sum(v for k, v in self.c.items() if net in k)
+
+    def to_ground(self, net: str) -> float:
+        return self.c.get((GROUND, net) if GROUND < net else (net, GROUND), 0.0)
+
+    def pair(self, a: str, b: str) -> float:
+        return self.c.get((a, b) if a < b else (b, a), 0.0)
+
+    def items(self):
+        return sorted(self.c.items())
+
+
+def _below(geo, stack, i):
+    """Conductors under layer ``i``, nearest first: [(gap top, {net: Region}, union)]."""
+    import klayout.db as kdb
+    out = []
+    for c in reversed(stack.conductors[:i]):
+        nets = geo.wires.get(c.name, {})
+        if nets:
+            u = kdb.Region()
+            for r in nets.values():
+                u += r
+            out.append((c.top, nets, u.merged()))
+    if geo.surface:
+        u = kdb.Region()
+        for r in geo.surface.values():
+            u += r
+        out.append((0.0, geo.surface, u.merged()))
+    return out
+
+
+def _above(geo, stack, i):
+    """Conductors over layer ``i``, nearest first: [(their bottom, {net: Region}, union)]."""
+    import klayout.db as kdb
+    out = []
+    for c in stack.conductors[i + 1:]:
+        nets = geo.wires.get(c.name, {})
+        if nets:
+            u = kdb.Region()
+            for r in nets.values():
+                u += r
+            out.append((c.z, nets, u.merged()))
+    return out
+
+
+def _under(region, below, z):
+    """(net, area dbu2, gap h) of each part of ``region`` (at height z) over the nearest conductor
+    below it; what is over nothing sees the substrate (net 0, h = z)."""
+    rest = region
+    for top, nets, union in below:
+        hit = rest & union
+        if hit.is_empty():
+            continue
+        for m, reg in nets.items():
+            a = (hit & reg).area()
+            if a:
+                yield m, a, z - top
+        rest = rest - union
+    a = rest.area()
+    if a:
+        yield GROUND, a, z
+
+
+def _down(cpl, net, band, below, eps, t, z, per_area, weight):
+    """The downward fringe of ``band`` (``per_area``: edge length per band area) to what lies under it."""
+    for m, a, h in _under(band, below, z):
+        cpl.add(net, m, fringe(eps, t, h) * per_area * a * weight(h))
+
+
+def _fringe_band(cpl, net, band, below, above, eps, t, z, edge_len, band_area):
+    """Share the fringe of ``edge_len`` (m) of a shape by what lies under and over ``band`` (the strip
+    beside its edges, by area). Where a conductor of another net lies over the strip (gap h_u), the
+    sidewall's field splits between the two planes: the downward fringe keeps h_u / (h_u + h_d)
+    and the upward one, ``fringe(t, h_u)``, h_d / (h_u + h_d)."""
+    if band_area <= 0 or edge_len <= 0:
+        return
+    per_area = edge_len / band_area
+    rest = band
+    top_z = z + t
+    for bottom, nets, union in above:
+        hit = rest & union
+        if hit.is_empty():
+            continue
+        hu = bottom - top_z
+        for m, reg in nets.items():
+            part = hit & reg
+            a = part.area()
+            if not a:
+                continue
+            h_d = z   # the substrate (the nearest plane below decides each part's h_d in _down)
+            cpl.add(net, m, fringe(eps, t, hu) * per_area * a * h_d / (hu + h_d))
+            _down(cpl, net, part, below, eps, t, z, per_area, lambda hd, hu=hu: hu / (hu + hd))
+        rest = rest - union
+    _down(cpl, net, rest, below, eps, t, z, per_area, lambda hd: 1.0)
+
+
+def capacitances(geo, stack) -> Couplings:
+    """Every wiring capacitance of ``geo`` (a ``nets.NetGeometry``) with ``stack``'s numbers."""
+    import klayout.db as kdb
+    cpl = Couplings()
+    eps, dbu = stack.eps, geo.dbu
+    halo = int(round(stack.halo / dbu))
+    for i, cond in enumerate(stack.conductors):
+        nets = geo.wires.get(cond.name, {})
+        if not nets:
+            continue
+        z, t = cond.z, cond.thickness
+        below = _below(geo, stack, i)
+        above = _above(geo, stack, i)
+        # area, to the nearest conductor below or the substrate
+        for net, reg in nets.items():
+            for m, a, h in _under(reg, below, z):
+                cpl.add(net, m, eps * a * dbu * dbu / h)
+        # lateral: facing edges of different nets, nearest only (one shielded space check of the layer)
+        layer = kdb.Region()
+        ids = {}
+        for k, (net, reg) in enumerate(sorted(nets.items())):
+            ids[k + 1] = net
+            for p in reg.each():
+                layer.insert(kdb.PolygonWithProperties(p, {0: k + 1}))
+        shielded = defaultdict(float)    # (net, edge key) -> length in dbu lost to a neighbour, weighted
+        if len(nets) > 1:
+            pairs = layer.space_check(halo, False, kdb.Region.Projection, None, None, None, True,
+                                      kdb.Region.NoOppositeFilter, kdb.Region.NoRectFilter, False,
+                                      kdb.Region.DifferentPropertiesConstraint)
+            seen = set()
+            for ep in pairs.each():
+                canon = tuple(sorted((_canon(ep.first), _canon(ep.second))))
+                if canon in seen:
+                    continue        # the check reports a pair from each side
+                seen.add(canon)
+                (a_net, wa), (b_net, wb) = _net_of(nets, ep.first, dbu), _net_of(nets, ep.second, dbu)
+                if a_net is None or b_net is None or a_net == b_net:
+                    continue
+                s = ep.distance() * dbu
+                la, lb = ep.first.length() * dbu, ep.second.length() * dbu
+                if s <= 0 or min(la, lb) <= 0:
+                    continue
+                h = _plane_gap(ep.polygon(0), below, above, z, t)
+                cpl.add(a_net, b_net, lateral(eps, t, h, min(wa, wb), s) * (la + lb) / 2)
+                keep = s / (s + SHIELD_K * z)
+                shielded[a_net] += (1 - keep) * la
+                shielded[b_net] += (1 - keep) * lb
+        # fringe downwards, less what neighbours take
+        for net, reg in nets.items():
+            h = z
+            wb = max(1, int(round(h / dbu)))
+            band = reg.sized(wb) - reg
+            perim = reg.perimeter() * dbu
+            length = max(0.0, perim - shielded.get(net, 0.0))
+            _fringe_band(cpl, net, band, below, above, eps, t, z, length, band.area())
+    return cpl
+
+
+def _canon(e):
+    """An edge without its direction."""
+    a, b = (e.p1.x, e.p1.y), (e.p2.x, e.p2.y)
+    return (a, b) if a <= b else (b, a)
+
+
+def _plane_gap(poly, below, above, z, t) -> float:
+    """H of the lateral formula: the gap from the pair to the nearest conductor under or over the
+    space between them (the substrate when there is none below)."""
+    import klayout.db as kdb
+    gap = kdb.Region(poly)
+    h = z
+    for top, _nets, union in below:
+        if not (union & gap).is_empty():
+            h = z - top
+            break
+    for bottom, _nets, union in above:
+        if not (union & gap).is_empty():
+            h = min(h, bottom - (z + t))
+            break
+    return h
+
+
+def _net_of(nets, edge, dbu):
+    """(net, width m) of the shape carrying ``edge`` (found by the edge's midpoint); the width is
+    2 area / perimeter of that shape (a line's width), at most 2 um."""
+    import klayout.db as kdb
+    c = edge.p1 + (edge.p2 - edge.p1) * 0.5
+    probe = kdb.Region(kdb.Box(c.x - 1, c.y - 1, c.x + 1, c.y + 1))
+    for net, reg in nets.items():
+        hit = reg.interacting(probe)
+        if not hit.is_empty():
+            poly = next(hit.each())
+            return net, min(2.0 * poly.area() / poly.perimeter(), 2000.0) * dbu
+    return None, 0.0

@@ -1,0 +1,151 @@
+"""The nets of a drawn cell with their geometry, matched to the kit's netlist.
+
+The cell is flattened (labels of sub-cells dropped: only the top cell's pins name nets) and its
+devices and connectivity extracted with the kit's LVS extraction (``signoff.lvs.extract``,
+KLayout's ``LayoutVsSchematic``). KLayout's ``NetlistComparer`` then pairs every extracted net
+with a net of the kit's flattened netlist of the same cell (``schematic.flat_view``), so each
+net's geometry carries the name the simulations use (``Xp.fd``: node ``fd`` of instance ``Xp``).
+A layout that does not match its netlist, or a net the comparer cannot pair, is an error that
+names it: parasitics are never hung on a guessed node.
+
+Shapes on no matched net (the top-metal shield, which the drawing leaves floating) are the
+net ``0``: a chip ties its shield to ground.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from ...errors import PixelkitError
+
+#: Conductors at the substrate surface (the kit's LVS layers): diffusions and wells.
+SURFACE = ("nsd", "psd", "ptap", "ntap", "well", "pd_n")
+GROUND = "0"
+
+
+@dataclass
+class NetGeometry:
+    """Regions (``klayout.db.Region``, dbu units) of every net on every conductor layer."""
+    top: str
+    dbu: float                                   # m per database unit
+    wires: dict = field(default_factory=dict)    # layer -> {net: Region} (poly off the gates, metals)
+    surface: dict = field(default_factory=dict)  # net -> Region (diffusions and wells)
+    bbox: tuple = ()                             # the cell's extent (m)
+    unmatched: list = field(default_factory=list)
+
+
+def _flat_names(design, top: str) -> tuple:
+    """The kit's flat netlist of ``top`` as KLayout sees it, and {flat SPICE name: dotted name}."""
+    from ..signoff.schematic import circuits_of, flat_view, lvs_view, to_klayout
+    view = flat_view(lvs_view(design, circuits_of(design, top)))
+    dotted = _dotted(design, top)
+    return to_klayout(view), dotted
+
+
+def _dotted(design, top: str) -> dict:
+    """{SPICE-safe flat net name ("Xpix_Xp_fd"): hierarchical name ("Xpix.Xp.fd")}."""
+    from ..signoff.schematic import circuits_of, lvs_view
+    view = lvs_view(design, circuits_of(design, top))
+    by = {c["name"]: c for c in view}
+    out = {}
+
+    def walk(c, prefix, nets):
+        m = {p: nets[i] for i, p in enumerate(c["pins"])}
+        local = set()
+        for _n, _m, *ts in c["mos"]:
+            local.update(ts[:4])
+        for _n, a, k, *_ in c["diodes"]:
+            local.update((a, k))
+        for name, target, nets_ in c["subs"]:
+            local.update(nets_)
+            walk(by[target], f"{prefix}{name}.", [m.get(x, f"{prefix}{x}") for x in nets_])
+        for x in local:
+            full = m.get(x, f"{prefix}{x}")
+            out[full.replace(".", "_")] = full
+    top_c = view[-1]
+    walk(top_c, "", list(top_c["pins"]))
+    return out
+
+
+def _flat(region):
+    """A flat, merged copy (free of the extraction's deep shape store, which dies with it)."""
+    import klayout.db as kdb
+    out = kdb.Region()
+    for p in region.each_merged():
+        out.insert(p)
+    return out.merged()
+
+
+def net_geometry(gds, top: str, design) -> NetGeometry:
+    """Flatten ``top`` of ``gds``, extract and match its nets; their geometry by layer."""
+    import klayout.db as kdb
+    from ..signoff.lvs import extract, prepare
+    tech = design.tech
+    stack = tech.stack
+    layout = kdb.Layout()
+    layout.read(str(gds))
+    cell = layout.cell(top)
+    if cell is None:
+        raise PixelkitError(f"{gds} has no cell {top!r}")
+    for ci in cell.called_cells():
+        sub = layout.cell(ci)
+        for li in layout.layer_indexes():
+            for s in list(sub.shapes(li).each(kdb.Shapes.STexts)):
+                sub.shapes(li).erase(s)
+    cell.flatten(-1, True)
+    lvs = kdb.LayoutVsSchematic(kdb.RecursiveShapeIterator(layout, cell, []))
+    L = extract(lvs, layout, tech)
+    ref, dotted = _flat_names(design, top)
+    nl = prepare(lvs, ref)
+    comparer = kdb.NetlistComparer()
+    a, b = nl.circuit_by_name(top), next(ref.each_circuit_top_down())
+    if a is not None:
+        comparer.same_circuits(a, b)
+    ok = lvs.compare(comparer)
+    xref = lvs.xref()
+    if not ok:
+        from ..signoff.lvs import _describe
+        raise PixelkitError(f"extraction of {top}: the layout does not match the kit's netlist, so its parasitics "
+                            "cannot be placed: " + "; ".join(_describe(xref)[:5]))
+    names, unmatched = {}, []
+    for cp in xref.each_circuit_pair():
+        for np_ in xref.each_net_pair(cp):
+            na, nb = np_.first(), np_.second()
+            if na is not None and nb is not None:
+                names[na.cluster_id] = dotted.get(nb.name, nb.name)
+            elif na is not None:
+                unmatched.append(na.expanded_name())
+    if unmatched:
+        raise PixelkitError(f"extraction of {top}: layout net(s) {', '.join(sorted(unmatched))} match no net of "
+                            "the kit's netlist")
+    dbu = layout.dbu * 1e-6
+    geo = NetGeometry(top, dbu)
+    circuit = nl.circuit_by_name(top) or next(nl.each_circuit_top_down())
+    poly_wire = L["poly"] - L["active"]          # the gates are the devices' (their capacitance is the models')
+    layers = {c.name: (poly_wire if c.name == "poly" else L[c.name]) for c in stack.conductors}
+    claimed = {name: kdb.Region() for name in layers}
+    for net in circuit.each_net():
+        name = names.get(net.cluster_id)
+        if name is None:
+            continue
+        for lname, reg in layers.items():
+            r = lvs.shapes_of_net(net, L[lname], True) if lname != "poly" else \
+                lvs.shapes_of_net(net, L["poly"], True) - L["active"]
+            r = _flat(r)
+            if not r.is_empty():
+                geo.wires.setdefault(lname, {})
+                geo.wires[lname][name] = geo.wires[lname].get(name, kdb.Region()) + r
+                claimed[lname] += r
+        surf = kdb.Region()
+        for s in SURFACE:
+            surf += lvs.shapes_of_net(net, L[s], True)
+        surf = _flat(surf)
+        if not surf.is_empty():
+            geo.surface[name] = geo.surface.get(name, kdb.Region()) + surf
+    for lname, reg in layers.items():   # floating shapes (the shield): ground
+        rest = _flat(reg - claimed[lname])
+        if not rest.is_empty():
+            geo.wires.setdefault(lname, {})
+            geo.wires[lname][GROUND] = geo.wires[lname].get(GROUND, kdb.Region()) + rest
+    b = cell.bbox()
+    geo.bbox = (b.left * dbu, b.bottom * dbu, b.right * dbu, b.top * dbu)
+    return geo
