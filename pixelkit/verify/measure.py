@@ -67,7 +67,7 @@ def _end_state(r) -> tuple:
     out = []
     for key in r.names():
         node = key[2:-1]
-        if key.startswith("v(") and (node.startswith("col_") or node.count(".") == 2) and not node.endswith("nph"):
+        if key.startswith("v(") and (node.startswith("col_") or node.count(".") == 2):
             out.append((node, float(r.vectors[key][-1])))
     return tuple(out)
 
@@ -82,9 +82,20 @@ class _Bench:
         self.tm = timings(design, self.tw)
         self.i_max = (_i_max(design, "primary"), _i_max(design, "secondary"))
 
-    def net(self, ip, is_, title, **kw):
+    def cols(self) -> tuple:
+        return ("col_p", *(f"col_s{k}" for k in range(self.n)))
+
+    def state(self) -> tuple:
+        """Every pixel node a following frame starts from (``_end_state``), and the columns."""
+        subs = ("xp", *(f"xs{k}" for k in range(self.n)))
+        return (*self.cols(), *(f"x1.{s}.{node}" for s in subs for node in ("pd", "fd", "sfo")))
+
+    def net(self, ip, is_, title, saves=None, **kw):
+        """The bench saving only ``saves`` (default: the column lines): fewer vectors to write,
+        cache and read back."""
         from ..circuits.testbench import dual_pixel_bench
-        return dual_pixel_bench(self.design, ip, is_, title=title, **kw)
+        net = dual_pixel_bench(self.design, ip, is_, title=title, **kw)
+        return replace(net, saves=tuple(saves or self.cols()))
 
     def sig(self, r, tm=None):
         """(primary, mean of the secondaries) double-sampled column signals."""
@@ -93,17 +104,21 @@ class _Bench:
         return (double_sampled(r, "col_p", tm["primary"]),
                 float(np.mean([double_sampled(r, f"col_s{k}", tm["secondary"]) for k in range(self.n)])))
 
-    def first(self):
-        """Dark, small-signal and saturated decks (the same decks in every group: cached once)."""
+    def dark(self):
+        return self.net(0.0, 0.0, "vfy_dark", saves=self.state())
+
+    def sat(self):
+        return self.net(*self.i_max, "vfy_sat", saves=self.state())
+
+    def small(self):
         i = self.i_max
-        return [self.net(0.0, 0.0, "vfy_dark"), self.net(SMALL * i[0], SMALL * i[1], "vfy_small"),
-                self.net(i[0], i[1], "vfy_sat")]
+        return self.net(SMALL * i[0], SMALL * i[1], "vfy_small", saves=(*self.cols(), "x1.xp.pd", "x1.xs0.pd"))
 
 
 def pixel(design, draw=None, backend="batch") -> dict:
     b = _Bench(design)
     tw, tm = b.tw, b.tm
-    dark, small, sat = _run(b.first(), design, draw, backend)
+    dark, small, sat = _run([b.dark(), b.small(), b.sat()], design, draw, backend)
     (d_p, d_s), (s_p, s_s), (t_p, t_s) = b.sig(dark), b.sig(small), b.sig(sat)
     swing_p, swing_s = t_p - d_p, t_s - d_s
     i_small_p, i_small_s = SMALL * b.i_max[0], SMALL * b.i_max[1]
@@ -156,7 +171,7 @@ def lag(design, draw=None, backend="batch") -> dict:
     """A dark frame after a saturated one against a dark frame after a dark one, each starting
     from the state the previous frame ended in (``_end_state``)."""
     b = _Bench(design)
-    dark, _small, sat = _run(b.first(), design, draw, backend)
+    dark, sat = _run([b.dark(), b.sat()], design, draw, backend)
     after_dark, after_sat = _run([replace(b.net(0.0, 0.0, "vfy_lag_dark"), ic=_end_state(dark)),
                                   replace(b.net(0.0, 0.0, "vfy_lag_sat"), ic=_end_state(sat))], design, draw, backend)
     (a_p, a_s), (s_p, s_s), (d_p, d_s), (t_p, t_s) = b.sig(after_dark), b.sig(after_sat), b.sig(dark), b.sig(sat)
@@ -179,7 +194,8 @@ def noise(design, draw=None, backend="batch") -> dict:
 
 def dark(design, draw=None, backend="batch") -> dict:
     from ..circuits.testbench import dark_bench
-    nets = [dark_bench(design, k, getattr(design, k).t_int, title=f"vfy_dark_{k[0]}") for k in ("primary", "secondary")]
+    nets = [replace(dark_bench(design, k, getattr(design, k).t_int, title=f"vfy_dark_{k[0]}"), saves=("pd",))
+            for k in ("primary", "secondary")]
     out = {}
     for k, r in zip(("primary", "secondary"), _run(nets, design, draw, backend)):
         t0 = getattr(design, k).timing.t_reset + 50e-9  # dark_bench: EC resets for t_reset
@@ -193,7 +209,8 @@ def afe(design, draw=None, backend="batch") -> dict:
     from ..measure.afe import afe_output
     a = design.afe
     v_rst, dv = 1.9, np.array([0.1, 0.35, 0.6])
-    (r,) = _run([afe_bench(design, [(v_rst - x, v_rst) for x in dv], title="vfy_afe")], design, draw, backend)
+    net = replace(afe_bench(design, [(v_rst - x, v_rst) for x in dv], title="vfy_afe"), saves=("out",))
+    (r,) = _run([net], design, draw, backend)
     t = GsTiming(t_exp=0.0, t_row=1 / a.f_clk, rows=len(dv), t_reset=0.0, t_tg=0.0, t_gap=0.0, t_pre=0.0)
     out = np.array([afe_output(r, t, k) for k in range(len(dv))])
     slope = float(np.polyfit(dv, out, 1)[0])
@@ -221,7 +238,8 @@ def settling(design, draw=None, backend="batch") -> dict:
     # open drives the macromodel's rail-less output away, which costs the simulator dearly)
     plan = [(kind, d, f"vfy_settle_{kind[0]}{'_slow' if d is slow else ''}")
             for kind in ("primary", "secondary") for d in (quiet, slow)]
-    nets = [array_bench(d, ip, is_, Tile((kind,), (0, 1), (0,)), with_afe=True, title=t) for kind, d, t in plan]
+    nets = [replace(array_bench(d, ip, is_, Tile((kind,), (0, 1), (0,)), with_afe=True, title=t),
+                    saves=(f"out_col_{kind[0]}_0",)) for kind, d, t in plan]
     vals = {}
     for (kind, d, _), r in zip(plan, _run(nets, design, draw, backend)):
         tm = frame_timings(d, d.experiment.t_window, 2)[kind]

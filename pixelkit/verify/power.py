@@ -59,7 +59,8 @@ def _split(net, design):
                 els.append(Element(f"Iq_{e.name}"[:64], ("vdd_afe", "0"), design.afe.supply_current))
         els.append(e)
     els += [Element(f"Vdd_{b}", (f"vdd_{b}", "0"), vdd) for b in ("read", "bias", "afe")]
-    return replace(net, elements=tuple(els), saves=())
+    net = replace(net, elements=tuple(els))
+    return replace(net, saves=tuple(f"i({s})" for names in _sources(design, net).values() for s in names))
 
 
 def _sources(design, net) -> dict:
