@@ -14,7 +14,7 @@ from __future__ import annotations
 from .canvas import Canvas, box
 from .dual import SUPPLIES
 from .primitives import Mos, mos_strip, pad_side, tap, tap_size, well
-from .route import Lines, RouteError, route_all, stub_to_track, track, via_on
+from .route import Lines, RouteError, route_all, route_to_line, stub_to_track, track, via_on
 from .rules import RuleError
 
 LINES = ("s1", "s1b", "s2", "s2b", "vdd", "vss")
@@ -24,13 +24,10 @@ def _sizes(design, lt):
     dev = design.pixel.devices
     out = {}
     for name, field, mult in (("load", "load", 1), ("sw", "sw", 1), ("swp", "sw", 2)):
-        w, l_ = getattr(dev, f"{field}_w") * mult, getattr(dev, f"{field}_l")
-        for f, v in ((f"{field}_w", getattr(dev, f"{field}_w")), (f"{field}_l", l_)):
-            nm = v * 1e9
-            if abs(nm - round(nm / lt.grid) * lt.grid) > 1e-3:
-                raise RuleError("grid", "column cell", f"{v * 1e6:g} um is not on the {lt.grid:g} nm grid",
-                                f"pixel.devices.{f}", v)
-        out[name] = (lt.snap(w * 1e9), lt.snap(l_ * 1e9))
+        w = lt.size_nm(getattr(dev, f"{field}_w"), f"pixel.devices.{field}_w", "column cell", "active.width")
+        l_ = lt.size_nm(getattr(dev, f"{field}_l"), f"pixel.devices.{field}_l", "column cell",
+                        low=lt.snap_up(design.tech.mos.lmin * 1e9), low_rule="mos.lmin")
+        out[name] = (w * mult, l_)
     return out
 
 
@@ -97,7 +94,6 @@ def column_cell(design, lt, kind: str, width: int, tracks: dict, reserved: list,
     terminals = {"s1": b.gates[0][1], "s2": b.gates[1][1], "s1b": c.gates[0][1], "s2b": c.gates[1][1],
                  "vss": dict(a.sd)["vss"], "vdd": tap_n}
     route_all(cv, lt, lines, terminals, sorted(terminals, key=lambda n: terminals[n].cy))
-    from .route import route_to_line
     route_to_line(cv, lt, lines, "vss", tap_p[1])          # the substrate tap onto the vss line
     cv.ports = {"lines": dict(lines.y), "height": height, "tracks": dict(tracks)}
     return cv

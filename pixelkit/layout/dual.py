@@ -26,7 +26,6 @@ from .canvas import Canvas, box
 from .pixel import SubpixelPlan, subpixel
 from .primitives import pad_side
 from .route import RouteError, stack_fits, track, via_on
-from .rules import RuleError
 
 SUPPLIES = ("vdd", "vpdr", "vrst", "vss")
 CONTROLS = ("ec", "tg", "rst", "rs")
@@ -162,5 +161,3 @@ def dual_pixel(design, lt) -> tuple[dict, Canvas]:
                  "lines_p": lines_p, "lines_s": lines_s}
     return {"PRIMARY": pri, "SECONDARY": sec}, top
 
-
-__all__ = ["dual_pixel", "plan", "opening_box", "RuleError"]

@@ -59,17 +59,10 @@ def device_sizes(design, lt, names) -> list[Mos]:
     dev = design.pixel.devices
     out = []
     for n in names:
-        w, l_ = getattr(dev, f"{n}_w"), getattr(dev, f"{n}_l")
-        for f, v, lo, rule in ((f"{n}_w", w, lt.width("active"), "active.width"),
-                               (f"{n}_l", l_, lt.snap_up(design.tech.mos.lmin * 1e9), "mos.lmin")):
-            nm = v * 1e9
-            if abs(nm - round(nm / lt.grid) * lt.grid) > 1e-3:
-                raise RuleError("grid", f"{n.upper()} transistor", f"{v * 1e6:g} um is not on the "
-                                f"{lt.grid:g} nm drawing grid", f"pixel.devices.{f}", v)
-            if round(nm) < lo:
-                raise RuleError(rule, f"{n.upper()} transistor", f"{v * 1e6:g} um < {lo / 1000:g} um",
-                                f"pixel.devices.{f}", v)
-        out.append(Mos(n, lt.snap(w * 1e9), lt.snap(l_ * 1e9)))
+        w = lt.size_nm(getattr(dev, f"{n}_w"), f"pixel.devices.{n}_w", f"{n.upper()} transistor", "active.width")
+        l_ = lt.size_nm(getattr(dev, f"{n}_l"), f"pixel.devices.{n}_l", f"{n.upper()} transistor",
+                        low=lt.snap_up(design.tech.mos.lmin * 1e9), low_rule="mos.lmin")
+        out.append(Mos(n, w, l_))
     return out
 
 
@@ -217,10 +210,6 @@ def _strip_row(lt, plan: SubpixelPlan, h1, h2, gap12: int, below: int, side: int
             break
         y -= 50
     return best[1]
-
-
-def design_pd(design, which):
-    return getattr(design, which).pd_height
 
 
 def _bands(lo: int, hi: int, plan: SubpixelPlan) -> list:

@@ -63,15 +63,6 @@ def stack_shapes(lt, x: int, y: int, bottom: str, top: str) -> list[tuple[str, B
     return out
 
 
-def stack_free(cv: Canvas, lt, x: int, y: int, bottom: str, top: str, net: str) -> bool:
-    return all(cv.free(layer, b, net) for layer, b in stack_shapes(lt, x, y, bottom, top))
-
-
-def draw_stack(cv: Canvas, lt, x: int, y: int, bottom: str, top: str, net: str) -> None:
-    for layer, b in stack_shapes(lt, x, y, bottom, top):
-        cv.add(layer, b, net)
-
-
 def contact_pad(cv: Canvas, lt, cx: int, cy: int, base: str, net: str) -> Box:
     """A contact on ``base`` (active or poly, drawn by the caller) with its metal1 pad."""
     cv.add("contact", square(cx, cy, lt.cut("contact")), net)

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 
 from .canvas import Box, Canvas, box
 from .rules import RuleError
-from .primitives import METALS, VIAS, draw_stack, pad_side, stack_free, stack_shapes
+from .primitives import METALS, pad_side, stack_shapes
 
 STEP = 50   # nm: search step of line heights and via positions
 
@@ -187,5 +187,3 @@ def via_on(cv: Canvas, lt, net: str, x: int, y: int, bottom: str, top: str) -> N
 def stack_fits(cv: Canvas, lt, x: int, y: int, bottom: str, top: str, net: str) -> bool:
     return all(cv.fillers(lay, b, net) is not None for lay, b in stack_shapes(lt, x, y, bottom, top))
 
-
-__all__ = ["Lines", "RouteError", "route_all", "route_to_line", "stub_to_track", "track", "via_on", "METALS", "VIAS"]

@@ -9,6 +9,8 @@ from __future__ import annotations
 import math
 from functools import cached_property
 
+from .rules import RuleError
+
 
 class LayoutTech:
     def __init__(self, tech):
@@ -27,6 +29,19 @@ class LayoutTech:
     def snap(self, x: float) -> int:
         g = self.grid
         return int(round(x / g)) * g
+
+    def size_nm(self, value_m: float, field: str, place: str, rule: str = "", low: int = 0,
+                low_rule: str = "") -> int:
+        """A device size of the design in nm: refused (naming ``field``) off the drawing grid or
+        under the rule ``rule`` (or ``low`` nm, ``low_rule``)."""
+        nm = value_m * 1e9
+        if abs(nm - round(nm / self.grid) * self.grid) > 1e-3:
+            raise RuleError("grid", place, f"{value_m * 1e6:g} um is not on the {self.grid:g} nm drawing grid",
+                            field, value_m)
+        lo, name = (self.nm(rule), rule) if rule else (low, low_rule)
+        if round(nm) < lo:
+            raise RuleError(name, place, f"{value_m * 1e6:g} um < {lo / 1000:g} um", field, value_m)
+        return self.snap(nm)
 
     def nm(self, key: str) -> int:
         v = self.memo.get(key)
