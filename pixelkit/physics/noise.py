@@ -13,17 +13,20 @@ The chain ([Thesis2019] fig. 3.3 sequence; all variances at the column, V^2):
 - **NCDS.** The reset level comes from a *new* RST reset (non-correlated double
   sampling): another kT / C_FD, uncorrelated. So 2 kT / C_FD at
   FD, times A_sf^2 at the column.
-- **SF + column load (thermal).** Both transistors carry the same current; in weak
-  inversion each has current noise 2 q I and the follower's output conductance is
-  I / U_T, so the column (C_col) holds kT / C_col per sample whatever the current
-  (``sf_thermal``). Two uncorrelated samples: 2 kT / C_col.
+- **SF + column load (thermal)** (``sf.column_thermal``): the follower, its load
+  and the load's bias mirror, each with its channel noise at its own inversion level
+  (EKV: the follower sits in moderate inversion, gm / I_D ~ 20 /V, IC ~ 0.8 at
+  400 nA), through the column's source impedance 1 / gms + R_rs (the row switch adds
+  its own 4 k T R_rs): one sample holds S / (4 Z C_col), about 1.7 kT / C_col here
+  (the weak-inversion closed form gave kT / C_col: it left out the mirror and the
+  switch). Two uncorrelated samples.
 - **SF + column load (1/f)** (``sf_flicker``). Each NMOS has gate-referred
   S_vg = kf_vg / (cox W L f^ef) (technology ``mos.kf_vg``, ``mos.ef``, fitted to the
   model library). The SF's reaches the column times A_sf; the load's drain-current
-  noise gm_ld^2 S_vg,ld divides by the follower's output conductance gm_sf / A_sf, and
-  in weak inversion at the same current gm_ld = gm_sf (the assumption of
-  ``sf_thermal``), so S_col = A_sf^2 kf_vg / (cox f^ef) (1/(W L)_sf + 1/(W L)_ld),
-  low-passed by the column pole f_col = (I / U_T) / (2 pi C_col). The two NCDS samples
+  noise gm_ld^2 S_vg,ld (twice: the bias device's, copied by the mirror) flows through
+  the column's source impedance Z (EKV gm at each device's inversion level), so
+  S_col = kf_vg / (cox f^ef) (A_sf^2 / (W L)_sf + 2 (gm_ld Z)^2 / (W L)_ld),
+  low-passed by the column pole f_col = 1 / (2 pi Z C_col). The two NCDS samples
   are dt apart (signal, then the new reset's level), so the difference sees
   |1 - exp(-j 2 pi f dt)|^2 = 2 - 2 cos(2 pi f dt): 1/f below 1/dt cancels, above it
   the samples add. var = int S_col(f) (2 - 2 cos 2 pi f dt) / (1 + (f/f_col)^2) df.
@@ -59,15 +62,16 @@ def shot_electrons(n_electrons):
     return np.sqrt(np.asarray(n_electrons, dtype=float))
 
 
-def sf_thermal(c_col: float, temperature_K: float) -> float:
-    """Variance (V^2) of one column sample from the SF and its load, both in weak inversion."""
-    return K_B * temperature_K / c_col
-
-
 def column_flicker_psd(design, a_sf: float, f):
-    """1/f PSD (V^2/Hz) at the column from the SF and its load, below the column pole."""
+    """1/f PSD (V^2/Hz) at the column from the SF, its load and the load's bias mirror, below the column pole:
+    the SF's gate noise times A_sf^2, the load's (and, copied by the mirror, the bias device's) drain-current
+    noise gm_ld^2 S_vg through the column's source impedance Z (``sf.column``; in weak inversion with no row
+    switch gm_ld Z = A_sf)."""
+    from .sf import column
     mos, dev = design.tech.mos, design.pixel.devices
-    s1 = a_sf ** 2 * mos.kf_vg / mos.cox * (1.0 / (dev.sf_w * dev.sf_l) + 1.0 / (dev.load_w * dev.load_l))
+    c = column(design)
+    ld = 2.0 * (c["gm_load"] * c["z_ohm"]) ** 2
+    s1 = mos.kf_vg / mos.cox * (a_sf ** 2 / (dev.sf_w * dev.sf_l) + ld / (dev.load_w * dev.load_l))
     return s1 / np.asarray(f, dtype=float) ** mos.ef
 
 
@@ -75,7 +79,8 @@ def sf_flicker(design, a_sf: float, dt: float, c_col: float, points_per_decade: 
     """Variance (V^2) of the NCDS difference from the SF's and the load's 1/f noise (derivation above)."""
     if design.tech.mos.kf_vg <= 0:
         return 0.0
-    f_col = design.pixel.sf_bias / (K_B * design.temperature / Q) / (2 * np.pi * c_col)
+    from .sf import column
+    f_col = 1.0 / (2 * np.pi * column(design)["z_ohm"] * c_col)
     lo, hi = 1e-4 / dt, 1e4 * f_col
     f = np.logspace(np.log10(lo), np.log10(hi), int(points_per_decade * np.log10(hi / lo)) + 1)
     w = (2.0 - 2.0 * np.cos(2 * np.pi * f * dt)) / (1.0 + (f / f_col) ** 2)
@@ -108,6 +113,7 @@ def chain(design, which: str, a_sf: float, t_int: float | None = None, t_wait: f
     """
     from . import afe_noise, fd
     from .dark import dark_current
+    from .sf import column_thermal
     sub, temp = getattr(design, which), design.temperature
     t_int = sub.t_int if t_int is None else t_int
     r = fd.response(design, which, a_sf)
@@ -120,7 +126,7 @@ def chain(design, which: str, a_sf: float, t_int: float | None = None, t_wait: f
         "reset_common_mode": a_sf ** 2 * kt / r["c_total_F"],
         "tg_partition": a_sf ** 2 * kt * r["c_pd_node_F"] / (r["c_fd_F"] * r["c_total_F"]),
         "fd_reset_ncds": a_sf ** 2 * kt / r["c_fd_F"],
-        "sf_load_thermal": 2.0 * sf_thermal(c_col, temp),
+        "sf_load_thermal": 2.0 * column_thermal(design, c_col)["variance_V2"],
         "sf_load_flicker": sf_flicker(design, a_sf, ncds_interval(design, which), c_col),
         "dark_shot": n_dark * cg ** 2,
         "fd_leakage_shot": (n_fd * (r["c_total_F"] / r["c_fd_F"]) ** 2) * cg ** 2,
