@@ -221,6 +221,8 @@ class Design:
     tech: Technology = field(default=None, metadata=dict(kind="skip"))
     source: str = field(default="", metadata=dict(kind="skip"))
     raw: dict = field(default=None, metadata=dict(kind="skip"), repr=False, compare=False)
+    #: the extracted parasitics of the post-layout view (``layout.pex.overlay.post_layout_view``); None: schematic
+    post_layout: object = field(default=None, metadata=dict(kind="skip"))
 
     def validate(self, path, source, raw):
         if self.pixel.swing >= 5.0:

@@ -117,7 +117,7 @@ class ArrayCamera:
 
 def combined_node(design, which: str, a_sf: float) -> Node:
     p = pd_node(design, which, parasitics=True)
-    f = fd.fd_node(design, a_sf)
+    f = fd.fd_node(design, a_sf, which=which)
     return Node(p.terms + f.terms, p.c_fixed + f.c_fixed)
 
 

@@ -7,7 +7,7 @@ parameters ``iph_p`` and ``iph_s0 ..``: one photocurrent per subpixel.
 from __future__ import annotations
 
 from ..spice.netlist import Element, Param, Subckt
-from .pixel5t import pixel5t
+from .pixel5t import pixel5t, wiring
 
 
 def ports(n_secondary: int) -> tuple:
@@ -23,6 +23,7 @@ def dual_pixel(design) -> tuple[Subckt, ...]:
     for k in range(n):
         elems.append(Element(f"Xs{k}", ("vdd", "vpdr", "vrst", "ec_s", "tg_s", "rst_s", "rs_s", f"col_s{k}"),
                              "pix5t_secondary", (("iph", Param(f"iph_s{k}")),)))
+    elems += wiring(design, "dualpix")
     params = (("iph_p", 0.0), *((f"iph_s{k}", 0.0) for k in range(n)))
     return (pixel5t(design, "primary"), pixel5t(design, "secondary"),
             Subckt("dualpix", ports(n), tuple(elems), params))

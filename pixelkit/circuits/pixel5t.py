@@ -44,4 +44,13 @@ def pixel5t(design, which: str) -> Subckt:
         mosfet("rst", "vrst", "rst", "fd", "0", dev.rst_w, dev.rst_l, t),
         mosfet("sf", "vdd", "fd", "sfo", "0", dev.sf_w, dev.sf_l, t),
         mosfet("rs", "sfo", "rs", "col", "0", dev.rs_w, dev.rs_l, t),
+        *wiring(design, f"pix5t_{which}"),
     ), (("iph", 0.0),))
+
+
+def wiring(design, cell: str) -> tuple:
+    """The extracted wiring capacitances of subcircuit ``cell`` (post-layout view; none on the schematic)."""
+    pl = design.post_layout
+    if pl is None:
+        return ()
+    return tuple(Element(f"Cw{k}", (a, b), c) for k, (a, b, c) in enumerate(pl.cells.get(cell, ())))

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import click
 
-from .common import design_arg, emit, json_opt, load, main, out_opt, output_path, scheduler_address, spice_opts
+from .common import design_arg, emit, json_opt, load, main, out_opt, output_path, scheduler_address, spice_opts, post_layout_opt
 
 
 def _finite(value, param):
@@ -36,6 +36,7 @@ def _finite(value, param):
 @click.option("--scheduler", default=None, callback=scheduler_address, help="Dask scheduler address (default: local workers)")
 @out_opt("folder for frame.csv and frame.png (default reports/<design>/array_RxC)", folder=True)
 @spice_opts
+@post_layout_opt
 @json_opt
 def array_cmd(design, rows, cols, scene, unit, with_afe, split, check, seed, t_exp, scheduler, out,
               backend, jobs, as_json):

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import click
 
-from .common import design_arg, emit, json_opt, load, main, out_opt, output_path, spice_opts
+from .common import design_arg, emit, json_opt, load, main, out_opt, output_path, spice_opts, post_layout_opt
 
 _ROWS = (("K (DN/e-)", "k_dn_per_e", 1.0, ".4g"),
          ("K x LSB (uV/e-)", None, 1e6, "sig"),
@@ -63,6 +63,7 @@ def camera_text(r: dict) -> str:
 @click.option("--size", "size", default=None, metavar="ROWSxCOLS",
               help="image size of the virtual sensor (default: each array's own)")
 @spice_opts
+@post_layout_opt
 @json_opt
 def camera(design, out, emva_out, seed, size, backend, jobs, as_json):
     """EMVA 1288 figures of both arrays (K, read noise, QE, saturation, DR, SNR, GSE), plots, datasets."""

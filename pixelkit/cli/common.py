@@ -143,11 +143,32 @@ def output_path(out, design, default_name: str) -> Path:
     return check_output(reports_root() / name / default_name)
 
 
+def _post_layout(ctx, param, value):
+    if value:
+        ctx.meta["pixelkit.post_layout"] = True
+    return value
+
+
+post_layout_opt = click.option("--post-layout", is_flag=True, expose_value=False, callback=_post_layout,
+                               help="run on the post-layout view: the wiring parasitics extracted from the "
+                                    "design's own layout (docs/post-layout.md)")
+
+
 def load(design_path: str, drawable: bool = True):
     """Load a design for a command: warnings on stderr (and in the JSON output)
-    (``drawable=False``: no warning that the layout cannot be drawn - ``layout`` says it as an error)."""
+    (``drawable=False``: no warning that the layout cannot be drawn - ``layout`` says it as an error);
+    with ``--post-layout`` the post-layout view (a technology without a stack is refused, naming it)."""
     from ..api import load_design
-    return load_design(design_path, warn=warn, drawable=drawable)
+    return view(load_design(design_path, warn=warn, drawable=drawable))
+
+
+def view(design):
+    """``design`` as the command asked: its post-layout view with ``--post-layout``, else as loaded."""
+    ctx = click.get_current_context(silent=True)
+    if ctx is not None and ctx.meta.get("pixelkit.post_layout"):
+        from ..layout.pex.overlay import post_layout_view
+        return post_layout_view(design)
+    return design
 
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})

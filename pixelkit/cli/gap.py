@@ -6,7 +6,7 @@ from pathlib import Path
 import click
 import numpy as np
 
-from .common import design_arg, emit, json_opt, load, main, out_opt, output_path, spice_opts
+from .common import design_arg, emit, json_opt, load, main, out_opt, output_path, spice_opts, post_layout_opt
 
 
 @main.group()
@@ -19,6 +19,7 @@ def gap():
 @click.option("--conditions", type=click.Path(dir_okay=False), required=True)
 @out_opt("predicted table (default: reports/<design>/predicted.csv)")
 @spice_opts
+@post_layout_opt
 @json_opt
 def predict(design, conditions, out, backend, jobs, as_json):
     """Write the nominal prediction of every row of a conditions file (column v_nominal_V)."""
@@ -64,6 +65,7 @@ def _prepare(design, measured, backend):
 @click.option("--seed", type=int, default=0, show_default=True, help="train / held-out split")
 @setup_opts
 @spice_opts
+@post_layout_opt
 @json_opt
 def diagnose(design, measured, out, seed, gain_tol, offset_tol, backend, jobs, as_json):
     """Where the data leave the simulation, which effect explains it, whether the gap is explained."""

@@ -7,7 +7,7 @@ from pathlib import Path
 import click
 
 from ..errors import EXIT_REGRESSION
-from .common import design_arg, emit, json_opt, load, main, out_opt, output_path, spice_opts
+from .common import design_arg, emit, json_opt, load, main, out_opt, output_path, spice_opts, post_layout_opt
 
 REFERENCE = "designs/dual_pixel_revA.toml"
 
@@ -20,6 +20,7 @@ REFERENCE = "designs/dual_pixel_revA.toml"
 @click.option("--models", "models_mode", type=click.Choice(["absolute", "link"]), default="absolute",
               show_default=True, help="absolute model paths, or 'models/<file>' with a 'models' link "
                                       "written beside the deck")
+@post_layout_opt
 @json_opt
 def netlist(design, bench_name, out, models_mode, as_json):
     """Write a deck that runs as it is in `ngspice -b`: the kit's options, models, stimulus."""

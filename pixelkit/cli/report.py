@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from .common import design_arg, emit, finishing, json_opt, main, quiet_opt
+from .common import design_arg, emit, finishing, json_opt, main, post_layout_opt, quiet_opt, view
 
 
 @main.command("report")
@@ -22,13 +22,14 @@ from .common import design_arg, emit, finishing, json_opt, main, quiet_opt
 @click.option("--backend", type=click.Choice(["batch", "shared"]), default="batch", show_default=True)
 @click.option("--jobs", type=click.IntRange(1, 64), default=None, help="parallel ngspice workers")
 @quiet_opt
+@post_layout_opt
 @json_opt
 def report(design, out, baseline, measured, quick, no_cache, backend, jobs, as_json):
     """Write the design report (HTML + CSV/JSON + summary.json); with --baseline, the revision diff."""
     from ..design import load_design
     from ..report.build import build_report
     from ..report.text import report_text
-    d = load_design(design)
+    d = view(load_design(design))
     out = Path(out) if out else Path("reports") / d.name
     r = build_report(d, out, quick=quick, backend=backend, jobs=jobs, measured=measured, baseline=baseline,
                      use_cache=not no_cache, html=not as_json)

@@ -3,11 +3,12 @@ from __future__ import annotations
 
 import click
 
-from .common import design_arg, emit, json_opt, load, main, spice_opts, waveforms_opt
+from .common import design_arg, emit, json_opt, load, main, spice_opts, waveforms_opt, post_layout_opt
 
 
 @main.command()
 @design_arg
+@post_layout_opt
 @json_opt
 def models(design, as_json):
     """Analytic model table: C_jdep, conversion gain, full well, C_A, C_C."""
@@ -32,6 +33,7 @@ def _waveforms(d, result, path, backend):
 @design_arg
 @spice_opts
 @waveforms_opt
+@post_layout_opt
 @json_opt
 def simulate(design, backend, jobs, waveforms, as_json):
     """The simulation experiment of [Thesis2019] (fig. A.1 - A.3): i_mid, i_5pct, model vs SPICE.
@@ -60,6 +62,7 @@ def simulate(design, backend, jobs, waveforms, as_json):
 @design_arg
 @spice_opts
 @waveforms_opt
+@post_layout_opt
 @json_opt
 def run(design, backend, jobs, waveforms, as_json):
     """The main job on a design: model table and simulation summary."""

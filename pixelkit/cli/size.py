@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import click
 
-from .common import design_arg, emit, finishing, json_opt, load, main, out_opt, output_path, spice_opts
+from .common import design_arg, emit, finishing, json_opt, load, main, out_opt, output_path, spice_opts, post_layout_opt
 
 
 @main.command()
@@ -12,6 +12,7 @@ from .common import design_arg, emit, finishing, json_opt, load, main, out_opt, 
 @click.option("--sensitivity", "with_sens", is_flag=True,
               help="also re-size at +-10 % C_j, +-20 % SF bias, each corner, +-10 K")
 @spice_opts
+@post_layout_opt
 @json_opt
 def size(design, out, with_sens, backend, jobs, as_json):
     """Size the secondary mask opening and the integration times (5 % / mid-scale criterion)."""

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import click
 
-from .common import design_arg, emit, json_opt, load, main, out_opt, output_path, scheduler_address, spice_opts
+from .common import design_arg, emit, json_opt, load, main, out_opt, output_path, scheduler_address, spice_opts, post_layout_opt
 
 
 @main.command("sweep")
@@ -16,6 +16,7 @@ from .common import design_arg, emit, json_opt, load, main, out_opt, output_path
               help="Dask distributed scheduler address (tcp://host:8786); default: local worker processes")
 @out_opt("folder for sweep.csv and sweep.nc (default reports/<design>/sweep)", folder=True)
 @spice_opts
+@post_layout_opt
 @json_opt
 def sweep_cmd(design, overs, with_afe, scheduler, out, backend, jobs, as_json):
     """Sweep the dual-pixel bench; failed points are listed with ngspice's message.

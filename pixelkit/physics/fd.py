@@ -40,7 +40,7 @@ from ..circuits.geometry import diffusion
 from ..constants import Q
 from .dark import diffusion_leakage
 from .junction import Node
-from .nodes import overlap, pd_node, switch_side
+from .nodes import overlap, pd_node, switch_side, wiring
 
 
 def sf_gate(design, a_sf: float, v_fd: float | None = None) -> float:
@@ -51,12 +51,14 @@ def sf_gate(design, a_sf: float, v_fd: float | None = None) -> float:
     return overlap(dev.sf_w, v - design.tech.supply, mos) + (1.0 - a_sf) * c_gs
 
 
-def fd_node(design, a_sf: float, v_fd: float | None = None) -> Node:
+def fd_node(design, a_sf: float, v_fd: float | None = None, which: str = "primary") -> Node:
     """C(V) of the floating diffusion (reverse bias V of its junctions); overlaps taken at ``v_fd``
-    (default the PD reset level), with TG and RST gates at 0 V."""
+    (default the PD reset level), with TG and RST gates at 0 V. Post-layout (``design.post_layout``)
+    the extracted wiring of ``which`` subpixel's FD is added: its couplings to the nodes that
+    follow FD through the SF (``sfo``, the column line) bootstrapped by A_sf like the SF gate."""
     dev, tech = design.pixel.devices, design.tech
     v = design.pixel.v_pd_reset if v_fd is None else v_fd
-    terms, c_fixed = [], sf_gate(design, a_sf, v)
+    terms, c_fixed = [], sf_gate(design, a_sf, v) + wiring(design, which, "fd", a_sf)
     for w in (dev.tg_w, dev.rst_w):
         t, c = switch_side(w, tech, -v)
         terms += t
@@ -95,7 +97,7 @@ def response(design, which: str, a_sf: float, v_bias: float | None = None) -> di
     v = design.pixel.v_pd_reset if v_bias is None else v_bias
     c_pd = float(pd_node(design, which).capacitance(v))
     c_node = float(pd_node(design, which, parasitics=True).capacitance(v))
-    c_fd = float(fd_node(design, a_sf, v).capacitance(v))
+    c_fd = float(fd_node(design, a_sf, v, which).capacitance(v))
     c_tot = c_node + c_fd
     return {"v_bias_V": v, "c_pd_F": c_pd, "c_pd_node_F": c_node, "c_fd_F": c_fd, "c_total_F": c_tot,
             "cg_pd_V_per_e": Q / c_pd, "sharing": c_node / c_tot, "cg_fd_V_per_e": Q / c_tot,

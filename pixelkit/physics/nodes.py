@@ -36,7 +36,8 @@ def switch_side(w: float, tech, v_ov: float = 0.0) -> tuple[tuple, float]:
 
 def pd_node(design, which: str, parasitics: bool = False) -> Node:
     """C(V) of the photodiode of ``which`` subpixel, optionally with its switch parasitics
-    (EC and TG source diffusions and overlaps, gates at 0 V, overlaps at the PD reset level)."""
+    (EC and TG source diffusions and overlaps, gates at 0 V, overlaps at the PD reset level; post-layout,
+    the extracted wiring on the PD node too)."""
     sub = getattr(design, which)
     tech = design.tech
     terms = [(sub.area, sub.perimeter, Junction.of(tech.photodiode))]
@@ -47,4 +48,12 @@ def pd_node(design, which: str, parasitics: bool = False) -> Node:
             t, c = switch_side(w, tech, -design.pixel.v_pd_reset)
             terms += t
             c_fixed += c
+        c_fixed += wiring(design, which, "pd")
     return Node(tuple(terms), c_fixed)
+
+
+def wiring(design, which: str, node: str, a_sf: float | None = None) -> float:
+    """Extracted wiring capacitance (F) on ``node`` of ``which`` subpixel: 0 on the schematic view,
+    the layout's on the post-layout view (``design.post_layout``)."""
+    pl = getattr(design, "post_layout", None)
+    return 0.0 if pl is None else pl.node_wiring(which, node, a_sf)

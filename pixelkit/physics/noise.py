@@ -94,11 +94,16 @@ def ncds_interval(design, which: str) -> float:
     return tm.t_reset_level(0) - tm.t_signal(0)
 
 
-def column_capacitance(design) -> float:
-    """Column line: its parasitic C plus the RS source and load drain junctions at zero bias."""
+def column_capacitance(design, which: str = "primary") -> float:
+    """Column line: its parasitic C plus the RS source and load drain junctions at zero bias
+    (post-layout: the extracted line of ``which`` array, every row's share and the column circuit's)."""
+    from ..circuits.column import line_cap
     from ..circuits.geometry import diffusion
     mos, dev = design.tech.mos, design.pixel.devices
-    c = design.pixel.column_cap
+    col = "col_p" if which == "primary" else "col_s0"
+    c = line_cap(design, col)
+    if design.post_layout is not None:
+        c += design.post_layout.per_row[col]
     for w in (dev.rs_w, dev.load_w):
         a, p = diffusion(w, mos.diff_ext)
         c += mos.cj * a + mos.cjsw * (p - w) + mos.cjswg * w
@@ -119,7 +124,7 @@ def chain(design, which: str, a_sf: float, t_int: float | None = None, t_wait: f
     r = fd.response(design, which, a_sf)
     kt = K_B * temp
     cg = r["cg_out_V_per_e"]
-    c_col = column_capacitance(design)
+    c_col = column_capacitance(design, which)
     n_dark = dark_current(sub.area, sub.perimeter, temp, design.tech.photodiode) * t_int / Q
     n_fd = fd.leakage(design) * t_wait / Q
     col = {   # V^2 at the column (NCDS difference)

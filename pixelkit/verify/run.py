@@ -34,13 +34,11 @@ def _task(task):
 
 
 def post_layout_view(design):
-    """The design whose decks carry the extracted parasitics (``--post-layout``).
-
-    Hook for the post-layout work (issue 28 and after): return a design (or raise) so that
-    the generators use the extracted netlists; every measurement then runs on that view
-    unchanged. Until extraction exists this refuses clearly."""
-    raise ConfigError(design.source, "--post-layout", True,
-                      "the schematic view: post-layout extraction not available yet")
+    """The design whose decks carry the extracted parasitics (``--post-layout``): the generators use
+    the extracted netlists and every measurement runs on that view unchanged
+    (``layout.pex.overlay``; a technology without a process stack is refused, naming it)."""
+    from ..layout.pex.overlay import post_layout_view as view
+    return view(design)
 
 
 def spec_conditions(spec, grid: list) -> list:

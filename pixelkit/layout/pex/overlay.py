@@ -1,0 +1,157 @@
+"""The post-layout view of a design: the extracted parasitics as an overlay on its netlists.
+
+``post_layout_view(design)`` draws the design's dual pixel with its column circuits, extracts
+them (``nets``, ``capacitance``) and returns the same design carrying a :class:`Parasitics`:
+the generators then add the wiring capacitances to the subcircuits the simulations use, so every
+command runs the schematic or the post-layout view of one design with one flag. What goes where:
+
+- ``pix5t_primary`` / ``pix5t_secondary``: each coupling of a node of the subpixel (``fd``,
+  ``pd``, ``sfo``) to ground or to a net that is one of its ports (``tg``, ``rst``, ``col`` ...);
+  a coupling to a net the cell does not see (another subpixel's column line) is taken to ground.
+  The three secondaries are drawn alike but sit among other neighbours: their mean is used.
+- ``dualpix``: the couplings between the dual pixel's own lines (row lines, column lines,
+  supplies): one row's share of every column-to-column and row-to-column coupling.
+- the column line's lumped capacitance (``column.load``, in place of ``pixel.column_cap``): the
+  other ``rows - 1`` dual pixels' share of the line (its total per dual pixel, every coupling
+  counted to ground) plus the column circuit's wiring.
+- resistance: every long line's end-to-end resistance (column lines over the array's rows, row
+  lines over its columns) from its length, width and the stack's sheet resistance; reported,
+  not simulated (``docs/post-layout.md``: at 90 mOhm/sq the column line's RC is below 1 ns).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+from .nets import GROUND
+
+PIXEL_PORTS = ("vdd", "vpdr", "vrst", "ec", "tg", "rst", "rs", "col")
+_MIN_C = 1e-19    # couplings below 0.1 aF are dropped
+
+
+@dataclass(frozen=True)
+class Parasitics:
+    """Extracted wiring capacitances placed in the kit's subcircuits (F)."""
+    cells: dict = field(default_factory=dict)       # subcircuit -> ((node, node, C), ...)
+    column_cap: dict = field(default_factory=dict)  # "primary" / "secondary" -> lumped rest of the line (F)
+    per_row: dict = field(default_factory=dict)     # figures per dual pixel: {"col_p": F, ...}
+    resistance: dict = field(default_factory=dict)  # line -> Ohm
+    source: str = ""
+
+    def node_wiring(self, which: str, node: str, a_sf: float | None = None) -> float:
+        """Wiring capacitance (F) on ``node`` of ``which`` subpixel; couplings to nodes that follow FD
+        through the source follower (``sfo``, ``col``) count (1 - a_sf) of themselves when a_sf is given."""
+        total = 0.0
+        for a, b, c in self.cells.get(f"pix5t_{which}", ()):
+            if node not in (a, b):
+                continue
+            other = b if a == node else a
+            follows = node == "fd" and other in ("sfo", "col") and a_sf is not None
+            total += c * (1.0 - a_sf) if follows else c
+        return total
+
+
+def _local(net: str, inst: str, ports: dict) -> str | None:
+    """The name of ``net`` inside instance ``inst`` ("p", "s0"): its own node, the port it reaches,
+    or None (a net the cell does not see)."""
+    if net.startswith(inst + "."):
+        return net.split(".", 1)[1]
+    return ports.get(net)
+
+
+def _instance_ports(n_secondary: int) -> dict:
+    """{instance: {dual-pixel net: subpixel port}} as ``circuits.dual_pixel`` wires them."""
+    out = {"p": dict(zip(("vdd", "vpdr", "vrst", "ec_p", "tg_p", "rst_p", "rs_p", "col_p"), PIXEL_PORTS))}
+    for k in range(n_secondary):
+        out[f"s{k}"] = dict(zip(("vdd", "vpdr", "vrst", "ec_s", "tg_s", "rst_s", "rs_s", f"col_s{k}"), PIXEL_PORTS))
+    return out
+
+
+def place(cpl, n_secondary: int) -> dict:
+    """The couplings of the dual pixel (``DUALPIX``, names as ``nets.py`` gives them) by subcircuit."""
+    inst = _instance_ports(n_secondary)
+    acc = {"pix5t_primary": {}, "pix5t_secondary": {}, "dualpix": {}}
+    for (a, b), c in cpl.items():
+        a, b = (GROUND if x == "vss" else x for x in (a, b))     # the substrate net is the simulations' 0
+        if a == b:
+            continue
+        owners = {x.split(".", 1)[0] for x in (a, b) if "." in x}
+        if not owners:      # two lines of the dual pixel (or one and ground)
+            key = (a, b)
+            acc["dualpix"][key] = acc["dualpix"].get(key, 0.0) + c
+            continue
+        for o in owners:    # a subpixel's node: in that subpixel, the other end its port or ground
+            la, lb = _local(a, o, inst[o]), _local(b, o, inst[o])
+            if a == GROUND:
+                la = GROUND
+            if b == GROUND:
+                lb = GROUND
+            la, lb = la or GROUND, lb or GROUND
+            if la == lb:
+                continue
+            cell = "pix5t_primary" if o == "p" else "pix5t_secondary"
+            share = 1.0 if o == "p" else 1.0 / n_secondary
+            key = tuple(sorted((la, lb)))
+            acc[cell][key] = acc[cell].get(key, 0.0) + c * share
+    return {cell: tuple((a, b, c) for (a, b), c in sorted(d.items()) if c > _MIN_C) for cell, d in acc.items()}
+
+
+def _line_resistance(geo, stack, net: str, layer: str) -> float:
+    """End-to-end resistance (Ohm) of ``net``'s longest straight run on ``layer`` across the cell."""
+    reg = geo.wires.get(layer, {}).get(net)
+    if reg is None:
+        return 0.0
+    best = 0.0
+    for p in reg.each():
+        b = p.bbox()
+        long_, short = max(b.width(), b.height()), min(b.width(), b.height())
+        if short > 0:
+            best = max(best, long_ / short)
+    return best * stack.conductor(layer).sheet
+
+
+def build(design, pix_geo, col_geo) -> Parasitics:
+    """The overlay from the extracted ``DUALPIX`` and ``DUALPIX_COL`` geometry."""
+    from .capacitance import capacitances
+    st = design.tech.stack
+    n = design.secondary_per_pixel
+    pix = capacitances(pix_geo, st)
+    col = capacitances(col_geo, st)
+    cols = {"primary": ["col_p"], "secondary": [f"col_s{k}" for k in range(n)]}
+    per_row = {c: pix.total(c) for cs in cols.values() for c in cs}
+    per_row.update({f"{w}.fd": pix.total("p.fd" if w == "primary" else "s0.fd") for w in ("primary", "secondary")})
+    column_cap, resistance = {}, {}
+    for kind, names in cols.items():
+        rows = getattr(design, kind).rows
+        cell = [col.total(c) - pix.total(c) for c in names]   # the column circuit's wiring of the line
+        column_cap[kind] = sum((rows - 1) * pix.total(c) + x for c, x in zip(names, cell)) / len(names)
+        resistance[f"column line ({kind}, {rows} rows)"] = rows * max(
+            _line_resistance(pix_geo, st, c, "metal4") for c in names)
+    for line in ("tg_p", "rst_p", "tg_s", "rst_s"):
+        kind = "primary" if line.endswith("_p") else "secondary"
+        resistance[f"row line {line} ({getattr(design, kind).cols} columns)"] = \
+            getattr(design, kind).cols * _line_resistance(pix_geo, st, line, "metal3")
+    return Parasitics(place(pix, n), column_cap, per_row, resistance,
+                      f"extracted from the drawn DUALPIX / DUALPIX_COL of {design.name} ({st.source})")
+
+
+_CACHE: dict = {}
+
+
+def post_layout_view(design):
+    """``design`` with its extracted parasitics (``design.post_layout``); a clear error when its
+    technology has no stack or its layout does not match its netlist."""
+    from ...tech.stack import require_stack
+    from . import cell_geometry
+    require_stack(design.tech)
+    if getattr(design, "post_layout", None) is not None:
+        return design
+    key = repr(design)
+    if key not in _CACHE:
+        import tempfile
+        from pathlib import Path
+        from ..flow import write_gds
+        from ..library import build_library
+        with tempfile.TemporaryDirectory(prefix="pixelkit-pex-") as tmp:
+            gds = write_gds(build_library(design), Path(tmp) / f"{design.name}.gds")
+            _CACHE[key] = build(design, cell_geometry(design, "DUALPIX", gds), cell_geometry(design, "DUALPIX_COL", gds))
+    return replace(design, post_layout=_CACHE[key])
