@@ -82,3 +82,19 @@ def test_technology_without_stack_refuses_post_layout():
         code, out, err = run_cli(*args, ROOT / "designs" / "dual_pixel_revA.toml", "--post-layout", timeout=120)
         assert code == 2, (args, err)
         assert "[stack]" in err and "c35_thesis" in err and "post-layout" in err
+
+
+def test_report_section_post_layout_vs_schematic(tmp_path):
+    """The report's post-layout section on the GF180 design (quick profile): both views in one table,
+    the post-layout FD larger than the schematic's by the extracted wiring; unavailable, saying why,
+    for a technology without a stack."""
+    from pixelkit.report.sections import Context
+    from pixelkit.report.sections import post_layout as section
+    d = load_design(GF)
+    s = section.build(Context(d, tmp_path, quick=True))
+    rows = {r[0]: r for r in s.tables[0].rows}
+    sch, post = rows["C_FD, primary (fF)"][1:3]
+    assert post - sch == pytest.approx(s.tables[1].rows[0][1], rel=1e-6)
+    assert next(c for c in s.checked if c.name == "post_layout.cg_model_vs_spice_frac").value < 0.02
+    ref = section.build(Context(load_design(ROOT / "designs" / "dual_pixel_revA.toml"), tmp_path, quick=True))
+    assert not ref.available and "[stack]" in ref.why

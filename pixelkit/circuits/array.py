@@ -219,6 +219,11 @@ def array_bench(design, iph_p, iph_s, tile: Tile | None = None, t_exp: float | N
                 el.append(Element(f"Xafe_{col}", (f"in_{col}", f"out_{col}", "vref", f"p1_{s}", f"p1_{s}b",
                                                   f"p2_{s}", f"p2_{s}b", "vdd"), "scafe",
                                   tuple(zip(("c11", "c12", "c13"), caps)) if mismatch_seed is not None else ()))
+    if set(tile.kinds) == {"primary", "secondary"}:     # post-layout: column-to-column couplings per dual pixel
+        for c in tile.columns("primary", n):
+            lines = {"col_p": f"col_p_{c}", **{f"col_s{k}": f"col_s_{n * c + k}" for k in range(n)
+                                             if n * c + k in tile.columns("secondary", n)}}
+            el += column.line_couplings(design, lines, whole=True)
     last = max(tile.rows)
     stop = max(tm[k].row(last + 1) + 0.05 * tm[k].t_row for k in tile.kinds)
     tran = replace(_tran(tm), stop=stop)

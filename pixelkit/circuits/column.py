@@ -71,3 +71,16 @@ def dual_pixel_column(design):
         elems.append(Element(f"Xcs{k}", ("vdd", f"col_s{k}", f"nbias_s{k}", f"out_s{k}", "s1_s", "s1b_s", "s2_s",
                                           "s2b_s"), "column_secondary"))
     return Subckt("dualpix_col", outer, tuple(elems))
+
+
+def line_couplings(design, lines: dict, whole: bool = False) -> tuple:
+    """Post-layout: the other rows' share of the couplings between the column lines of one dual pixel,
+    ``lines`` mapping its lines (``col_p``, ``col_s0`` ...) to the bench's nodes (none on the schematic);
+    ``whole``: every row's share (a bench whose pixels are not ``dualpix`` instances)."""
+    pl = design.post_layout
+    if pl is None:
+        return ()
+    rows = design.primary.rows
+    k = rows / (rows - 1) if whole and rows > 1 else 1.0
+    return tuple(Element(f"Ccc_{lines[a]}_{lines[b]}", (lines[a], lines[b]), c * k)
+                 for a, b, c in pl.column_pairs if a in lines and b in lines)

@@ -122,6 +122,7 @@ def dual_pixel_bench(design, iph_p: float, iph_s, t_exp: float | None = None, wi
                          "rs_s", *cols[1:]), "dualpix", params)]
     for c in cols:
         el += column.load(design, c)
+    el += column.line_couplings(design, {c: c for c in cols})
     subckts = list(dual_pixel(design))
     if with_afe:
         el.append(Element("Vref", ("vref", "0"), design.afe.vref))

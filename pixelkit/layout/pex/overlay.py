@@ -12,8 +12,9 @@ command runs the schematic or the post-layout view of one design with one flag. 
 - ``dualpix``: the couplings between the dual pixel's own lines (row lines, column lines,
   supplies): one row's share of every column-to-column and row-to-column coupling.
 - the column line's lumped capacitance (``column.load``, in place of ``pixel.column_cap``): the
-  other ``rows - 1`` dual pixels' share of the line (its total per dual pixel, every coupling
-  counted to ground) plus the column circuit's wiring.
+  other ``rows - 1`` dual pixels' share of the line (its total per dual pixel but its couplings to
+  the dual pixel's other column lines, to ground) plus the column circuit's wiring; and
+  (``column.line_couplings``) the other rows' share of each column-to-column coupling.
 - resistance: every long line's end-to-end resistance (column lines over the array's rows, row
   lines over its columns) from its length, width and the stack's sheet resistance; reported,
   not simulated (``docs/post-layout.md``: at 90 mOhm/sq the column line's RC is below 1 ns).
@@ -36,6 +37,7 @@ class Parasitics:
     per_row: dict = field(default_factory=dict)     # figures per dual pixel: {"col_p": F, ...}
     resistance: dict = field(default_factory=dict)  # line -> Ohm
     source: str = ""
+    column_pairs: tuple = ()                        # (col, col, F): the other rows' share of each coupling
 
     def node_wiring(self, which: str, node: str, a_sf: float | None = None) -> float:
         """Wiring capacitance (F) on ``node`` of ``which`` subpixel; couplings to nodes that follow FD
@@ -120,38 +122,78 @@ def build(design, pix_geo, col_geo) -> Parasitics:
     per_row = {c: pix.total(c) for cs in cols.values() for c in cs}
     per_row.update({f"{w}.fd": pix.total("p.fd" if w == "primary" else "s0.fd") for w in ("primary", "secondary")})
     column_cap, resistance = {}, {}
+    per_col = [c for cs in cols.values() for c in cs]
     for kind, names in cols.items():
         rows = getattr(design, kind).rows
         cell = [col.total(c) - pix.total(c) for c in names]   # the column circuit's wiring of the line
-        column_cap[kind] = sum((rows - 1) * pix.total(c) + x for c, x in zip(names, cell)) / len(names)
+        own = [pix.total(c) - sum(pix.pair(c, o) for o in per_col if o != c) for c in names]
+        column_cap[kind] = sum((rows - 1) * o + x for o, x in zip(own, cell)) / len(names)
         resistance[f"column line ({kind}, {rows} rows)"] = rows * max(
             _line_resistance(pix_geo, st, c, "metal4") for c in names)
+    duals = design.primary.cols          # a row line crosses every dual pixel of the row
     for line in ("tg_p", "rst_p", "tg_s", "rst_s"):
-        kind = "primary" if line.endswith("_p") else "secondary"
-        resistance[f"row line {line} ({getattr(design, kind).cols} columns)"] = \
-            getattr(design, kind).cols * _line_resistance(pix_geo, st, line, "metal3")
+        resistance[f"row line {line} ({duals} dual pixels)"] = duals * _line_resistance(pix_geo, st, line, "metal3")
+    names = [c for cs in cols.values() for c in cs]
+    pairs = tuple((a, b, (design.primary.rows - 1) * pix.pair(a, b))
+                  for i, a in enumerate(names) for b in names[i + 1:] if pix.pair(a, b) > _MIN_C)
     return Parasitics(place(pix, n), column_cap, per_row, resistance,
-                      f"extracted from the drawn DUALPIX / DUALPIX_COL of {design.name} ({st.source})")
+                      f"extracted from the drawn DUALPIX / DUALPIX_COL of {design.name} ({st.source})", pairs)
 
 
 _CACHE: dict = {}
 
 
+def _key(design) -> str:
+    """Cache key of a design's extraction: the code that draws and extracts it and the design."""
+    import hashlib
+    from pathlib import Path
+    pkg = Path(__file__).resolve().parents[2]
+    h = hashlib.sha256(repr(design).encode())
+    for sub in ("layout", "tech", "circuits"):
+        for p in sorted((pkg / sub).rglob("*.py")) + sorted((pkg / sub).rglob("*.toml")):
+            h.update(str(p.relative_to(pkg)).encode())
+            h.update(p.read_bytes())
+    return h.hexdigest()
+
+
+def _stored(key: str) -> Parasitics | None:
+    import json
+    from ...cachestore import Store
+    files = Store("pex", "report-cache", "extracting again").load(key)
+    if not files:
+        return None
+    d = json.loads(files["parasitics.json"])
+    return Parasitics({k: tuple(tuple(x) for x in v) for k, v in d["cells"].items()}, d["column_cap"],
+                      d["per_row"], d["resistance"], d["source"], tuple(tuple(x) for x in d["column_pairs"]))
+
+
+def _store(key: str, p: Parasitics) -> None:
+    import json
+    from dataclasses import asdict
+    from ...cachestore import Store
+    Store("pex", "report-cache", "extracting again").save(key, {"parasitics.json": json.dumps(asdict(p)).encode()})
+
+
 def post_layout_view(design):
     """``design`` with its extracted parasitics (``design.post_layout``); a clear error when its
-    technology has no stack or its layout does not match its netlist."""
+    technology has no stack or its layout does not match its netlist. Extractions are cached in
+    ``$PIXELKIT_CACHE/pex`` (key: the design and the code that draws and extracts it)."""
     from ...tech.stack import require_stack
     from . import cell_geometry
     require_stack(design.tech)
     if getattr(design, "post_layout", None) is not None:
         return design
-    key = repr(design)
+    key = _key(design)
     if key not in _CACHE:
-        import tempfile
-        from pathlib import Path
-        from ..flow import write_gds
-        from ..library import build_library
-        with tempfile.TemporaryDirectory(prefix="pixelkit-pex-") as tmp:
-            gds = write_gds(build_library(design), Path(tmp) / f"{design.name}.gds")
-            _CACHE[key] = build(design, cell_geometry(design, "DUALPIX", gds), cell_geometry(design, "DUALPIX_COL", gds))
+        found = _stored(key)
+        if found is None:
+            import tempfile
+            from pathlib import Path
+            from ..flow import write_gds
+            from ..library import build_library
+            with tempfile.TemporaryDirectory(prefix="pixelkit-pex-") as tmp:
+                gds = write_gds(build_library(design), Path(tmp) / f"{design.name}.gds")
+                found = build(design, cell_geometry(design, "DUALPIX", gds), cell_geometry(design, "DUALPIX_COL", gds))
+            _store(key, found)
+        _CACHE[key] = found
     return replace(design, post_layout=_CACHE[key])
