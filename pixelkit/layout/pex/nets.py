@@ -31,6 +31,8 @@ class NetGeometry:
     surface: dict = field(default_factory=dict)  # net -> Region (diffusions and wells)
     bbox: tuple = ()                             # the cell's extent (m)
     unmatched: list = field(default_factory=list)
+    junctions: dict = field(default_factory=dict)  # surface layer (nsd, psd, well, pd_n ...) -> {net: Region}
+    openings: object = None                        # Region: the drawn light openings (the kit's marker)
 
 
 def _flat_names(design, top: str) -> tuple:
@@ -137,7 +139,11 @@ def net_geometry(gds, top: str, design) -> NetGeometry:
                 claimed[lname] += r
         surf = kdb.Region()
         for s in SURFACE:
-            surf += lvs.shapes_of_net(net, L[s], True)
+            part = lvs.shapes_of_net(net, L[s], True)
+            surf += part
+            part = _flat(part)
+            if not part.is_empty():
+                geo.junctions.setdefault(s, {})[name] = part
         surf = _flat(surf)
         if not surf.is_empty():
             geo.surface[name] = geo.surface.get(name, kdb.Region()) + surf
@@ -146,6 +152,10 @@ def net_geometry(gds, top: str, design) -> NetGeometry:
         if not rest.is_empty():
             geo.wires.setdefault(lname, {})
             geo.wires[lname][GROUND] = geo.wires[lname].get(GROUND, kdb.Region()) + rest
+    if "opening" in tech.layout.layers or "opening" in tech.layout.aliases:
+        lay = tech.layer("opening")
+        idx = layout.find_layer(lay.layer, lay.datatype)
+        geo.openings = _flat(kdb.Region(cell.begin_shapes_rec(idx))) if idx is not None else kdb.Region()
     b = cell.bbox()
     geo.bbox = (b.left * dbu, b.bottom * dbu, b.right * dbu, b.top * dbu)
     return geo

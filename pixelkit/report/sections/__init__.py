@@ -78,6 +78,7 @@ REGISTRY: list[tuple[str, str, str]] = [
     ("array", "2 x 2 array readout (fig. 3.13)", "report"),
     ("layout", "Layout", "report"),
     ("post_layout", "Post-layout vs schematic", "issue 30 (extraction)"),
+    ("light_map", "Light map: what the shield leaves open", "issue 30 (extraction)"),
     ("noise", "Noise", "issue 11 (noise / virtual camera)"),
     ("camera", "Virtual camera: EMVA 1288 figures", "issue 11 (noise / virtual camera)"),
     ("frame", "Frame-level models", "issue 15 (frame-level models)"),

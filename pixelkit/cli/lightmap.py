@@ -1,0 +1,36 @@
+"""``pixelkit lightmap``: the junctions the shield leaves open, their photocurrent, the output error."""
+from __future__ import annotations
+
+import click
+
+from .common import design_arg, emit, json_opt, load, main, spice_opts
+
+
+def _text(r: dict) -> str:
+    lines = [f"light map, shield {r['shield']}, {r['irradiance_W_m2']:g} W/m2 on the die:",
+             f"  {'net':12s} {'bench node':12s} {'junction':26s} {'area (um2)':>10s} {'I (pA)':>9s}"]
+    for j in r["junctions"]:
+        lines.append(f"  {j['net']:12s} {j['node']:12s} {j['kind']:26s} {j['area_m2'] * 1e12:10.3f} "
+                     f"{j['current_A'] * 1e12:9.3f}")
+    lines.append(f"  readout junctions exposed: {r['readout_area_m2'] * 1e12:.3f} um2")
+    for c, v in r["columns"].items():
+        lines.append(f"  {c}: AFE output error {v['error_V'] * 1e3:+.3f} mV, {v['error_over_noise']:.1f} x the read "
+                     f"noise there ({v['read_noise_V'] * 1e3:.3f} mV)")
+    return "\n".join(lines)
+
+
+@main.command("lightmap")
+@design_arg
+@click.option("--shield", type=click.Choice(["pixels", "full"]), default="pixels", show_default=True,
+              help="pixels: the shield as drawn over the subpixels, the readout open ([Thesis2019]'s chip); "
+                   "full: only the pixels' light openings see light")
+@spice_opts
+@json_opt
+def lightmap_cmd(design, shield, backend, jobs, as_json):
+    """Exposed junctions of the drawn dual pixel and its column circuits, their photocurrent at the
+    scene's headlight irradiance, and the AFE output error each array's column sees (SPICE)."""
+    from ..layout.pex.light import light_map
+    from ..tech.stack import require_stack
+    d = load(design)
+    require_stack(d.tech, "the light map")
+    emit(light_map(d, shield, backend), as_json, _text)

@@ -1,0 +1,159 @@
+"""The light map: every junction the top-metal shield leaves open, its node and area, its
+photocurrent at the scene's irradiance, and the output error that current causes through the
+real readout (SPICE).
+
+From the drawn dual pixel with its column circuits (``DUALPIX_COL``), nets matched to the
+netlist (``nets.py``): a junction is a diffusion or a well of a net (N+ in the substrate, P+ in an
+n-well, an n-well in the substrate); it is exposed where no metal (metal1 - metal5, the shield
+included) covers it. ``shield``:
+
+- ``pixels``: the shield as drawn today - over each subpixel but its light opening, the column
+  circuits left open ([Thesis2019]'s chip: light reached its readout);
+- ``full``: a top metal over everything but the pixels' light openings (the photodiodes' wells
+  where the pixel's own shield leaves them open): only the photodiodes see light.
+
+Each exposed junction's photocurrent (the technology's QE over the scene's spectrum, at the
+scene's headlight irradiance on the die) is put on its node in the dual-pixel bench with its AFE
+columns - an N+ junction draws it from its node to the substrate, a P+ junction in a well pushes it
+from the well's supply into its node - and the AFE outputs are compared with the same bench
+without it: the output error the light causes, per node and all together, against the read noise.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from .nets import GROUND
+
+METALS = ("metal1", "metal2", "metal3", "metal4", "metal5")
+KINDS = {"nsd": "N+ diffusion", "psd": "P+ diffusion in an n-well", "well": "n-well", "pd_n": "photodiode well",
+         "ntap": "n-well tap", "ptap": "substrate tap"}
+#: nets whose photocurrent flows into a source (supplies, clocks, the substrate): no output error
+_DRIVEN = ("vdd", "vss", "vpdr", "vrst", GROUND)
+
+
+@dataclass(frozen=True)
+class Junction:
+    net: str
+    kind: str          # a key of KINDS
+    area_m2: float
+    current_A: float = 0.0
+
+
+def exposed(geo, shield: str = "pixels") -> list[Junction]:
+    """The junctions of ``geo`` no metal covers (``shield``: ``pixels`` as drawn, ``full`` the light
+    openings only)."""
+    import klayout.db as kdb
+    if shield not in ("pixels", "full"):
+        raise ValueError(shield)
+    metal = kdb.Region()
+    for m in METALS:
+        for reg in geo.wires.get(m, {}).values():
+            metal += reg
+    metal.merge()
+    light = kdb.Region()
+    for reg in geo.junctions.get("pd_n", {}).values():
+        light += reg
+    out = []
+    d2 = geo.dbu ** 2
+    for kind, nets in geo.junctions.items():
+        for net, reg in nets.items():
+            open_ = reg - metal
+            if shield == "full":
+                open_ = open_ & light
+            a = open_.area() * d2
+            if a > 0:
+                out.append(Junction(net, kind, a))
+    return sorted(out, key=lambda j: (-j.area_m2, j.net))
+
+
+def irradiance(design) -> tuple[float, object]:
+    """The scene's headlight irradiance on the die (W/m2) and its spectrum."""
+    from ...physics.photo import Spectrum
+    sc = design.scene
+    if sc is None:
+        from ...errors import ConfigError
+        raise ConfigError(design.source, "scene", None, "a [scene] table (the light map needs its irradiance)")
+    return sc.headlight, Spectrum.blackbody(sc.spectrum_temperature)
+
+
+def with_currents(design, junctions) -> list[Junction]:
+    from ...physics.photo import photocurrent
+    e, spec = irradiance(design)
+    return [Junction(j.net, j.kind, j.area_m2, photocurrent(e, j.area_m2, spec, design.tech.qe)) for j in junctions]
+
+
+def bench_node(net: str, n_secondary: int) -> str | None:
+    """The dual-pixel bench's node of a ``DUALPIX_COL`` net (None: inside a pixel or a driven line)."""
+    if net in _DRIVEN or net.startswith("pix.") or net[:2] in ("ec", "tg") or net[:3] in ("rst", "rs_") \
+            or net.startswith(("s1", "s2")):
+        return None
+    if net.startswith("out_"):
+        return f"in_col_{net[4:]}"
+    if net.startswith("nbias"):
+        return "nbias"
+    if net == "col_p" or (net.startswith("col_s") and int(net[5:]) < n_secondary):
+        return net
+    return None
+
+
+def sources(junctions, n_secondary: int) -> list:
+    """Current sources of the junctions' photocurrents on the bench's nodes."""
+    from ...spice.netlist import Element
+    out = []
+    for k, j in enumerate(junctions):
+        node = bench_node(j.net, n_secondary)
+        if node is None or j.current_A <= 0:
+            continue
+        pins = ("vdd", node) if j.kind == "psd" else (node, "0")
+        out.append(Element(f"Ilight{k}", pins, j.current_A))
+    return out
+
+
+def output_error(design, junctions, backend: str = "batch") -> dict:
+    """AFE output of each column with the junctions' photocurrents minus without (V), by SPICE."""
+    from dataclasses import replace as _r
+    from ...circuits.testbench import dual_pixel_bench, timings
+    from ...measure.afe import afe_output
+    from ...spice import simulate_many
+    n = design.secondary_per_pixel
+    base = dual_pixel_bench(design, 0.0, 0.0, with_afe=True, title="light_dark")
+    lit = dual_pixel_bench(design, 0.0, 0.0, with_afe=True, title="light_readout")
+    lit = _r(lit, elements=(*lit.elements, *sources(junctions, n)))
+    r0, r1 = simulate_many([base, lit], backend=backend)
+    tm = timings(design, design.experiment.t_window)
+    out = {}
+    for col in ["col_p", *(f"col_s{k}" for k in range(n))]:
+        t = tm["primary" if col == "col_p" else "secondary"]
+        node = f"out_{col}"
+        out[col] = afe_output(r1, t, 0, node) - afe_output(r0, t, 0, node)
+    return out
+
+
+def read_noise_at_afe(design) -> dict:
+    """Read noise (V rms) at each array's AFE output: the column's NCDS read noise (``physics.noise``)
+    through the AFE's gain C11 / C13."""
+    from ...camera.spicenoise import sf_gain
+    from ...physics.noise import chain
+    a = sf_gain(design)
+    g = design.afe.c11 / design.afe.c13
+    return {w: chain(design, w, a)["pixel_V"] * g for w in ("primary", "secondary")}
+
+
+def light_map(design, shield: str = "pixels", backend: str = "batch", geo=None) -> dict:
+    """The light map of ``design`` under ``shield``: exposed junctions (node, kind, area, photocurrent),
+    the AFE output error of each column by SPICE, its ratio to the read noise there."""
+    from . import cell_geometry
+    geo = geo if geo is not None else cell_geometry(design, "DUALPIX_COL")
+    js = with_currents(design, exposed(geo, shield))
+    err = output_error(design, js, backend)
+    noise = read_noise_at_afe(design)
+    e, _ = irradiance(design)
+    rows = [{"net": j.net, "node": bench_node(j.net, design.secondary_per_pixel) or "-", "kind": KINDS[j.kind],
+             "area_m2": j.area_m2, "current_A": j.current_A,
+             "readout": j.net.startswith(("col", "out", "nbias"))} for j in js]
+    cols = {c: {"error_V": v, "read_noise_V": noise["primary" if c == "col_p" else "secondary"],
+                "error_over_noise": abs(v) / noise["primary" if c == "col_p" else "secondary"]}
+            for c, v in err.items()}
+    return {"shield": shield, "irradiance_W_m2": e, "junctions": rows, "columns": cols,
+            "readout_area_m2": sum(r["area_m2"] for r in rows if r["readout"]),
+            "worst_error_over_noise": max(c["error_over_noise"] for c in cols.values())}

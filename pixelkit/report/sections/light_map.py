@@ -1,0 +1,78 @@
+"""The light map: the junctions the shield leaves open, their photocurrent at the scene's irradiance and
+the output error each array's AFE sees (SPICE), under the shield as drawn (the readout open, as on
+[Thesis2019]'s chip) and under a full shield; with a picture of where the light gets in."""
+from __future__ import annotations
+
+from . import Checked, Figure, Section, Table
+
+TITLE = "Light map: what the shield leaves open"
+
+
+def _picture(ctx, geo, path):
+    import klayout.db as kdb
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from ...layout.pex.light import METALS
+    d = geo.dbu * 1e6
+    metal = kdb.Region()
+    for m in METALS:
+        for reg in geo.wires.get(m, {}).values():
+            metal += reg
+    fig, ax = plt.subplots(figsize=(5, 7))
+    for kind, nets in geo.junctions.items():
+        for net, reg in nets.items():
+            for p in (reg - metal).each():
+                pts = [(q.x * d, q.y * d) for q in p.each_point_hull()]
+                ro = net.startswith(("col", "out", "nbias"))
+                ax.fill(*zip(*pts), color="C3" if ro else ("C0" if kind == "pd_n" else "C1"), lw=0)
+    x0, y0, x1, y1 = (v * 1e6 for v in geo.bbox)
+    ax.add_patch(plt.Rectangle((x0, y0), x1 - x0, y1 - y0, fill=False, lw=0.8))
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (um)")
+    ax.set_ylabel("y (um)")
+    ax.set_title("exposed junctions: photodiodes (blue), readout (red), other (orange)", fontsize=8)
+    fig.savefig(path, dpi=110, bbox_inches="tight")
+    plt.close(fig)
+
+
+def build(ctx) -> Section:
+    d = ctx.design
+    if d.tech.stack is None:
+        return Section.unavailable(TITLE, f"technology {d.tech.name} has no process stack ([stack]): its nets "
+                                          "cannot be extracted (docs/post-layout.md)")
+    if d.scene is None:
+        return Section.unavailable(TITLE, "the design has no [scene]: no irradiance to light the die with")
+    from ...layout.pex import cell_geometry
+    from ...layout.pex.light import light_map
+    geo = cell_geometry(d, "DUALPIX_COL")
+    maps = {s: light_map(d, s, ctx.backend, geo) for s in ("pixels", "full")}
+    tables = []
+    for s, m in maps.items():
+        tables.append(Table(f"light_map_{s}", f"Exposed junctions, shield '{s}' ({m['irradiance_W_m2']:g} W/m2 on the die)",
+                            ["net", "bench node", "junction", "area (um2)", "photocurrent (pA)"],
+                            [[j["net"], j["node"], j["kind"], j["area_m2"] * 1e12, j["current_A"] * 1e12]
+                             for j in m["junctions"]]))
+    tables.append(Table("light_map_error", "AFE output error from the light on the exposed junctions (SPICE)",
+                        ["shield", "column", "error (mV)", "read noise there (mV)", "error / read noise"],
+                        [[s, c, v["error_V"] * 1e3, v["read_noise_V"] * 1e3, v["error_over_noise"]]
+                         for s, m in maps.items() for c, v in m["columns"].items()]))
+    fig = ctx.figure("light_map.png")
+    _picture(ctx, geo, fig)
+    bad = maps["pixels"]
+    text = [f"Every diffusion and well of the drawn dual pixel with its column circuits that no metal covers, "
+            f"with the photocurrent of the scene's headlight irradiance ({bad['irradiance_W_m2']:g} W/m2, the "
+            "technology's QE over the scene's spectrum); each current put on its node in the dual-pixel bench "
+            "with its AFE columns and the AFE outputs compared with the dark bench (ngspice): the error the light "
+            "causes through the real readout. 'pixels' is the shield as drawn (over the subpixels, the readout "
+            "open: the chip of [Thesis2019], which failed this way); 'full' leaves only the pixels' light openings.",
+            f"Shield as drawn: {bad['readout_area_m2'] * 1e12:.2f} um2 of readout junctions open, the worst column "
+            f"error {bad['worst_error_over_noise']:.0f} x its read noise; full shield: "
+            f"{maps['full']['worst_error_over_noise']:.2g} x. Not counted: light through the gates into the "
+            "channels (collected by the devices' sources and drains)."]
+    return Section(TITLE, text=text, tables=tables,
+                   figures=[Figure(fig.name, "Exposed junctions of DUALPIX_COL under the shield as drawn")],
+                   checked=[Checked("light_map.worst_error_over_noise_pixels", bad["worst_error_over_noise"], "1",
+                                    tol_rel=0.05),
+                            Checked("light_map.readout_area_pixels_m2", bad["readout_area_m2"], "m2", tol_rel=0.01)],
+                   data=maps)
