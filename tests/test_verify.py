@@ -215,3 +215,29 @@ def test_dask_cluster_gives_the_local_table(tmp_path, monkeypatch):
     local = verify(d, jobs=2, **kw)
     assert [c["figures"] for c in remote["conditions"]] == [c["figures"] for c in local["conditions"]]
     assert remote["mc_values"] == local["mc_values"] and len(local["mc_values"]["afe_gain_error"]) == 2
+
+
+def test_post_layout_view_lowers_the_pd_conversion_gain_by_its_wiring(tmp_path):
+    """verify --post-layout runs every measurement on the extracted view: the PD-referred
+    conversion gain drops by C_node / (C_node + the wiring the extraction put on the PD node)
+    (independent path: the junction model's C(V) and the extraction's own capacitance). A
+    technology without a process stack is refused, never run as the schematic."""
+    gf = ROOT / "designs" / "dual_pixel_gf180.toml"
+    raw = tomllib.loads(gf.read_text())
+    raw["spec"] = {"pd_conversion_gain_primary": {"min": "1 uV/e-"}, "pd_conversion_gain_secondary": {"min": "1 uV/e-"}}
+    (tmp_path / "g.toml").write_text(to_toml(raw))
+    d = load_design(tmp_path / "g.toml")
+    kw = dict(corners=("tt",), temperatures=(300.15,), supplies=(0.0,), mc=0)
+    sch = verify(d, **kw)
+    post = verify(d, post_layout=True, **kw)
+    assert (sch["view"], post["view"]) == ("schematic", "post-layout")
+    from pixelkit.physics.subpixel import pd_node
+    from pixelkit.verify.run import post_layout_view
+    pl = post_layout_view(d).post_layout
+    for i, kind in enumerate(("primary", "secondary")):
+        c = float(pd_node(d, kind, parasitics=True).capacitance(d.pixel.v_pd_reset))
+        ratio = post["rows"][i]["value"] / sch["rows"][i]["value"]
+        assert ratio == pytest.approx(c / (c + pl.node_wiring(kind, "pd")), rel=0.01), kind
+        assert ratio < 0.99
+    with pytest.raises(ConfigError, match="stack"):
+        verify(load_design(_design(tmp_path, {"afe_gain_error": {"max": "1 %"}})), post_layout=True, **kw)

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import click
 
-from .common import design_arg, emit, json_opt, load, main, out_opt, output_path, scheduler_address, spice_opts
+from .common import design_arg, emit, json_opt, load, main, out_opt, output_path, post_layout_opt, scheduler_address, spice_opts
 
 
 def _list(kind: str):
@@ -38,14 +38,13 @@ def _list(kind: str):
 @click.option("--mc", type=click.IntRange(0, 100000), default=None,
               help="Monte Carlo samples at the nominal condition (default: [verify] mc)")
 @click.option("--seed", type=click.IntRange(0, 2**31 - 1), default=None, help="Monte Carlo seed (default: [verify] seed)")
-@click.option("--post-layout", is_flag=True, help="run on the extracted (post-layout) netlists")
+@post_layout_opt
 @click.option("--scheduler", default=None, callback=scheduler_address,
               help="Dask scheduler address (default: local workers)")
 @out_opt("folder for signoff.csv and signoff.json (default reports/<design>/verify)", folder=True)
 @spice_opts
 @json_opt
-def verify_cmd(design, corners, temperatures, supplies, mc, seed, post_layout, scheduler, out, backend, jobs,
-               as_json):
+def verify_cmd(design, corners, temperatures, supplies, mc, seed, scheduler, out, backend, jobs, as_json):
     """Sign-off: every [spec] at every corner x temperature x supply, Monte Carlo yield; exit 1 on a failing spec."""
     import csv
     import io
@@ -55,10 +54,9 @@ def verify_cmd(design, corners, temperatures, supplies, mc, seed, post_layout, s
     from ..fileio import json_default, write_atomic
     from ..verify.run import verify
     from ..verify.signoff import COLUMNS, csv_rows, text, where
-    d = load(design)
+    d = load(design)   # with --post-layout: its post-layout view
     folder = output_path(out, d, "verify")
-    r = verify(d, corners, temperatures, supplies, mc, seed, backend=backend, jobs=jobs, scheduler=scheduler,
-               post_layout=post_layout)
+    r = verify(d, corners, temperatures, supplies, mc, seed, backend=backend, jobs=jobs, scheduler=scheduler)
     folder.mkdir(parents=True, exist_ok=True)
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")

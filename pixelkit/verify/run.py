@@ -34,9 +34,9 @@ def _task(task):
 
 
 def post_layout_view(design):
-    """The design whose decks carry the extracted parasitics (``--post-layout``): the generators use
-    the extracted netlists and every measurement runs on that view unchanged
-    (``layout.pex.overlay``; a technology without a process stack is refused, naming it)."""
+    """The design whose decks carry the parasitics extracted from its own layout
+    (``layout.pex.overlay``: every generator adds them; a technology without a process stack
+    is refused naming it); every measurement then runs on that view unchanged."""
     from ..layout.pex.overlay import post_layout_view as view
     return view(design)
 
@@ -109,7 +109,8 @@ def verify(design, corners=None, temperatures=None, supplies=None, mc: int | Non
             "mc": {"samples": len(samples) if mc_specs else 0, "seed": seed, "source": src,
                    "draws": mismatch.describe(src) if src else None, "condition": nominal.label,
                    "confidence": design.verify.confidence},
-            "supply_V": design.tech.supply, "view": "schematic",
+            "supply_V": design.tech.supply,
+            "view": "schematic" if getattr(design, "post_layout", None) is None else "post-layout",
             "conditions": [{**c.as_dict(), "label": c.label, "figures": {k: v for k, v in values.get(c, {}).items()
                                                                           if k in {s.fig.name for s in design.spec}}}
                            for c in grid],

@@ -133,7 +133,8 @@ def text(result: dict) -> str:
     widths = [max(len(str(x)) for x in col) for col in zip(head, *body)]
     lines = ["  ".join(str(x).ljust(w) for x, w in zip(row, widths)).rstrip() for row in [head, *body]]
     g, mc = result["grid"], result["mc"]
-    lines.insert(0, f"sign-off of {result['design']} rev {result['revision']}: {g['conditions']} conditions "
+    lines.insert(0, f"sign-off of {result['design']} rev {result['revision']} ({result.get('view', 'schematic')}): "
+                    f"{g['conditions']} conditions "
                     f"(corners {', '.join(g['corners'])} x {', '.join(f'{t:g}' for t in g['temperatures_C'])} degC x "
                     f"supply {', '.join(f'{100 * s:+g}%' for s in g['supplies'])} of {result['supply_V']:g} V)"
                     + (f"; Monte Carlo {mc['samples']} samples at {mc['condition']}, seed {mc['seed']}, draws: "
