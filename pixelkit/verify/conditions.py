@@ -59,3 +59,11 @@ def at(design, cond: Condition):
                               f"({supply:g} V)")
     tech = replace(design.tech, supply=supply) if cond.supply else design.tech
     return replace(design, corner=cond.corner, temperature=cond.temperature, tech=tech)
+
+
+def spec_conditions(spec, grid: list) -> list:
+    """The conditions of ``grid`` a spec holds at (its own corners / temperatures / supplies, if any)."""
+    return [c for c in grid
+            if (not spec.corners or c.corner in spec.corners)
+            and (not spec.temperatures or any(abs(c.temperature - t) < 1e-6 for t in spec.temperatures))
+            and (not spec.supplies or any(abs(c.supply - s) < 1e-9 for s in spec.supplies))]

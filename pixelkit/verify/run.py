@@ -41,23 +41,16 @@ def post_layout_view(design):
     return view(design)
 
 
-def spec_conditions(spec, grid: list) -> list:
-    return [c for c in grid
-            if (not spec.corners or c.corner in spec.corners)
-            and (not spec.temperatures or any(abs(c.temperature - t) < 1e-6 for t in spec.temperatures))
-            and (not spec.supplies or any(abs(c.supply - s) < 1e-9 for s in spec.supplies))]
-
-
 def plan(design, grid: list, mc: int) -> tuple[list, list]:
     """([(condition, its groups)], Monte Carlo specs): which groups run where. The Monte Carlo runs at the
     nominal condition, so it serves the specs that hold there and whose figure mismatch moves."""
     need: dict = {}
     for s in design.spec:
-        for c in spec_conditions(s, grid):
+        for c in conditions.spec_conditions(s, grid):
             for g in measure.groups_for([s.fig.name]):
                 need.setdefault(c, set()).add(g)
     nominal = [conditions.nominal(design)]
-    mc_specs = [s for s in design.spec if mc and s.mc and s.fig.mc and spec_conditions(s, nominal)]
+    mc_specs = [s for s in design.spec if mc and s.mc and s.fig.mc and conditions.spec_conditions(s, nominal)]
     order = list(measure.GROUPS)
     return [(c, tuple(sorted(gs, key=order.index))) for c, gs in sorted(need.items())], mc_specs
 

@@ -11,6 +11,7 @@ import math
 
 import numpy as np
 
+from .conditions import spec_conditions
 from .figures import shown
 from .yields import clopper_pearson, margin_sigma
 
@@ -34,7 +35,6 @@ def _fmt(x) -> str:
 
 
 def table(design, grid, values: dict, samples: list, mc_specs: list) -> list[dict]:
-    from .run import spec_conditions
     conf, min_yield = design.verify.confidence, design.verify.min_yield
     rows = []
     for s in design.spec:
