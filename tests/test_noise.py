@@ -14,6 +14,7 @@ from pixelkit.circuits.noisebench import flicker_deck, read_deck
 from pixelkit.constants import K_B
 from pixelkit.physics import fd
 from pixelkit.physics.noise import chain, column_flicker_psd, ktc_voltage
+from pixelkit.tech.ekv import models_for
 
 
 @pytest.fixture(scope="module")
@@ -38,7 +39,7 @@ def test_read_noise_chain_vs_spice_noise(ref_design, a_sf, which):
     """Analytic NCDS chain (kT/C_FD twice, SF + load kT/C_col) against the SPICE figure:
     ``.noise`` of FD as each switch leaves it (devices' own capacitances, SF Miller) and of
     the read chain weighted by the NCDS filter 2(1 - cos 2 pi f dt) (thermal + 1/f)."""
-    an = chain(ref_design, which, a_sf)
+    an = chain(ref_design, which, a_sf, models_for(ref_design))
     sp = pixel_noise(ref_design, which, a_sf)
     dark_and_leak = an["variance_V2"]["dark_shot"] + an["variance_V2"]["fd_leakage_shot"]
     an_v = np.sqrt(an["pixel_V"] ** 2 - dark_and_leak)
@@ -88,5 +89,5 @@ def test_column_flicker_spectrum_vs_spice(ref_design, a_sf):
     all of it. 20 %: BSIM4's 1/f depends on the bias (kf_vg fitted at 1 uA, 10/1 um)."""
     r = run_noise(read_deck(ref_design, ref_design.pixel.v_pd_reset))
     low = r["f"] <= 30.0
-    ratio = column_flicker_psd(ref_design, a_sf, r["f"][low]) / r["psd"][low]
+    ratio = column_flicker_psd(ref_design, a_sf, r["f"][low], models_for(ref_design)) / r["psd"][low]
     assert np.median(ratio) == pytest.approx(1.0, rel=0.20)

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from pixelkit.physics import sf
-from pixelkit.tech.ekv import fit
+from pixelkit.tech.ekv import fit, models_for
 
 
 def test_ekv_fits_the_model_librarys_follower(ref_design):
@@ -30,12 +30,12 @@ def test_follower_gain_against_spice_over_the_bias_range(ref_design, i_bias):
     from pixelkit.mc.pelgrom import sf_gain
     d = replace(ref_design, pixel=replace(ref_design.pixel, sf_bias=i_bias))
     for v_fd in (1.3, 1.7, 2.0, 2.4):
-        assert sf.follower_gain(d, v_fd) == pytest.approx(sf_gain(d, v_fd), rel=0.05), v_fd
+        assert sf.follower_gain(d, models_for(d), v_fd) == pytest.approx(sf_gain(d, v_fd), rel=0.05), v_fd
 
 
 def test_the_follower_is_in_moderate_inversion(ref_design):
     """gm / I_D ~ 20 /V and IC ~ 0.8 at 400 nA: neither closed form (weak: 1 / (n U_T) = 31 /V) holds."""
-    c = sf.column(ref_design)
+    c = sf.column(ref_design, models_for(ref_design))
     assert 15 < c["gm_over_id_sf"] < 25 and 0.3 < c["ic_sf"] < 3
     assert 1 < c["ic_load"] < 10            # the 1 / 2 um load: moderate to strong
 
@@ -49,10 +49,10 @@ def test_column_white_noise_against_spice(ref_design):
     from pixelkit.circuits.noisebench import read_deck
     from pixelkit.physics.noise import column_capacitance, column_flicker_psd
     c_col = column_capacitance(ref_design)
-    ct = sf.column_thermal(ref_design, c_col)
+    ct = sf.column_thermal(ref_design, models_for(ref_design), c_col)
     r = run_noise(read_deck(ref_design, ref_design.pixel.v_pd_reset))
     f_col = 1.0 / (2 * math.pi * ct["z_ohm"] * c_col)
     band = (r["f"] >= 1e6) & (r["f"] <= 5e6)
-    model = (ct["white_psd_V2_per_Hz"] + column_flicker_psd(ref_design, sf_gain(ref_design), r["f"][band])) \
+    model = (ct["white_psd_V2_per_Hz"] + column_flicker_psd(ref_design, sf_gain(ref_design), r["f"][band], models_for(ref_design))) \
         / (1 + (r["f"][band] / f_col) ** 2)
     assert np.all(np.abs(r["psd"][band] / model - 1) < 0.10)

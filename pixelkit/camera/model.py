@@ -33,6 +33,7 @@ from ..physics.dark import dark_current
 from ..physics.junction import Node
 from ..physics.noise import chain
 from ..physics.subpixel import pd_node
+from ..tech.ekv import models_for
 
 ARRAYS = ("primary", "secondary")
 
@@ -132,7 +133,7 @@ def array_camera(design, which: str, a_sf: float, transfer: dict, wavelength_m: 
     clip = transfer[which]["swing_V"]
     t_e, t_v = transfer[which]["electrons"], transfer[which]["signal_V"]
     r = fd.response(design, which, a_sf)
-    ch = chain(design, which, a_sf)
+    ch = chain(design, which, a_sf, models_for(design))
     read_var = sum(v for k, v in ch["variance_V2"].items() if k not in ("dark_shot", "fd_leakage_shot"))
     eta = float(tech.qe(wavelength_m)) * sub.photoactive_area / sub.pitch ** 2
     return ArrayCamera(

@@ -8,6 +8,7 @@ and S2 (reset) pulses of double sampling.
 from __future__ import annotations
 
 from ..spice.netlist import Element
+from ..physics.nodes import line_cap
 from .devices import mosfet, tgate
 
 
@@ -25,15 +26,6 @@ def load(design, col: str, bias: str = "nbias") -> tuple:
     dev = design.pixel.devices
     return (mosfet(f"ld_{col}", col, bias, "0", "0", dev.load_w, dev.load_l, design.tech),
             Element(f"C{col}", (col, "0"), line_cap(design, col)))
-
-
-def line_cap(design, col: str) -> float:
-    """The column line's lumped capacitance: ``pixel.column_cap`` (schematic), or post-layout the
-    extracted line of the other rows and the column circuit (``layout.pex.overlay``)."""
-    pl = design.post_layout
-    if pl is None:
-        return design.pixel.column_cap
-    return pl.column_cap["primary" if col.startswith("col_p") else "secondary"]
 
 
 def sampler(design, col: str, out: str, s1: str = "s1", s2: str = "s2") -> tuple:

@@ -57,3 +57,12 @@ def wiring(design, which: str, node: str, a_sf: float | None = None) -> float:
     the layout's on the post-layout view (``design.post_layout``)."""
     pl = getattr(design, "post_layout", None)
     return 0.0 if pl is None else pl.node_wiring(which, node, a_sf)
+
+
+def line_cap(design, col: str) -> float:
+    """The column line's lumped capacitance: ``pixel.column_cap`` (schematic), or post-layout the
+    extracted line of the other rows and the column circuit (``layout.pex.overlay``)."""
+    pl = design.post_layout
+    if pl is None:
+        return design.pixel.column_cap
+    return pl.column_cap["primary" if col.startswith("col_p") else "secondary"]

@@ -62,29 +62,29 @@ def shot_electrons(n_electrons):
     return np.sqrt(np.asarray(n_electrons, dtype=float))
 
 
-def column_flicker_psd(design, a_sf: float, f):
+def column_flicker_psd(design, a_sf: float, f, sf_models: dict):
     """1/f PSD (V^2/Hz) at the column from the SF, its load and the load's bias mirror, below the column pole:
     the SF's gate noise times A_sf^2, the load's (and, copied by the mirror, the bias device's) drain-current
     noise gm_ld^2 S_vg through the column's source impedance Z (``sf.column``; in weak inversion with no row
     switch gm_ld Z = A_sf)."""
     from .sf import column
     mos, dev = design.tech.mos, design.pixel.devices
-    c = column(design)
+    c = column(design, sf_models)
     ld = 2.0 * (c["gm_load"] * c["z_ohm"]) ** 2
     s1 = mos.kf_vg / mos.cox * (a_sf ** 2 / (dev.sf_w * dev.sf_l) + ld / (dev.load_w * dev.load_l))
     return s1 / np.asarray(f, dtype=float) ** mos.ef
 
 
-def sf_flicker(design, a_sf: float, dt: float, c_col: float, points_per_decade: int = 100) -> float:
+def sf_flicker(design, a_sf: float, dt: float, c_col: float, sf_models: dict, points_per_decade: int = 100) -> float:
     """Variance (V^2) of the NCDS difference from the SF's and the load's 1/f noise (derivation above)."""
     if design.tech.mos.kf_vg <= 0:
         return 0.0
     from .sf import column
-    f_col = 1.0 / (2 * np.pi * column(design)["z_ohm"] * c_col)
+    f_col = 1.0 / (2 * np.pi * column(design, sf_models)["z_ohm"] * c_col)
     lo, hi = 1e-4 / dt, 1e4 * f_col
     f = np.logspace(np.log10(lo), np.log10(hi), int(points_per_decade * np.log10(hi / lo)) + 1)
     w = (2.0 - 2.0 * np.cos(2 * np.pi * f * dt)) / (1.0 + (f / f_col) ** 2)
-    return float(np.trapezoid(column_flicker_psd(design, a_sf, f) * w, f))
+    return float(np.trapezoid(column_flicker_psd(design, a_sf, f, sf_models) * w, f))
 
 
 def ncds_interval(design, which: str) -> float:
@@ -97,7 +97,7 @@ def ncds_interval(design, which: str) -> float:
 def column_capacitance(design, which: str = "primary") -> float:
     """Column line: its parasitic C plus the RS source and load drain junctions at zero bias
     (post-layout: the extracted line of ``which`` array, every row's share and the column circuit's)."""
-    from ..circuits.column import line_cap
+    from .nodes import line_cap
     from ..circuits.geometry import diffusion
     mos, dev = design.tech.mos, design.pixel.devices
     col = "col_p" if which == "primary" else "col_s0"
@@ -110,7 +110,7 @@ def column_capacitance(design, which: str = "primary") -> float:
     return c
 
 
-def chain(design, which: str, a_sf: float, t_int: float | None = None, t_wait: float = 0.0) -> dict:
+def chain(design, which: str, a_sf: float, sf_models: dict, t_int: float | None = None, t_wait: float = 0.0) -> dict:
     """Read-noise budget of ``which`` subpixel: variances by source, totals in V and e-.
 
     ``t_int`` (default: the subpixel's ``t_int``) sets the dark shot noise; ``t_wait``
@@ -131,8 +131,8 @@ def chain(design, which: str, a_sf: float, t_int: float | None = None, t_wait: f
         "reset_common_mode": a_sf ** 2 * kt / r["c_total_F"],
         "tg_partition": a_sf ** 2 * kt * r["c_pd_node_F"] / (r["c_fd_F"] * r["c_total_F"]),
         "fd_reset_ncds": a_sf ** 2 * kt / r["c_fd_F"],
-        "sf_load_thermal": 2.0 * column_thermal(design, c_col)["variance_V2"],
-        "sf_load_flicker": sf_flicker(design, a_sf, ncds_interval(design, which), c_col),
+        "sf_load_thermal": 2.0 * column_thermal(design, sf_models, c_col)["variance_V2"],
+        "sf_load_flicker": sf_flicker(design, a_sf, ncds_interval(design, which), c_col, sf_models),
         "dark_shot": n_dark * cg ** 2,
         "fd_leakage_shot": (n_fd * (r["c_total_F"] / r["c_fd_F"]) ** 2) * cg ** 2,
     }

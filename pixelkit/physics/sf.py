@@ -90,25 +90,19 @@ def noise_factor(model: Ekv, v_g: float, i: float, w_over_l: float, temperature_
     return model.n(model.v_p(v_g)) * (0.5 + 2.0 * x / 3.0) / (1.0 + x)
 
 
-def _models(design):
-    from ..tech.ekv import fit
-    dev, t, temp = design.pixel.devices, design.tech, design.temperature
-    return {k: fit(t, getattr(dev, f"{k}_w"), getattr(dev, f"{k}_l"), temp)[0] for k in ("sf", "load", "rs")}
-
-
-def follower_gain(design, v_fd: float | None = None) -> float:
+def follower_gain(design, models: dict, v_fd: float | None = None) -> float:
     """A_sf of the pixel's follower at FD = ``v_fd`` (default the PD reset level), EKV (within 3.3 % of ngspice's
     two-point gain of the full read chain from 0.1 to 4 uA and 1.3 to 2.4 V: ``tests/test_sf.py``)."""
     dev = design.pixel.devices
     v = design.pixel.v_pd_reset if v_fd is None else v_fd
-    return gain(_models(design)["sf"], v, design.pixel.sf_bias, dev.sf_w / dev.sf_l, design.temperature)
+    return gain(models["sf"], v, design.pixel.sf_bias, dev.sf_w / dev.sf_l, design.temperature)
 
 
-def column(design, v_fd: float | None = None) -> dict:
+def column(design, models: dict, v_fd: float | None = None) -> dict:
     """The read chain's small-signal figures at FD = ``v_fd``: each device's gm, noise factor and inversion
     coefficient, the row switch's resistance and the column's source impedance Z = 1 / gms + R_rs."""
     dev, px, temp = design.pixel.devices, design.pixel, design.temperature
-    m = _models(design)
+    m = models
     v = px.v_pd_reset if v_fd is None else v_fd
     i = px.sf_bias
     wl_sf, wl_ld, wl_rs = dev.sf_w / dev.sf_l, dev.load_w / dev.load_l, dev.rs_w / dev.rs_l
@@ -124,7 +118,7 @@ def column(design, v_fd: float | None = None) -> dict:
             "ic_sf": ic(m["sf"], v, i, wl_sf, temp), "ic_load": ic(m["load"], vg_ld, i, wl_ld, temp)}
 
 
-def column_thermal(design, c_col: float, v_fd: float | None = None) -> dict:
+def column_thermal(design, models: dict, c_col: float, v_fd: float | None = None) -> dict:
     """Thermal noise of one column sample (V^2) from the follower, its load, the load's bias mirror and the row
     switch, EKV at each device's own inversion level (``column``).
 
@@ -134,7 +128,7 @@ def column_thermal(design, c_col: float, v_fd: float | None = None) -> dict:
     tau = Z C_col, so one sample holds S_white / (4 Z C_col). In weak inversion with no switch this is
     1.5 kT / C_col (kT / C_col from the follower and the load, half of it again from the mirror)."""
     from ..constants import K_B
-    c = column(design, v_fd)
+    c = column(design, models, v_fd)
     kt, z = K_B * design.temperature, c["z_ohm"]
     psd = {"sf": 4 * kt * c["gamma_sf"] * c["gm_sf"] * z * z,
            "load_and_mirror": 4 * kt * 2 * c["gamma_load"] * c["gm_load"] * z * z,

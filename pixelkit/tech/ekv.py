@@ -60,3 +60,11 @@ def fit(tech, w: float, l: float, temperature_K: float, backend: str = "batch") 
     if key not in _FITS:
         _FITS[key] = _fit(tech, w, l, temperature_K, backend)
     return _FITS[key]
+
+
+def models_for(design) -> dict:
+    """The fitted EKV parameters of the pixel's follower, column load and row switch ({"sf", "load", "rs"}),
+    which the analytic models in ``physics.sf`` and ``physics.noise`` take as an argument (they sit below the
+    simulator and never fit anything themselves)."""
+    dev, t, temp = design.pixel.devices, design.tech, design.temperature
+    return {k: fit(t, getattr(dev, f"{k}_w"), getattr(dev, f"{k}_l"), temp)[0] for k in ("sf", "load", "rs")}

@@ -181,13 +181,15 @@ def lag(design, draw=None, backend="batch") -> dict:
 def noise(design, draw=None, backend="batch") -> dict:
     from ..circuits.testbench import sf_bench
     from ..physics.noise import chain
+    from ..tech.ekv import models_for
     v, dv = design.pixel.v_fd_reset, 0.05
     lo, hi = _run([sf_bench(design, v - dv, title="vfy_sf_lo"), sf_bench(design, v + dv, title="vfy_sf_hi")],
                   design, draw, backend)
     a_sf = float((hi["v(col)"][0] - lo["v(col)"][0]) / (2 * dv))
     out = {"a_sf": a_sf}
+    sf_models = models_for(design)
     for kind in ("primary", "secondary"):
-        c = chain(design, kind, a_sf)
+        c = chain(design, kind, a_sf, sf_models)
         out[kind] = {"read_e": c["afe_e"], "ktc_e": c["electrons"]["fd_reset_ncds"], "pixel_e": c["pixel_e"]}
     return out
 

@@ -134,9 +134,11 @@ def read_noise_at_afe(design) -> dict:
     through the AFE's gain C11 / C13."""
     from ...camera.spicenoise import sf_gain
     from ...physics.noise import chain
+    from ...tech.ekv import models_for
     a = sf_gain(design)
     g = design.afe.c11 / design.afe.c13
-    return {w: chain(design, w, a)["pixel_V"] * g for w in ("primary", "secondary")}
+    m = models_for(design)
+    return {w: chain(design, w, a, m)["pixel_V"] * g for w in ("primary", "secondary")}
 
 
 def light_map(design, shield: str = "pixels", backend: str = "batch", geo=None) -> dict:

@@ -9,6 +9,7 @@ from ...camera.plots import noise_breakdown
 from ...camera.spicenoise import output_cg, pixel_noise, sf_gain
 from ...physics import fd
 from ...physics.noise import chain
+from ...tech.ekv import models_for
 from .. import names as N
 from ..html import fmt
 from .. import plausibility
@@ -21,7 +22,8 @@ _ARR = ("primary", "secondary")
 def build(ctx) -> Section:
     d = ctx.design
     a = sf_gain(d)
-    ch = {w: chain(d, w, a) for w in _ARR}
+    sf_models = models_for(d)
+    ch = {w: chain(d, w, a, sf_models) for w in _ARR}
     sp = {w: pixel_noise(d, w, a) for w in _ARR}
     cg_sp = output_cg(d, backend=ctx.backend)
     sources = list(ch["primary"]["electrons"])

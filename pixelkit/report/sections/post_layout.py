@@ -20,6 +20,7 @@ def _figures(d, backend, jobs, quick) -> dict:
     from ...camera.spicenoise import output_cg, sf_gain
     from ...physics import fd
     from ...physics.noise import chain
+    from ...tech.ekv import models_for
     from ...physics.subpixel import model_table
     a = sf_gain(d)
     cg_sp = output_cg(d, backend=backend)
@@ -29,7 +30,7 @@ def _figures(d, backend, jobs, quick) -> dict:
         r = fd.response(d, w, a)
         out[w] = {"c_fd_F": r["c_fd_F"], "c_pd_node_F": r["c_pd_node_F"], "cg_pd_V_per_e": r["cg_pd_V_per_e"],
                   "cg_fd_V_per_e": r["cg_fd_V_per_e"], "cg_out_V_per_e": r["cg_out_V_per_e"],
-                  "cg_out_spice_V_per_e": cg_sp[w], "read_noise_e": chain(d, w, a)["pixel_e"],
+                  "cg_out_spice_V_per_e": cg_sp[w], "read_noise_e": chain(d, w, a, models_for(d))["pixel_e"],
                   "full_well_e": mt[w]["fwc_cv_e"]}
     out["crosstalk"] = _crosstalk(d, backend)
     if not quick:
