@@ -1,6 +1,6 @@
 """Seeded fuzz of the inputs added since the design-file fuzz: sweep axes, corners, Monte Carlo
 settings, --scheduler addresses, array exposure and scene, EMVA 1288 descriptors, family design files,
-verify's grid options and the [spec] / [verify] keys.
+verify's grid options and the [spec] / [verify] keys, the layout's array size and shield.
 
 INPUTS is the one table of inputs: a row names an input and says how a hostile value reaches it
 (the command line it builds from the value). To fuzz a new input (a timing key, a layout option,
@@ -112,6 +112,9 @@ INPUTS = {
                                                                                      k, [v])])(k)
        for k in ("spec.afe_gain_error.corners", "spec.afe_gain_error.temperatures", "verify.supplies",
                  "verify.corners")},
+    "layout --rows": lambda tmp, v: ["layout", REF, "--rows", v, "--afe", "--out", tmp / "lay"],
+    "layout --cols": lambda tmp, v: ["layout", REF, "--cols", v, "--out", tmp / "lay"],
+    "layout --shield": lambda tmp, v: ["layout", REF, "--shield", v, "--afe", "--out", tmp / "lay"],
     **{f"emva '{t}'": (lambda t: lambda tmp, v: ["gap", "emva", _emva(tmp, t, v)])(t) for t in EMVA_LINES},
 }
 FAMILIES = ("ratio_pixel.toml", "wdr_pixel.toml")
@@ -130,6 +133,7 @@ def _cases():
 
 def _run(argv, monkeypatch, capfd):
     import pixelkit.chip.frame
+    import pixelkit.layout.library
     import pixelkit.mc.montecarlo
     import pixelkit.sweep.executors
     import pixelkit.sweep.run
@@ -138,6 +142,7 @@ def _run(argv, monkeypatch, capfd):
     monkeypatch.setattr(pixelkit.sweep.executors, "run_tasks", _stub)    # verify: after specs and grid
     monkeypatch.setattr(pixelkit.mc.montecarlo, "simulate_frame", _stub)  # after the corner is applied
     monkeypatch.setattr(pixelkit.chip.frame, "simulate_frame", _stub)
+    monkeypatch.setattr(pixelkit.layout.library, "build_chip_cells", _stub)  # after the layout's options
     common.WARNINGS.clear()
     try:
         entry([str(a) for a in argv])

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import click
 
+from ..errors import ConfigError
 from .common import design_arg, emit, json_opt, load, main, out_opt, output_path
 
 
@@ -13,10 +14,15 @@ def _render(x: dict) -> str:
     lines = [f"GDS: {x['gds']} (cells {', '.join(x['cells'])})",
              f"netlists: {', '.join(Path(p).name for p in x['spice'].values())}"]
     if "png" in x:
-        lines.append(f"pictures: {x['png']}, {x['png_3d']}")
+        lines.append(f"pictures: {x['png']}, {x['png_3d']}, {x['png_shield']}")
     lines += [f"  {w}: PD {x[w]['pd_area_m2'] * 1e12:.3f} um2, perimeter {x[w]['pd_perimeter_m'] * 1e6:.2f} um, "
               f"photoactive {x[w]['photoactive_area_m2'] * 1e12:.4f} um2" for w in ("primary", "secondary")]
     lines.append(f"  C_A = {x['c_a']:.4f}")
+    sh = x["shield"]
+    lines.append(f"{x['top']}: {x['size_um'][0]:.1f} x {x['size_um'][1]:.1f} um; shield {sh['mode']}: junction left "
+                 f"open {sh['exposed_m2'] * 1e12:.4g} um2 (openings drawn {sh['openings_m2'] * 1e12:.4g} um2)")
+    lines += [f"  {k}: {v * 1e12:.5g} um2, open {sh['blocks'][k]['exposed_m2'] * 1e12:.4g} um2"
+              for k, v in x["blocks"].items()]
     if "drc" in x:
         d = x["drc"]
         head = f"DRC ({Path(d['deck']).name}, {d['top']}, {d['klayout']}, {d['seconds']:g} s): "
@@ -40,23 +46,34 @@ def _render(x: dict) -> str:
               "with its columns; exit 1 when it finds a violation")
 @click.option("--lvs", is_flag=True, help="compare the layout's extracted netlist with the kit's netlist "
               "(KLayout Python API); exit 1 on a mismatch")
+@click.option("--afe", is_flag=True, help="draw every column's AFE (switched capacitors, MIM capacitors, "
+              "op-amp) under its column circuit")
+@click.option("--shield", type=click.Choice(["full", "pixels", "none"]), default="full", show_default=True,
+              help="top-metal light shield: everything but the openings, the pixels only (the readout left "
+              "open), or none")
 @click.option("--pictures/--no-pictures", default=True, show_default=True, help="2D and 3D pictures")
 @click.option("--golden", is_flag=True, help="(re)write layouts/golden/<design>.gds, the geometry baseline")
 @json_opt
-def layout(design, out, rows, cols, drc, lvs, pictures, golden, as_json):
-    """Write the GDS (dual pixel, its column circuits, an array) and each cell's SPICE netlist, extract
-    PD area / perimeter / photoactive area, draw 2D and 3D views; --drc / --lvs sign it off."""
+def layout(design, out, rows, cols, drc, lvs, afe, shield, pictures, golden, as_json):
+    """Write the GDS (an R x C array with its column circuits, --afe its AFEs, the light shield) and
+    each cell's SPICE netlist, extract PD area / perimeter / photoactive area and the junction
+    the shield leaves open per block, draw 2D and 3D views; --drc / --lvs sign the array off."""
     from ..layout.fit import as_config_error
     from ..layout.flow import layout_design, write_gds
     from ..layout.library import build_library
     from ..layout.rules import RuleError
     d = load(design, drawable=False)
+    for opt, n, field in (("--rows", rows, "rows"), ("--cols", cols, "cols")):
+        most = getattr(d.primary, field)
+        if n > most:   # the chip the design describes bounds the array
+            raise ConfigError("command line", opt, n, f"1 to {most} (the design's primary.{field})")
     try:
         if golden:
             path = write_gds(build_library(d, 2, 2), Path("layouts/golden") / f"{d.name}.gds")
             emit({"gds": str(path)}, as_json, lambda x: f"wrote {x['gds']}")
             return
-        r = layout_design(d, output_path(out, d, "layout"), rows, cols, pictures=pictures, drc=drc, lvs=lvs)
+        r = layout_design(d, output_path(out, d, "layout"), rows, cols, pictures=pictures, drc=drc, lvs=lvs,
+                          afe=afe, shield=shield)
     except RuleError as exc:
         raise as_config_error(d, exc) from None
     emit(r, as_json, _render)

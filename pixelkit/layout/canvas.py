@@ -88,6 +88,8 @@ class Placement:
     columns: int = 1
     spacing: int = 0    # x spacing of an array of ``columns`` instances
     name: str = ""
+    rows: int = 1
+    row_spacing: int = 0   # y spacing of an array of ``rows`` instances
 
 
 class Canvas:
@@ -120,10 +122,15 @@ class Canvas:
         self.labels.append(Label(layer, x, y, text))
 
     def place(self, cell: "Canvas", dx: int, dy: int, nets: dict, columns: int = 1, spacing: int = 0,
-              name: str = "") -> None:
-        """Reference ``cell`` at (dx, dy) (``columns`` copies ``spacing`` apart); its port nets
-        become ``nets[port]``, its other nets ``name.net``."""
-        self.placements.append(Placement(cell, dx, dy, dict(nets), columns, spacing, name))
+              name: str = "", rows: int = 1, row_spacing: int = 0, register: bool = True) -> None:
+        """Reference ``cell`` at (dx, dy) (``columns`` copies ``spacing`` apart, ``rows`` rows
+        ``row_spacing`` apart); its port nets become ``nets[port]``, its other nets ``name.net``.
+        ``register=False``: the copies are not seen by :meth:`free` (a large array the parent
+        does not route over)."""
+        self.placements.append(Placement(cell, dx, dy, dict(nets), columns, spacing, name, rows, row_spacing))
+        if not register:
+            return
+        assert rows == 1, "an array of rows is placed unregistered"
         for k in range(columns):
             tag = f"{name or cell.name}{k if columns > 1 else ''}"
             for s in cell.all_shapes():
@@ -208,9 +215,9 @@ class Canvas:
             cell.add(gdstk.Label(lb.text, (lb.x * 1e-3, lb.y * 1e-3), layer=lay.layer, texttype=lay.datatype))
         for p in self.placements:
             ref = cells[p.cell.name]
-            if p.columns > 1:
-                cell.add(gdstk.Reference(ref, (p.dx * 1e-3, p.dy * 1e-3), columns=p.columns, rows=1,
-                                         spacing=(p.spacing * 1e-3, 0)))
+            if p.columns > 1 or p.rows > 1:
+                cell.add(gdstk.Reference(ref, (p.dx * 1e-3, p.dy * 1e-3), columns=p.columns, rows=p.rows,
+                                         spacing=(p.spacing * 1e-3, p.row_spacing * 1e-3)))
             else:
                 cell.add(gdstk.Reference(ref, (p.dx * 1e-3, p.dy * 1e-3)))
         return cell

@@ -41,7 +41,9 @@ def _place(design) -> None:
 
 #: the design field that sizes each cell (named when a cell offers no room for its devices or nets)
 CELL_FIELD = {"PRIMARY": "primary.pitch", "SECONDARY": "secondary.pitch", "COLUMN_P": "primary.pitch",
-              "COLUMN_S": "secondary.pitch", "DUALPIX": "primary.pitch", "DUALPIX_COL": "primary.pitch"}
+              "COLUMN_S": "secondary.pitch", "DUALPIX": "primary.pitch", "DUALPIX_COL": "primary.pitch",
+              "AFE_P": "primary.pitch", "AFE_S": "secondary.pitch", "READOUT_P": "primary.pitch",
+              "READOUT_S": "secondary.pitch"}
 
 
 def as_config_error(design, exc: RuleError):

@@ -27,47 +27,76 @@ def write_gds(lib, path: Path) -> Path:
     return commit(path, tmp)
 
 
-def write_netlists(design, cells, folder: Path) -> dict:
-    """``<cell>.spice`` beside the GDS for every cell the kit has a netlist of."""
-    from .signoff.schematic import CELL_CIRCUIT, circuits_of, flat_view, lvs_view, spice_text
+def write_netlists(design, cells, folder: Path, top: str = SIGNOFF_TOP) -> dict:
+    """``<cell>.spice`` beside the GDS for every cell the kit has a netlist of, and the sign-off
+    cell ``top`` also flat (``<top>.flat.spice``, for LVS decks that compare a flattened layout)."""
+    from .signoff.schematic import circuit_of, circuits_of, flat_view, lvs_view, spice_text
     out = {}
     for name in cells:
-        if name in CELL_CIRCUIT:
+        if circuit_of(name) is not None:
             view = lvs_view(design, circuits_of(design, name))
             out[name] = str(write_atomic(Path(folder) / f"{name}.spice", spice_text(view, f"{design.name} {name}")))
-    # the sign-off cell also flat, for LVS decks that compare a flattened layout
-    view = flat_view(lvs_view(design, circuits_of(design, SIGNOFF_TOP)))
-    out[f"{SIGNOFF_TOP}.flat"] = str(write_atomic(Path(folder) / f"{SIGNOFF_TOP}.flat.spice",
-                                                  spice_text(view, f"{design.name} {SIGNOFF_TOP}, flattened")))
+    view = flat_view(lvs_view(design, circuits_of(design, top)))
+    out[f"{top}.flat"] = str(write_atomic(Path(folder) / f"{top}.flat.spice",
+                                          spice_text(view, f"{design.name} {top}, flattened")))
     return out
 
 
 def layout_design(design, out_dir: Path = Path("layouts"), rows: int = 2, cols: int = 2,
-                  pictures: bool = True, drc: bool = False, lvs: bool = False) -> dict:
+                  pictures: bool = True, drc: bool = False, lvs: bool = False, afe: bool = False,
+                  shield: str = "full") -> dict:
+    """Every cell of an R x C chip (its readout with ``afe``; ``shield`` full / pixels / none) in
+    one GDS, the netlists beside it, extraction, the shield's exposure per block, pictures and,
+    on request, the sign-off of the chip cell."""
+    from .library import build_chip_cells
     from .rules import check
+    from .shield import exposed_junctions
     check(design)
-    cells = build_cells(design)          # every rule and route checked before any file is written
-    lib = to_library(design, cells, rows, cols)
-    gds = write_gds(lib, Path(out_dir) / f"{design.name}.gds")
-    spice = write_netlists(design, cells, Path(out_dir))
+    cells, top = build_chip_cells(design, rows, cols, afe, shield)   # every rule and route checked first
+    lib = to_library(design, cells)
+    out_dir = Path(out_dir)
+    gds = write_gds(lib, out_dir / f"{design.name}.gds")
+    spice = write_netlists(design, cells, out_dir, top)
     ex = extract(gds, design.tech)
-    result = {"gds": str(gds), **ex, "spice": spice,
+    chip = cells[top]
+    exposure = exposed_junctions(gds, top, design.tech, chip.ports["blocks"])
+    n_pix = rows * cols
+    openings = n_pix * (_opening(design.primary) + design.secondary_per_pixel * _opening(design.secondary))
+    result = {"gds": str(gds), **ex, "spice": spice, "top": top, "rows": rows, "cols": cols, "afe": afe,
               "c_a": ex["primary"]["pd_area_m2"] / ex["secondary"]["pd_area_m2"],
-              "cells": [c.name for c in lib.cells]}
+              "cells": [c.name for c in lib.cells],
+              "size_um": [chip.ports["width"] / 1000, chip.ports["height"] / 1000],
+              "blocks": _areas(chip.ports["blocks"]),
+              "shield": {"mode": shield, "openings_m2": openings,
+                         "exposed_m2": sum(v["exposed_m2"] for v in exposure.values()),
+                         "blocks": {k: {"junction_m2": v["junction_m2"], "exposed_m2": v["exposed_m2"]}
+                                    for k, v in exposure.items()}}}
     if pictures:
-        from .render import plot_2d, view_3d
+        from .render import plot_2d, view_3d, plot_exposure
         dual = next(c for c in lib.cells if c.name == "DUALPIX")
-        result["png"] = str(plot_2d(dual, design.tech, Path(out_dir) / f"{design.name}_dualpix.png",
+        result["png"] = str(plot_2d(dual, design.tech, out_dir / f"{design.name}_dualpix.png",
                                     f"{design.name}: integrated dual pixel"))
-        result["png_3d"] = str(view_3d(dual, design.tech, Path(out_dir) / f"{design.name}_dualpix_3d.png"))
+        result["png_3d"] = str(view_3d(dual, design.tech, out_dir / f"{design.name}_dualpix_3d.png"))
+        result["png_shield"] = str(plot_exposure(chip.ports, exposure, out_dir / f"{design.name}_shield.png",
+                                                 f"{design.name} {top}: junction left open (--shield {shield})"))
     if drc:
         from .signoff.drc import run_drc
-        result["drc"] = run_drc(gds, SIGNOFF_TOP, design.tech, Path(out_dir) / "drc").as_dict()
+        result["drc"] = run_drc(gds, top, design.tech, out_dir / "drc").as_dict()
     if lvs:
         from .signoff.lvs import run_lvs, run_lvs_deck
         if design.tech.signoff.lvs_deck:   # the technology's own deck (another PDK's)
-            result["lvs"] = run_lvs_deck(gds, SIGNOFF_TOP, design, Path(out_dir) / "lvs",
-                                         Path(spice[SIGNOFF_TOP])).as_dict()
+            result["lvs"] = run_lvs_deck(gds, top, design, out_dir / "lvs", Path(spice[top])).as_dict()
         else:
-            result["lvs"] = run_lvs(gds, SIGNOFF_TOP, design, Path(out_dir) / "lvs").as_dict()
+            result["lvs"] = run_lvs(gds, top, design, out_dir / "lvs").as_dict()
     return result
+
+
+def _opening(sub) -> float:
+    """The area the shield leaves open over one subpixel, as the design asks: its mask opening,
+    or its whole PD when it is unmasked."""
+    return sub.mask_opening if sub.mask_opening is not None else sub.pd_width * sub.pd_height
+
+
+def _areas(blocks: dict) -> dict:
+    """Area (m2) of each block's region."""
+    return {k: sum(b.w * b.h for b in v) * 1e-18 for k, v in blocks.items()}

@@ -29,6 +29,27 @@ def build_cells(design) -> "OrderedDict[str, object]":
     return out
 
 
+def build_chip_cells(design, rows: int, cols: int, afe: bool = False, shield: str = "full"):
+    """Every cell of an R x C chip (with ``afe``: every column's AFE; ``shield``: see
+    :mod:`.shield`), children first, and the name of the chip cell."""
+    from .chip import build_chip
+    from .shield import add_shield, strip_pixel_shield
+    cells = build_cells(design)
+    if shield == "none":
+        strip_pixel_shield(cells)
+    lt = LayoutTech(design.tech)
+    chip_cells = build_chip(design, lt, cells, rows, cols, afe)
+    *below, top = chip_cells
+    chip = chip_cells[top]
+    shields = add_shield(lt, cells, chip, shield, chip.ports["readouts"])
+    out = OrderedDict(cells)
+    for name in below:
+        out[name] = chip_cells[name]
+    out.update(shields)
+    out[top] = chip
+    return out, top
+
+
 def to_library(design, cells, rows: int = 0, cols: int = 0) -> gdstk.Library:
     """The GDS library of ``cells``; with ``rows`` x ``cols`` also ``ARRAY_RxC`` of DUALPIX."""
     lib = gdstk.Library(name=design.name, unit=1e-6, precision=1e-9)

@@ -284,6 +284,40 @@ def pd_contact_inset(lt) -> int:
     return max(lt.nm("nwell.enclosure.ncomp") + side // 2, iside // 2)
 
 
+def resistor_heads(lt) -> int:
+    """Length of poly a :func:`poly_resistor` adds beyond its body at each end (its contacted head)."""
+    cut = lt.cut("contact")
+    return lt.snap_up(max(lt.nm("poly.extension.sab"), lt.nm("sab.space_to.contact") + cut + lt.nm("poly.enclosure.contact")))
+
+
+def poly_resistor(cv: Canvas, lt, x0: int, y0: int, w: int, length: int, bottom: str, top: str) -> dict:
+    """An unsalicided P+ poly resistor along y: the body ``w`` x ``length`` from (x0, y0) under the
+    salicide block and the resistor marker (their edges across the poly are the body's ends, as
+    the foundry's RES_MK rule asks), a contacted head beyond each end, the P+ implant around all.
+    Returns {"bottom": metal1 pad, "top": metal1 pad, "extent": the implant box}."""
+    if w < lt.width("resistor"):
+        raise ValueError(f"resistor width {w / 1000:g} um < {lt.cite('resistor.width')}")
+    cut, penc = lt.cut("contact"), lt.nm("poly.enclosure.contact")
+    head = resistor_heads(lt)
+    enc_sab = lt.nm("sab.enclosure.resistor")
+    sab = box(x0 - enc_sab, y0, x0 + w + enc_sab, y0 + length)
+    if sab.w < lt.width("sab") or sab.w * sab.h < lt.area("sab.area"):
+        raise ValueError(f"resistor body {w / 1000:g} x {length / 1000:g} um: its salicide block is under "
+                         f"{lt.cite('sab.width')} / {lt.tech.rule('sab.area').value * 1e12:g} um2")
+    cv.add("poly", box(x0, y0 - head, x0 + w, y0), bottom)
+    cv.add("poly", box(x0, y0, x0 + w, y0 + length), "")
+    cv.add("poly", box(x0, y0 + length, x0 + w, y0 + length + head), top)
+    cv.add("sab", sab, "")
+    cv.add("res_marker", sab, "")
+    e = lt.nm("pplus.enclosure.resistor")
+    ext = cv.add("pplus", box(x0 - e, y0 - head - e, x0 + w + e, y0 + length + head + e), "")
+    cx = x0 + w // 2
+    out = {"extent": ext}
+    for net, cy in ((bottom, y0 - head + penc + cut // 2), (top, y0 + length + head - penc - cut + cut // 2)):
+        out["bottom" if net == bottom else "top"] = contact_pad(cv, lt, cx, cy, "poly", net)
+    return out
+
+
 def mim_cap(cv: Canvas, lt, x0: int, y0: int, w: int, h: int, top: str, bottom: str) -> dict:
     """A MIM capacitor (top plate ``w`` x ``h``): bottom plate on ``mim_bottom`` enclosing it,
     the marker layers, a sea of vias from the top plate to the metal above and one via from
@@ -305,8 +339,9 @@ def mim_cap(cv: Canvas, lt, x0: int, y0: int, w: int, h: int, top: str, bottom: 
     pitch = vs + lt.nm("mim_via.space")
     nx = max(1, (w - 2 * venc - vs) // pitch + 1)
     ny = max(1, (h - 2 * venc - vs) // pitch + 1)
-    ox = x0 + (w - (nx - 1) * pitch - vs) // 2
-    oy = y0 + (h - (ny - 1) * pitch - vs) // 2
+    g = lt.grid   # the sea centred, on the drawing grid
+    ox = x0 + (w - (nx - 1) * pitch - vs) // (2 * g) * g
+    oy = y0 + (h - (ny - 1) * pitch - vs) // (2 * g) * g
     for i in range(nx):
         for j in range(ny):
             cv.add(via, box(ox + i * pitch, oy + j * pitch, ox + i * pitch + vs, oy + j * pitch + vs), top)
@@ -318,7 +353,7 @@ def mim_cap(cv: Canvas, lt, x0: int, y0: int, w: int, h: int, top: str, bottom: 
     bot = box(x0 - e_bot, y0 - e_bot, bx1, y0 + h + e_bot)
     cv.add(bl, bot, bottom)
     vx = bx1 - benc - vs
-    vy = y0 + h // 2 - vs // 2
+    vy = y0 + (h // 2 - vs // 2) // g * g
     cv.add(via, box(vx, vy, vx + vs, vy + vs), bottom)
     side = pad_side(lt, upper)
     bottom_metal = cv.add(upper, square(vx + vs // 2, vy + vs // 2, side), bottom)

@@ -78,3 +78,35 @@ def view_3d(cell, tech, path: Path) -> Path:
     plotter.screenshot(str(tmp))
     plotter.close()
     return commit(path, tmp)
+
+
+def plot_exposure(ports: dict, exposure: dict, path: Path, title: str) -> Path:
+    """The chip's blocks outlined and the junction no metal covers filled in red, with the
+    exposed area of each block in the legend."""
+    from matplotlib.collections import PolyCollection
+    from matplotlib.patches import Rectangle
+    w, h = ports["width"] / 1000, ports["height"] / 1000
+    fig, ax = plt.subplots(figsize=(6, max(4.0, min(9.0, 6 * h / max(w, 1e-9)))))
+    colours = {"pixel array": "#4c72b0", "column circuits": "#55a868", "AFE": "#8172b3", "periphery": "#937860"}
+    for name, boxes in ports["blocks"].items():
+        e = exposure[name]["exposed_m2"] * 1e12
+        for k, b in enumerate(boxes):
+            ax.add_patch(Rectangle((b.x0 / 1000, b.y0 / 1000), b.w / 1000, b.h / 1000, fill=False, lw=0.8,
+                                   ec=colours.get(name, "k"), label=f"{name}: {e:.4g} um2 open" if k == 0 else None))
+    polys = []
+    for e in exposure.values():
+        for p in e["region"].each():
+            polys.append([(pt.x / 1000, pt.y / 1000) for pt in p.each_point_hull()])
+    if polys:
+        ax.add_collection(PolyCollection(polys, facecolor="#d62728", edgecolor="#d62728", lw=0.3))
+    ax.set_xlim(-0.02 * w, 1.02 * w)
+    ax.set_ylim(-0.02 * h, 1.02 * h)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (um)")
+    ax.set_ylabel("y (um)")
+    ax.set_title(title, fontsize=9)
+    ax.legend(fontsize=7, loc="upper right")
+    path, tmp = atomic_target(path)
+    fig.savefig(tmp, dpi=110, format="png")
+    plt.close(fig)
+    return commit(path, tmp)

@@ -31,7 +31,7 @@ from ..units import quantity
 #: designs draw; a missing one is named when a generator asks).
 DRAWN = ("nwell", "active", "poly", "nplus", "pplus", "contact", "metal1", "via1", "metal2", "via2",
          "metal3", "via3", "metal4", "via4", "metal5", "pd_marker", "mim_top", "mim_marker",
-         "shield", "opening", "boundary")
+         "sab", "res_marker", "mim_l_marker", "shield", "opening", "boundary")
 _PAIR_KINDS = ("enclosure", "extension", "space_to")
 _SINGLE_KINDS = ("width", "space", "area", "size")
 _SWITCH = re.compile(r"^[A-Za-z0-9_.+-]{1,64}$")

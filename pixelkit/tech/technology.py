@@ -112,6 +112,23 @@ class Mismatch:
 
 
 @dataclass(frozen=True)
+class Passives:
+    """The capacitor and resistor the layout draws for a netlist's C and R (the readout's
+    MIM capacitors, the op-amp's compensation resistor): their device names and the law
+    that gives a drawn shape its value."""
+    mim_model: str = ident(doc="MIM capacitor model of the model library (SPICE name)")
+    mim_lvs: str = ident(doc="name the foundry LVS gives the drawn MIM capacitor (and the kit's netlists for LVS)")
+    mim_c_area: float = qty("F/m2", gt=0, plausible=(1e-5, 0.1), doc="MIM capacitance per top-plate area")
+    mim_c_perimeter: float = qty("F/m", ge=0, plausible=(0.0, 1e-8), doc="MIM capacitance per top-plate perimeter")
+    res_model: str = ident(doc="poly resistor model (SPICE and LVS name)")
+    res_sheet: float = qty("Ohm", gt=0, plausible=(1.0, 1e5), doc="sheet resistance of the resistor body (Ohm per square)")
+
+    def mim_value(self, w: float, l: float) -> float:
+        """Capacitance (F) of a w x l (m) top plate."""
+        return self.mim_c_area * w * l + self.mim_c_perimeter * 2 * (w + l)
+
+
+@dataclass(frozen=True)
 class Technology:
     name: str = ident()
     description: str = text()
@@ -120,6 +137,7 @@ class Technology:
     mos: Mos = table(Mos)
     rules: LayoutRules = table(LayoutRules)
     mismatch: Mismatch | None = table(Mismatch, None)
+    passives: Passives | None = table(Passives, None)
     models: ModelLibrary = field(default=None, metadata=dict(kind="skip"))
     layout: LayoutData = field(default=None, metadata=dict(kind="skip"), repr=False)
     source: str = field(default="", metadata=dict(kind="skip"))

@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ...errors import PixelkitError
-from .schematic import CELL_CIRCUIT, VSS, circuits_of, lvs_view, to_klayout
+from .schematic import CELL_CIRCUIT, VSS, circuit_of, circuits_of, lvs_view, to_klayout
 
 METALS = ("metal1", "metal2", "metal3", "metal4", "metal5")
 VIAS = ("via1", "via2", "via3", "via4")
@@ -59,6 +59,9 @@ def _layers(lvs, layout, tech):
 
     for n in ("nwell", "active", "poly", "nplus", "pplus", "contact", "pd_marker", *METALS, *VIAS):
         out[n] = get(n)
+    for n in PASSIVE_LAYERS:   # the readout's MIM capacitors and poly resistor, where the technology has them
+        if n in tech.layout.layers or n in tech.layout.aliases:
+            out[n] = get(n)
     for m in METALS:
         if f"{m}_label" in tech.layout.layers:
             out[f"{m}_label"] = get(f"{m}_label", "text")
@@ -86,6 +89,7 @@ def extract(lvs, layout, tech) -> dict:
     for name, reg in (("pd_n", pd_n), ("well", well), ("ngate", ngate), ("pgate", pgate), ("nsd", nsd),
                       ("psd", psd), ("ptap", ptap), ("ntap", ntap), ("bulk", bulk), ("pd_p", pd_p)):
         lvs.register(reg, name)
+    poly, vias = _passives(lvs, L, tech, poly)
     mos = tech.mos
     lvs.extract_devices(kdb.DeviceExtractorMOS4Transistor(mos.nmos),
                         {"SD": nsd, "G": ngate, "P": poly, "W": bulk})
@@ -101,8 +105,8 @@ def extract(lvs, layout, tech) -> dict:
     lvs.connect(pd_n, ntap)
     lvs.connect(L["contact"], L["metal1"])
     for i, v in enumerate(VIAS):
-        lvs.connect(L[METALS[i]], L[v])
-        lvs.connect(L[v], L[METALS[i + 1]])
+        lvs.connect(L[METALS[i]], vias[v])
+        lvs.connect(vias[v], L[METALS[i + 1]])
     for m in METALS:
         lvs.connect(L[m])
         if f"{m}_label" in L:
@@ -110,17 +114,76 @@ def extract(lvs, layout, tech) -> dict:
     for r in (ptap, bulk, pd_p):
         lvs.connect_global(r, VSS)
     lvs.extract_netlist()
+    _mim_values(lvs.netlist(), tech)
     return {**L, "nsd": nsd, "psd": psd, "ptap": ptap, "ntap": ntap, "well": well, "pd_n": pd_n}
+
+
+#: layers of the readout's passives: MIM top plate and its marker, salicide block, resistor marker
+PASSIVE_LAYERS = ("mim_top", "mim_marker", "sab", "res_marker")
+
+
+def _passives(lvs, L, tech, poly):
+    """The MIM capacitors (top plate under its marker over the bottom-plate metal; the vias on a
+    top plate join it, not the metal below, to the metal above) and the poly resistors (poly
+    under the salicide block and the resistor marker: the body, cut out of the poly that
+    conducts). Returns the conducting poly and the via layers to connect."""
+    import klayout.db as kdb
+    vias = {v: L[v] for v in VIAS}
+    pa = tech.passives
+    if pa is None:
+        return poly, vias
+    if "mim_top" in L and "mim_marker" in L:
+        top = L["mim_top"] & L["mim_marker"]
+        cut = VIAS[len(METALS) - 2]                      # the via onto the top plate (via4)
+        bottom_metal = L[METALS[-2]]
+        on_plate, off_plate = L[cut] & L["mim_top"], L[cut] - L["mim_top"]
+        bottom = bottom_metal & top
+        for name, reg in (("mim_plate", top), ("mim_bottom", bottom), ("via_plate", on_plate), ("via_off", off_plate)):
+            lvs.register(reg, name)
+        lvs.extract_devices(kdb.DeviceExtractorCapacitor(pa.mim_lvs, pa.mim_c_area * 1e-12),
+                            {"P1": bottom, "P2": top, "tA": bottom_metal, "tB": top})
+        lvs.connect(top)
+        lvs.connect(top, on_plate)
+        lvs.connect(on_plate, L[METALS[-1]])
+        vias[cut] = off_plate
+    if "sab" in L and "res_marker" in L:
+        body = poly & L["sab"] & L["res_marker"]
+        poly = poly - body
+        lvs.register(body, "res_body")
+        lvs.register(poly, "poly_con")
+        lvs.extract_devices(kdb.DeviceExtractorResistor(pa.res_model, pa.res_sheet), {"R": body, "C": poly})
+    return poly, vias
+
+
+def _mim_values(nl, tech) -> None:
+    """An extracted MIM capacitor's value by the model card's law (area and perimeter terms)."""
+    pa = tech.passives
+    if pa is None:
+        return
+    import klayout.db as kdb
+    dc = nl.device_class_by_name(pa.mim_lvs)
+    if dc is None:
+        return
+    for c in nl.each_circuit():
+        for d in c.each_device():
+            if d.device_class().name == pa.mim_lvs:
+                a, p = d.parameter(kdb.DeviceClassCapacitor.PARAM_A), d.parameter(kdb.DeviceClassCapacitor.PARAM_P)
+                d.set_parameter(kdb.DeviceClassCapacitor.PARAM_C, pa.mim_c_area * a * 1e-12 + pa.mim_c_perimeter * p * 1e-6)
 
 
 def _params(da, db) -> list[str]:
     diffs = []
-    for p in ("W", "L", "A", "P"):
-        try:
-            va, vb = da.parameter(p), db.parameter(p)
-        except Exception:   # noqa: BLE001 - a class without that parameter
+    cls = db.device_class()
+    value = [p for p in ("C", "R") if cls.has_parameter(p)]
+    for p in value or ("W", "L", "A", "P"):   # a capacitor / resistor by its value, not by its shape
+        if not cls.has_parameter(p):
             continue
-        if abs(va - vb) > 1e-6 * max(1.0, abs(vb)):
+        va, vb = da.parameter(p), db.parameter(p)
+        if p in "CR":
+            if abs(va - vb) > 1e-3 * abs(vb):
+                unit, k = ("fF", 1e15) if p == "C" else ("Ohm", 1.0)
+                diffs.append(f"{p} {va * k:.5g} {unit} (layout) vs {vb * k:.5g} {unit} (netlist)")
+        elif abs(va - vb) > 1e-6 * max(1.0, abs(vb)):
             unit = "um2" if p == "A" else "um"
             diffs.append(f"{p} {va:.4g} {unit} (layout) vs {vb:.4g} {unit} (netlist)")
     return diffs
@@ -144,6 +207,10 @@ def _describe(xref) -> list[str]:
         a, b = cp.first(), cp.second()
         cname = (b or a).name if (a or b) else "?"
         if cp.status() not in bad:
+            continue
+        if a is None or b is None:
+            out.append(f"{cname}: a circuit of the netlist with no layout cell" if a is None
+                       else f"{cname}: a layout cell with no circuit in the netlist")
             continue
         extra, missing = [], []
         for dp in xref.each_device_pair(cp):
@@ -206,11 +273,15 @@ def _terms(d) -> str:
                      for t in d.device_class().terminal_definitions())
 
 
-def prepare(lvs, ref):
+def prepare(lvs, ref, top: str = ""):
     """Set ``ref`` as the reference of ``lvs`` and bring both netlists to the form they are compared
-    in (floating nets purged, top-level pins, parallel devices combined); the extracted netlist."""
+    in (cells below ``top`` without a circuit of their own looked through, floating nets purged,
+    top-level pins, parallel devices combined); the extracted netlist."""
     lvs.reference = ref
     nl = lvs.netlist()
+    if top:
+        for c in [c for c in nl.each_circuit() if c.name != top and circuit_of(c.name) is None]:
+            nl.flatten_circuit(c)    # an array of references, a readout row, a shield
     nl.purge_nets()
     nl.make_top_level_pins()
     nl.combine_devices()
@@ -222,8 +293,9 @@ def prepare(lvs, ref):
 def run_lvs(gds: Path, top: str, design, workdir: Path | None = None) -> LvsResult:
     """Extract cell ``top`` of ``gds`` and compare it with the kit's netlist of that cell."""
     import klayout.db as kdb
-    if top not in CELL_CIRCUIT:
-        raise PixelkitError(f"no kit netlist for cell {top!r} (cells with one: {', '.join(CELL_CIRCUIT)})")
+    if circuit_of(top) is None:
+        raise PixelkitError(f"no kit netlist for cell {top!r} (cells with one: {', '.join(CELL_CIRCUIT)}, "
+                            "CHIP_RxC[_AFE])")
     t0 = time.perf_counter()
     layout = kdb.Layout()
     layout.read(str(gds))
@@ -234,23 +306,13 @@ def run_lvs(gds: Path, top: str, design, workdir: Path | None = None) -> LvsResu
     extract(lvs, layout, design.tech)
     tech = design.tech
     ref = to_klayout(lvs_view(design, circuits_of(design, top)))
-    nl = prepare(lvs, ref)
+    nl = prepare(lvs, ref, top)
     comparer = kdb.NetlistComparer()
-    for model in (tech.mos.nmos, tech.mos.pmos):
-        dc = ref.device_class_by_name(model)
-        if dc is not None:
-            eq = kdb.EqualDeviceParameters(kdb.DeviceClassMOS4Transistor.PARAM_W, 1e-3, 0.0)
-            eq += kdb.EqualDeviceParameters(kdb.DeviceClassMOS4Transistor.PARAM_L, 1e-3, 0.0)
-            dc.equal_parameters = eq
-    dc = ref.device_class_by_name(tech.photodiode.spice_model)
-    if dc is not None:
-        eq = kdb.EqualDeviceParameters(kdb.DeviceClassDiode.PARAM_A, 0.0, 1e-3)
-        eq += kdb.EqualDeviceParameters(kdb.DeviceClassDiode.PARAM_P, 0.0, 1e-3)
-        dc.equal_parameters = eq
-    for cell_name, circ in CELL_CIRCUIT.items():
-        a, b = _circuit(nl, cell_name), ref.circuit_by_name(circ)
-        if a is not None and b is not None:
-            comparer.same_circuits(a, b)
+    _tolerances(tech, ref, nl)
+    for c in nl.each_circuit():
+        b = ref.circuit_by_name(circuit_of(c.name) or "")
+        if b is not None:
+            comparer.same_circuits(c, b)
     ok = lvs.compare(comparer)
     mismatches = _describe(lvs.xref()) if not ok else []
     misnamed = _misnamed(lvs.xref())
@@ -267,6 +329,30 @@ def run_lvs(gds: Path, top: str, design, workdir: Path | None = None) -> LvsResu
     return LvsResult(top, ok, time.perf_counter() - t0, mismatches,
                      sum(1 for _ in top_circuit.each_device()) if top_circuit else 0,
                      sum(1 for _ in top_circuit.each_net()) if top_circuit else 0, report)
+
+
+def _tolerances(tech, *netlists) -> None:
+    """How close a drawn device must come to the netlist's, set on the device classes of both
+    netlists (the comparer reads the tolerance of the class it meets first): W and L within
+    1 nm, the photodiode's area and perimeter within 0.1 %, a capacitor's or resistor's value
+    within 0.1 %."""
+    import klayout.db as kdb
+    eqs = []
+    for model in (tech.mos.nmos, tech.mos.pmos):
+        eq = kdb.EqualDeviceParameters(kdb.DeviceClassMOS4Transistor.PARAM_W, 1e-3, 0.0)
+        eq += kdb.EqualDeviceParameters(kdb.DeviceClassMOS4Transistor.PARAM_L, 1e-3, 0.0)
+        eqs.append((model, eq))
+    eq = kdb.EqualDeviceParameters(kdb.DeviceClassDiode.PARAM_A, 0.0, 1e-3)
+    eq += kdb.EqualDeviceParameters(kdb.DeviceClassDiode.PARAM_P, 0.0, 1e-3)
+    eqs.append((tech.photodiode.spice_model, eq))
+    if tech.passives is not None:
+        eqs.append((tech.passives.mim_lvs, kdb.EqualDeviceParameters(kdb.DeviceClassCapacitor.PARAM_C, 0.0, 1e-3)))
+        eqs.append((tech.passives.res_model, kdb.EqualDeviceParameters(kdb.DeviceClassResistor.PARAM_R, 0.0, 1e-3)))
+    for nl in netlists:
+        for name, eq in eqs:
+            dc = nl.device_class_by_name(name)
+            if dc is not None:
+                dc.equal_parameters = eq
 
 
 def _circuit(nl, name):
