@@ -128,11 +128,12 @@ def size(design, out=None, sensitivity: bool = False, backend: str = "batch") ->
 
 
 def layout_design(design, out_dir="layouts", rows: int = 2, cols: int = 2, pictures: bool = True,
-                  drc: bool = False, lvs: bool = False) -> dict:
-    """GDS of the dual pixel, its column circuits and an array, each cell's SPICE netlist, extracted PD
-    geometry, 2D/3D pictures; ``drc`` / ``lvs``: sign-off results under "drc" / "lvs"."""
+                  drc: bool = False, lvs: bool = False, afe: bool = False, shield: str = "full") -> dict:
+    """GDS of an R x C array with its column circuits (``afe``: and AFEs) and its light shield
+    (``shield``: full / pixels / none), each cell's SPICE netlist, extracted PD geometry, the junction
+    left open per block, 2D/3D pictures; ``drc`` / ``lvs``: sign-off of the array under "drc" / "lvs"."""
     from .layout.flow import layout_design as _layout
-    return _layout(design, Path(out_dir), rows, cols, pictures, drc=drc, lvs=lvs)
+    return _layout(design, Path(out_dir), rows, cols, pictures, drc=drc, lvs=lvs, afe=afe, shield=shield)
 
 
 def diagnose(design, measured, seed: int = 0) -> dict:

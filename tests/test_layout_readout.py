@@ -264,3 +264,36 @@ def test_an_afe_capacitor_under_the_mim_minimum_is_refused_before_anything_is_wr
     e = json.loads(out)
     assert e["field"] == "afe.c11" and e["value"] == "20 fF" and "at least" in e["allowed"]
     assert not (tmp_path / "o").exists()
+
+
+# ---------------------------------------------------------------- the report ----------------------
+
+def test_a_violation_is_pictured_where_the_deck_found_it(drc, gf, tmp_path):
+    """The report's picture of a DRC marker: the layers of the flagged cell around the marker's
+    own coordinates (the BAD_MIM's MIMTM.7 marker lies on the plate that lost its CAP_MK)."""
+    from pixelkit.layout.render import plot_violation
+    result, _ = drc
+    v = next(v for v in result.violations if v.cell == "BAD_MIM" and v.rule == "MIMTM.7")
+    nums = [float(x) for x in re.findall(r"-?\d+(?:\.\d+)?", v.where)]
+    assert max(nums[1::2]) > 300     # C11 is the topmost plate of the 337 um tall AFE_S
+    png = plot_violation(Path(result.report).parent / "all.gds", v.cell, v.where, gf.tech, tmp_path / "v.png", v.rule)
+    assert png.read_bytes()[:4] == b"\x89PNG" and png.stat().st_size > 5000
+
+
+def test_report_section_signs_off_and_shows_the_open_junction(tmp_path, gf):
+    """The "Layout sign-off" section (quick profile: LVS and the shield; the deck runs in the full
+    report and in the DRC tests above): its tables, picture and checked figures."""
+    from pixelkit.report.sections import Context
+    from pixelkit.report.sections.layout_signoff import build
+    s = build(Context(gf, tmp_path, quick=True))
+    assert s.available, s.why
+    tables = {t.name: t for t in s.tables}
+    assert tables["layout_signoff_lvs"].rows[0][:2] == [TOP, "match"]
+    areas = {r[1]: r for r in tables["layout_signoff_areas"].rows}
+    assert areas["AFE_S"][2] == pytest.approx(gf.secondary.pitch * 1e6) and areas["AFE_P"][2] == pytest.approx(24)
+    assert areas["DUALPIX"][4] == pytest.approx(24 * 32)
+    shield = {r[0]: r for r in tables["layout_signoff_shield"].rows}
+    assert shield["AFE"][2] == 0 and shield["AFE"][1] > 0
+    assert shield["all"][2] == pytest.approx(_openings(gf, 4) * 1e12, rel=0.01)
+    assert (tmp_path / s.figures[0].file).stat().st_size > 5000
+    assert {c.name for c in s.checked} >= {"layout_signoff.lvs_match", "layout_signoff.open_m2"}

@@ -330,7 +330,8 @@ def afe_layout(design, lt, which: str, width: int, x_in: int, x_pass: int, name:
     r = GridRouter(cv, lt, ("metal2", "metal3", "metal4", "metal5"), area, router_pitch)
     for net, ts in st.terms.items():
         r.add_net(net, ts)
-    order = sorted(st.terms, key=lambda n: -len(st.terms[n]))
+    # the capacitors' nets first (their top-metal lanes beside the plates are few), then the busiest
+    order = sorted(st.terms, key=lambda n: (not any(t.layer == "metal5" for t in st.terms[n]), -len(st.terms[n])))
     r.route(order)
     cv.ports = {"width": width, "height": height, "lines": line_y, "bottom": bottom_x,
                 "top": {"in": x_in, "nbias": x_pass}}

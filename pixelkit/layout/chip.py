@@ -188,10 +188,16 @@ def build_chip(design, lt, cells: dict, rows: int, cols: int, afe: bool) -> dict
                 chip.label("metal4_label", margin + j * step + x, y + (1 if tag == "s" else -1), f"{net}_{tag}_{j}")
     chip.add("boundary", box(0, 0, width, height), "")
     chip.ports = {"readouts": {"s": (bottom, 0, n * cols, ps), "p": (top, hb + rows * hd, cols, wp)},"width": width, "height": height, "margin": margin, "hb": hb, "ht": ht, "rows": rows,
-                  "cols": cols, "afe": afe, "straps": strap_x, "reach": reach,
+                  "cols": cols, "afe": afe, "straps": strap_x, "reach": reach, "pixel": (wp, hd),
                   "blocks": _blocks(margin, hb, ht, rows, cols, wp, hd, ps, n, afe, info)}
     out[chip.name] = chip
     return out
+
+
+def chip_size(ports: dict, rows: int, cols: int) -> tuple[int, int]:
+    """(width, height) in nm of the same chip with ``rows`` x ``cols`` dual pixels."""
+    wp, hd = ports["pixel"]
+    return ports["margin"] + cols * wp, ports["hb"] + rows * hd + ports["ht"]
 
 
 def _line_width(lt, cell, part: str) -> int:

@@ -71,13 +71,20 @@ def layout_design(design, out_dir: Path = Path("layouts"), rows: int = 2, cols: 
                          "exposed_m2": sum(v["exposed_m2"] for v in exposure.values()),
                          "blocks": {k: {"junction_m2": v["junction_m2"], "exposed_m2": v["exposed_m2"]}
                                     for k, v in exposure.items()}}}
+    from .chip import chip_size
+    full = chip_size(chip.ports, design.primary.rows, design.primary.cols)
+    result["full_chip_um"] = [full[0] / 1000, full[1] / 1000]
+    result["cell_sizes"] = {("ARRAY" if name.startswith("ARRAY_") else name): _size_um(cv) for name, cv in cells.items()
+                            if name in ("DUALPIX", "COLUMN_P", "COLUMN_S", "AFE_P", "AFE_S") or name.startswith("ARRAY_")}
+    result["block_regions_um"] = {k: [[b.x0 / 1000, b.y0 / 1000, b.x1 / 1000, b.y1 / 1000] for b in v]
+                                  for k, v in chip.ports["blocks"].items()}
     if pictures:
         from .render import plot_2d, view_3d, plot_exposure
         dual = next(c for c in lib.cells if c.name == "DUALPIX")
         result["png"] = str(plot_2d(dual, design.tech, out_dir / f"{design.name}_dualpix.png",
                                     f"{design.name}: integrated dual pixel"))
         result["png_3d"] = str(view_3d(dual, design.tech, out_dir / f"{design.name}_dualpix_3d.png"))
-        result["png_shield"] = str(plot_exposure(chip.ports, exposure, out_dir / f"{design.name}_shield.png",
+        result["png_shield"] = str(plot_exposure(result, exposure, out_dir / f"{design.name}_shield.png",
                                                  f"{design.name} {top}: junction left open (--shield {shield})"))
     if drc:
         from .signoff.drc import run_drc
@@ -95,6 +102,18 @@ def _opening(sub) -> float:
     """The area the shield leaves open over one subpixel, as the design asks: its mask opening,
     or its whole PD when it is unmasked."""
     return sub.mask_opening if sub.mask_opening is not None else sub.pd_width * sub.pd_height
+
+
+def _size_um(cv) -> list:
+    """[width, height] in um of a cell's boundary."""
+    b = next(s.box for s in cv.shapes if s.layer == "boundary")
+    return [b.w / 1000, b.h / 1000]
+
+
+def block_boxes(result: dict) -> dict:
+    """The blocks' regions of a layout result as boxes in nm (what ``exposed_junctions`` takes)."""
+    from .canvas import Box
+    return {k: [Box(*(round(x * 1000) for x in b)) for b in v] for k, v in result["block_regions_um"].items()}
 
 
 def _areas(blocks: dict) -> dict:

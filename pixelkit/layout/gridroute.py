@@ -142,27 +142,30 @@ class GridRouter:
         b, w = t.box, self.w
         out = []
         p = self.pitch
-        for i in self._range(b.x0 - radius * p, b.x1 + radius * p, self.x0, self.nx):
-            for j in self._range(b.y0 - radius * p, b.y1 + radius * p, self.y0, self.ny):
-                if not self.free_for(k, (i, j), net):
-                    continue
-                pad = self.pad(k, i, j)
-                if _covers(b, pad, w):
-                    out.append((0, (k, i, j), []))
-                    continue
-                x, y = self.xy(i, j)
-                qx, qy = min(max(x, b.x0 + w // 2), b.x1 - w // 2), min(max(y, b.y0 + w // 2), b.y1 - w // 2)
-                if b.w < w:
-                    qx = b.cx
-                if b.h < w:
-                    qy = b.cy
-                shapes = []
-                if qx != x:
-                    shapes.append((t.layer, box(min(x, qx) - w // 2, y - w // 2, max(x, qx) + w // 2, y - w // 2 + w)))
-                if qy != y:
-                    shapes.append((t.layer, box(qx - w // 2, min(y, qy) - w // 2, qx - w // 2 + w, max(y, qy) + w // 2)))
-                if all(self.cv.fillers(lay, s, net) is not None for lay, s in shapes):
-                    out.append((abs(qx - x) + abs(qy - y), (k, i, j), shapes))
+        near = [(i, j) for i in self._range(b.x0 - radius * p, b.x1 + radius * p, self.x0, self.nx)
+                for j in self._range(b.y0 - radius * p, b.y1 + radius * p, self.y0, self.ny)
+                if self.free_for(k, (i, j), net)]
+        near.sort(key=lambda n: self.pad(k, *n).gap(b))
+        for i, j in near:
+            if len(out) >= 8:      # the nearest ways on are enough
+                break
+            pad = self.pad(k, i, j)
+            if _covers(b, pad, w):
+                out.append((0, (k, i, j), []))
+                continue
+            x, y = self.xy(i, j)
+            qx, qy = min(max(x, b.x0 + w // 2), b.x1 - w // 2), min(max(y, b.y0 + w // 2), b.y1 - w // 2)
+            if b.w < w:
+                qx = b.cx
+            if b.h < w:
+                qy = b.cy
+            shapes = []
+            if qx != x:
+                shapes.append((t.layer, box(min(x, qx) - w // 2, y - w // 2, max(x, qx) + w // 2, y - w // 2 + w)))
+            if qy != y:
+                shapes.append((t.layer, box(qx - w // 2, min(y, qy) - w // 2, qx - w // 2 + w, max(y, qy) + w // 2)))
+            if all(self.cv.fillers(lay, s, net) is not None for lay, s in shapes):
+                out.append((abs(qx - x) + abs(qy - y), (k, i, j), shapes))
         out.sort(key=lambda a: a[0])
         return [(n, s) for _, n, s in out]
 
@@ -172,11 +175,13 @@ class GridRouter:
         node -> extra cost. Returns the node list, source first."""
         if not targets:
             return None
-        tx = [self.xy(i, j) for (_, i, j) in targets]
+        ii = [i for _, i, _ in targets]
+        jj = [j for _, _, j in targets]
+        i0, i1, j0, j1 = min(ii), max(ii), min(jj), max(jj)
 
-        def h(node):
-            x, y = self.xy(node[1], node[2])
-            return min(abs(x - a) + abs(y - b) for a, b in tx) * STEP // self.pitch
+        def h(node):     # grid steps to the targets' bounding box: never more than the cost left
+            _, i, j = node
+            return (max(i0 - i, 0, i - i1) + max(j0 - j, 0, j - j1)) * STEP
 
         heap = []
         best = {}

@@ -80,18 +80,19 @@ def view_3d(cell, tech, path: Path) -> Path:
     return commit(path, tmp)
 
 
-def plot_exposure(ports: dict, exposure: dict, path: Path, title: str) -> Path:
+def plot_exposure(result: dict, exposure: dict, path: Path, title: str) -> Path:
     """The chip's blocks outlined and the junction no metal covers filled in red, with the
-    exposed area of each block in the legend."""
+    exposed area of each block in the legend. ``result``: the layout's (``size_um``,
+    ``block_regions_um``)."""
     from matplotlib.collections import PolyCollection
     from matplotlib.patches import Rectangle
-    w, h = ports["width"] / 1000, ports["height"] / 1000
+    w, h = result["size_um"]
     fig, ax = plt.subplots(figsize=(6, max(4.0, min(9.0, 6 * h / max(w, 1e-9)))))
     colours = {"pixel array": "#4c72b0", "column circuits": "#55a868", "AFE": "#8172b3", "periphery": "#937860"}
-    for name, boxes in ports["blocks"].items():
+    for name, boxes in result["block_regions_um"].items():
         e = exposure[name]["exposed_m2"] * 1e12
-        for k, b in enumerate(boxes):
-            ax.add_patch(Rectangle((b.x0 / 1000, b.y0 / 1000), b.w / 1000, b.h / 1000, fill=False, lw=0.8,
+        for k, (x0, y0, x1, y1) in enumerate(boxes):
+            ax.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, fill=False, lw=0.8,
                                    ec=colours.get(name, "k"), label=f"{name}: {e:.4g} um2 open" if k == 0 else None))
     polys = []
     for e in exposure.values():
@@ -106,6 +107,37 @@ def plot_exposure(ports: dict, exposure: dict, path: Path, title: str) -> Path:
     ax.set_ylabel("y (um)")
     ax.set_title(title, fontsize=9)
     ax.legend(fontsize=7, loc="upper right")
+    path, tmp = atomic_target(path)
+    fig.savefig(tmp, dpi=110, format="png")
+    plt.close(fig)
+    return commit(path, tmp)
+
+
+def plot_violation(gds, cell: str, where: str, tech, path: Path, title: str, margin: float = 3.0) -> Path:
+    """The layers of ``cell`` around a DRC marker (``where``: the marker as the deck's report gives
+    it, cell coordinates in um), the marker outlined in red."""
+    import re
+    import gdstk
+    lib = gdstk.read_gds(str(gds))
+    c = next(x for x in lib.cells if x.name == cell)
+    nums = [float(v) for v in re.findall(r"-?\d+(?:\.\d+)?", where)]
+    xs, ys = nums[0::2], nums[1::2]
+    x0, x1, y0, y1 = min(xs) - margin, max(xs) + margin, min(ys) - margin, max(ys) + margin
+    window = gdstk.rectangle((x0, y0), (x1, y1))
+    fig, ax = plt.subplots(figsize=(5, 5))
+    polys = c.get_polygons()
+    names = dict(STACK, mim_top=("#17becf", 0, 0), via4=("#000000", 0, 0))
+    for name, (colour, _z0, _z1) in names.items():
+        lay = tech.layer(name)
+        mine = [p for p in polys if (p.layer, p.datatype) == (lay.layer, lay.datatype)]
+        for k, p in enumerate(gdstk.boolean(mine, window, "and")):
+            ax.fill(p.points[:, 0], p.points[:, 1], color=colour, alpha=0.5, lw=0.3, label=name if k == 0 else None)
+    ax.plot(xs + xs[:1], ys + ys[:1], color="red", lw=2, label="marker")
+    ax.set_xlim(x0, x1)
+    ax.set_ylim(y0, y1)
+    ax.set_aspect("equal")
+    ax.set_title(title, fontsize=9)
+    ax.legend(fontsize=6, loc="upper right")
     path, tmp = atomic_target(path)
     fig.savefig(tmp, dpi=110, format="png")
     plt.close(fig)

@@ -55,7 +55,7 @@ def _dotted(design, top: str) -> dict:
         local = set()
         for _n, _m, *ts in c["mos"]:
             local.update(ts[:4])
-        for _n, a, k, *_ in c["diodes"]:
+        for _n, a, k, *_ in c["diodes"] + c.get("caps", []) + c.get("res", []):
             local.update((a, k))
         for name, target, nets_ in c["subs"]:
             local.update(nets_)
@@ -97,7 +97,7 @@ def net_geometry(gds, top: str, design) -> NetGeometry:
     lvs = kdb.LayoutVsSchematic(kdb.RecursiveShapeIterator(layout, cell, []))
     L = extract(lvs, layout, tech)
     ref, dotted = _flat_names(design, top)
-    nl = prepare(lvs, ref)
+    nl = prepare(lvs, ref, tech=tech)
     comparer = kdb.NetlistComparer()
     a, b = nl.circuit_by_name(top), next(ref.each_circuit_top_down())
     if a is not None:

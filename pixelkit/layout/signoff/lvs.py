@@ -273,7 +273,7 @@ def _terms(d) -> str:
                      for t in d.device_class().terminal_definitions())
 
 
-def prepare(lvs, ref, top: str = ""):
+def prepare(lvs, ref, top: str = "", tech=None):
     """Set ``ref`` as the reference of ``lvs`` and bring both netlists to the form they are compared
     in (cells below ``top`` without a circuit of their own looked through, floating nets purged,
     top-level pins, parallel devices combined); the extracted netlist."""
@@ -287,6 +287,8 @@ def prepare(lvs, ref, top: str = ""):
     nl.combine_devices()
     ref.combine_devices()
     nl.purge()
+    if tech is not None:
+        _tolerances(tech, ref, nl)
     return nl
 
 
@@ -306,9 +308,8 @@ def run_lvs(gds: Path, top: str, design, workdir: Path | None = None) -> LvsResu
     extract(lvs, layout, design.tech)
     tech = design.tech
     ref = to_klayout(lvs_view(design, circuits_of(design, top)))
-    nl = prepare(lvs, ref, top)
+    nl = prepare(lvs, ref, top, tech)
     comparer = kdb.NetlistComparer()
-    _tolerances(tech, ref, nl)
     for c in nl.each_circuit():
         b = ref.circuit_by_name(circuit_of(c.name) or "")
         if b is not None:

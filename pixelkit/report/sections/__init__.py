@@ -77,6 +77,7 @@ REGISTRY: list[tuple[str, str, str]] = [
     ("afe", "AFE transfer and its error", "report"),
     ("array", "2 x 2 array readout (fig. 3.13)", "report"),
     ("layout", "Layout", "report"),
+    ("layout_signoff", "Layout sign-off", "issue 29 (readout layout, arrays, shield)"),
     ("post_layout", "Post-layout vs schematic", "issue 30 (extraction)"),
     ("light_map", "Light map: what the shield leaves open", "issue 30 (extraction)"),
     ("noise", "Noise", "issue 11 (noise / virtual camera)"),
