@@ -36,9 +36,11 @@ def write_netlists(design, cells, folder: Path, top: str = SIGNOFF_TOP) -> dict:
         if circuit_of(name) is not None:
             view = lvs_view(design, circuits_of(design, name))
             out[name] = str(write_atomic(Path(folder) / f"{name}.spice", spice_text(view, f"{design.name} {name}")))
-    view = flat_view(lvs_view(design, circuits_of(design, top)))
-    out[f"{top}.flat"] = str(write_atomic(Path(folder) / f"{top}.flat.spice",
-                                          spice_text(view, f"{design.name} {top}, flattened")))
+    for name in dict.fromkeys((SIGNOFF_TOP, top)):   # the pixel with its columns, and the chip
+        if name in cells:
+            view = flat_view(lvs_view(design, circuits_of(design, name)))
+            out[f"{name}.flat"] = str(write_atomic(Path(folder) / f"{name}.flat.spice",
+                                                   spice_text(view, f"{design.name} {name}, flattened")))
     return out
 
 

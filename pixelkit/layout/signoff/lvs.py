@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ...errors import PixelkitError
-from .schematic import CELL_CIRCUIT, VSS, circuit_of, circuits_of, lvs_view, to_klayout
+from .schematic import CELL_CIRCUIT, VSS, circuit_of, circuits_of, lvs_view, pd_device, to_klayout
 
 METALS = ("metal1", "metal2", "metal3", "metal4", "metal5")
 VIAS = ("via1", "via2", "via3", "via4")
@@ -95,7 +95,7 @@ def extract(lvs, layout, tech) -> dict:
                         {"SD": nsd, "G": ngate, "P": poly, "W": bulk})
     lvs.extract_devices(kdb.DeviceExtractorMOS4Transistor(mos.pmos),
                         {"SD": psd, "G": pgate, "P": poly, "W": well})
-    lvs.extract_devices(kdb.DeviceExtractorDiode(tech.photodiode.spice_model), {"P": pd_p, "N": pd_n})
+    lvs.extract_devices(kdb.DeviceExtractorDiode(pd_device(tech)), {"P": pd_p, "N": pd_n})
     for r in (nsd, psd, ptap, ntap, poly, L["contact"], well, pd_n):
         lvs.connect(r)
     for a, b in (("nsd", "contact"), ("psd", "contact"), ("ptap", "contact"), ("ntap", "contact")):
@@ -345,7 +345,7 @@ def _tolerances(tech, *netlists) -> None:
         eqs.append((model, eq))
     eq = kdb.EqualDeviceParameters(kdb.DeviceClassDiode.PARAM_A, 0.0, 1e-3)
     eq += kdb.EqualDeviceParameters(kdb.DeviceClassDiode.PARAM_P, 0.0, 1e-3)
-    eqs.append((tech.photodiode.spice_model, eq))
+    eqs.append((pd_device(tech), eq))
     if tech.passives is not None:
         eqs.append((tech.passives.mim_lvs, kdb.EqualDeviceParameters(kdb.DeviceClassCapacitor.PARAM_C, 0.0, 1e-3)))
         eqs.append((tech.passives.res_model, kdb.EqualDeviceParameters(kdb.DeviceClassResistor.PARAM_R, 0.0, 1e-3)))

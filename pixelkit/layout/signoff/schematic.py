@@ -64,6 +64,12 @@ def circuit_of(cell: str) -> str | None:
     return CELL_CIRCUIT.get(cell)
 
 
+def pd_device(tech) -> str:
+    """The photodiode's name in netlists for LVS: the foundry's device (its LVS deck extracts the
+    junction under that name) when the technology names one, else the kit's model."""
+    return tech.photodiode.foundry_card or tech.photodiode.spice_model
+
+
 def _node(n: str) -> str:
     return VSS if n == "0" else n
 
@@ -112,7 +118,8 @@ def _collect(design, sc, c, by, drawn, prefix, nets, params) -> None:
                      {**dict(inner.params), **{k: value(v) for k, v in e.params}})
         elif kind == "D":
             p = dict(e.params)
-            c["diodes"].append((name, n(e.nodes[0]), n(e.nodes[1]), e.value, p["area"] * 1e12, p["pj"] * 1e6))
+            model = pd_device(t) if e.value == t.photodiode.spice_model else e.value
+            c["diodes"].append((name, n(e.nodes[0]), n(e.nodes[1]), model, p["area"] * 1e12, p["pj"] * 1e6))
         elif kind == "C" and "0" not in e.nodes and t.passives is not None:
             cval = value(e.value)
             w, l_ = _drawn(design, c["name"], "c", cval)
