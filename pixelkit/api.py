@@ -14,10 +14,11 @@ The main commands of the command line are thin layers over these functions::
     sized = pk.size(d)                                       # mask opening, integration times
     lay = pk.layout_design(d, "layouts")                     # GDS, extraction, pictures
     gap = pk.diagnose(d, "measured.csv")                     # sim-to-real gap of measured data
+    so = pk.sign_off(d, corners=("tt", "ss"), mc=20)         # [spec] over corners x T x supply, yield
 
 Units are SI throughout (A, V, s, m); results are plain dicts / numpy arrays.
-(``measure_signals`` and ``layout_design`` are not called ``measure`` / ``layout``:
-those names are the subpackages ``pixelkit.measure`` and ``pixelkit.layout``.)
+(``measure_signals``, ``layout_design`` and ``sign_off`` are not called ``measure`` / ``layout`` / ``verify``:
+those names are the subpackages ``pixelkit.measure``, ``pixelkit.layout`` and ``pixelkit.verify``.)
 """
 from __future__ import annotations
 
@@ -143,3 +144,13 @@ def diagnose(design, measured, seed: int = 0) -> dict:
     from .gap.store import load_nominal
     r, _x, _resid = analyse(design, read_table(measured, design, measured=True), load_nominal(design), seed=seed)
     return r
+
+
+def sign_off(design, corners=None, temperatures=None, supplies=None, mc=None, seed=None, backend: str = "batch",
+           jobs=None, scheduler=None, post_layout: bool = False) -> dict:
+    """The sign-off of the design's ``[spec]`` table over process corner x temperature (K) x supply
+    deviation, with ``mc`` Monte Carlo samples (defaults: its ``[verify]`` table): ``rows`` (per spec:
+    worst condition, value, margin, status, yield), ``failed``, ``power``, every condition's figures."""
+    from .verify.run import verify as _verify
+    return _verify(design, corners, temperatures, supplies, mc, seed, backend=backend, jobs=jobs,
+                   scheduler=scheduler, post_layout=post_layout)
