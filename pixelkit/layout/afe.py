@@ -20,8 +20,9 @@ column's width. From the bottom edge (away from the array) up:
 Every MOSFET, capacitor and resistor is an element of the netlist with its W / L or value:
 the capacitor's plate is as wide as the pitch allows and as long as its value asks (the
 model card's area and perimeter capacitance), the resistor's body as long as its value asks
-at the technology's sheet resistance. The nets are routed by :mod:`.gridroute` on metal2 -
-metal5, keeping metal4 1.2 um (the MIM rule) off every capacitor's bottom plate.
+at the technology's sheet resistance. The capacitors' plates leave on planned top-metal leads
+to metal4 landings (:mod:`.mimstack`); every net is then routed by :mod:`.gridroute` on metal2 -
+metal4, keeping metal4 1.2 um (the MIM rule) off every capacitor's bottom plate.
 """
 from __future__ import annotations
 
@@ -31,7 +32,8 @@ from dataclasses import dataclass
 from ..circuits.readout import afe_cell, opamp_cell
 from .canvas import Box, Canvas, box
 from .gridroute import GridRouter, Terminal
-from .primitives import Mos, mim_cap, mos_strip, pad_side, poly_resistor, resistor_heads, strip_height, tap, tap_size, well
+from .mimstack import column, draw_stack
+from .primitives import Mos, mos_strip, pad_side, poly_resistor, resistor_heads, strip_height, tap, tap_size, well
 from .route import track
 from .rules import RuleError
 
@@ -119,12 +121,8 @@ def cap_plate(lt, tech, c: float, w: int) -> int:
 
 
 def cap_width(lt, width: int) -> int:
-    """The widest MIM top plate a ``width`` nm cell holds (bottom plate enclosure, its via on the
-    right, half the bottom-plate spacing to each neighbour cell)."""
-    e = lt.nm("mim_bottom.enclosure.mim_top")
-    ext = max(e, lt.nm("mim_top.space_to.via4") + lt.cut("via4") + lt.nm("mim_bottom.enclosure.via4"))
-    half = lt.nm("mim_bottom.space") // 2
-    return ((width - 2 * half - e - ext) // lt.grid) * lt.grid
+    """The widest MIM top plate a ``width`` nm cell holds (``mimstack.column``)."""
+    return column(lt, width).plate_w
 
 
 def resistor_length(lt, tech, r: float, w: int) -> int:
@@ -153,12 +151,12 @@ def _fit(design, lt, width: int, which: str, devs: list[Device]) -> dict:
     pitch_value = getattr(design, which).pitch
     wp = cap_width(lt, width)
     amin = lt.area("mim_top.area")
-    side_min = lt.snap_up(math.sqrt(amin))
+    side_min = 2 * lt.nm("mim_top.enclosure.via4") + lt.cut("via4")     # one via of the sea
     if wp < side_min:
         raise RuleError("afe_fit", f"AFE cell ({which} column)", f"the MIM capacitors need a plate at least "
-                        f"{side_min / 1000:g} um wide ({lt.cite('mim_top.area')}): the {width / 1000:g} um pitch "
-                        f"leaves {wp / 1000:g} um; the pitch must be at least {(width - wp + side_min) / 1000:g} um",
-                        pitch_field, pitch_value)
+                        f"{side_min / 1000:g} um wide (a via enclosed by {lt.cite('mim_top.enclosure.via4')}) beside "
+                        f"their bottom plates' vias and lanes: the {width / 1000:g} um pitch leaves {wp / 1000:g} um; "
+                        f"the pitch must be at least {(width - wp + side_min) / 1000:g} um", pitch_field, pitch_value)
     out = {"plate_w": wp, "caps": {}, "fingers": {}}
     pa = design.tech.passives
     for d in devs:
@@ -197,10 +195,6 @@ class _Stack:
     def term(self, net: str, layer: str, b: Box) -> None:
         self.terms.setdefault(net, []).append(Terminal(layer, b))
 
-    def keep_dark(self, junction: Box) -> None:
-        """No top-metal wire over a junction: the shield's gap around it would let light in."""
-        self.cv.block(["metal5"], junction.grown(100), "#junction")
-
     def strip(self, dev: Device, n: int, wf: int, kind: str):
         lt = self.lt
         devs, nets = _strip_devs(lt, dev, n, wf)
@@ -210,7 +204,6 @@ class _Stack:
         s = mos_strip(self.cv, lt, kind, self.x, y0, devs, nets, contacted, "right")
         for net, p in s.sd + s.gates:
             self.term(net, "metal1", p)
-        self.keep_dark(s.comp)
         self.y = y0 + strip_height(lt, devs, contacted) + e
         return s
 
@@ -219,7 +212,6 @@ class _Stack:
         cx, cy = self.x + iside // 2, self.y + iside // 2
         comp, pad = tap(self.cv, self.lt, kind, cx, cy, net)
         self.term(net, "metal1", pad)
-        self.keep_dark(comp)
         self.y += iside
         return comp
 
@@ -256,28 +248,28 @@ def afe_layout(design, lt, which: str, width: int, x_in: int, x_pass: int, name:
         b = track(cv, lt, net, "metal4", x, 0, stub)
         st.term(net, "metal4", b)
         cv.label("metal4_label", x, stub // 2, net)
-    y = stub + lt.nm("mim_bottom.space") + CAP_GAP // 2
+    y = stub + lt.nm("mim_bottom.space") + lt.space("metal4")
     # Cc (the op-amp's compensation), then Rz
-    wp = fit["plate_w"]
     caps = [d for d in devs if d.kind == "c"]
     shared = _shared_node(caps)
-    e_bot = lt.nm("mim_bottom.enclosure.mim_top")
+    col = column(lt, width)
 
-    def draw_cap(d, y):
-        top = shared if shared in d.nodes else d.nodes[0]
-        bottom = d.nodes[1] if d.nodes[0] == top else d.nodes[0]
-        h = fit["caps"][d.name]
-        m = mim_cap(cv, lt, x_left, y + e_bot, wp, h, top, bottom)
-        st.term(top, "metal5", m["top"])
-        st.term(bottom, "metal5", m["bottom"])
-        plate = m["plate"]
+    def stack(ds, y):
+        spec = []
+        for d in ds:
+            top = shared if shared in d.nodes else d.nodes[0]
+            spec.append((top, d.nodes[1] if d.nodes[0] == top else d.nodes[0], fit["caps"][d.name]))
+        s_ = draw_stack(cv, lt, col, spec, y)
+        for net, pads in s_.landings.items():
+            for b in pads:
+                st.term(net, "metal4", b)
         keep = lt.nm("mim_bottom.space") - lt.space("metal4")
-        cv.block(["metal4"], plate.grown(keep), "#mim")
-        return plate.y1
+        for plate in s_.plates:       # MIMTM.1 / .10: no metal4 (so no via3) near a bottom plate
+            cv.block(["metal4"], plate.grown(keep), "#mim")
+        return s_.y1
 
-    others = [d for d in caps if shared not in d.nodes]
-    for d in others:
-        y = draw_cap(d, y) + CAP_GAP
+    for d in [d for d in caps if shared not in d.nodes]:
+        y = stack([d], y) + CAP_GAP
     st.y = y
     for d in devs:
         if d.kind == "r":
@@ -314,11 +306,9 @@ def afe_layout(design, lt, which: str, width: int, x_in: int, x_pass: int, name:
     _n_group(st, lt, swn, fit)
     st.y += GROUP_GAP
     _p_group(st, lt, swp, fit)
-    # the input capacitors, their top plates the shared node
-    y = st.y + CAP_GAP
-    for d in [d for d in caps if shared in d.nodes][::-1]:
-        y = draw_cap(d, y) + lt.nm("mim_bottom.space")
-    height = lt.snap_up(y - lt.nm("mim_bottom.space") + CAP_GAP)
+    # the input capacitors, their top plates the shared node (C13 lowest)
+    y = stack([d for d in caps if shared in d.nodes][::-1], st.y + GROUP_GAP)
+    height = lt.snap_up(y + stub + lt.space("metal4"))
     # top edge: the column's out (= in) and nbias arrive on metal4
     for net, x in (("in", x_in), ("nbias", x_pass)):
         b = track(cv, lt, net, "metal4", x, height - stub, height)
@@ -327,12 +317,10 @@ def afe_layout(design, lt, which: str, width: int, x_in: int, x_pass: int, name:
     cv.add("boundary", box(0, 0, width, height), "")
     # route every net with two or more terminals
     area = box(half, half, width - half, height - half)
-    r = GridRouter(cv, lt, ("metal2", "metal3", "metal4", "metal5"), area, router_pitch)
+    r = GridRouter(cv, lt, ("metal2", "metal3", "metal4"), area, router_pitch)
     for net, ts in st.terms.items():
         r.add_net(net, ts)
-    # the capacitors' nets first (their top-metal lanes beside the plates are few), then the busiest
-    order = sorted(st.terms, key=lambda n: (not any(t.layer == "metal5" for t in st.terms[n]), -len(st.terms[n])))
-    r.route(order)
+    r.route(sorted(st.terms, key=lambda n: -len(st.terms[n])))   # the busiest first
     cv.ports = {"width": width, "height": height, "lines": line_y, "bottom": bottom_x,
                 "top": {"in": x_in, "nbias": x_pass}}
     return cv
@@ -370,7 +358,6 @@ def _p_group(st: _Stack, lt, devs, fit) -> None:
     st.y += STRIP_GAP
     comps.append(st.tap("n", "vdd"))
     nw = well(st.cv, lt, comps, "vdd")
-    st.keep_dark(nw)
     st.y = nw.y1
 
 

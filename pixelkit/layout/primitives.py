@@ -318,23 +318,38 @@ def poly_resistor(cv: Canvas, lt, x0: int, y0: int, w: int, length: int, bottom:
     return out
 
 
-def mim_cap(cv: Canvas, lt, x0: int, y0: int, w: int, h: int, top: str, bottom: str) -> dict:
-    """A MIM capacitor (top plate ``w`` x ``h``): bottom plate on ``mim_bottom`` enclosing it,
-    the marker layers, a sea of vias from the top plate to the metal above and one via from
-    the bottom plate's extension (right side) up. Returns {"top": metal box, "bottom": metal box}."""
+def top_metal_space(lt) -> int:
+    """Spacing to the top metal's wide shapes (a MIM plate, the shield): the wide-metal rule
+    where the technology has one."""
+    return lt.nm("shield.space") if lt.has("shield.space") else lt.space("metal5")
+
+
+def mim_extension(lt) -> int:
+    """How far a :func:`mim_cap`'s bottom plate reaches beyond the top plate on its via side:
+    the via clear of the top plate (MIMTM.5), its top-metal pad clear of the plate's top metal,
+    the bottom plate around the via (MIMTM.2)."""
+    vs = lt.cut("via4")
+    side = pad_side(lt, "metal5")
+    to_via = max(lt.nm("mim_top.space_to.via4"), top_metal_space(lt) + (side - vs) // 2)
+    return max(lt.nm("mim_bottom.enclosure.mim_top"), to_via + vs + lt.nm("mim_bottom.enclosure.via4"))
+
+
+def mim_cap(cv: Canvas, lt, x0: int, y0: int, w: int, h: int, top: str, bottom: str, via_side: str = "right") -> dict:
+    """A MIM capacitor (top plate ``w`` x ``h`` at (x0, y0)): bottom plate on ``mim_bottom``
+    enclosing it, the marker layers, a sea of vias from the top plate to the metal above and one
+    via from the bottom plate's extension on ``via_side`` ("right" / "left") up, its top-metal pad
+    clear of the plate's. Returns {"top": metal box, "bottom": metal box, "plate": bottom plate}."""
     tp = box(x0, y0, x0 + w, y0 + h)
     area_min = lt.area("mim_top.area")
     if w * h < area_min:
         raise ValueError(f"MIM top plate {w * h / 1e6:g} um2 < {lt.cite('mim_top.area')}")
-    bl = "mim_bottom"
     e_bot = lt.nm("mim_bottom.enclosure.mim_top")
     via = "via4"
     vs, venc = lt.cut(via), lt.nm("mim_top.enclosure.via4")
     upper = "metal5"
-    cv.add("mim_top", tp, top)
-    cv.add("mim_marker", tp.grown(e_bot), "")
+    shapes = [("mim_top", tp, top), ("mim_marker", tp.grown(e_bot), "")]
     if lt.tech.layout.layers.get("mim_l_marker") is not None:
-        cv.add("mim_l_marker", tp.grown(e_bot), "")
+        shapes.append(("mim_l_marker", tp.grown(e_bot), ""))
     # top plate: vias at the sea-of-via spacing, the upper metal over them
     pitch = vs + lt.nm("mim_via.space")
     nx = max(1, (w - 2 * venc - vs) // pitch + 1)
@@ -344,17 +359,20 @@ def mim_cap(cv: Canvas, lt, x0: int, y0: int, w: int, h: int, top: str, bottom: 
     oy = y0 + (h - (ny - 1) * pitch - vs) // (2 * g) * g
     for i in range(nx):
         for j in range(ny):
-            cv.add(via, box(ox + i * pitch, oy + j * pitch, ox + i * pitch + vs, oy + j * pitch + vs), top)
-    top_metal = cv.add(upper, tp, top)
-    # bottom plate with an extension carrying its via
-    bsep = lt.nm("mim_top.space_to.via4")
-    benc = lt.nm("mim_bottom.enclosure.via4")
-    bx1 = x0 + w + max(e_bot, bsep + vs + benc)
+            shapes.append((via, box(ox + i * pitch, oy + j * pitch, ox + i * pitch + vs, oy + j * pitch + vs), top))
+    shapes.append((upper, tp, top))
+    # bottom plate with an extension carrying its via (drawn on the right, mirrored for the left)
+    ext = mim_extension(lt)
+    bx1 = x0 + w + ext
     bot = box(x0 - e_bot, y0 - e_bot, bx1, y0 + h + e_bot)
-    cv.add(bl, bot, bottom)
-    vx = bx1 - benc - vs
+    vx = bx1 - lt.nm("mim_bottom.enclosure.via4") - vs
     vy = y0 + (h // 2 - vs // 2) // g * g
-    cv.add(via, box(vx, vy, vx + vs, vy + vs), bottom)
     side = pad_side(lt, upper)
-    bottom_metal = cv.add(upper, square(vx + vs // 2, vy + vs // 2, side), bottom)
-    return {"top": top_metal, "bottom": bottom_metal, "plate": bot}
+    shapes += [("mim_bottom", bot, bottom), (via, box(vx, vy, vx + vs, vy + vs), bottom),
+               (upper, square(vx + vs // 2, vy + vs // 2, side), bottom)]
+    if via_side == "left":          # mirror about the plate's centre line
+        shapes = [(lay, box(2 * x0 + w - b.x1, b.y0, 2 * x0 + w - b.x0, b.y1), n) for lay, b, n in shapes]
+    for lay, b, n in shapes:
+        cv.add(lay, b, n)
+    top_metal = next(b for lay, b, n in shapes if lay == upper and n == top)
+    return {"top": top_metal, "bottom": shapes[-1][1], "plate": shapes[-3][1]}
