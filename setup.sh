@@ -85,10 +85,10 @@ VPY="$VENV/bin/python"
 stamp="$VENV/.pixelkit-setup"
 want="$(sha256sum pyproject.toml | cut -d' ' -f1) $CLONE"
 if [ "$(cat "$stamp" 2>/dev/null)" != "$want" ] || ! (cd / && "$VPY" -c \
-    "import emva1288, pytest, pixelkit, sys; sys.exit(not pixelkit.__file__.startswith(sys.argv[1]))" \
+    "import emva1288, pytest, mkdocs, material, mkdocstrings, mkdocs_click, pixelkit, sys; sys.exit(not pixelkit.__file__.startswith(sys.argv[1]))" \
     "$CLONE/" 2>/dev/null); then
   echo "setup: installing pixelkit and its dependencies into $VENV (pip)" >&2
-  "$VPY" -m pip install -q --disable-pip-version-check -e '.[test]'
+  "$VPY" -m pip install -q --disable-pip-version-check -e '.[test,docs]'
   echo "$want" > "$stamp"
 fi
 "$VPY" -m pixelkit.layout.signoff.decks --fetch >&2

@@ -72,6 +72,8 @@ def simulate(netlist, backend: str = "batch", options=None, use_cache: bool = Tr
 
 
 def simulate_many(netlists, backend: str = "batch", jobs=None, options=None, use_cache: bool = True):
+    """Run several netlists in parallel (``jobs`` workers, default ``$PIXELKIT_JOBS`` or the cores,
+    at most 8), each cached and retried as :func:`simulate`; a list of Results in their order."""
     from .spice import simulate_many as _many
     return _many(netlists, backend=backend, jobs=jobs, options=options, use_cache=use_cache)
 

@@ -2,7 +2,7 @@
 --jobs/--backend where SPICE runs, distinct exit statuses, working-range warnings, progress.
 
 The expected exit statuses and JSON fields are the documented convention
-(README "Command line and Python API", pixelkit/errors.py), not the code's output;
+(docs/cli-conventions.md, pixelkit/errors.py), not the code's output;
 the soft-reset limit is derived here from the technology (supply - Vth).
 """
 import json
@@ -93,7 +93,7 @@ def _in_process(argv, capsys):
 
 
 def test_exit_statuses_are_distinct(capsys):
-    """1 difference, 2 user error, 3 internal fault, 4 simulation failed (errors.py, README)."""
+    """1 difference, 2 user error, 3 internal fault, 4 simulation failed (errors.py, docs/cli-conventions.md)."""
     from pixelkit.errors import ConfigError, RegressionFound, SimulationError
 
     raised = {"regression": RegressionFound("2 figures changed"),

@@ -13,7 +13,7 @@ def test_row_split_matches_undivided(ref_design):
     """Independent path: the undivided 3 x 2 deck (both arrays, every row, one simulation).
 
     The split runs one deck per array and row. Both at reltol 1e-6: at the kit's default
-    1e-5 two decks with different step sequences already scatter by ~0.2 mV (README), which
+    1e-5 two decks with different step sequences already scatter by ~0.2 mV (docs/arrays.md), which
     would hide what the split itself changes. Limit: 0.1 mV (the issue's figure)."""
     d = ref_design
     ip = np.array([[2e-10 + 1e-10 * (r + c) for c in range(2)] for r in range(3)])
@@ -41,7 +41,7 @@ def test_column_chains_match_undivided_with_afe(ref_design):
     pixel by 2.2 mV; both fail here. Tolerances: reltol 1e-6, abstol 1e-12 (at 1e-6 / 1e-14
     ngspice stops, "timestep too small" on a clock source, and the engine's looser retry
     would move the comparison by ~2.5 mV; retried decks fail the test). Limit 0.1 mV (the
-    issue's figure); a 27-row column was measured within 0.013 / 0.038 mV (README). The
+    issue's figure); a 27-row column was measured within 0.013 / 0.038 mV (docs/arrays.md). The
     reference is one deck per array: the arrays share only ideal sources, and both arrays in
     one deck scatter by up to 0.11 mV from the same arrays alone at these tolerances (two
     interleaved clock systems, one step sequence: the simulator's noise, not a coupling)."""

@@ -231,7 +231,7 @@ def _minus(b: Box, h: Box):
 # ---------------------------------------------------------------- command line ------------------
 
 def test_layout_cli_pixels_shield_leaves_the_readout_open(tmp_path, cli):
-    """The thesis's chip: the pixels shielded, the readout open. The pixels' exposure is what the
+    """The chip of [Thesis2019]: the pixels shielded, the readout open. The pixels' exposure is what the
     design asks; the AFE and column circuits show their junctions."""
     code, out, err = cli("layout", GF, "--afe", "--shield", "pixels", "--lvs", "--no-pictures", "--json",
                          "--out", tmp_path)

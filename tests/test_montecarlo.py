@@ -57,7 +57,7 @@ def test_dsnu_prnu_column_fpn_and_pedestal_against_linear_propagation(ref_design
         lo, hi = sample_band(cols - 1)
         assert lo <= m["column_fpn_V"] / e["column_fpn_V"] <= hi, (k, m["column_fpn_V"], e)
         # the mean of the draws is the nominal dark signal: within 4 standard errors of the
-        # mean, + 0.3 mV for two decks at different tolerances (README: ~0.2 mV)
+        # mean, + 0.3 mV for two decks at different tolerances (docs/arrays.md: ~0.2 mV)
         se = math.sqrt(pix2 / n + col2 / cols)
         assert abs(m["pedestal_V"] - e["nominal_dark_V"]) <= 4 * se + 3e-4, (k, m["pedestal_V"], e)
 

@@ -15,7 +15,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 
 #: Folders that are not the kit's own text: vendor model files, data, generated output.
-SKIP_DIRS = {".git", ".venv", "venv", "reports", "__pycache__", ".pytest_cache", "build", "dist"}
+SKIP_DIRS = {".git", ".venv", "venv", "reports", "__pycache__", ".pytest_cache", "build", "dist", "site"}
 SKIP_UNDER = ("tests/data/", "pixelkit/tech/models/")
 TEXT_SUFFIXES = {".py", ".md", ".toml", ".txt", ".sh", ".j2", ".html", ".css", ".cfg", ".ini", ".yml",
                  ".yaml", ".cir", ".spice", ".json", ".csv", ""}

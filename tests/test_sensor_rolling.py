@@ -4,7 +4,7 @@ Independent path: ``pixelkit.sensor.exposure``, a row-by-row, time-stepped
 exposure of the moving rectangle (no closed form inside). The closed forms of
 ``pixelkit.sensor.rolling`` (derived in its docstring) and the compensation of
 ``pixelkit.sensor.compensation`` must agree with those images within one pixel;
-the published forms of [Rychazhnikov2008a] / [Rychazhnikov2008b] are shown to fail where the README says.
+the published forms of [Rychazhnikov2008a] / [Rychazhnikov2008b] are shown to fail where docs/frame-models.md says.
 """
 import itertools
 import json

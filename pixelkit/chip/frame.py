@@ -61,7 +61,7 @@ GROUP = {"primary": 3, "secondary": 1}
 #: long benches. PWL edges are breakpoints, so switching is still resolved; between them the
 #: error control steps. On a 27-row primary column with its AFE (default tolerances) against
 #: the converged undivided deck: largest error 0.13 mV at t_row / 2, 0.24 mV at t_row / 20
-#: (the error is the tolerances', not the step's), in 0.7x the time (README).
+#: (the error is the tolerances', not the step's), in 0.7x the time (docs/arrays.md).
 STEPS_PER_ROW = 2
 
 
@@ -258,7 +258,7 @@ def simulate_frame(design, iph_p, iph_s, with_afe: bool = False, split: str | No
 
 
 #: Tolerances at which a split is judged against the undivided deck: at the defaults two decks
-#: with different step sequences already scatter by 0.2 - 0.4 mV (README), which would hide
+#: with different step sequences already scatter by 0.2 - 0.4 mV (docs/arrays.md), which would hide
 #: what the split itself changes; at reltol 1e-6, abstol 1e-12 the undivided deck moves by
 #: < 0.08 mV with trtol or the maximum step (abstol 1e-14 stops ngspice there).
 CONVERGED = (("reltol", 1e-6), ("abstol", 1e-12))

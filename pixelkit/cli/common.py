@@ -1,6 +1,6 @@
 """The ``pixelkit`` command: the group, the shared options, output and ``run`` (errors, exit statuses).
 
-The convention every command follows (README, "Command line and Python API"):
+The convention every command follows (docs/cli-conventions.md):
 
 - the design file is the first positional argument (``design_arg``); commands
   that work on a design load it with :func:`load` (it prints the design's

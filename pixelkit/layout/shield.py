@@ -5,7 +5,7 @@
 - ``full``: everything but the mask openings - the pixels (their shield is drawn in each
   subpixel: the cell but its opening, or its PD when unmasked), the column circuits, the AFEs
   and the periphery (cells ``SHIELD_*``, one per readout cell, placed as the readout is);
-- ``pixels``: the pixels only, the readout left open (the source thesis's chip, whose AFE and
+- ``pixels``: the pixels only, the readout left open (the chip of [Thesis2019], whose AFE and
   output stage saw light);
 - ``none``: no shield at all.
 

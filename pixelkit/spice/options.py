@@ -9,7 +9,7 @@ Defaults (measured with ngspice 39 on an 8x8 array + SC AFE):
   for 0.09 mV on an SC output, but on the pixel's 5 % point (a ~19 mV secondary
   signal) 1e-16 / 1e-4 left 1.5 mV of error and a signal-vs-current curve that
   wandered by +-5 %; 1e-18 / 1e-5 made it linear to 0.1 % for +14 % run time
-  (measured on the dual-pixel bench, see the README).
+  (measured on the dual-pixel bench, docs/engine.md).
 - ``abstol = 1e-14``: photocurrents are pA; the default 1 pA is their size.
 - ``method = gear``: damps the trapezoidal ringing after switch edges (+2 %).
 """

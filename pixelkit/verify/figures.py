@@ -46,7 +46,7 @@ _LIST = [
                "analytic C(V) of the PD node (physics.subpixel.pd_node)"),
     *_per_kind("swing", "V", "V", "pixel",
                "column swing of the {kind} subpixel: saturated minus dark double-sampled signal (SPICE)",
-               "pixel.swing minus the SF's drop (README: 'Column swing ~0.85 V')"),
+               "pixel.swing minus the SF's drop (docs/pixel-model.md: 'Column swing ~0.85 V')"),
     *_per_kind("full_well", "C", "e-", "pixel",
                "saturation capacity of the {kind} subpixel as EMVA 1288 defines it: column swing over the "
                "output-referred conversion gain (SPICE)",

@@ -49,7 +49,7 @@ def build(ctx) -> Section:
             "but worth a second look.",
             f"Model library of {d.tech.name}: {len(incs)} include(s) from {d.tech.models.folder.name}/; no "
             ".control block in them or in the files they include (a model library is executable code: "
-            "the kit refuses one that would run simulator commands, see README 'Security and reliability'). "
+            "the kit refuses one that would run simulator commands, docs/security.md). "
             "Decks name the files through the kit's models/ link; no user path is written into a deck."]
     table = Table("input_margins", "Quantities by their position in the plausibility range",
                   ["field", "value", "plausible from", "plausible to", "position (0 = low, 1 = high)", "note"],

@@ -1,0 +1,1 @@
+"""Build helpers of the documentation site (MkDocs): not part of the installed kit."""

@@ -1,0 +1,108 @@
+"""The documentation site builds from ``docs/`` with ``mkdocs build --strict``: no broken link,
+anchor or citation key, no page left out of the navigation.
+
+Independent references: the CLI reference is compared with the click group's own commands and
+the API reference with ``pixelkit.__all__`` (the site is generated, so its content is checked
+against what it was generated from, by name); the bibliography's keys are read from its
+headings here. A planted site with a missing page, a broken anchor and an unknown key shows the
+strict build fails for each.
+"""
+import re
+import subprocess
+import sys
+
+import pytest
+import yaml
+
+from conftest import ROOT
+
+sys.path.insert(0, str(ROOT))
+from docsite.hooks import link_markdown  # noqa: E402
+
+
+def build(config, site, cwd=ROOT):
+    return subprocess.run([sys.executable, "-m", "mkdocs", "build", "--strict", "-f", str(config),
+                           "--site-dir", str(site)], cwd=cwd, capture_output=True, text=True, timeout=600,
+                          env={**__import__("os").environ, "NO_MKDOCS_2_WARNING": "1"})
+
+
+def nav_files(nav) -> list[str]:
+    out = []
+    for item in nav:
+        for value in (item.values() if isinstance(item, dict) else [item]):
+            out += nav_files(value) if isinstance(value, list) else [value]
+    return out
+
+
+@pytest.fixture(scope="module")
+def site(tmp_path_factory):
+    out = tmp_path_factory.mktemp("site")
+    p = build(ROOT / "mkdocs.yml", out)
+    assert p.returncode == 0, p.stderr[-4000:]
+    return out
+
+
+def test_every_page_is_in_the_nav():
+    """Every Markdown file under docs/ is a page of the site's navigation (mkdocs.yml ``nav``):
+    a new page must be added there, in the section it belongs to."""
+    config = yaml.load((ROOT / "mkdocs.yml").read_text(), Loader=yaml.BaseLoader)
+    listed = nav_files(config["nav"])
+    pages = sorted(p.relative_to(ROOT / "docs").as_posix() for p in (ROOT / "docs").rglob("*.md"))
+    missing = [p for p in pages if p not in listed]
+    assert not missing, f"docs pages not in the nav of mkdocs.yml: {missing}"
+    assert len(listed) == len(set(listed)), "a page is listed twice in the nav"
+
+
+def test_site_builds_strictly_with_every_command_and_api_name(site):
+    from pixelkit.cli import register_all
+    from pixelkit.cli.common import main
+    import pixelkit
+    register_all()
+    cli = (site / "cli" / "index.html").read_text()
+    ids = set(re.findall(r'<h\d id="([^"]+)"', cli))
+    missing = [c for c in main.commands if f"pixelkit-{c}" not in ids]
+    assert not missing, f"commands missing from the CLI reference: {missing}"
+    api = (site / "api" / "index.html").read_text()
+    missing = [n for n in pixelkit.__all__ if f'id="pixelkit.api.{n}"' not in api]
+    assert not missing, f"API names missing from the API reference: {missing}"
+    # the design-file reference is a page, and citation keys are links to the bibliography
+    assert "pixel.devices" in (site / "design-file" / "index.html").read_text() or \
+        "[pixel.devices]" in (ROOT / "docs" / "design-file.md").read_text()
+    page = (site / "pixel-model" / "index.html").read_text()
+    assert 'href="../bibliography/#thesis2019"' in page
+    bib = (site / "bibliography" / "index.html").read_text()
+    assert 'id="thesis2019"' in bib
+
+
+def test_citation_and_page_links():
+    text = ("See docs/verify.md and `docs/verify.md#power`, [Thesis2019], `[Thesis2019]`.\n"
+            "```\ndocs/verify.md [Thesis2019]\n```")
+    out = link_markdown(text, {"Thesis2019"}, titles={"verify.md": "Sign-off"}, root="../")
+    assert out.split("\n")[0] == ("See [Sign-off](../verify.md) and [Sign-off](../verify.md#power), "
+                                  "[[Thesis2019]](../bibliography.md#thesis2019), `[Thesis2019]`.")
+    assert out.split("\n")[2] == "docs/verify.md [Thesis2019]"        # fenced code untouched
+
+
+@pytest.mark.parametrize("page, why", [
+    ("See docs/nowhere.md.", "a mention of a page that does not exist"),
+    ("As [Nobody" + "2001] shows.", "a citation key the bibliography does not define"),
+    ("[a heading](index.md#no-such-heading)", "a link to an anchor that does not exist"),
+])
+def test_strict_build_fails_on_a_planted_fault(tmp_path, page, why):
+    """The strict build can fail: a small site with the real hook and validation settings, first
+    clean (it builds), then with one fault planted (it must not)."""
+    docs = tmp_path / "docs"
+    docs.mkdir()
+    (docs / "bibliography.md").write_text("# Bibliography\n\n### [Thesis2019]\n\nA dissertation.\n")
+    (docs / "index.md").write_text("# Home\n\nAs [Thesis2019] says, docs/bibliography.md.\n")
+    config = yaml.load((ROOT / "mkdocs.yml").read_text(), Loader=yaml.BaseLoader)
+    cfg = {"site_name": "t", "docs_dir": str(docs), "strict": True, "validation": config["validation"],
+           "hooks": [str(ROOT / "docsite" / "hooks.py")], "markdown_extensions": ["toc", "attr_list"],
+           "nav": ["index.md", "bibliography.md", "fault.md"]}
+    (tmp_path / "mkdocs.yml").write_text(yaml.safe_dump(cfg))
+    (docs / "fault.md").write_text("# Fault\n\nNothing wrong.\n")
+    clean = build(tmp_path / "mkdocs.yml", tmp_path / "site", cwd=tmp_path)
+    assert clean.returncode == 0, clean.stderr[-2000:]
+    (docs / "fault.md").write_text(f"# Fault\n\n{page}\n")
+    broken = build(tmp_path / "mkdocs.yml", tmp_path / "site", cwd=tmp_path)
+    assert broken.returncode != 0, f"the strict build passed {why}"
