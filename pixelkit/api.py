@@ -112,7 +112,8 @@ def models(design) -> dict:
     """The analytic model table: C_jdep, conversion gain, full well, C_A, C_C."""
     from .camera.spicenoise import sf_gain
     from .physics.subpixel import model_table
-    return model_table(design, sf_gain(design))
+    from .tech.ekv import models_for
+    return model_table(design, sf_gain(design), models_for(design))
 
 
 def experiment(design, backend: str = "batch", jobs=None) -> dict:

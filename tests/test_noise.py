@@ -54,17 +54,17 @@ def test_signal_sample_keeps_kt_over_cfd_after_charge_sharing(ref_design, a_sf):
         sp = pixel_noise(ref_design, which, a_sf)
         assert sp["fd_signal_V2"] == pytest.approx(sp["fd_reset_V2"], rel=0.03)
         # and neither is kT/C_total, the naive charge-sharing figure (it would be 5 - 15x smaller)
-        c_tot = fd.response(ref_design, which, a_sf)["c_total_F"]
+        c_tot = fd.capacitances(ref_design, which, a_sf)["c_total_F"]
         assert sp["fd_signal_V2"] > 3 * K_B * ref_design.temperature / c_tot
 
 
 def test_output_cg_vs_spice_charge_step(ref_design, a_sf):
-    """CG_out = A_sf q / (C_PD,node + C_FD) against a SPICE transient: the double-sampled
+    """CG_out (the transfer, TG's turn-off and RS's turn-on: ``fd.transfer``) against a SPICE transient: the double-sampled
     column signal of a known photo-charge (I x t over the exposure, ~10 % of the swing)
     minus the dark run."""
     spice = output_cg(ref_design)
     for which in ("primary", "secondary"):
-        r = fd.response(ref_design, which, a_sf)
+        r = fd.response(ref_design, which, a_sf, models_for(ref_design))
         assert r["cg_out_V_per_e"] == pytest.approx(spice[which], rel=0.05)
         # the PD-referred CG of the thesis [Thesis2019] is far from what the column sees
         assert r["cg_pd_V_per_e"] > 1.3 * spice[which]

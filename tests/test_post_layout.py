@@ -17,6 +17,7 @@ from pixelkit.layout.pex import cell_geometry
 from pixelkit.layout.pex.capacitance import capacitances
 from pixelkit.layout.pex.overlay import place, post_layout_view
 from pixelkit.physics import fd
+from pixelkit.tech.ekv import models_for
 
 GF = ROOT / "designs" / "dual_pixel_gf180.toml"
 
@@ -35,9 +36,9 @@ def test_conversion_gain_model_vs_spice_within_2_percent_post_layout(views):
     a = sf_gain(post)
     spice = output_cg(post)
     for w in ("primary", "secondary"):
-        model = fd.response(post, w, a)["cg_out_V_per_e"]
+        model = fd.response(post, w, a, models_for(post))["cg_out_V_per_e"]
         assert model == pytest.approx(spice[w], rel=0.02), w
-        stale = fd.response(sch, w, sf_gain(sch))["cg_out_V_per_e"]
+        stale = fd.response(sch, w, sf_gain(sch), models_for(sch))["cg_out_V_per_e"]
         assert abs(stale / spice[w] - 1) > 0.02, w
 
 

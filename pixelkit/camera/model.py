@@ -78,11 +78,13 @@ class ArrayCamera:
     temperature_K: float
     adc: Adc
     chain: dict
+    cg0: float                 # output-referred conversion gain at zero signal (physics.fd.response)
 
     @property
     def cg0_V_per_e(self) -> float:
-        """Output-referred conversion gain at zero signal."""
-        return self.a_sf * Q / float(self.node.capacitance(self.v0))
+        """Output-referred conversion gain at zero signal: CG_out(0) of ``physics.fd.response`` (the
+        transfer, TG's turn-off and RS's turn-on), the same figure the design summary shows."""
+        return self.cg0
 
     @property
     def k0_dn_per_e(self) -> float:
@@ -132,7 +134,7 @@ def array_camera(design, which: str, a_sf: float, transfer: dict, wavelength_m: 
     sub, tech = getattr(design, which), design.tech
     clip = transfer[which]["swing_V"]
     t_e, t_v = transfer[which]["electrons"], transfer[which]["signal_V"]
-    r = fd.response(design, which, a_sf)
+    r = fd.response(design, which, a_sf, models_for(design))
     ch = chain(design, which, a_sf, models_for(design))
     read_var = sum(v for k, v in ch["variance_V2"].items() if k not in ("dark_shot", "fd_leakage_shot"))
     eta = float(tech.qe(wavelength_m)) * sub.photoactive_area / sub.pitch ** 2
@@ -147,4 +149,4 @@ def array_camera(design, which: str, a_sf: float, transfer: dict, wavelength_m: 
         pls_V_per_e=a_sf * Q / (design.pixel.gse * r["c_fd_F"]),
         t_row=1.0 / sub.f_read, t_pre=sub.timing.t_pre + sub.timing.t_store,
         t_s1=sub.timing.row(1.0 / sub.f_read)["s1_off"], t_int=sub.t_int, temperature_K=design.temperature,
-        adc=Adc(bits, 1.2 * clip), chain=ch)
+        adc=Adc(bits, 1.2 * clip), chain=ch, cg0=r["cg_out_V_per_e"])

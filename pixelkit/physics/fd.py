@@ -37,6 +37,8 @@ Storage: FD leaks through its diffusions by the device models' junction law
 from __future__ import annotations
 
 from ..circuits.geometry import diffusion
+import numpy as np
+
 from ..constants import Q
 from .dark import diffusion_leakage
 from .junction import Node
@@ -88,20 +90,79 @@ def pd_switch_leakage(design, temperature_K: float | None = None) -> float:
     return sum(diffusion_leakage(w, design.tech, t) for w in (dev.ec_w, dev.tg_w))
 
 
-def response(design, which: str, a_sf: float, v_bias: float | None = None) -> dict:
-    """PD-referred and output-referred conversion gain of ``which`` subpixel at ``v_bias``.
+def transfer(design, which: str, a_sf: float, sf_models: dict, v: float | None = None) -> dict:
+    """The photo-charge's way to the read, in three stages, each with the capacitances it sees.
 
-    ``v_bias`` (default: the design's PD reset level) is the reverse bias of the PD node
-    and FD at which the small-signal capacitances are taken.
+    1. *Transfer* (TG on, RS off): the PD node and FD are one node through TG's channel, so the
+       charge spreads over ``C_T = C_PD,node + C_FD,store + C_ch`` - the channel's gate capacitance
+       ``C_ch = Cox W L`` of TG included, and both TG overlaps at their gate-high value.
+    2. *TG turns off* (the TG charge split): TG opens when its gate falls to the node's voltage plus
+       its threshold, so a signal dV keeps it on for a further gate fall (1 + eta) dV (eta: the body
+       factor at the node). During that fall the signal run's node still follows the gate through
+       ``C_g = C_ch + 2 C_ov`` over C_T, while a dark pixel's FD, already alone, follows it through
+       TG's FD-side overlap over C_FD,store: the FD keeps ``1 + (1 + eta)(C_g / C_T - C_ov / C_FD,store)``
+       of its transfer voltage (below 1 for a large PD, above 1 for a small one).
+    3. *RS turns on* (the select switch): FD's charge stays, its capacitance changes. Stored (RS
+       off) the follower's source floats: its gate sees its depletion capacitance
+       ``Cox W L (n - 1) / n`` (weak inversion); selected, the gate-source capacitance bootstrapped,
+       ``(1 - A_sf)(2/3 Cox W L + C_ov)`` (``sf_gate``): FD's voltage is ``C_FD,store / C_FD,read`` of the stored one.
+
+    ``eta`` and ``n`` are those of the pixel's NMOS at the node's voltage: the follower's EKV parameters
+    (``sf_models["sf"]``, ``tech.ekv.models_for``). The single-capacitance sharing ``q / (C_PD,node + C_FD,read)`` lacks 1 and 3
+    and its errors cancel at the read (docs/post-layout.md: each stage against SPICE).
     """
+    dev, mos = design.pixel.devices, design.tech.mos
+    v = design.pixel.v_pd_reset if v is None else v
+    ekv = sf_models["sf"]
+    n = ekv.n(ekv.v_p(v))
+    eta = ekv.gamma / (2.0 * float(np.sqrt(ekv.phi + v)))
+    c_ch = mos.cox * dev.tg_w * dev.tg_l
+    ov_on, ov_off = overlap(dev.tg_w, 1.0, mos), overlap(dev.tg_w, -v, mos)
+    c_node = float(pd_node(design, which, parasitics=True).capacitance(v))
+    c_read = float(fd_node(design, a_sf, v, which).capacitance(v))
+    c_gs = 2.0 / 3.0 * mos.cox * dev.sf_w * dev.sf_l + overlap(dev.sf_w, 1.0, mos)
+    # post-layout: FD's wiring to the follower's source and to the column line follows FD when selected
+    # (counted (1 - A_sf) at the read); stored, the column line is held by its load and the floating
+    # source follows the gate by 1 / n
+    pl = getattr(design, "post_layout", None)
+    w_sfo = w_col = 0.0
+    for a, b, c in (pl.cells.get(f"pix5t_{which}", ()) if pl is not None else ()):
+        if {a, b} == {"fd", "sfo"}:
+            w_sfo += c
+        elif {a, b} == {"fd", "col"}:
+            w_col += c
+    c_store = (c_read - (1.0 - a_sf) * (c_gs + w_sfo + w_col) + mos.cox * dev.sf_w * dev.sf_l * (n - 1.0) / n
+               + w_col + (1.0 - 1.0 / n) * w_sfo)
+    c_t = float(c_node + c_store + c_ch + 2.0 * (ov_on - ov_off))
+    k_tg = float(1.0 + (1.0 + eta) * ((c_ch + 2.0 * ov_on) / c_t - ov_on / c_store))
+    k_rs = c_store / c_read
+    return {"c_transfer_F": c_t, "c_channel_F": c_ch, "c_fd_store_F": c_store, "c_fd_read_F": c_read,
+            "eta": eta, "tg_turnoff": k_tg, "rs_turnon": k_rs, "cg_transfer_V_per_e": Q / c_t,
+            "cg_store_V_per_e": Q / c_t * k_tg, "cg_fd_V_per_e": Q / c_t * k_tg * k_rs}
+
+
+def capacitances(design, which: str, a_sf: float, v_bias: float | None = None) -> dict:
+    """The read-time capacitances of ``which`` subpixel at ``v_bias`` (default the PD reset level): the PD
+    junction, the PD node (with its switches), FD, and C_PD,node + C_FD (the noise budget's node)."""
     v = design.pixel.v_pd_reset if v_bias is None else v_bias
     c_pd = float(pd_node(design, which).capacitance(v))
     c_node = float(pd_node(design, which, parasitics=True).capacitance(v))
     c_fd = float(fd_node(design, a_sf, v, which).capacitance(v))
-    c_tot = c_node + c_fd
-    return {"v_bias_V": v, "c_pd_F": c_pd, "c_pd_node_F": c_node, "c_fd_F": c_fd, "c_total_F": c_tot,
-            "cg_pd_V_per_e": Q / c_pd, "sharing": c_node / c_tot, "cg_fd_V_per_e": Q / c_tot,
-            "a_sf": a_sf, "cg_out_V_per_e": a_sf * Q / c_tot}
+    return {"v_bias_V": v, "c_pd_F": c_pd, "c_pd_node_F": c_node, "c_fd_F": c_fd, "c_total_F": c_node + c_fd}
+
+
+def response(design, which: str, a_sf: float, sf_models: dict, v_bias: float | None = None) -> dict:
+    """PD-referred and output-referred conversion gain of ``which`` subpixel at ``v_bias``.
+
+    ``v_bias`` (default: the design's PD reset level) is the reverse bias of the PD node
+    and FD at which the small-signal capacitances are taken. CG_FD follows the charge through the
+    transfer, TG's turn-off and RS's turn-on (``transfer``; ``sf_models``: ``tech.ekv.models_for``);
+    ``c_total_F`` is the read-time sum C_PD,node + C_FD the noise budget uses.
+    """
+    c = capacitances(design, which, a_sf, v_bias)
+    cg_fd = transfer(design, which, a_sf, sf_models, c["v_bias_V"])["cg_fd_V_per_e"]
+    return {**c, "cg_pd_V_per_e": Q / c["c_pd_F"], "sharing": c["c_pd_node_F"] / c["c_total_F"],
+            "cg_fd_V_per_e": cg_fd, "a_sf": a_sf, "cg_out_V_per_e": a_sf * cg_fd}
 
 
 def pls_current(design, i_ph: float) -> float:
@@ -116,7 +177,7 @@ def pls_current(design, i_ph: float) -> float:
 
 def signal_gse(design, which: str, a_sf: float) -> float:
     """GSE on the signal: gse x C_FD / (C_PD,node + C_FD)."""
-    r = response(design, which, a_sf)
+    r = capacitances(design, which, a_sf)
     return design.pixel.gse * r["c_fd_F"] / r["c_total_F"]
 
 
@@ -126,6 +187,6 @@ def storage_signal(design, which: str, a_sf: float, i_ph: float, t_wait: float,
 
     ``v_fd``: the FD's bias while it stores (default the PD reset level); ``a_sf`` the SF
     gain there."""
-    r = response(design, which, a_sf, v_fd)
+    r = capacitances(design, which, a_sf, v_fd)
     i = leakage(design, temperature_K) + pls_current(design, i_ph)
     return a_sf * i * t_wait / r["c_fd_F"]

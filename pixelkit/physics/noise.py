@@ -121,7 +121,7 @@ def chain(design, which: str, a_sf: float, sf_models: dict, t_int: float | None 
     from .sf import column_thermal
     sub, temp = getattr(design, which), design.temperature
     t_int = sub.t_int if t_int is None else t_int
-    r = fd.response(design, which, a_sf)
+    r = fd.response(design, which, a_sf, sf_models)
     kt = K_B * temp
     cg = r["cg_out_V_per_e"]
     c_col = column_capacitance(design, which)

@@ -34,17 +34,18 @@ def figures(design, which: str) -> dict:
     }
 
 
-def model_table(design, a_sf: float) -> dict:
+def model_table(design, a_sf: float, sf_models: dict) -> dict:
     """The figures ``pixelkit models`` prints; ratios as eq. 3.10 and 3.13 define them.
 
     Besides the thesis's table at its 2.5 V, each subpixel gets ``at_reset``: the
     PD-referred and output-referred conversion gain side by side at the design's own
     PD reset level (``fd.response``). ``a_sf``: the SF gain; ``pixelkit.api.models`` takes
     it from a SPICE operating point of the SF and its column load (``camera.spicenoise.sf_gain``):
-    the models stay importable and testable without the simulator above them.
+    the models stay importable and testable without the simulator above them; ``sf_models`` the
+    follower's EKV parameters (``tech.ekv.models_for``), for the switches' body factor (``fd.transfer``).
     """
     p, s = figures(design, "primary"), figures(design, "secondary")
-    p["at_reset"], s["at_reset"] = (response(design, w, a_sf) for w in SUBPIXELS)
+    p["at_reset"], s["at_reset"] = (response(design, w, a_sf, sf_models) for w in SUBPIXELS)
     return {
         "design": design.name,
         "technology": design.tech.name,

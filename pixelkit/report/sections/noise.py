@@ -36,7 +36,7 @@ def build(ctx) -> Section:
     v_reset = d.pixel.v_pd_reset
     versus, flags, resp = [], [], {}
     for w in _ARR:
-        r = resp[w] = fd.response(d, w, a)
+        r = resp[w] = fd.response(d, w, a, sf_models)
         versus.append([w, 1e3 * ch[w]["pixel_V"], 1e3 * sp[w]["pixel_V"], 1e6 * r["cg_pd_V_per_e"],
                        1e6 * r["cg_out_V_per_e"], 1e6 * cg_sp[w]])
         flag = plausibility.read_noise(w, ch[w]["pixel_e"], ch[w]["electrons"], r["cg_out_V_per_e"], r["c_fd_F"])

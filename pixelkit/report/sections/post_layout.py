@@ -24,10 +24,10 @@ def _figures(d, backend, jobs, quick) -> dict:
     from ...physics.subpixel import model_table
     a = sf_gain(d)
     cg_sp = output_cg(d, backend=backend)
-    mt = model_table(d, a)
+    mt = model_table(d, a, models_for(d))
     out = {"a_sf": a}
     for w in _ARR:
-        r = fd.response(d, w, a)
+        r = fd.response(d, w, a, models_for(d))
         out[w] = {"c_fd_F": r["c_fd_F"], "c_pd_node_F": r["c_pd_node_F"], "cg_pd_V_per_e": r["cg_pd_V_per_e"],
                   "cg_fd_V_per_e": r["cg_fd_V_per_e"], "cg_out_V_per_e": r["cg_out_V_per_e"],
                   "cg_out_spice_V_per_e": cg_sp[w], "read_noise_e": chain(d, w, a, models_for(d))["pixel_e"],
