@@ -86,7 +86,7 @@ def test_spec_values_in_si_and_in_their_unit(tmp_path):
     q = 1.602176634e-19
     assert s["cg"].lo == pytest.approx(3.5e-6 / q) and s["cg"].typical == pytest.approx(4.0e-6 / q)
     assert s["dynamic_range_primary"].lo == pytest.approx(1000.0)       # 60 dB as an amplitude ratio
-    assert s["full_well_primary"].lo == pytest.approx(200e3 * q)
+    assert s["full_well_primary"].lo == pytest.approx(200e3 * q, rel=1e-9, abs=0)
     assert (s["criterion_secondary"].lo, s["criterion_secondary"].hi) == pytest.approx((0.04, 0.06))
     assert [x.name for x in d.spec] == ["cg", "dynamic_range_primary", "full_well_primary", "criterion_secondary"]
 
@@ -139,8 +139,8 @@ def test_margin_sigma():
 def test_electron_units():
     from pixelkit.units import quantity
     q = 1.602176634e-19
-    assert quantity("30 e-", "C", "x") == pytest.approx(30 * q)
-    assert quantity("248 ke-", "C", "x") == pytest.approx(248e3 * q)
+    assert quantity("30 e-", "C", "x") == pytest.approx(30 * q, rel=1e-9, abs=0)
+    assert quantity("248 ke-", "C", "x") == pytest.approx(248e3 * q, rel=1e-9, abs=0)
     assert quantity("4 uV/e-", "V/C", "x") == pytest.approx(4e-6 / q)
     with pytest.raises(ConfigError):
         quantity("1 me-", "C", "x")
@@ -193,3 +193,35 @@ def test_revision_diff_fails_on_specs_and_ranks_by_margin_used(tmp_path):
     plain_b = _report_folder(tmp_path / "pb", {"x.v": 1.5}, None)
     d = diff_reports(load_report(plain_a), plain_b)
     assert not d["by_specs"] and not d["passed"] and d["moved"] == ["x.v"]
+
+
+def _tech_with_mim(tmp_path: Path, mim: dict) -> Path:
+    """The reference design on a copy of c35_thesis whose [models.mim_corners] is ``mim``."""
+    from pixelkit.tech import load_technology
+    src = Path(load_technology("c35_thesis").source)
+    raw = tomllib.loads(src.read_text())
+    raw["models"]["folder"] = str(load_technology("c35_thesis").models.folder)
+    raw["models"]["mim_corners"] = mim
+    (tmp_path / "t.toml").write_text(to_toml(raw))
+    d = tmp_path / "d.toml"
+    d.write_text(REF.read_text().replace('"c35_thesis"', json.dumps(str(tmp_path / "t.toml"))))
+    return d
+
+
+def test_mim_corners_scale_the_afe_capacitors_by_the_library_factor(tmp_path, ref_design):
+    """The factors are the GF180MCU library's own (sm141064.ngspice: mimcap_ff sets
+    mim_corner_2p0fF=0.9, mimcap_ss 1.1, the parameter cap_mim_2f0fF's c_cox is scaled by);
+    a condition at ss carries the AFE's capacitors x 1.1, fs (no MIM section named) x 1. A
+    section that sets no such parameter, or a corner the library lacks, is refused at load."""
+    from pixelkit.verify import conditions
+    assert ref_design.tech.mim_corner == {"tt": 1.0, "ff": 0.9, "ss": 1.1}
+    a = ref_design.afe
+    for corner, k in (("ss", 1.1), ("ff", 0.9), ("fs", 1.0)):
+        b = conditions.at(ref_design, conditions.Condition(corner, 300.15, 0.0)).afe
+        assert (b.c11, b.c12, b.c13) == pytest.approx((a.c11 * k, a.c12 * k, a.c13 * k), rel=1e-12, abs=0), corner
+    with pytest.raises(ConfigError) as e:   # the MOS section sets no MIM factor
+        load_design(_tech_with_mim(tmp_path, {"ff": "lib sm141064.ngspice ff"}))
+    assert e.value.field == "models.mim_corners.ff" and "mim_corner_2p0fF" in str(e.value)
+    with pytest.raises(ConfigError) as e:
+        load_design(_tech_with_mim(tmp_path, {"xx": "lib sm141064.ngspice mimcap_ss"}))
+    assert e.value.field == "models.mim_corners.xx" and "ff, fs, sf, ss, tt" in str(e.value)

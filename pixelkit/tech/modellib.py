@@ -14,7 +14,7 @@ from __future__ import annotations
 import hashlib
 import os
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import lru_cache
 from importlib import metadata
 from pathlib import Path
@@ -52,6 +52,7 @@ class ModelLibrary:
     folder: Path
     default_corner: str
     corners: dict  # name -> tuple[Include, ...]
+    mim: dict = field(default_factory=dict)  # corner -> Include of its MIM-capacitor section (tech/mimcorner.py)
 
     def includes(self, corner: str | None = None) -> tuple[Include, ...]:
         corner = corner or self.default_corner
@@ -147,9 +148,9 @@ def load_model_library(raw, base: Path, source: str) -> ModelLibrary:
     if not isinstance(raw, dict):
         raise ConfigError(source, "models", raw, "a [models] table with folder, default_corner and corners")
     for key in raw:
-        if key not in ("folder", "default_corner", "corners"):
+        if key not in ("folder", "default_corner", "corners", "mim_corners"):
             raise ConfigError(source, f"models.{key}", raw[key],
-                              "no such field here; allowed: corners, default_corner, folder")
+                              "no such field here; allowed: corners, default_corner, folder, mim_corners")
     folder = _resolve_folder(str(raw.get("folder", "")), base, source)
     corners_raw = raw.get("corners")
     if not isinstance(corners_raw, dict) or not corners_raw:
@@ -166,7 +167,18 @@ def load_model_library(raw, base: Path, source: str) -> ModelLibrary:
     default = raw.get("default_corner")
     if not isinstance(default, str) or default not in corners:
         raise ConfigError(source, "models.default_corner", default, f"one of {', '.join(corners)}")
-    return ModelLibrary(folder, default, corners)
+    mim_raw = raw.get("mim_corners", {})
+    if not isinstance(mim_raw, dict):
+        raise ConfigError(source, "models.mim_corners", mim_raw, 'a table of corner = "lib FILE SECTION"')
+    mim = {}
+    for name, line in mim_raw.items():
+        where = f"models.mim_corners.{name}"
+        if name not in corners:
+            raise ConfigError(source, where, name, f"a corner of models.corners: {', '.join(sorted(corners))}")
+        if not isinstance(line, str) or not line.startswith("lib "):
+            raise ConfigError(source, where, line, '"lib FILE SECTION" (the MIM capacitor\'s corner section)')
+        mim[name] = _parse_include(line, folder, source, where)
+    return ModelLibrary(folder, default, corners, mim)
 
 
 def _parse_include(line: str, folder: Path, source: str, where: str) -> Include:

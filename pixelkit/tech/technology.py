@@ -15,6 +15,7 @@ from ..fileio import path_kind
 from ..schema import flag, ident, load, num, qty, read_toml, table, text
 from .layout_data import Layer, LayoutData, Rule, Signoff, parse_layers, parse_rules, parse_signoff
 from .libcheck import check_devices
+from .mimcorner import mim_factors
 from .modellib import ModelLibrary, load_model_library
 from .stack import Stack, parse_stack
 
@@ -142,6 +143,8 @@ class Technology:
     layout: LayoutData = field(default=None, metadata=dict(kind="skip"), repr=False)
     source: str = field(default="", metadata=dict(kind="skip"))
     stack: Stack | None = field(default=None, metadata=dict(kind="skip"), repr=False)
+    #: process corner -> factor on the MIM capacitors (the library's MIM corner sections; tech/mimcorner.py)
+    mim_corner: dict = field(default_factory=dict, metadata=dict(kind="skip"), repr=False)
 
     def layer(self, name: str) -> Layer:
         """The GDS layer the technology draws ``name`` on (aliases resolved)."""
@@ -236,4 +239,5 @@ def load_technology(name_or_path: str | Path, relative_to: Path | None = None, s
     object.__setattr__(tech, "source", source)
     object.__setattr__(tech, "stack", stack)
     check_devices(tech, source)   # every device name resolves in every corner (tech/libcheck.py)
+    object.__setattr__(tech, "mim_corner", mim_factors(tech, source))
     return tech

@@ -2,7 +2,8 @@
 
 A condition changes three things of a design and nothing else: the model library's
 corner (the technology's corner table: MOS sections and, where the library has them,
-the diode sections it pairs with them), the die temperature (every deck's ``.temp``,
+the diode sections it pairs with them; the MIM capacitors' corner factor on the AFE's
+capacitors, ``[models.mim_corners]``, tech/mimcorner.py), the die temperature (every deck's ``.temp``,
 hence the device models and the kit's dark-current law), and the supply (the
 technology's ``supply``: VDD of the pixels, columns, AFE and the clock levels). The
 reset drains (``pixel.v_pd_reset``, ``v_fd_reset``) and ``afe.vref`` are references a
@@ -58,7 +59,10 @@ def at(design, cond: Condition):
             raise ConfigError(design.source, what, v, f"a level below the supply at condition {cond.label} "
                               f"({supply:g} V)")
     tech = replace(design.tech, supply=supply) if cond.supply else design.tech
-    return replace(design, corner=cond.corner, temperature=cond.temperature, tech=tech)
+    k = design.tech.mim_corner.get(cond.corner, 1.0)
+    a = design.afe
+    afe = a if k == 1.0 else replace(a, c11=a.c11 * k, c12=a.c12 * k, c13=a.c13 * k)
+    return replace(design, corner=cond.corner, temperature=cond.temperature, tech=tech, afe=afe)
 
 
 def spec_conditions(spec, grid: list) -> list:
