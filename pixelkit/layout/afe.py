@@ -89,7 +89,7 @@ def afe_devices(design) -> list[Device]:
     return out
 
 
-def _fingers(lt, dev: Device, wmax: int, field: str) -> tuple[int, int]:
+def _fingers(lt, dev: Device, wmax: int, field: str, value, place: str) -> tuple[int, int]:
     """(number of fingers, finger W in nm) of a device at most ``wmax`` wide per finger."""
     w = round(dev.w * 1e9)
     n = max(1, math.ceil(w / wmax))
@@ -97,8 +97,9 @@ def _fingers(lt, dev: Device, wmax: int, field: str) -> tuple[int, int]:
         if w % n == 0 and (w // n) % lt.grid == 0 and w // n >= lt.width("active"):
             return n, w // n
         n += 1
-    raise RuleError("afe_fit", "AFE cell", f"{dev.name} (W {w / 1000:g} um) cannot be folded into fingers of "
-                    f"at most {wmax / 1000:g} um on the {lt.grid} nm grid", field)
+    raise RuleError("afe_fit", place, f"{dev.name} (W {w / 1000:g} um) cannot be folded into fingers of "
+                    f"at most {wmax / 1000:g} um (the pitch less 4 um of gate pads and wells) on the {lt.grid} nm grid",
+                    field, value)
 
 
 def _finger_nets(dev: Device, n: int) -> list[str]:
@@ -145,6 +146,10 @@ def drawn_size(design, circuit: str, kind: str, value: float) -> tuple:
     return w / 1000, cap_plate(lt, design.tech, value, w) / 1000
 
 
+def _cell(which: str) -> str:
+    return "AFE_P" if which == "primary" else "AFE_S"
+
+
 def _fit(design, lt, width: int, which: str, devs: list[Device]) -> dict:
     """Sizes of what is drawn, or a RuleError naming the field that does not fit."""
     pitch_field = f"{which}.pitch"
@@ -153,7 +158,7 @@ def _fit(design, lt, width: int, which: str, devs: list[Device]) -> dict:
     amin = lt.area("mim_top.area")
     side_min = 2 * lt.nm("mim_top.enclosure.via4") + lt.cut("via4")     # one via of the sea
     if wp < side_min:
-        raise RuleError("afe_fit", f"AFE cell ({which} column)", f"the MIM capacitors need a plate at least "
+        raise RuleError("afe_fit", f"{_cell(which)} cell", f"the MIM capacitors need a plate at least "
                         f"{side_min / 1000:g} um wide (a via enclosed by {lt.cite('mim_top.enclosure.via4')}) beside "
                         f"their bottom plates' vias and lanes: the {width / 1000:g} um pitch leaves {wp / 1000:g} um; "
                         f"the pitch must be at least {(width - wp + side_min) / 1000:g} um", pitch_field, pitch_value)
@@ -165,19 +170,19 @@ def _fit(design, lt, width: int, which: str, devs: list[Device]) -> dict:
             field = {"C11": "afe.c11", "C12": "afe.c12", "C13": "afe.c13"}.get(d.name, "")
             if length * wp < amin:
                 need = pa.mim_value(math.sqrt(amin) * 1e-9, math.sqrt(amin) * 1e-9)
-                raise RuleError("mim_top.area", f"AFE cell ({which} column)", f"{d.name} = {d.value * 1e15:g} fF "
+                raise RuleError("mim_top.area", f"{_cell(which)} cell", f"{d.name} = {d.value * 1e15:g} fF "
                                 f"is a {wp / 1000:g} x {length / 1000:g} um plate, under the MIM's "
                                 f"{amin / 1e6:g} um2 ({lt.tech.rule('mim_top.area').name}): at least "
                                 f"{need * 1e15:.0f} fF", field, d.value)
             if length * wp > 1e10:    # MIMTM.8b: 10000 um2 per capacitor
-                raise RuleError("mim_size", f"AFE cell ({which} column)", f"{d.name} = {d.value * 1e15:g} fF needs "
+                raise RuleError("mim_size", f"{_cell(which)} cell", f"{d.name} = {d.value * 1e15:g} fF needs "
                                 f"{length * wp / 1e6:.0f} um2 of plate, over the 10000 um2 of one MIM capacitor",
                                 field, d.value)
             out["caps"][d.name] = length
     wmax = max(lt.width("active"), ((width - 4000) // lt.grid) * lt.grid)
     for d in devs:
         if d.kind in "np":
-            out["fingers"][d.name] = _fingers(lt, d, wmax, pitch_field)
+            out["fingers"][d.name] = _fingers(lt, d, wmax, pitch_field, pitch_value, f"{_cell(which)} cell")
     return out
 
 

@@ -45,8 +45,8 @@ def build(ctx) -> Section:
         drc_rows = [["(not run: quick profile)", "", "", "", ""]]
     else:
         text.append(f"DRC: {drc['deck'].rsplit('/', 1)[-1]} ({drc['klayout']}, {drc['options'].get('run_mode', '')} "
-                    f"mode) on {r['top']}: " + ("no violation." if drc["clean"] else f"{drc['total']} violation(s) in "
-                                                f"{len(drc['by_rule'])} rule(s)."))
+                    f"mode, {_rules_run(drc['report'])} rules in its report) on {r['top']}: "
+                    + ("no violation." if drc["clean"] else f"{drc['total']} violation(s) in {len(drc['by_rule'])} rule(s)."))
         drc_rows = []
         for k, v in enumerate(drc["violations"]):
             pic = ""
@@ -98,6 +98,12 @@ def build(ctx) -> Section:
     return Section(TITLE, text=text, tables=tables, figures=figures, checked=checked, files=files,
                    data={"top": r["top"], "shield": sh, "blocks_m2": r["blocks"], "lvs": lvs,
                          "drc": None if drc is None else {k: drc[k] for k in ("clean", "total", "by_rule", "deck")}})
+
+
+def _rules_run(report: str) -> int:
+    """How many rules the deck's report lists (one category each, violated or not)."""
+    import xml.etree.ElementTree as ET
+    return sum(1 for c in ET.parse(report).getroot().iter("category") if c.findtext("name"))
 
 
 def _areas(d, r) -> list:
