@@ -99,7 +99,8 @@ def test_stack_from_the_technology_file(gf):
     m1 = st.conductor("metal1")
     assert (m1.z, m1.thickness, m1.sheet) == pytest.approx((1.23e-6, 0.55e-6, 0.09))
     assert "klayout-pex" in st.source and st.dielectric_k == 4.0
-    assert [c.name for c in st.conductors] == ["poly", "metal1", "metal2", "metal3", "metal4", "metal5"]
+    assert [c.name for c in st.conductors] == ["poly", "metal1", "metal2", "metal3", "metal4", "mim_top", "metal5"]
+    assert st.conductor("mim_top").device_below and not m1.device_below
 
 
 def test_technology_without_a_stack_is_named(ref_design):

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 from ..spice.netlist import Element, Param, Subckt
 from .devices import tgate
+from .pixel5t import wiring
 
 PORTS = ("in", "out", "vref", "p1", "p1b", "p2", "p2b", "vdd")
 SWITCH_W, SWITCH_L = 1e-6, 0.35e-6
@@ -43,4 +44,5 @@ def sc_afe(design) -> Subckt:
         *tgate("Sc", "c", "vref", "p1", "p1b", SWITCH_W, SWITCH_L, t),
         *tgate("So", "c", "out", "p2", "p2b", SWITCH_W, SWITCH_L, t),
         Element("Xop", ("vref", "x", "out", "vdd"), op),
+        *wiring(design, "scafe"),
     ), (("c11", a.c11), ("c12", a.c12), ("c13", a.c13)))

@@ -11,7 +11,9 @@
     metal1 = { z = "1.23 um", thickness = "0.55 um", sheet = "0.09 Ohm", via_below = "6.3 Ohm" }
 
 ``z`` is the conductor's bottom above the substrate surface, ``sheet`` its sheet resistance
-(Ohm per square), ``via_below`` the resistance of one cut to the conductor below. Diffusions
+(Ohm per square), ``via_below`` the resistance of one cut to the conductor below; ``device_below =
+true`` marks a capacitor's top plate (the MIM's), whose coupling to the conductor under it is the
+capacitor itself (a device of the netlist), not wiring. Diffusions
 and wells are conductors at the substrate surface (z = 0). A technology without ``[stack]``
 has no post-layout view: :func:`require_stack` names what is missing.
 """
@@ -32,6 +34,7 @@ class Conductor:
     thickness: float    # m
     sheet: float        # Ohm per square
     via_below: float    # Ohm per cut to the conductor below
+    device_below: bool = False   # a capacitor's top plate: what lies under it is the device (no wiring C)
 
     @property
     def top(self) -> float:
@@ -57,6 +60,7 @@ class Stack:
 
 
 _KEYS = {"z": "m", "thickness": "m", "sheet": "Ohm", "via_below": "Ohm"}
+_FLAGS = ("device_below",)
 
 
 def parse_stack(raw, source: str, layer_names) -> Stack | None:
@@ -86,15 +90,17 @@ def parse_stack(raw, source: str, layer_names) -> Stack | None:
         where = f"stack.layers.{name}"
         if name not in layer_names:
             raise ConfigError(source, where, name, f"a layer of the [layers] table ({', '.join(sorted(layer_names))})")
-        if not isinstance(v, dict) or set(v) != set(_KEYS):
-            raise ConfigError(source, where, v, "{ z, thickness, sheet, via_below } with units")
+        if not isinstance(v, dict) or not set(_KEYS) <= set(v) <= set(_KEYS) | set(_FLAGS) \
+                or not all(isinstance(v.get(f, False), bool) for f in _FLAGS):
+            raise ConfigError(source, where, v, "{ z, thickness, sheet, via_below } with units (and device_below = "
+                              "true for a capacitor's top plate)")
         vals = {key: quantity(v[key], dim, f"{where}.{key}", source) for key, dim in _KEYS.items()}
         for key, hi in (("z", 1e-4), ("thickness", 1e-4), ("sheet", 1e6), ("via_below", 1e6)):
             lo_ok = vals[key] > 0 if key in ("z", "thickness") else vals[key] >= 0
             if not (lo_ok and vals[key] <= hi):
                 raise ConfigError(source, f"{where}.{key}", v[key], "a positive value" if key in ("z", "thickness")
                                   else "a value >= 0")
-        out.append(Conductor(name, **vals))
+        out.append(Conductor(name, **vals, device_below=v.get("device_below", False)))
     out.sort(key=lambda c: c.z)
     for a, b in zip(out, out[1:]):
         if b.z < a.top:

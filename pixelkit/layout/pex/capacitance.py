@@ -102,13 +102,17 @@ def _above(geo, stack, i):
     return out
 
 
-def _under(region, below, z):
+def _under(region, below, z, device=False):
     """(net, area dbu2, gap h) of each part of ``region`` (at height z) over the nearest conductor
-    below it; what is over nothing sees the substrate (net 0, h = z)."""
+    below it; what is over nothing sees the substrate (net 0, h = z). ``device``: the conductor right
+    below is a capacitor's bottom plate (the part over it is the device's, counted nowhere)."""
     rest = region
-    for top, nets, union in below:
+    for k, (top, nets, union) in enumerate(below):
         hit = rest & union
         if hit.is_empty():
+            continue
+        if device and k == 0:
+            rest = rest - union
             continue
         for m, reg in nets.items():
             a = (hit & reg).area()
@@ -120,13 +124,13 @@ def _under(region, below, z):
         yield GROUND, a, z
 
 
-def _down(cpl, net, band, below, eps, t, z, per_area, weight):
+def _down(cpl, net, band, below, eps, t, z, per_area, weight, device=False):
     """The downward fringe of ``band`` (``per_area``: edge length per band area) to what lies under it."""
-    for m, a, h in _under(band, below, z):
+    for m, a, h in _under(band, below, z, device):
         cpl.add(net, m, fringe(eps, t, h) * per_area * a * weight(h))
 
 
-def _fringe_band(cpl, net, band, below, above, eps, t, z, edge_len, band_area):
+def _fringe_band(cpl, net, band, below, above, eps, t, z, edge_len, band_area, device=False):
     """Share the fringe of ``edge_len`` (m) of a shape by what lies under and over ``band`` (the strip
     beside its edges, by area). Where a conductor of another net lies over the strip (gap h_u), the
     sidewall's field splits between the two planes: the downward fringe keeps h_u / (h_u + h_d)
@@ -148,9 +152,9 @@ def _fringe_band(cpl, net, band, below, above, eps, t, z, edge_len, band_area):
                 continue
             h_d = z   # the substrate (the nearest plane below decides each part's h_d in _down)
             cpl.add(net, m, fringe(eps, t, hu) * per_area * a * h_d / (hu + h_d))
-            _down(cpl, net, part, below, eps, t, z, per_area, lambda hd, hu=hu: hu / (hu + hd))
+            _down(cpl, net, part, below, eps, t, z, per_area, lambda hd, hu=hu: hu / (hu + hd), device)
         rest = rest - union
-    _down(cpl, net, rest, below, eps, t, z, per_area, lambda hd: 1.0)
+    _down(cpl, net, rest, below, eps, t, z, per_area, lambda hd: 1.0, device)
 
 
 def capacitances(geo, stack) -> Couplings:
@@ -168,7 +172,7 @@ def capacitances(geo, stack) -> Couplings:
         above = _above(geo, stack, i)
         # area, to the nearest conductor below or the substrate
         for net, reg in nets.items():
-            for m, a, h in _under(reg, below, z):
+            for m, a, h in _under(reg, below, z, cond.device_below):
                 cpl.add(net, m, eps * a * dbu * dbu / h)
         # lateral: facing edges of different nets, nearest only (one shielded space check of the layer)
         layer = kdb.Region()
@@ -207,7 +211,7 @@ def capacitances(geo, stack) -> Couplings:
             band = reg.sized(wb) - reg
             perim = reg.perimeter() * dbu
             length = max(0.0, perim - shielded.get(net, 0.0))
-            _fringe_band(cpl, net, band, below, above, eps, t, z, length, band.area())
+            _fringe_band(cpl, net, band, below, above, eps, t, z, length, band.area(), cond.device_below)
     return cpl
 
 

@@ -68,6 +68,22 @@ def _dotted(design, top: str) -> dict:
     return out
 
 
+#: stack conductors the extraction connects under another name (the MIM's top plate: under its marker)
+CONNECTED_AS = {"mim_top": "mim_plate"}
+
+
+def _conductor(lvs, L, name, poly_wire):
+    """The connected region of stack conductor ``name`` (None: the layout has none of it)."""
+    if name == "poly":
+        return poly_wire
+    if name in CONNECTED_AS:
+        try:
+            return lvs.layer_by_name(CONNECTED_AS[name])
+        except RuntimeError:      # not registered: the technology draws no such device
+            return None
+    return L.get(name)
+
+
 def _flat(region):
     """A flat, merged copy (free of the extraction's deep shape store, which dies with it)."""
     import klayout.db as kdb
@@ -123,15 +139,16 @@ def net_geometry(gds, top: str, design) -> NetGeometry:
     geo = NetGeometry(top, dbu)
     circuit = nl.circuit_by_name(top) or next(nl.each_circuit_top_down())
     poly_wire = L["poly"] - L["active"]          # the gates are the devices' (their capacitance is the models')
-    layers = {c.name: (poly_wire if c.name == "poly" else L[c.name]) for c in stack.conductors}
+    layers = {c.name: _conductor(lvs, L, c.name, poly_wire) for c in stack.conductors}
+    layers = {k: v for k, v in layers.items() if v is not None}
     claimed = {name: kdb.Region() for name in layers}
     for net in circuit.each_net():
         name = names.get(net.cluster_id)
         if name is None:
             continue
         for lname, reg in layers.items():
-            r = lvs.shapes_of_net(net, L[lname], True) if lname != "poly" else \
-                lvs.shapes_of_net(net, L["poly"], True) - L["active"]
+            r = lvs.shapes_of_net(net, L["poly"], True) - L["active"] if lname == "poly" else \
+                lvs.shapes_of_net(net, reg, True)
             r = _flat(r)
             if not r.is_empty():
                 geo.wires.setdefault(lname, {})

@@ -15,6 +15,8 @@ command runs the schematic or the post-layout view of one design with one flag. 
   other ``rows - 1`` dual pixels' share of the line (its total per dual pixel but its couplings to
   the dual pixel's other column lines, to ground) plus the column circuit's wiring; and
   (``column.line_couplings``) the other rows' share of each column-to-column coupling.
+- ``scafe``: the drawn AFEs' wiring (``AFE_P``, ``AFE_S``; their mean) among the SC stage's nodes
+  (``in``, ``vm``, ``x``, ``c``, ``out``, clocks, supplies); the op-amp's inner nodes as ground;
 - resistance: every long line's end-to-end resistance (column lines over the array's rows, row
   lines over its columns) from its length, width and the stack's sheet resistance; reported,
   not simulated (``docs/post-layout.md``: at 90 mOhm/sq the column line's RC is below 1 ns).
@@ -111,8 +113,25 @@ def _line_resistance(geo, stack, net: str, layer: str) -> float:
     return best * stack.conductor(layer).sheet
 
 
-def build(design, pix_geo, col_geo) -> Parasitics:
-    """The overlay from the extracted ``DUALPIX`` and ``DUALPIX_COL`` geometry."""
+#: the AFE's nodes the simulated ``scafe`` subcircuit has (its ports and its capacitors' nodes)
+AFE_NODES = ("in", "out", "vref", "p1", "p1b", "p2", "p2b", "vdd", "vm", "x", "c")
+
+
+def place_afe(cpls) -> tuple:
+    """The couplings of the drawn AFEs (``AFE_P``, ``AFE_S``: their mean, one ``scafe`` serves every
+    column) among the nodes ``scafe`` has; the op-amp's inner nodes and the bias are taken as ground."""
+    acc = {}
+    for cpl in cpls:
+        for (a, b), c in cpl.items():
+            a, b = (x if x in AFE_NODES else GROUND for x in (a, b))
+            if a != b:
+                key = tuple(sorted((a, b)))
+                acc[key] = acc.get(key, 0.0) + c / len(cpls)
+    return tuple((a, b, c) for (a, b), c in sorted(acc.items()) if c > _MIN_C)
+
+
+def build(design, pix_geo, col_geo, afe_geos=()) -> Parasitics:
+    """The overlay from the extracted ``DUALPIX`` and ``DUALPIX_COL`` geometry (and the AFEs')."""
     from .capacitance import capacitances
     st = design.tech.stack
     n = design.secondary_per_pixel
@@ -136,7 +155,10 @@ def build(design, pix_geo, col_geo) -> Parasitics:
     names = [c for cs in cols.values() for c in cs]
     pairs = tuple((a, b, (design.primary.rows - 1) * pix.pair(a, b))
                   for i, a in enumerate(names) for b in names[i + 1:] if pix.pair(a, b) > _MIN_C)
-    return Parasitics(place(pix, n), column_cap, per_row, resistance,
+    cells = place(pix, n)
+    if afe_geos:
+        cells["scafe"] = place_afe([capacitances(g, st) for g in afe_geos])
+    return Parasitics(cells, column_cap, per_row, resistance,
                       f"extracted from the drawn DUALPIX / DUALPIX_COL of {design.name} ({st.source})", pairs)
 
 
@@ -190,10 +212,12 @@ def post_layout_view(design):
             import tempfile
             from pathlib import Path
             from ..flow import write_gds
-            from ..library import build_library
+            from ..library import build_chip_cells, to_library
             with tempfile.TemporaryDirectory(prefix="pixelkit-pex-") as tmp:
-                gds = write_gds(build_library(design), Path(tmp) / f"{design.name}.gds")
-                found = build(design, cell_geometry(design, "DUALPIX", gds), cell_geometry(design, "DUALPIX_COL", gds))
+                cells, _top = build_chip_cells(design, 2, 2, True, "full")   # the AFEs are drawn with a chip
+                gds = write_gds(to_library(design, cells), Path(tmp) / f"{design.name}.gds")
+                found = build(design, cell_geometry(design, "DUALPIX", gds), cell_geometry(design, "DUALPIX_COL", gds),
+                              [cell_geometry(design, c, gds) for c in ("AFE_P", "AFE_S")])
             _store(key, found)
         _CACHE[key] = found
     return replace(design, post_layout=_CACHE[key])

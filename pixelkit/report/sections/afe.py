@@ -19,17 +19,29 @@ TITLE = "AFE transfer and its error"
 V_RST = 1.9   # column reset level of the bench (V): the pixel's reset level at the column
 
 
+def transfer(d, n: int, backend="batch", jobs=None) -> tuple:
+    """(input steps dv, AFE outputs) of the SPICE AFE bench over the full pixel swing, ``n`` points."""
+    a = d.afe
+    dv = np.linspace(0.0, 1.2, n)   # the full pixel swing at the column
+    pairs = [(V_RST - x, V_RST) for x in dv]
+    (r,) = simulate_many([afe_bench(d, pairs, title="report_afe")], backend=backend, jobs=jobs)
+    t = GsTiming(t_exp=0.0, t_row=1 / a.f_clk, rows=n, t_reset=0.0, t_tg=0.0, t_gap=0.0, t_pre=0.0)
+    return dv, np.array([afe_output(r, t, k) for k in range(n)])
+
+
+def gain_error(d, n: int = 7, backend="batch", jobs=None) -> float:
+    """The AFE's gain error by SPICE: the transfer's slope against C11 / C13."""
+    dv, out = transfer(d, n, backend, jobs)
+    return float(-np.polyfit(dv, out, 1)[0] / (d.afe.c11 / d.afe.c13) - 1)
+
+
 def build(ctx) -> Section:
     d = ctx.design
     a = d.afe
     n = 7 if ctx.quick else 13
-    dv = np.linspace(0.0, 1.2, n)   # the full pixel swing at the column
-    pairs = [(V_RST - x, V_RST) for x in dv]
     ctx.progress("afe: SPICE bench", 0, 1)
-    (r,) = simulate_many([afe_bench(d, pairs, title="report_afe")], backend=ctx.backend, jobs=ctx.jobs)
+    dv, out = transfer(d, n, ctx.backend, ctx.jobs)
     ctx.progress("afe: SPICE bench", 1, 1)
-    t = GsTiming(t_exp=0.0, t_row=1 / a.f_clk, rows=n, t_reset=0.0, t_tg=0.0, t_gap=0.0, t_pre=0.0)
-    out = np.array([afe_output(r, t, k) for k in range(n)])
     ideal = ideal_output(a.vref, a.c11, a.c13, dv)
     model = finite_gain_output(a.vref, a.c11, a.c13, a.gain, dv)
     slope, offset = (float(x) for x in np.polyfit(dv, out, 1))

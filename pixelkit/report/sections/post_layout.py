@@ -33,6 +33,8 @@ def _figures(d, backend, jobs, quick) -> dict:
                   "cg_out_spice_V_per_e": cg_sp[w], "read_noise_e": chain(d, w, a, models_for(d))["pixel_e"],
                   "full_well_e": mt[w]["fwc_cv_e"]}
     out["crosstalk"] = _crosstalk(d, backend)
+    from .afe import gain_error
+    out["afe_gain_error"] = gain_error(d, backend=backend)
     if not quick:
         from ...experiments.thesis import run_experiment
         e = run_experiment(d, backend=backend, jobs=jobs)
@@ -86,6 +88,7 @@ def build(ctx) -> Section:
                                     ("pedestal_s_V", "pedestal, secondary (row lines into FD)", 1e3, "mV")):
         a, b = s["crosstalk"][key], p["crosstalk"][key]
         rows.append([f"{label} ({unit})", a * scale, b * scale, (b / a - 1) * 100 if a else "-"])
+    rows.append(["AFE gain error, SPICE (%)", s["afe_gain_error"] * 100, p["afe_gain_error"] * 100, "-"])
     if not ctx.quick:
         for key, label in (("i_mid_A", "i_mid, primary"), ("i_5pct_A", "i_5pct, secondary")):
             rows.append([f"{label} (pA)", s[key] * 1e12, p[key] * 1e12, (p[key] / s[key] - 1) * 100])
@@ -107,8 +110,8 @@ def build(ctx) -> Section:
             "sampled after FD's reset with RS held, is not kicked. Column-to-column: the lines are driven by their "
             "source followers while they are sampled, so a coupling's step has settled by the sample.",
             "Not in this table yet: the sized C_M and mask opening on the post-layout netlist (run `pixelkit size "
-            "DESIGN --post-layout`), and the AFE's gain error and settling: the AFE is not drawn yet, so its "
-            "figures are the schematic's."]
+            "DESIGN --post-layout`) and the AFE's settling at each f_read. The AFE's wiring (the drawn AFE_P / "
+            "AFE_S, their mean) is in the post-layout SC stage."]
     if ctx.quick:
         text.append("Quick profile: i_mid / i_5pct (the SPICE sweeps of the experiment) are left to the full report.")
     return Section(
