@@ -60,13 +60,18 @@ def _at(design, corner, temp_c=27.0, supply=0.0):
 def test_settling_slower_at_ss_than_ff(ref_design):
     """Slow devices (ss) leave a larger settling error at the same clocks than fast ones (ff); the
     same corner twice gives the same number (the inequality is not the noise of the solver).
-    The secondary (1 MHz) is time-constant limited; the reference primary's error is slewing of
-    the column at the bias current (C11 memory, issue 27), which no corner changes: equal there."""
+    The secondary (1 MHz) is time-constant limited: much worse at ss. The reference primary's error
+    is slewing of the column and C11 at the load's bias current (C11 memory, issue 27): no device
+    corner changes that current, but the MIM corner scales C11 (x1.1 at ss, x0.9 at ff, the model
+    library's mimcap sections): worse at ss, and equal (5 %) with C11 held at its typical value."""
     ss = measure.settling(_at(ref_design, "ss"))
     ff = measure.settling(_at(ref_design, "ff"))
     assert ss["secondary"] > 2 * ff["secondary"], (ss, ff)
-    assert ss["primary"] == pytest.approx(ff["primary"], rel=0.05)
+    assert ss["primary"] > 1.2 * ff["primary"], (ss, ff)
     assert measure.settling(_at(ref_design, "ff")) == ff
+    # the cause isolated: the device corners alone, C11 - C13 at their typical values
+    typ = {c: measure.settling(replace(_at(ref_design, c), afe=ref_design.afe))["primary"] for c in ("ss", "ff")}
+    assert typ["ss"] == pytest.approx(typ["ff"], rel=0.05), typ
 
 
 def test_pd_dark_drop_and_ktc_grow_with_temperature(ref_design):
