@@ -37,7 +37,7 @@ def test_conversion_gain_model_vs_spice_within_2_percent_post_layout(views):
     spice = output_cg(post)
     for w in ("primary", "secondary"):
         model = fd.response(post, w, a, models_for(post))["cg_out_V_per_e"]
-        assert model == pytest.approx(spice[w], rel=0.02), w
+        assert model == pytest.approx(spice[w], rel=0.02, abs=0), w
         stale = fd.response(sch, w, sf_gain(sch), models_for(sch))["cg_out_V_per_e"]
         assert abs(stale / spice[w] - 1) > 0.02, w
 
@@ -48,7 +48,7 @@ def test_fd_wiring_enters_the_analytic_node(views):
     for w in ("primary", "secondary"):
         c_sch = fd.fd_node(sch, a, which=w).c_fixed
         c_post = fd.fd_node(post, a, which=w).c_fixed
-        assert c_post - c_sch == pytest.approx(post.post_layout.node_wiring(w, "fd", a))
+        assert c_post - c_sch == pytest.approx(post.post_layout.node_wiring(w, "fd", a), rel=1e-9, abs=0)
         assert 0.3e-15 < c_post - c_sch < 2e-15      # a wiring node of a few tenths of a fF to 1 fF
 
 
@@ -63,7 +63,7 @@ def test_every_extracted_capacitance_is_placed_once(views):
     total = sum(v for (a, b), v in cpl.items() if not (a in ("0", "vss") and b in ("0", "vss")))
     # a coupling between two subpixels' nodes is placed in each (to ground in the other): counted twice
     twice = sum(v for (a, b), v in cpl.items() if "." in a and "." in b and a.split(".")[0] != b.split(".")[0])
-    assert placed == pytest.approx(total + twice, rel=1e-3)
+    assert placed == pytest.approx(total + twice, rel=1e-3, abs=0)
 
 
 def test_netlist_post_layout_runs_in_ngspice(tmp_path):
@@ -95,7 +95,7 @@ def test_report_section_post_layout_vs_schematic(tmp_path):
     s = section.build(Context(d, tmp_path, quick=True))
     rows = {r[0]: r for r in s.tables[0].rows}
     sch, post = rows["C_FD, primary (fF)"][1:3]
-    assert post - sch == pytest.approx(s.tables[1].rows[0][1], rel=1e-6)
+    assert post - sch == pytest.approx(s.tables[1].rows[0][1], rel=1e-6, abs=0)
     assert next(c for c in s.checked if c.name == "post_layout.cg_model_vs_spice_frac").value < 0.02
     ref = section.build(Context(load_design(ROOT / "designs" / "dual_pixel_revA.toml"), tmp_path, quick=True))
     assert not ref.available and "[stack]" in ref.why
