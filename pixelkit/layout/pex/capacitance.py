@@ -204,8 +204,9 @@ def capacitances(geo, stack) -> Couplings:
                 keep = s / (s + SHIELD_K * z)
                 shielded[a_net] += (1 - keep) * la
                 shielded[b_net] += (1 - keep) * lb
-        # fringe downwards, less what neighbours take
-        for net, reg in nets.items():
+        # fringe downwards, less what neighbours take (a capacitor's top plate has none: its bottom plate,
+        # which encloses it, takes its sidewalls' field - the device's)
+        for net, reg in (nets.items() if not cond.device_below else ()):
             h = z
             wb = max(1, int(round(h / dbu)))
             band = reg.sized(wb) - reg
