@@ -8,9 +8,9 @@ from .common import design_arg, emit, json_opt, load, main, spice_opts
 
 def _text(r: dict) -> str:
     lines = [f"light map, shield {r['shield']}, {r['irradiance_W_m2']:g} W/m2 on the die:",
-             f"  {'net':12s} {'bench node':12s} {'junction':26s} {'area (um2)':>10s} {'I (pA)':>9s}"]
+             f"  {'cell':11s} {'net':12s} {'bench node':12s} {'junction':26s} {'area (um2)':>10s} {'I (pA)':>9s}"]
     for j in r["junctions"]:
-        lines.append(f"  {j['net']:12s} {j['node']:12s} {j['kind']:26s} {j['area_m2'] * 1e12:10.3f} "
+        lines.append(f"  {j['cell']:11s} {j['net']:12s} {j['node']:12s} {j['kind']:26s} {j['area_m2'] * 1e12:10.3f} "
                      f"{j['current_A'] * 1e12:9.3f}")
     lines.append(f"  readout junctions exposed: {r['readout_area_m2'] * 1e12:.3f} um2")
     for c, v in r["columns"].items():

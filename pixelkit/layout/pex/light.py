@@ -2,8 +2,8 @@
 photocurrent at the scene's irradiance, and the output error that current causes through the
 real readout (SPICE).
 
-From the drawn dual pixel with its column circuits (``DUALPIX_COL``), nets matched to the
-netlist (``nets.py``): a junction is a diffusion or a well of a net (N+ in the substrate, P+ in an
+From the drawn dual pixel with its column circuits (``DUALPIX_COL``) and the AFEs (``AFE_P``,
+``AFE_S``, drawn in a chip), nets matched to the netlist (``nets.py``): a junction is a diffusion or a well of a net (N+ in the substrate, P+ in an
 n-well, an n-well in the substrate); it is exposed where no metal (metal1 - metal5, the shield
 included) covers it. ``shield``:
 
@@ -109,8 +109,23 @@ def sources(junctions, n_secondary: int) -> list:
     return out
 
 
-def output_error(design, junctions, backend: str = "batch") -> dict:
-    """AFE output of each column with the junctions' photocurrents minus without (V), by SPICE."""
+def afe_sources(afe_junctions) -> list:
+    """Current sources inside the SC stage (``scafe``, one for every column: the mean of the drawn
+    AFE_P's and AFE_S's exposed junctions) on the nodes it has; the op-amp's inner nodes are left out."""
+    from ...spice.netlist import Element
+    from .overlay import AFE_NODES
+    acc = {}
+    for js in afe_junctions:
+        for j in js:
+            if j.net in AFE_NODES and j.net not in ("vdd", "vref") and j.current_A > 0:
+                pins = ("vdd", j.net) if j.kind == "psd" else (j.net, "0")
+                acc[pins] = acc.get(pins, 0.0) + j.current_A / len(afe_junctions)
+    return [Element(f"Ilight{k}", pins, i) for k, (pins, i) in enumerate(sorted(acc.items()))]
+
+
+def output_error(design, junctions, backend: str = "batch", afe_junctions=()) -> dict:
+    """AFE output of each column with the junctions' photocurrents minus without (V), by SPICE
+    (``afe_junctions``: the drawn AFEs' exposed junctions, one list per AFE cell)."""
     from dataclasses import replace as _r
     from ...circuits.testbench import dual_pixel_bench, timings
     from ...measure.afe import afe_output
@@ -118,7 +133,9 @@ def output_error(design, junctions, backend: str = "batch") -> dict:
     n = design.secondary_per_pixel
     base = dual_pixel_bench(design, 0.0, 0.0, with_afe=True, title="light_dark")
     lit = dual_pixel_bench(design, 0.0, 0.0, with_afe=True, title="light_readout")
-    lit = _r(lit, elements=(*lit.elements, *sources(junctions, n)))
+    inner = afe_sources(afe_junctions)
+    subs = tuple(_r(sc, elements=sc.elements + tuple(inner)) if sc.name == "scafe" else sc for sc in lit.subckts)
+    lit = _r(lit, elements=(*lit.elements, *sources(junctions, n)), subckts=subs)
     r0, r1 = simulate_many([base, lit], backend=backend)
     tm = timings(design, design.experiment.t_window)
     out = {}
@@ -141,21 +158,31 @@ def read_noise_at_afe(design) -> dict:
     return {w: chain(design, w, a, m)["pixel_V"] * g for w in ("primary", "secondary")}
 
 
-def light_map(design, shield: str = "pixels", backend: str = "batch", geo=None) -> dict:
-    """The light map of ``design`` under ``shield``: exposed junctions (node, kind, area, photocurrent),
-    the AFE output error of each column by SPICE, its ratio to the read noise there."""
-    from . import cell_geometry
-    geo = geo if geo is not None else cell_geometry(design, "DUALPIX_COL")
-    js = with_currents(design, exposed(geo, shield))
-    err = output_error(design, js, backend)
+def light_map(design, shield: str = "pixels", backend: str = "batch", geos: dict | None = None) -> dict:
+    """The light map of ``design`` under ``shield``: exposed junctions (node, kind, area, photocurrent) of
+    the dual pixel with its column circuits and of the AFEs, the AFE output error of each column by
+    SPICE, its ratio to the read noise there. ``geos``: ``chip_geometry(design)`` when already made."""
+    from . import chip_geometry
+    geos = geos if geos is not None else chip_geometry(design, ("DUALPIX_COL", "AFE_P", "AFE_S"))
+    js = with_currents(design, exposed(geos["DUALPIX_COL"], shield))
+    afe = {c: with_currents(design, exposed(geos[c], shield)) for c in ("AFE_P", "AFE_S")}
+    err = output_error(design, js, backend, list(afe.values()))
     noise = read_noise_at_afe(design)
     e, _ = irradiance(design)
-    rows = [{"net": j.net, "node": bench_node(j.net, design.secondary_per_pixel) or "-", "kind": KINDS[j.kind],
-             "area_m2": j.area_m2, "current_A": j.current_A,
+    rows = [{"cell": "DUALPIX_COL", "net": j.net, "node": bench_node(j.net, design.secondary_per_pixel) or "-",
+             "kind": KINDS[j.kind], "area_m2": j.area_m2, "current_A": j.current_A,
              "readout": j.net.startswith(("col", "out", "nbias"))} for j in js]
+    for cell, lst in afe.items():
+        rows += [{"cell": cell, "net": j.net, "node": f"scafe.{j.net}" if j.net in _AFE_SIMULATED else "-",
+                  "kind": KINDS[j.kind], "area_m2": j.area_m2, "current_A": j.current_A, "readout": True}
+                 for j in lst]
     cols = {c: {"error_V": v, "read_noise_V": noise["primary" if c == "col_p" else "secondary"],
                 "error_over_noise": abs(v) / noise["primary" if c == "col_p" else "secondary"]}
             for c, v in err.items()}
     return {"shield": shield, "irradiance_W_m2": e, "junctions": rows, "columns": cols,
             "readout_area_m2": sum(r["area_m2"] for r in rows if r["readout"]),
+            "afe_area_m2": {c: sum(j.area_m2 for j in lst) for c, lst in afe.items()},
             "worst_error_over_noise": max(c["error_over_noise"] for c in cols.values())}
+
+
+_AFE_SIMULATED = ("in", "out", "vm", "x", "c", "p1", "p1b", "p2", "p2b")

@@ -201,7 +201,7 @@ def post_layout_view(design):
     technology has no stack or its layout does not match its netlist. Extractions are cached in
     ``$PIXELKIT_CACHE/pex`` (key: the design and the code that draws and extracts it)."""
     from ...tech.stack import require_stack
-    from . import cell_geometry
+    from . import chip_geometry
     require_stack(design.tech)
     if getattr(design, "post_layout", None) is not None:
         return design
@@ -209,15 +209,8 @@ def post_layout_view(design):
     if key not in _CACHE:
         found = _stored(key)
         if found is None:
-            import tempfile
-            from pathlib import Path
-            from ..flow import write_gds
-            from ..library import build_chip_cells, to_library
-            with tempfile.TemporaryDirectory(prefix="pixelkit-pex-") as tmp:
-                cells, _top = build_chip_cells(design, 2, 2, True, "full")   # the AFEs are drawn with a chip
-                gds = write_gds(to_library(design, cells), Path(tmp) / f"{design.name}.gds")
-                found = build(design, cell_geometry(design, "DUALPIX", gds), cell_geometry(design, "DUALPIX_COL", gds),
-                              [cell_geometry(design, c, gds) for c in ("AFE_P", "AFE_S")])
+            g = chip_geometry(design)
+            found = build(design, g["DUALPIX"], g["DUALPIX_COL"], [g["AFE_P"], g["AFE_S"]])
             _store(key, found)
         _CACHE[key] = found
     return replace(design, post_layout=_CACHE[key])

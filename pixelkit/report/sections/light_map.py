@@ -43,15 +43,16 @@ def build(ctx) -> Section:
                                           "cannot be extracted (docs/post-layout.md)")
     if d.scene is None:
         return Section.unavailable(TITLE, "the design has no [scene]: no irradiance to light the die with")
-    from ...layout.pex import cell_geometry
+    from ...layout.pex import chip_geometry
     from ...layout.pex.light import light_map
-    geo = cell_geometry(d, "DUALPIX_COL")
-    maps = {s: light_map(d, s, ctx.backend, geo) for s in ("pixels", "full")}
+    geos = chip_geometry(d, ("DUALPIX_COL", "AFE_P", "AFE_S"))
+    geo = geos["DUALPIX_COL"]
+    maps = {s: light_map(d, s, ctx.backend, geos) for s in ("pixels", "full")}
     tables = []
     for s, m in maps.items():
         tables.append(Table(f"light_map_{s}", f"Exposed junctions, shield '{s}' ({m['irradiance_W_m2']:g} W/m2 on the die)",
-                            ["net", "bench node", "junction", "area (um2)", "photocurrent (pA)"],
-                            [[j["net"], j["node"], j["kind"], j["area_m2"] * 1e12, j["current_A"] * 1e12]
+                            ["cell", "net", "bench node", "junction", "area (um2)", "photocurrent (pA)"],
+                            [[j["cell"], j["net"], j["node"], j["kind"], j["area_m2"] * 1e12, j["current_A"] * 1e12]
                              for j in m["junctions"]]))
     tables.append(Table("light_map_error", "AFE output error from the light on the exposed junctions (SPICE)",
                         ["shield", "column", "error (mV)", "read noise there (mV)", "error / read noise"],
