@@ -86,7 +86,7 @@ def _retried_lines(r: dict) -> list[str]:
 def size_text(r: dict) -> str:
     a, s, v = r["levels"]["analytic"], r["levels"]["spice"], r["verify"]
     lines = [f"Sizing ({r['level']} level chosen); sized design: {r['sized_design']}",
-             _row("", "analytic", "SPICE curves"), *_pairs(a, s, _SIZE_ROWS),
+             _row("", "analytic", "SPICE level"), *_pairs(a, s, _SIZE_ROWS),
              f"  verify in SPICE: primary at {v['primary_frac'] * 100:.1f} % of swing, "
              f"secondary at {v['secondary_frac'] * 100:.1f} %",
              f"  analytic solve {r['solve_time_s'] * 1e3:.1f} ms",
