@@ -1,0 +1,152 @@
+"""The tutorial (docs/tutorial.md) and the README's tour run as written, so neither can go stale.
+
+The runner takes every ```sh block of the page in order and runs it with bash (``-e -o
+pipefail``) in one scratch folder holding a copy of ``designs/``, as a user runs them from a
+clone; ``pixelkit`` there is this interpreter's ``python -m pixelkit``. A block's expected exit
+status is 0 unless an HTML comment right above it says otherwise (``<!-- exit: 0 1 -->``:
+verify and the revision diff exit 1 on a failing specification, which the tutorial explains);
+``<!-- creates: PATH ... -->`` names files the block must leave; ``<!-- slow -->`` marks a block
+that takes minutes (DRC, sign-off, the reports). The whole walk is ``slow``
+(``python -m pytest -m slow tests/test_tutorial.py``: about 4 min on a warm cache); by default
+the quick blocks run and the slow blocks' ``pixelkit`` command lines are parsed by the real
+click commands in the folder the quick blocks left (a renamed command or option, a bad value
+or a file the page never made fails), without running them. Independent of the code under
+test: what is checked is what the page promises the reader (statuses, files), parsed from the
+page itself. The simulation cache is the test session's, so blocks that repeat another test's
+work are served from it.
+"""
+import os
+import re
+import shlex
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import click
+import pytest
+
+from conftest import ROOT
+
+BLOCK = re.compile(r"((?:<!--[^\n]*-->\n)*)```sh\n(.*?)\n```", re.S)
+
+
+def sh_blocks(text: str) -> list[dict]:
+    """[{code, exit: set of allowed statuses, creates: [paths]}] of the page's ```sh blocks."""
+    out = []
+    for m in BLOCK.finditer(text):
+        notes = m.group(1)
+        status = re.search(r"<!--\s*exit:\s*([\d ]+)-->", notes)
+        creates = re.search(r"<!--\s*creates:\s*(.+?)\s*-->", notes)
+        out.append({"code": m.group(2), "exit": {int(s) for s in status.group(1).split()} if status else {0},
+                    "creates": creates.group(1).split() if creates else [],
+                    "slow": bool(re.search(r"<!--\s*slow\s*-->", notes))})
+    return out
+
+
+def pixelkit_commands(code: str) -> list[list[str]]:
+    """The argument lists of the ``pixelkit`` commands of a block (continuation lines joined,
+    each command up to a pipe, redirection or ``&&``)."""
+    out = []
+    for line in code.replace("\\\n", " ").splitlines():
+        words = shlex.split(line, comments=True)
+        while "pixelkit" in words:
+            words = words[words.index("pixelkit") + 1:]
+            stop = next((i for i, w in enumerate(words) if w in {"|", ">", ">>", "&&", "||", ";"}), len(words))
+            out.append(words[:stop])
+            words = words[stop:]
+    return out
+
+
+def parse_command(args: list[str]) -> None:
+    """Parse ``pixelkit ARGS`` with the kit's click commands, converting every value (files must
+    exist, choices be known), without invoking anything."""
+    from pixelkit.cli import register_all
+    from pixelkit.cli.common import main
+    register_all()
+    cmd, parent, rest = main, None, list(args)
+    while True:
+        ctx = cmd.make_context("pixelkit" if parent is None else cmd.name, rest, parent=parent)
+        if not isinstance(cmd, click.Group):
+            design = ctx.params.get("design")
+            if design and not Path(design).is_file():   # the commands load it when they run
+                raise click.UsageError(f"design file {design} does not exist")
+            return
+        _, cmd, rest = cmd.resolve_command(ctx, ctx._protected_args + ctx.args)
+        parent = ctx
+
+
+def run_blocks(blocks, folder, parse_slow=False):
+    """Run the blocks in order in ``folder``; with ``parse_slow``, a slow block's commands are
+    parsed instead of run and the files it promises are stood in for by empty ones, so that a later
+    command naming them parses."""
+    prelude = f'pixelkit() {{ "{sys.executable}" -m pixelkit "$@"; }}\n'
+    env = {**os.environ, "PIXELKIT_PROGRESS": "0"}
+    env.pop("PIXELKIT_REPORTS", None)
+    for n, b in enumerate(blocks, 1):
+        if parse_slow and b["slow"]:
+            with pytest.MonkeyPatch.context() as mp:
+                mp.chdir(folder)
+                for args in pixelkit_commands(b["code"]):
+                    try:
+                        parse_command(args)
+                    except click.ClickException as e:
+                        raise AssertionError(f"block {n}: pixelkit {' '.join(args)}: {e.format_message()}") from e
+            for f in b["creates"]:
+                (folder / f).parent.mkdir(parents=True, exist_ok=True)
+                (folder / f).touch()
+            continue
+        p = subprocess.run(["bash", "-e", "-o", "pipefail", "-c", prelude + b["code"]], cwd=folder, env=env,
+                           capture_output=True, text=True, timeout=1800)
+        assert p.returncode in b["exit"], (f"block {n} exited {p.returncode} (the page says {sorted(b['exit'])}):\n"
+                                           f"{b['code']}\n--- stderr:\n{p.stderr[-3000:]}\n--- stdout:\n{p.stdout[-2000:]}")
+        missing = [f for f in b["creates"] if not (folder / f).exists()]
+        assert not missing, f"block {n} did not create {missing}:\n{b['code']}"
+
+
+@pytest.fixture
+def clone(tmp_path):
+    shutil.copytree(ROOT / "designs", tmp_path / "designs")
+    return tmp_path
+
+
+def tutorial_blocks():
+    blocks = sh_blocks((ROOT / "docs" / "tutorial.md").read_text())
+    assert len(blocks) >= 8, "the tutorial lost its commands"
+    return blocks
+
+
+@pytest.mark.slow
+def test_tutorial_runs_as_written(clone):
+    run_blocks(tutorial_blocks(), clone)
+
+
+def test_tutorial_quick_blocks_run_and_slow_commands_parse(clone):
+    blocks = tutorial_blocks()
+    assert any(b["slow"] for b in blocks) and not all(b["slow"] for b in blocks)
+    run_blocks(blocks, clone, parse_slow=True)
+
+
+def test_readme_tour_runs_as_written(clone):
+    """The README's blocks after its two set-up commands (the tour; the set-up itself is tests/test_setup.py's)."""
+    blocks = sh_blocks((ROOT / "README.md").read_text())[2:]
+    assert blocks, "the README lost its tour"
+    run_blocks(blocks, clone)
+
+
+def test_the_runner_catches_a_stale_command(clone):
+    """The check can fail: a command whose option no longer exists, and a block that does not
+    leave the file the page promises."""
+    with pytest.raises(AssertionError, match="exited 2"):
+        run_blocks(sh_blocks("```sh\npixelkit simulate designs/dual_pixel_revA.toml --no-such-option\n```"), clone)
+    with pytest.raises(AssertionError, match="did not create"):
+        run_blocks(sh_blocks("<!-- creates: out/x.csv -->\n```sh\ntrue\n```"), clone)
+    assert sh_blocks("<!-- exit: 0 1 -->\n```sh\nfalse\n```")[0]["exit"] == {0, 1}
+    slow = "<!-- slow -->\n```sh\npixelkit report designs/dual_pixel_revA.toml --quick --out r \\\n  --bogus 1\n```"
+    with pytest.raises(AssertionError, match="No such option '--bogus'"):
+        run_blocks(sh_blocks(slow), clone, parse_slow=True)
+    with pytest.raises(AssertionError, match="does not exist"):
+        run_blocks(sh_blocks(slow.replace("designs/dual_pixel_revA", "revZ").replace("--bogus 1", "")), clone,
+                   parse_slow=True)
+    with pytest.raises(AssertionError, match="No such command"):
+        run_blocks(sh_blocks("<!-- slow -->\n```sh\npixelkit reprot x\n```"), clone, parse_slow=True)
