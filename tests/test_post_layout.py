@@ -97,5 +97,20 @@ def test_report_section_post_layout_vs_schematic(tmp_path):
     sch, post = rows["C_FD, primary (fF)"][1:3]
     assert post - sch == pytest.approx(s.tables[1].rows[0][1], rel=1e-6, abs=0)
     assert next(c for c in s.checked if c.name == "post_layout.cg_model_vs_spice_frac").value < 0.02
+    # sizing on each view's curves: the opening at its bound, so t_int scales with the PD node's
+    # capacitance (the same fraction of the swing is q = C dV; derivation, not the sizer's own figure)
+    for w in ("primary", "secondary"):
+        c_sch, c_post = rows[f"C_PD,node, {w} (fF)"][1:3]
+        t_sch, t_post = rows[f"sized t_int, {w} (us) (analytic level)"][1:3]
+        assert t_post / t_sch == pytest.approx(c_post / c_sch, rel=0.01, abs=0), w
+    assert all(isinstance(rows[f"AFE settling error at f_read = {k} kHz, {w} (mV)"][2], float)
+               for k, w in (("500", "primary"), ("1000", "secondary")))
+    # the 2 x 2 frame (array deck) moves the dim secondaries by the dual-pixel bench's pedestal shift
+    ped = rows["pedestal, secondary (row lines into FD) (mV)"]
+    frame = next(t for t in s.tables if t.name == "post_layout_frame").rows
+    assert len(frame) == 2 * 2 + 2 * 2 * d.secondary_per_pixel
+    for r in frame:
+        if r[0] == "secondary" and r[2] == 0:
+            assert r[6] == pytest.approx(ped[2] - ped[1], abs=10.0), r
     ref = section.build(Context(load_design(ROOT / "designs" / "dual_pixel_revA.toml"), tmp_path, quick=True))
     assert not ref.available and "[stack]" in ref.why

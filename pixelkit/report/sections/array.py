@@ -48,17 +48,25 @@ def _plot(ctx, r, tm, n):
                              "phases shaded (S1 signal sample, RST pulse, S2 reset sample), cf. [Thesis2019] fig. 3.13")
 
 
-def build(ctx) -> Section:
-    d = ctx.design
-    n = d.secondary_per_pixel
-    m, unit = default_map(ROWS, n * COLS, "gradient")
+def frame(d, backend="batch", jobs=None, title=f"report_array_{ROWS}x{COLS}"):
+    """(SPICE result, frame timings, photocurrents) of the ``ROWS`` x ``COLS`` frame with the AFE under a
+    left-to-right gradient, one deck (fig. 3.13 of [Thesis2019]); ``d`` may be a post-layout view."""
+    m, unit = default_map(ROWS, d.secondary_per_pixel * COLS, "gradient")
     ph = photocurrents(d, ROWS, COLS, m, unit)
     t_exp = d.experiment.t_window
     tm = frame_timings(d, t_exp, ROWS)
     step = min(t.t_row for t in tm.values()) / STEPS_PER_ROW
-    net = array_bench(d, ph.iph_p, ph.iph_s, None, t_exp, True, None, step, title=f"report_array_{ROWS}x{COLS}")
+    net = array_bench(d, ph.iph_p, ph.iph_s, None, t_exp, True, None, step, title=title)
+    (r,) = simulate_many([net], backend=backend, jobs=jobs)
+    return r, tm, ph
+
+
+def build(ctx) -> Section:
+    d = ctx.design
+    n = d.secondary_per_pixel
+    t_exp = d.experiment.t_window
     ctx.progress("array: 2 x 2 frame with the AFE (one deck)", 0, 1)
-    (r,) = simulate_many([net], backend=ctx.backend, jobs=ctx.jobs)
+    r, tm, ph = frame(d, ctx.backend, ctx.jobs)
     ctx.progress("array: 2 x 2 frame with the AFE (one deck)", 1, 1)
     ctx.progress("array: the same frame as column chains", 0, 1)
     split = simulate_frame(d, ph.iph_p, ph.iph_s, with_afe=True, split="columns", t_exp=t_exp,
