@@ -62,9 +62,10 @@ def _c11_marker(cv: Canvas):
 
 
 @pytest.fixture(scope="module")
-def drc(tmp_path_factory, gf, chip):
-    """One deep run of the foundry deck over the chip and a copy of AFE_S whose C11 lost its
-    CAP_MK / MIM_L_MK markers."""
+def drc(tmp_path_factory, gf, ref_design, chip):
+    """One deep run of the foundry deck over the chip, the same chip with the thesis's shield
+    (``pixels``, its cells prefixed P_), the reference design's chip (c35_thesis, R_), and a copy
+    of AFE_S whose C11 lost its CAP_MK / MIM_L_MK markers."""
     from pixelkit.layout.signoff.drc import run_drc
     folder = tmp_path_factory.mktemp("drc")
     lib = to_library(gf, chip)
@@ -74,6 +75,13 @@ def drc(tmp_path_factory, gf, chip):
     top = gdstk.Cell("TOP")
     top.add(gdstk.Reference(next(c for c in lib.cells if c.name == TOP), (0, 0)))
     top.add(gdstk.Reference(cell, (-40, 0)))
+    for k, (prefix, d, mode) in enumerate((("P_", gf, "pixels"), ("R_", ref_design, "full"))):
+        cells, name = build_chip_cells(d, 2, 2, afe=True, shield=mode)
+        sub = to_library(d, cells)
+        for c in sub.cells:
+            c.name = prefix + c.name
+            lib.add(c)
+        top.add(gdstk.Reference(next(c for c in sub.cells if c.name == prefix + name), (100 * (k + 1), 0)))
     lib.add(top)
     path = folder / "all.gds"
     lib.write_gds(str(path))
@@ -81,11 +89,15 @@ def drc(tmp_path_factory, gf, chip):
 
 
 def test_foundry_deck_finds_no_violation_in_the_2x2_array_with_its_afes(drc):
+    """Both shields that draw something (full; pixels, with its tie to vss) and both reference
+    designs (gf180mcu_3v3, c35_thesis)."""
     result, lib = drc
     assert "KLayout 0.28.5" in result.klayout
     bad = {v.cell: v.rule for v in result.violations if v.cell != "BAD_MIM"}
     assert not bad, f"the GF180MCU deck flags generated cells: {bad}"
-    assert {"AFE_S", "AFE_P", "SHIELD_READOUT_S", TOP} <= {c.name for c in lib.cells}
+    names = {c.name for c in lib.cells}
+    assert {"AFE_S", "AFE_P", "SHIELD_READOUT_S", TOP, f"P_{TOP}", f"R_{TOP}"} <= names
+    assert "P_SHIELD_READOUT_S" not in names
 
 
 def test_foundry_deck_catches_a_mim_capacitor_without_its_marker(drc):
