@@ -168,6 +168,31 @@ def test_revision_diff_names_the_changed_device_and_fails_on_specs(quick_report,
     assert (tmp_path / "revB" / "index.html").is_file()
 
 
+def test_intentional_change_moves_figures_and_passes_on_specs_ranked(quick_report, tmp_path):
+    """Issue 31's case: a longer SF (sf_l 0.5 -> 0.8 um; 1 um no longer fits the secondary's 8 um
+    cell, layout rule transistors_fit) moves checked figures (the pedestal follows the SF's V_GS)
+    and breaks no spec: the diff lists what moved, ranks the specs by the margin the revision used
+    and passes, exit 0. Judged by moved figures (the rule of a design without specs) it would fail."""
+    base, _ = quick_report
+    changed = tmp_path / "revB.toml"
+    text = re.sub(r'^sf_l = "0.5 um"', 'sf_l = "0.8 um"', REF.read_text(), flags=re.M)
+    assert text != REF.read_text()
+    changed.write_text(text)
+    code, stdout, err = run_cli("report", changed, "--quick", "--out", tmp_path / "revB", "--baseline", base)
+    assert code == 0, err + stdout
+    diff = json.loads((tmp_path / "revB" / "diff.json").read_text())
+    assert [c["field"] for c in diff["design_changes"]] == ["pixel.devices.sf_l"]
+    assert any("pedestal" in name for name in diff["moved"]), diff["moved"]
+    assert diff["by_specs"] and diff["passed"] and diff["newly_failing"] == []
+    # the quick profile runs the nominal condition only: an 85 degC spec is "not run", unranked
+    assert all(r["verdict"] == "not run" for r in diff["specs"] if r.get("margin_used_pct") is None)
+    used = [r["margin_used_pct"] for r in diff["specs"] if r.get("margin_used_pct") is not None]
+    assert len(used) >= 8 and used == sorted(used, reverse=True), used
+    assert "no spec newly failing" in stdout
+    _, help_text, _ = run_cli("report", "--help")
+    assert "newly fails" in " ".join(help_text.split())
+
+
 def test_unchanged_revision_exits_0_and_json_gives_the_diff_without_html(quick_report, tmp_path):
     base, _ = quick_report
     out = tmp_path / "again"

@@ -14,7 +14,8 @@ from .common import design_arg, emit, finishing, json_opt, main, post_layout_opt
 @click.option("--out", type=click.Path(file_okay=False), default=None,
               help="report folder (default reports/<design>)")
 @click.option("--baseline", type=click.Path(file_okay=False), default=None,
-              help="an earlier report folder: add the revision diff; exit 1 when a checked figure moved")
+              help="an earlier report folder: add the revision diff, ranked by the margin each spec used; exit 1 "
+                   "when a spec newly fails (a design without [spec]: when a checked figure moved)")
 @click.option("--measured", type=click.Path(dir_okay=False), default=None,
               help="measured data (CSV, as 'pixelkit gap diagnose' reads) for the sim-to-real section")
 @click.option("--quick", is_flag=True, help="light profile for tests: fewer sweep points, no sensitivity table")
