@@ -1,19 +1,22 @@
-"""The tutorial (docs/tutorial.md) and the README's tour run as written, so neither can go stale.
+"""The tutorial (docs/tutorial.md), the how-to guides (docs/howto-*.md) and the README's tour run
+as written, so none can go stale.
 
-The runner takes every ```sh block of the page in order and runs it with bash (``-e -o
-pipefail``) in one scratch folder holding a copy of ``designs/``, as a user runs them from a
-clone; ``pixelkit`` there is this interpreter's ``python -m pixelkit``. A block's expected exit
-status is 0 unless an HTML comment right above it says otherwise (``<!-- exit: 0 1 -->``:
-verify and the revision diff exit 1 on a failing specification, which the tutorial explains);
-``<!-- creates: PATH ... -->`` names files the block must leave; ``<!-- slow -->`` marks a block
-that takes minutes (DRC, sign-off, the reports). The whole walk is ``slow``
-(``python -m pytest -m slow tests/test_tutorial.py``: about 4 min on a warm cache); by default
-the quick blocks run and the slow blocks' ``pixelkit`` command lines are parsed by the real
-click commands in the folder the quick blocks left (a renamed command or option, a bad value
-or a file the page never made fails), without running them. Independent of the code under
-test: what is checked is what the page promises the reader (statuses, files), parsed from the
-page itself. The simulation cache is the test session's, so blocks that repeat another test's
-work are served from it.
+The runner takes every ```sh block of a page in order and runs it with bash (``-e -o
+pipefail``) in one scratch folder holding a copy of ``designs/``, ``examples/`` and
+``tests/data/``, as a user runs them from a clone; ``pixelkit`` and ``python`` there are this
+interpreter. HTML comments right above a block (invisible on the site) say what it promises:
+``<!-- exit: 0 1 -->`` its allowed exit statuses (default 0; verify and the revision diff exit 1
+on a failing specification, which the tutorial explains); ``<!-- creates: PATH ... -->`` files it
+must leave; ``<!-- expect: REGEX -->`` a line its output must hold (the how-to's diagnosis names
+the effect the example's virtual silicon was made with); ``<!-- slow -->`` a block that takes
+minutes (DRC, sign-off, the reports); ``<!-- parse-only -->`` a block never run (it starts
+servers). Every page's whole walk is ``slow`` (``python -m pytest -m slow tests/test_tutorial.py``:
+the tutorial about 4 min on a warm cache); by default the quick blocks run and the slow blocks'
+``pixelkit`` command lines are parsed by the real click commands in the folder the quick blocks
+left (a renamed command or option, a bad value or a design file the page never made fails),
+without running them. Independent of the code under test: what is checked is what the page
+promises the reader, parsed from the page itself. The simulation cache is the test session's, so
+blocks that repeat another test's work are served from it.
 """
 import os
 import re
@@ -32,7 +35,8 @@ BLOCK = re.compile(r"((?:<!--[^\n]*-->\n)*)```sh\n(.*?)\n```", re.S)
 
 
 def sh_blocks(text: str) -> list[dict]:
-    """[{code, exit: set of allowed statuses, creates: [paths]}] of the page's ```sh blocks."""
+    """[{code, exit: set of allowed statuses, creates: [paths], slow, parse_only, expect: [regex]}]
+    of the page's ```sh blocks."""
     out = []
     for m in BLOCK.finditer(text):
         notes = m.group(1)
@@ -40,7 +44,9 @@ def sh_blocks(text: str) -> list[dict]:
         creates = re.search(r"<!--\s*creates:\s*(.+?)\s*-->", notes)
         out.append({"code": m.group(2), "exit": {int(s) for s in status.group(1).split()} if status else {0},
                     "creates": creates.group(1).split() if creates else [],
-                    "slow": bool(re.search(r"<!--\s*slow\s*-->", notes))})
+                    "slow": bool(re.search(r"<!--\s*slow\s*-->", notes)),
+                    "parse_only": bool(re.search(r"<!--\s*parse-only\s*-->", notes)),
+                    "expect": re.findall(r"<!--\s*expect:\s*(.+?)\s*-->", notes)})
     return out
 
 
@@ -80,11 +86,12 @@ def run_blocks(blocks, folder, parse_slow=False):
     """Run the blocks in order in ``folder``; with ``parse_slow``, a slow block's commands are
     parsed instead of run and the files it promises are stood in for by empty ones, so that a later
     command naming them parses."""
-    prelude = f'pixelkit() {{ "{sys.executable}" -m pixelkit "$@"; }}\n'
+    prelude = (f'pixelkit() {{ "{sys.executable}" -m pixelkit "$@"; }}\n'
+               f'python() {{ "{sys.executable}" "$@"; }}\n')
     env = {**os.environ, "PIXELKIT_PROGRESS": "0"}
     env.pop("PIXELKIT_REPORTS", None)
     for n, b in enumerate(blocks, 1):
-        if parse_slow and b["slow"]:
+        if b["parse_only"] or (parse_slow and b["slow"]):
             with pytest.MonkeyPatch.context() as mp:
                 mp.chdir(folder)
                 for args in pixelkit_commands(b["code"]):
@@ -102,12 +109,42 @@ def run_blocks(blocks, folder, parse_slow=False):
                                            f"{b['code']}\n--- stderr:\n{p.stderr[-3000:]}\n--- stdout:\n{p.stdout[-2000:]}")
         missing = [f for f in b["creates"] if not (folder / f).exists()]
         assert not missing, f"block {n} did not create {missing}:\n{b['code']}"
+        for rx in b["expect"]:
+            assert re.search(rx, p.stdout), f"block {n} did not print {rx!r}:\n{b['code']}\n--- stdout:\n{p.stdout[-2000:]}"
 
 
 @pytest.fixture
 def clone(tmp_path):
-    shutil.copytree(ROOT / "designs", tmp_path / "designs")
+    """What the pages' commands read from a clone: the designs, the examples, the EMVA 1288 test data."""
+    for d in ("designs", "examples", "tests/data"):
+        shutil.copytree(ROOT / d, tmp_path / d)
     return tmp_path
+
+
+HOWTOS = sorted(p.name for p in (ROOT / "docs").glob("howto-*.md") if sh_blocks(p.read_text()))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("page", HOWTOS)
+def test_howto_runs_as_written(page, clone):
+    run_blocks(sh_blocks((ROOT / "docs" / page).read_text()), clone)
+
+
+@pytest.mark.parametrize("page", HOWTOS)
+def test_howto_quick_blocks_run_and_slow_commands_parse(page, clone):
+    run_blocks(sh_blocks((ROOT / "docs" / page).read_text()), clone, parse_slow=True)
+
+
+def test_example_measurements_are_silicon_case_c1001_unchanged():
+    """examples/measured_revA.csv is case c1001 of the SPICE virtual silicon (docs/howto-measurements.md
+    states its truth from truth.json); the page's check that the diagnosis names fd_leakage rests on it."""
+    import csv
+    import json
+    cases = [{k: v for k, v in r.items() if k != "case"}
+             for r in csv.DictReader(open(ROOT / "pixelkit/gap/silicon_cases/cases.csv")) if r["case"] == "c1001"]
+    assert list(csv.DictReader(open(ROOT / "examples/measured_revA.csv"))) == cases
+    truth = json.loads((ROOT / "pixelkit/gap/silicon_cases/truth.json").read_text())["c1001"]
+    assert truth["effect"] == "fd_leakage" and truth["params"]["i_fd_A"] == pytest.approx(2.22e-16, rel=2e-3, abs=0)
 
 
 def tutorial_blocks():
@@ -148,5 +185,7 @@ def test_the_runner_catches_a_stale_command(clone):
     with pytest.raises(AssertionError, match="does not exist"):
         run_blocks(sh_blocks(slow.replace("designs/dual_pixel_revA", "revZ").replace("--bogus 1", "")), clone,
                    parse_slow=True)
+    with pytest.raises(AssertionError, match="did not print"):
+        run_blocks(sh_blocks("<!-- expect: fd_leakage -->\n```sh\necho dark_current\n```"), clone)
     with pytest.raises(AssertionError, match="No such command"):
         run_blocks(sh_blocks("<!-- slow -->\n```sh\npixelkit reprot x\n```"), clone, parse_slow=True)
