@@ -6,7 +6,7 @@ Independent paths: the DRC verdict is the foundry deck's (GlobalFoundries' GF180
 KLayout), not the generator's; LVS compares the extracted layout with the netlist the
 simulations use; the open junction is measured on the GDS read back and set beside the
 openings the design file asks for (its PD and mask-opening sizes). Quick profile: LVS and the
-shield only (the deck's fixed cost is about a minute; `pixelkit layout --afe --drc` runs it).
+shield only (the full profile runs the deck; so does `pixelkit layout --afe --drc`).
 """
 from __future__ import annotations
 
@@ -40,8 +40,8 @@ def build(ctx) -> Section:
     # DRC -------------------------------------------------------------------------------------
     drc = r.get("drc")
     if drc is None:
-        text.append("DRC: not run in the quick profile (the foundry deck costs about a minute whatever the "
-                    f"cell); `pixelkit layout {d.name}.toml --afe --drc` runs it.")
+        text.append("DRC: not run in the quick profile (the full profile runs the foundry deck, as "
+                    f"`pixelkit layout {d.name}.toml --afe --drc` does).")
         drc_rows = [["(not run: quick profile)", "", "", "", ""]]
     else:
         text.append(f"DRC: {drc['deck'].rsplit('/', 1)[-1]} ({drc['klayout']}, {drc['options'].get('run_mode', '')} "
