@@ -20,14 +20,18 @@ from pathlib import Path
 
 log = logging.getLogger("mkdocs.plugins.pixelkit")
 
-#: the citation key as ``tests/test_repository_pointers.py`` reads it
-CITE = re.compile(r"(?<![\w`])\[([A-Z][A-Za-z]*(?:19|20)\d\d[a-z]?)\](?![(:\[])")
+#: a bracketed word that may be a citation key: linked when the bibliography defines it
+#: (``[EMVA1288]``, ``[GF180MCU]``, ``[ngspice]``); Markdown links and their definitions excluded
+CITE = re.compile(r"(?<![\w`\[])\[([A-Za-z][A-Za-z0-9.-]*[A-Za-z0-9])\](?![(:\[\]])")
+#: an author-year key (as ``tests/test_repository_pointers.py`` reads it): one the bibliography
+#: does not define is a warning (an error in the strict build); other bracketed words are prose
+AUTHOR_YEAR = re.compile(r"[A-Z][A-Za-z]*(?:19|20)\d\d[a-z]?")
 PAGE = r"docs/([A-Za-z0-9_-]+\.md)(#[A-Za-z0-9_-]+)?"
 PAGE_SPAN = re.compile(r"`" + PAGE + r"`")
 PAGE_BARE = re.compile(r"(?<![\w/(\[`.-])" + PAGE + r"(?![\w/])")
 FENCE = re.compile(r"^\s*(```|~~~)")
 SPANS = re.compile(r"(`+)(.+?)\1")
-BIB_HEADING = re.compile(r"^#+\s*\[([A-Z][A-Za-z]*(?:19|20)\d\d[a-z]?)\]\s*$", re.M)
+BIB_HEADING = re.compile(r"^#+\s*\[([A-Za-z][A-Za-z0-9.-]*[A-Za-z0-9])\]\s*$", re.M)
 
 
 def bibliography_keys(docs_dir) -> set[str]:
@@ -53,7 +57,8 @@ def link_text(text: str, keys: set[str], root: str, where: str, titles: dict) ->
     """One stretch of prose (no code): citations and page mentions as links."""
     def cite(m):
         if m.group(1) not in keys:
-            log.warning("%s: citation key [%s] is not in the bibliography", where, m.group(1))
+            if AUTHOR_YEAR.fullmatch(m.group(1)):
+                log.warning("%s: citation key [%s] is not in the bibliography", where, m.group(1))
             return m.group(0)
         return f"[[{m.group(1)}]]({root}bibliography.md#{m.group(1).lower()})"
     text = PAGE_BARE.sub(lambda m: page_link(m, root, titles), text)

@@ -81,6 +81,11 @@ def test_citation_and_page_links():
     assert out.split("\n")[0] == ("See [Sign-off](../verify.md) and [Sign-off](../verify.md#power), "
                                   "[[Thesis2019]](../bibliography.md#thesis2019), `[Thesis2019]`.")
     assert out.split("\n")[2] == "docs/verify.md [Thesis2019]"        # fenced code untouched
+    # keys of any shape the bibliography defines (standards, PDK, tools); other brackets are prose
+    out = link_markdown("[EMVA1288], [GF180MCU] and [emva1288-py]; [stack], [models.corners], [a](x.md), [[b]].",
+                        {"EMVA1288", "GF180MCU", "emva1288-py"}, root="")
+    assert out == ("[[EMVA1288]](bibliography.md#emva1288), [[GF180MCU]](bibliography.md#gf180mcu) and "
+                   "[[emva1288-py]](bibliography.md#emva1288-py); [stack], [models.corners], [a](x.md), [[b]].")
 
 
 @pytest.mark.parametrize("page, why", [

@@ -7,7 +7,7 @@ pipefail``) in one scratch folder holding a copy of ``designs/``, ``examples/`` 
 interpreter. HTML comments right above a block (invisible on the site) say what it promises:
 ``<!-- exit: 0 1 -->`` its allowed exit statuses (default 0; verify and the revision diff exit 1
 on a failing specification, which the tutorial explains); ``<!-- creates: PATH ... -->`` files it
-must leave; ``<!-- expect: REGEX -->`` a line its output must hold (the how-to's diagnosis names
+must leave; ``<!-- expect: REGEX -->`` what its output (stdout and stderr) must hold (the how-to's diagnosis names
 the effect the example's virtual silicon was made with); ``<!-- slow -->`` a block that takes
 minutes (DRC, sign-off, the reports); ``<!-- parse-only -->`` a block never run (it starts
 servers). Every page's whole walk is ``slow`` (``python -m pytest -m slow tests/test_tutorial.py``:
@@ -110,7 +110,8 @@ def run_blocks(blocks, folder, parse_slow=False):
         missing = [f for f in b["creates"] if not (folder / f).exists()]
         assert not missing, f"block {n} did not create {missing}:\n{b['code']}"
         for rx in b["expect"]:
-            assert re.search(rx, p.stdout), f"block {n} did not print {rx!r}:\n{b['code']}\n--- stdout:\n{p.stdout[-2000:]}"
+            assert re.search(rx, p.stdout + p.stderr), (f"block {n} did not print {rx!r}:\n{b['code']}\n"
+                                                         f"--- stdout:\n{p.stdout[-2000:]}\n--- stderr:\n{p.stderr[-1000:]}")
 
 
 @pytest.fixture
