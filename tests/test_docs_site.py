@@ -111,3 +111,41 @@ def test_strict_build_fails_on_a_planted_fault(tmp_path, page, why):
     (docs / "fault.md").write_text(f"# Fault\n\n{page}\n")
     broken = build(tmp_path / "mkdocs.yml", tmp_path / "site", cwd=tmp_path)
     assert broken.returncode != 0, f"the strict build passed {why}"
+
+
+def test_technology_reference_is_the_generated_one_and_names_every_key_of_the_builtin_files():
+    """docs/technology-file.md is what the schema generates, every technology field has a meaning,
+    and every key the built-in technology files write is on the page (a schema field in its table's
+    rows, a table read by its own parser as a heading); a planted unknown key is found."""
+    import dataclasses
+    import tomllib
+
+    from pixelkit.schema_doc import TECH_DOC_PATH, generate_technology, undocumented
+    from pixelkit.tech.technology import BUILTIN_DIR, Technology
+    doc = (ROOT / TECH_DOC_PATH).read_text()
+    assert doc == generate_technology(), "regenerate with `python3 -m pixelkit.schema_doc --write`"
+    assert undocumented(Technology) == []
+
+    schema = {f.name for f in dataclasses.fields(Technology) if f.metadata.get("kind") == "table"}
+
+    def missing(raw):
+        out = []
+        for k, v in raw.items():
+            if not isinstance(v, dict):
+                out += [] if f"| `{k}` |" in doc else [k]
+            elif k == "rules":                                 # the kit's rules as rows, the foundry's by layer
+                out += [f"rules.{x}" for x, y in v.items()
+                        if (isinstance(y, dict) and "`[rules.<layer>]`" not in doc)
+                        or (not isinstance(y, dict) and f"| `{x}` |" not in doc)]
+            elif k in schema:                                  # a row, or its own paragraph
+                out += [f"{k}.{x}" for x, y in v.items() if not isinstance(y, dict) and f"| `{x}` |" not in doc
+                        and f"`[{k}]`: `{x}`" not in doc]
+            elif f"## `[{k}]`" not in doc:
+                out.append(k)
+            elif k != "layers":                                # [layers]: the names are the technology's own
+                out += [f"{k}.{x}" for x, y in v.items() if not isinstance(y, dict) and f"`{x}`" not in doc]
+        return out
+    for f in sorted(BUILTIN_DIR.glob("*.toml")):
+        assert missing(tomllib.loads(f.read_text())) == [], f.name
+    assert missing({"photodiode": {"no_such_key": 1}, "no_such_table": {}}) == ["photodiode.no_such_key",
+                                                                               "no_such_table"]

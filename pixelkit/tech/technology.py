@@ -57,21 +57,22 @@ class Photodiode:
 @dataclass(frozen=True)
 class Mos:
     """MOS device names and the diffusion parasitics the analytic models need."""
-    nmos: str = ident()
-    pmos: str = ident()
+    nmos: str = ident(doc="NMOS name in the model library (defined for every corner; checked when the file loads)")
+    pmos: str = ident(doc="PMOS name in the model library")
     kind: str = text(choices=("subckt", "model"), doc="subckt: X instances; model: M instances")
-    lmin: float = qty("m", gt=0, plausible=(1e-8, 1e-5))
-    wmin: float = qty("m", gt=0, plausible=(1e-8, 1e-5))
+    lmin: float = qty("m", gt=0, plausible=(1e-8, 1e-5), doc="minimum drawn gate length")
+    wmin: float = qty("m", gt=0, plausible=(1e-8, 1e-5), doc="minimum drawn gate width")
     diff_ext: float = qty("m", gt=0, plausible=(1e-8, 1e-4), doc="source/drain diffusion length used for AD/AS/PD/PS")
     cj: float = qty("F/m2", ge=0, plausible=(0.0, 0.1), doc="n+ diffusion bottom junction capacitance")
-    mj: float = num(gt=0, lt=1, plausible=(0.05, 0.95))
-    pb: float = qty("V", gt=0, plausible=_PB)
-    cjsw: float = qty("F/m", ge=0, plausible=(0.0, 1e-8))
-    mjsw: float = num(gt=0, lt=1, plausible=(0.05, 0.95))
-    pbsw: float = qty("V", gt=0, plausible=_PB)
+    mj: float = num(gt=0, lt=1, plausible=(0.05, 0.95), doc="grading coefficient of cj (BSIM4 mjs)")
+    pb: float = qty("V", gt=0, plausible=_PB, doc="built-in potential of cj (BSIM4 pbs)")
+    cjsw: float = qty("F/m", ge=0, plausible=(0.0, 1e-8), doc="n+ diffusion field-sidewall capacitance per "
+                      "perimeter (BSIM4 cjsws)")
+    mjsw: float = num(gt=0, lt=1, plausible=(0.05, 0.95), doc="grading coefficient of cjsw (BSIM4 mjsws)")
+    pbsw: float = qty("V", gt=0, plausible=_PB, doc="built-in potential of cjsw (BSIM4 pbsws)")
     cjswg: float = qty("F/m", ge=0, plausible=(0.0, 1e-8), doc="gate-edge sidewall (BSIM4 cjswgs)")
-    mjswg: float = num(gt=0, lt=1, plausible=(0.05, 0.95))
-    pbswg: float = qty("V", gt=0, plausible=_PB)
+    mjswg: float = num(gt=0, lt=1, plausible=(0.05, 0.95), doc="grading coefficient of cjswg (BSIM4 mjswgs)")
+    pbswg: float = qty("V", gt=0, plausible=_PB, doc="built-in potential of cjswg (BSIM4 pbswgs)")
     cgso: float = qty("F/m", ge=0, plausible=(0.0, 1e-8), doc="gate-source/drain overlap capacitance per width")
     cox: float = qty("F/m2", gt=0, plausible=(1e-4, 1.0), doc="gate oxide capacitance per area")
     vth_n: float = qty("V", gt=0, plausible=(0.05, 5.0), doc="nominal NMOS threshold (estimates only)")
@@ -92,12 +93,15 @@ class Mos:
 @dataclass(frozen=True)
 class LayoutRules:
     """Rules the layout generators and checks know (lengths in m)."""
-    min_pd_side: float = qty("m", gt=0, plausible=(1e-7, 1e-3))
-    min_opening_side: float = qty("m", gt=0, plausible=(1e-8, 1e-3))
+    min_pd_side: float = qty("m", gt=0, plausible=(1e-7, 1e-3), doc="smallest photodiode side the generators draw")
+    min_opening_side: float = qty("m", gt=0, plausible=(1e-8, 1e-3), doc="smallest side of a light-shield opening")
     opening_to_pd_edge: float = qty("m", ge=0, plausible=(0.0, 1e-4), doc="opening edge to PD edge, inside")
-    pd_to_cell_edge: float = qty("m", ge=0, plausible=(0.0, 1e-4))
-    shield_overlap: float = qty("m", ge=0, plausible=(0.0, 1e-4))
-    grid: float = qty("m", gt=0, plausible=(1e-10, 1e-6))
+    pd_to_cell_edge: float = qty("m", ge=0, plausible=(0.0, 1e-4), doc="photodiode edge to the cell boundary (a PD "
+                                 "wider than the pitch less twice this is refused)")
+    shield_overlap: float = qty("m", ge=0, plausible=(0.0, 1e-4), doc="light shield beyond the photodiode edge; "
+                                "read by no generator today (the shield is drawn by `[rules.shield]` and the openings)")
+    grid: float = qty("m", gt=0, plausible=(1e-10, 1e-6), doc="manufacturing grid every drawn coordinate is on "
+                      "(the mask opening is drawn to it)")
 
 
 @dataclass(frozen=True)
@@ -131,14 +135,18 @@ class Passives:
 
 @dataclass(frozen=True)
 class Technology:
-    name: str = ident()
-    description: str = text()
-    supply: float = qty("V", gt=0, le=40, plausible=(0.5, 40.0))
-    photodiode: Photodiode = table(Photodiode)
-    mos: Mos = table(Mos)
-    rules: LayoutRules = table(LayoutRules)
-    mismatch: Mismatch | None = table(Mismatch, None)
-    passives: Passives | None = table(Passives, None)
+    name: str = ident(doc="technology name, shown with every table and report (a built-in file's is the name designs use)")
+    description: str = text(doc="one line saying what the process is and where its models come from")
+    supply: float = qty("V", gt=0, le=40, plausible=(0.5, 40.0),
+                        doc="the pixel's supply; a design's reset levels above it are refused")
+    photodiode: Photodiode = table(Photodiode, doc="the photodiode junction, its dark current and QE")
+    mos: Mos = table(Mos, doc="the MOS devices of the model library and their diffusion parasitics")
+    rules: LayoutRules = table(LayoutRules, doc="the kit's own layout rules; the foundry's, per layer, in "
+                               "[rules.<layer>] (docs/howto-new-technology.md)")
+    mismatch: Mismatch | None = table(Mismatch, None, doc="matching the model library does not vary itself "
+                                      "(Monte Carlo)")
+    passives: Passives | None = table(Passives, None, doc="the MIM capacitor and poly resistor the readout is drawn "
+                                      "with")
     models: ModelLibrary = field(default=None, metadata=dict(kind="skip"))
     layout: LayoutData = field(default=None, metadata=dict(kind="skip"), repr=False)
     source: str = field(default="", metadata=dict(kind="skip"))
