@@ -39,10 +39,10 @@ def _picture(ctx, geo, path):
 def build(ctx) -> Section:
     d = ctx.design
     if d.tech.stack is None:
-        return Section.unavailable(TITLE, f"technology {d.tech.name} has no process stack ([stack]): its nets "
-                                          "cannot be extracted (docs/post-layout.md)")
+        return Section.needs_input(TITLE, "a technology with [stack]", f"technology {d.tech.name} has no process stack: "
+                                          "its nets cannot be extracted (docs/post-layout.md)")
     if d.scene is None:
-        return Section.unavailable(TITLE, "the design has no [scene]: no irradiance to light the die with")
+        return Section.needs_input(TITLE, "a [scene] table", "the design has no [scene]: no irradiance to light the die with")
     from ...layout.pex import chip_geometry
     from ...layout.pex.light import light_map
     geos = chip_geometry(d, ("DUALPIX_COL", "AFE_P", "AFE_S"))

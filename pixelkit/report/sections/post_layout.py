@@ -103,8 +103,8 @@ def _frame_figure(ctx, rows):
 def build(ctx) -> Section:
     d = ctx.design
     if d.tech.stack is None:
-        return Section.unavailable(TITLE, f"technology {d.tech.name} has no process stack ([stack]): no post-layout "
-                                          "view (docs/post-layout.md)")
+        return Section.needs_input(TITLE, "a technology with [stack]", f"technology {d.tech.name} has no process stack: "
+                                          "no post-layout view (docs/post-layout.md)")
     from ...layout.pex.overlay import post_layout_view
     sch = replace(d, post_layout=None)
     post = post_layout_view(sch)
