@@ -64,6 +64,38 @@ def set_param(net: Netlist, suffix: str, key: str, fn) -> Netlist:
     return replace(net, elements=tuple(els))
 
 
+def scale_in_subckt(net: Netlist, name: str, element: str, key: str, factor: float) -> Netlist:
+    """Parameter ``key`` of ``element`` inside subcircuit ``name`` times ``factor`` (a device's W)."""
+    subs = tuple(replace(s, elements=tuple(replace(e, params=tuple((k, v * factor if k == key else v)
+                                                                   for k, v in e.params)) if e.name == element else e
+                                           for e in s.elements)) if s.name == name else s for s in net.subckts)
+    return replace(net, subckts=subs)
+
+
+def scale_value_in_subckt(net: Netlist, name: str, element: str, factor: float) -> Netlist:
+    """The value of ``element`` inside subcircuit ``name`` times ``factor`` (unchanged if there is none)."""
+    subs = tuple(replace(s, elements=tuple(replace(e, value=e.value * factor) if e.name == element else e
+                                           for e in s.elements)) if s.name == name else s for s in net.subckts)
+    return replace(net, subckts=subs)
+
+
+def scale_caps(net: Netlist, afe: str, factors: dict) -> Netlist:
+    """Scale capacitors (by element name) of one AFE copy (numbers, or the subcircuit's parameter defaults)."""
+    from ..spice.netlist import Param
+    subs = []
+    for s in net.subckts:
+        if s.name == afe:
+            for name, factor in factors.items():
+                c = next(e for e in s.elements if e.name == name)
+                if isinstance(c.value, Param):
+                    s = replace(s, params=tuple((k, v * factor if k == c.value.name else v) for k, v in s.params))
+                else:
+                    s = replace(s, elements=tuple(replace(e, value=e.value * factor) if e.name == name else e
+                                                  for e in s.elements))
+        subs.append(s)
+    return replace(net, subckts=tuple(subs))
+
+
 def hold_window(design, array: str) -> tuple[float, float]:
     """(start, end) of the FD hold before the first row's signal sample, in deck time."""
     t = timings(design, design.experiment.t_window)[array]
@@ -103,6 +135,19 @@ def column_conductance(net: Netlist, design, col: str, v_pivot: float, g: float,
     return add_top(net, Element(f"Vpiv_{col}", (f"piv_{col}", "0"), v_pivot),
                    mosfet(f"sw_{col}", col, gate, f"m_{col}", "0", 1e-6, 0.35e-6, design.tech),
                    Element(f"R{tag}_{col}", (f"m_{col}", f"piv_{col}"), 1.0 / g))
+
+
+def offset_gate(net: Netlist, suffix: str, dv: float) -> Netlist:
+    """The top-level MOSFET whose name ends with ``suffix`` with its threshold raised by ``dv`` (V): its gate
+    driven through a source of -dv from the node it was on (the threshold mismatch of one device)."""
+    els, added = [], []
+    for e in net.elements:
+        if e.name.endswith(suffix):
+            g = f"g_{e.name}"
+            added.append(Element(f"Vdvt_{e.name}", (g, e.nodes[1]), -dv))
+            e = replace(e, nodes=(e.nodes[0], g, *e.nodes[2:]))
+        els.append(e)
+    return replace(net, elements=tuple(els + added))
 
 
 def scale_load(net: Netlist, col: str, factor: float) -> Netlist:

@@ -8,12 +8,18 @@ Domains (the term each effect feeds):
   of the FD site, ``responses``): ``gse`` (stray light on the FD),
   ``fd_leakage`` (droop with its T law);
 - a load on the column during the read (``col_g``, measured): ``sf_gain``;
+  the source follower's current factor (``sf_w``, measured): ``sf_strength``;
   the column load's current (``load``, measured): ``column_load`` (the same
   on every column) and ``column_pixel`` (per column: mismatch);
-- AFE: ``afe_gain`` (``deps``, pivots at the reset level, where the SC stage's
-  output is Vref); ``charge_injection`` (coupling from the RST clock onto FD
-  and from the AFE's p1 clock onto its virtual ground vm, both measured:
-  ``rst_fd``, ``p1_vm``); ``column_afe`` (per column: SC gain and p1 coupling);
+- AFE: ``afe_gain``, the SC stage's gain: C13 larger (``deps``, pivots at the
+  reset level, where the SC stage's output is Vref), C11 (measured ``c11``: the
+  gain and the column it loads) and the op-amp's DC gain (measured ``a_ol``:
+  A_design / A - 1, the gain error and the open-loop gap; to first order it
+  and C13 are one gain error, and the fit says when they are not identifiable);
+  ``charge_injection`` (coupling from
+  the RST clock onto FD and from the AFE's p1 clock onto its virtual ground
+  vm, both measured: ``rst_fd``, ``p1_vm``); ``column_afe`` (per column: C11
+  and p1 coupling);
 - readout light ``readout_light``: a junction photocurrent on the AFE's
   virtual-ground node, junction area x the irradiance, either sign; its
   response (``Nominal.vm_light``, derived in ``nominal``'s docstring) is the
@@ -54,6 +60,10 @@ class Param:
     starts: tuple = ()     # extra starting values, where the response is not monotone in the parameter
 
 
+# the readout-light area's scan (fit._scan): 12 values a decade, both signs, over the bounds
+AREA_SCAN = tuple(float(s * v) for s in (-1, 1) for v in np.geomspace(1e-12, 3e-9, 42))
+
+
 def _t_law(X, td):
     return 2.0 ** ((X["T"] - 25.0) / td)
 
@@ -83,8 +93,12 @@ def _column_load(X, p):    # the column load's current, the same on every column
     return {"load": p[0]}
 
 
-def _afe_gain(X, p):       # SC stage gain lower than designed (C13 larger, finite A): extra eps
-    return {"deps": p[0]}
+def _afe_gain(X, p):       # SC stage gain: C13 larger (extra eps), C11 (also the column it loads), op-amp gain
+    return {"deps": p[0], "c11": p[1], "a_ol": p[2]}
+
+
+def _sf_strength(X, p):    # the source follower's current factor (its W / L, mobility), the same in every pixel
+    return {"sf_w": p[0]}
 
 
 def _readout_light(X, p):  # junction photocurrent on the AFE's vm (area x irradiance) and the output stage
@@ -120,8 +134,9 @@ class ColumnParam:
 # per-column effects: mismatch drawn around zero, one value per column of each parameter
 COLUMN_EFFECTS = {
     "column_pixel": ((ColumnParam("load", -0.3, 0.3, 1e-2, 0.05),), lambda X, p: {"load": p[0]}),
-    "column_afe": ((ColumnParam("eps", -0.05, 0.05, 1e-3, 0.01), ColumnParam("p1_vm_F", -3e-15, 3e-15, 1e-16, 1e-15)),
-                   lambda X, p: {"deps": p[0], "p1_vm": p[1]}),
+    "column_afe": ((ColumnParam("c11_rel", -0.075, 0.075, 1e-3, 0.01),
+                    ColumnParam("p1_vm_F", -3e-15, 3e-15, 1e-16, 1e-15)),
+                   lambda X, p: {"c11": p[0], "p1_vm": p[1]}),
 }
 
 
@@ -134,10 +149,12 @@ EFFECTS = {
     "charge_injection": ((Param("c_rst_fd_F", 0.0, 4.5e-17, 1e-17, 1e-17),
                           Param("c_p1_vm_F", -3e-15, 3e-15, 1e-15, 0.0)), _charge_injection),
     "sf_gain": ((Param("g_col_S", 0.0, 2.5e-7, 1e-7, 5e-8),), _sf_gain),
-    "column_load": ((Param("load_rel", -0.22, 0.22, 1e-2, 0.0),), _column_load),
-    "afe_gain": ((Param("eps_extra", -0.05, 1.0, 1e-2, 0.0),), _afe_gain),
-    # the vm response has the op-amp clamp's steps in the current: a decade grid of starts over the bounds
-    "readout_light": ((Param("a_junction_m2", -3e-9, 3e-9, 1e-11, 0.0, (-1e-9, -1e-10, -1e-11, 1e-11, 1e-10, 1e-9)),
+    "column_load": ((Param("load_rel", -0.3, 0.3, 1e-2, 0.0),), _column_load),
+    "afe_gain": ((Param("eps_extra", -0.05, 1.0, 1e-2, 0.0), Param("c11_rel", -0.075, 0.075, 1e-2, 0.0),
+                  Param("opamp_gain_loss", 0.0, 45.0, 1.0, 0.0)), _afe_gain),
+    "sf_strength": ((Param("sf_w_rel", -0.6, 0.9, 0.1, 0.0),), _sf_strength),
+    # the vm response has the op-amp clamp's steps in the current: the fit scans AREA_SCAN for its starts
+    "readout_light": ((Param("a_junction_m2", -3e-9, 3e-9, 1e-11, 0.0, AREA_SCAN),
                        Param("out_V_per_A_m2", -1.0, 1.0, 1e-5, 0.0)), _readout_light),
     "crosstalk": ((Param("k_xt", 0.0, 0.5, 1e-3, 1e-4),), _crosstalk),
     "column_pixel": ((), None),   # per-column terms: COLUMN_EFFECTS

@@ -13,10 +13,11 @@ whose interval spans more than its own value, or which sits on a bound, is
 flagged as not identifiable. Per-column terms (``effects.COLUMN_EFFECTS``)
 carry a zero-mean Gaussian prior, so a column seen in one or two training rows
 is not given a wild value that no held-out row supports; ``uniform=True`` fits
-the same parameters with one value for every column (the nested model of the
-column-spread test). Each fit starts from the parameters' ``x0`` and one
-typical size away, and from a parameter's ``starts`` where its response is not
-monotone (readout light: the op-amp clamp's steps); the lowest cost wins.
+the same parameters with one value per array (the nested model of the
+column-to-column spread test). Each fit starts from the parameters' ``x0`` and one
+typical size away, and, where a parameter's response is not monotone (readout light:
+the op-amp clamp's steps), from the best few values of a scan over its ``starts`` grid
+(profile chi-square, the set-up solved exactly at each value); the lowest cost wins.
 """
 from __future__ import annotations
 
@@ -54,7 +55,7 @@ def model_fn(name, nom, X, cols=None, uniform=False):
     """(function of full parameter vector -> prediction, parameter specs) for candidate ``name``.
 
     Specs are (name, lo, hi, scale, prior width or None). ``uniform``: a per-column effect with one
-    value of each parameter for every column (its uniform counterpart, no prior)."""
+    value of each parameter per array (its uniform counterpart, no prior)."""
     afe = X["afe"]
     if name == "none":
         specs = []
@@ -64,9 +65,9 @@ def model_fn(name, nom, X, cols=None, uniform=False):
             return _setup(theta, afe, base)
     elif name in COLUMN_EFFECTS:
         params, fn = COLUMN_EFFECTS[name]
-        if uniform:
-            idx, n = np.zeros(X["afe"].size, int), 1
-            specs = [(f"{p.name}[all]", p.lo, p.hi, p.scale, None) for p in params]
+        if uniform:   # one value per array: the spread tested is the column-to-column one within an array
+            idx, n = X["arr"].astype(int), 2
+            specs = [(f"{p.name}[{a}]", p.lo, p.hi, p.scale, None) for p in params for a in ("primary", "secondary")]
         else:
             idx, n = np.searchsorted(cols, column_keys(X)), len(cols)
             specs = [(f"{p.name}[{c}]", p.lo, p.hi, p.scale, p.prior) for p in params for c in cols]
@@ -78,7 +79,7 @@ def model_fn(name, nom, X, cols=None, uniform=False):
         def f(theta):
             return _setup(theta, afe, g(theta[N_SETUP:]))
     else:
-        params, fn = EFFECTS[name]
+        params, fn = plain_effect(name)
         specs = [(p.name, p.lo, p.hi, p.scale, None) for p in params]
 
         @_memo
@@ -88,6 +89,21 @@ def model_fn(name, nom, X, cols=None, uniform=False):
         def f(theta):
             return _setup(theta, afe, g(theta[N_SETUP:]))
     return f, specs
+
+
+def plain_effect(name):
+    """(parameters, terms function) of a library effect, or of two at once (``a+b``: parameters
+    concatenated, terms added where both act on the same quantity)."""
+    parts = name.split("+")
+    if len(parts) == 1:
+        return EFFECTS[name]
+    (pa, fa), (pb, fb) = EFFECTS[parts[0]], EFFECTS[parts[1]]
+    k = len(pa)
+
+    def fn(X, p):
+        ta, tb = fa(X, p[:k]), fb(X, p[k:])
+        return {key: ta.get(key, 0.0) + tb.get(key, 0.0) for key in ta.keys() | tb.keys()}
+    return tuple(pa) + tuple(pb), fn
 
 
 def _memo(fn):
@@ -110,8 +126,9 @@ def fit(name, nom, X_train, y_train, sigma, cols=None, setup: SetupBounds = Setu
     scales = np.array([1e-3, 1e-2] * 2 + [s[3] for s in specs])
     lo = np.array(s_lo + [s[1] for s in specs]) / scales
     hi = np.array(s_hi + [s[2] for s in specs]) / scales
-    plain = name in EFFECTS and EFFECTS[name][1] is not None
-    x0 = np.array([0.0, 1.0] * 2 + ([p.x0 for p in EFFECTS[name][0]] if plain else [0.0] * len(specs))) / scales
+    plain = name != "none" and name not in COLUMN_EFFECTS
+    params = plain_effect(name)[0] if plain else ()
+    x0 = np.array([0.0, 1.0] * 2 + ([p.x0 for p in params] if plain else [0.0] * len(specs))) / scales
     x0 = np.clip(x0, lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
 
     prior = np.array([np.inf if sp[4] is None else sp[4] for sp in specs])
@@ -129,10 +146,10 @@ def fit(name, nom, X_train, y_train, sigma, cols=None, setup: SetupBounds = Setu
         s[N_SETUP:] = np.clip(sign * np.array([sp[3] for sp in specs]) / scales[N_SETUP:], lo[N_SETUP:] + 1e-9,
                               hi[N_SETUP:] - 1e-9)
         starts.append(s)
-        for j, prm in enumerate(EFFECTS[name][0]):
-            for v in prm.starts:
+        for j, prm in enumerate(params):
+            for v in _scan(f, x0, scales, lo, hi, N_SETUP + j, prm.starts, X_train["afe"], y_train, sigma):
                 s = x0.copy()
-                s[N_SETUP + j] = np.clip(v / scales[N_SETUP + j], lo[N_SETUP + j] + 1e-9, hi[N_SETUP + j] - 1e-9)
+                s[N_SETUP + j] = v
                 starts.append(s)
     best = None
     for s in starts:
@@ -149,6 +166,32 @@ def fit(name, nom, X_train, y_train, sigma, cols=None, setup: SetupBounds = Setu
             "bic": chi2 + k * math.log(n),
             "specs": specs, "intervals": info, "setup_at_bound": any(at),
             "setup": dict(zip(SETUP, map(float, theta[:N_SETUP]))), "uniform": uniform}
+
+
+SCAN_KEEP = 3
+
+
+def _scan(f, x0, scales, lo, hi, j, grid, afe, y, sigma):
+    """The ``SCAN_KEEP`` best of a parameter's grid ``grid`` (scaled values) by the profile chi-square: at each
+    value, the other parameters at their start and the set-up's gain and offset per probe solved exactly
+    (weighted linear least squares, unbounded). A response with steps in the parameter (readout light: the
+    op-amp clamp) has a chi-square with many narrow minima; a local optimiser started a decade away lands in
+    the nearest one, a scan finds the basin the data sit in."""
+    out = []
+    for v in grid:
+        u = x0.copy()
+        u[j] = np.clip(v / scales[j], lo[j] + 1e-9, hi[j] - 1e-9)
+        th = u * scales
+        th[:N_SETUP] = (0.0, 1.0, 0.0, 1.0)
+        pred = f(th)
+        chi2 = 0.0
+        for m in (~afe, afe):
+            if m.any():
+                A = np.stack([np.ones(int(m.sum())), pred[m]], 1) / sigma[m, None]
+                coef = np.linalg.lstsq(A, y[m] / sigma[m], rcond=None)[0]
+                chi2 += float(np.sum((A @ coef - y[m] / sigma[m]) ** 2))
+        out.append((chi2, u[j]))
+    return [u for _, u in sorted(out)[:SCAN_KEEP]]
 
 
 def _intervals(res, scales, n, k, lo, hi, theta):

@@ -296,18 +296,19 @@ def stage_one(design) -> list:
 NUDGES = (0.97, 0.94, 0.91)
 
 
-def simulate_exact(nets, backend: str = "batch") -> list:
+def simulate_exact(nets, backend: str = "batch", jobs: int | None = None) -> list:
     """``simulate_many``, but a deck the engine could only finish with looser tolerances (its retry
     policy: reltol 1e-4, which moved a table entry by 3 mV) is re-run at the kit's tolerances with its
     largest time step nudged (``NUDGES``), which moves the failing step; the first clean run is kept."""
     from dataclasses import replace
-    res = simulate_many(nets, backend=backend)
+    res = simulate_many(nets, backend=backend, jobs=jobs)
     for nudge in NUDGES:
         todo = [i for i, r in enumerate(res) if r.meta.get("retried")]
         if not todo:
             break
         again = simulate_many([replace(nets[i], analysis=replace(nets[i].analysis, max_step=nets[i].analysis.max_step
-                                                                  * nudge)) for i in todo], backend=backend)
+                                                                  * nudge)) for i in todo], backend=backend,
+                              jobs=jobs)
         for i, r in zip(todo, again):
             if not r.meta.get("retried"):
                 res[i] = r
@@ -403,7 +404,7 @@ def features(table, nom: Nominal, design) -> dict:
     return X
 
 
-LEVEL_SITES = ("col_g", "load", "rst_fd", "p1_vm")
+LEVEL_SITES = ("col_g", "load", "rst_fd", "p1_vm", "sf_w", "c11", "a_ol")
 
 
 def predict(nom: Nominal, X: dict, terms: dict | None = None) -> np.ndarray:
@@ -417,7 +418,8 @@ def predict(nom: Nominal, X: dict, terms: dict | None = None) -> np.ndarray:
     shift, V), ``dv_out`` (shift of both probes' output stage, V), ``i_vm``
     (junction current on the AFE's vm node, A: ``Nominal.vm_light``), and the
     amplitude of a measured site response (``responses``): ``col_g`` (S),
-    ``load`` (relative), ``rst_fd`` (F), ``p1_vm`` (F, signed).
+    ``load`` (relative), ``rst_fd`` (F), ``p1_vm`` (F, signed), ``sf_w`` and ``c11`` (relative),
+    ``a_ol`` (A_design / A - 1 of the op-amp).
     """
     t = terms or {}
     q = X["q"] + t.get("dq", 0.0)

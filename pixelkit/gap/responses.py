@@ -19,13 +19,21 @@ two amplitudes per site:
 - ``load``: the column load's width (so its current) scaled by 1 + a;
 - ``rst_fd``: a coupling capacitance from the RST clock line to FD;
 - ``p1_vm``: a coupling capacitance from the AFE's p1 clock (a > 0) or its
-  complement (a < 0) to the virtual ground vm.
+  complement (a < 0) to the virtual ground vm;
+- ``sf_w``: the source follower's width scaled by 1 + a (its current factor: the
+  levels move and a slewing column ends elsewhere);
+- ``c11``: the AFE's input capacitor scaled by 1 + a (its gain, and the load it
+  puts on the slewing column while S1X / S2X are closed);
+- ``a_ol``: the op-amp's DC gain divided by 1 + a (a >= 0; the closed-loop gain
+  error, ~ 1 / A, is linear in a; and how far the output runs in the open-loop
+  non-overlap gap).
 
 Kind ``level``: the table holds the shift of the pixel probe and of the AFE
 probe. Between the charges, cubic splines; in the amplitude, the polynomial
-through zero and the two measured amplitudes (quadratic; beyond the largest
-amplitude the same polynomial, so the library bounds its parameters to
-``EXTRAPOLATE`` times it). ``tests/test_gap_responses.py`` checks the
+through zero and two measured amplitudes (quadratic), or piecewise linear
+through zero and four or six (``p1_vm``, ``sf_w``, ``a_ol``: steps from the
+op-amp's clamp, a log-like response); beyond the largest amplitude the same, so the
+library bounds its parameters to ``EXTRAPOLATE`` times it. ``tests/test_gap_responses.py`` checks the
 interpolation against decks at charges and amplitudes the table was not built on.
 """
 from __future__ import annotations
@@ -72,6 +80,22 @@ def _p1_vm(net, design, which, amp, v_rst):
     return ce.add_to_subckt(net, f"scafe_{_col(which)}", ce.afe_coupling(amp, "Csite"))
 
 
+def _sf_w(net, design, which, amp, v_rst):
+    return ce.scale_in_subckt(net, ce.pixel_subckt(which), "Xsf", "w", 1.0 + amp)
+
+
+def _c11(net, design, which, amp, v_rst):
+    return ce.scale_caps(net, f"scafe_{_col(which)}", {"C11": 1.0 + amp})
+
+
+def _a_ol(net, design, which, amp, v_rst):
+    """The op-amp's DC gain divided by 1 + amp (the macromodel's R, shared by every AFE of the deck: edited
+    once, so every chain of a deck carries the same amplitude)."""
+    if which != "primary":
+        return net
+    return ce.scale_value_in_subckt(net, "opamp_macro", "R1", 1.0 / (1.0 + amp))
+
+
 @dataclass(frozen=True)
 class Site:
     kind: str            # "charge" (equivalent PD charge) or "level" (probe shifts)
@@ -85,6 +109,9 @@ SITES = {
     "load": Site("level", _load, lambda arr, q_max: (-0.15, 0.15)),
     "rst_fd": Site("level", _rst_fd, lambda arr, q_max: (1e-17, 3e-17)),
     "p1_vm": Site("level", _p1_vm, lambda arr, q_max: (-3e-15, -1.5e-15, -0.6e-15, 0.6e-15, 1.5e-15, 3e-15)),
+    "sf_w": Site("level", _sf_w, lambda arr, q_max: (-0.4, -0.15, 0.15, 0.6)),
+    "c11": Site("level", _c11, lambda arr, q_max: (-0.05, 0.05)),
+    "a_ol": Site("level", _a_ol, lambda arr, q_max: (1.0, 3.0, 10.0, 30.0)),
 }
 
 

@@ -38,11 +38,12 @@ RANGES = {
     "charge_injection": lambda g: [_u(g, 3e-18, 3e-17), g.choice([-1, 1]) * _u(g, 0.3e-15, 3e-15)],  # RST-FD, p1-vm
     "sf_gain": lambda g: [1.0 / _u(g, 6e6, 2.5e7)],                           # 3 - 10 % chain gain loss
     "column_load": lambda g: [g.choice([-1, 1]) * _u(g, 0.05, 0.2)],          # load current 5 - 20 % off
-    "afe_gain": lambda g: [_u(g, 0.01, 0.05)],
+    "sf_strength": lambda g: [float(np.exp(_u(g, np.log(0.6), np.log(1.6)))) - 1],   # SF W x 0.6 - 1.6
+    "afe_gain": lambda g: [_u(g, 0.01, 0.05), 0.0, 0.0],                      # C13 larger
     "readout_light": None,                                                   # scaled to the campaign (below)
     "crosstalk": lambda g: [_u(g, 0.003, 0.03)],
     "column_pixel": lambda g: [_u(g, 0.02, 0.08)],                            # load current mismatch (sd)
-    "column_afe": lambda g: [_u(g, 0.003, 0.01), _u(g, 0.3e-15, 1.5e-15)],    # gain (eps) and p1 coupling (sd)
+    "column_afe": lambda g: [_u(g, 0.003, 0.01), _u(g, 0.3e-15, 1.5e-15)],    # C11 and p1 coupling (sd)
     "lag": lambda g: [_u(g, 0.01, 0.05)],
     "supply": lambda g: [g.choice([-1, 1]) * _u(g, 0.01, 0.05), g.choice([-1, 1]) * _u(g, 0.01, 0.05)],
     "settling": None,                                                        # scaled to the design's read rate
@@ -125,8 +126,13 @@ def measure(design, nom, table: Table, effect: str | None, rng, params=None) -> 
     return offset + gain * v + rng.normal(0, 1, v.size) * sd, truth
 
 
+def _right(c) -> bool:
+    return c["found"] in c.get("accept", [c["truth"]])
+
+
 def score(cases: list) -> dict:
-    """Top-1, none-on-clean and not-explained rates of diagnosed cases (truth, found, explained)."""
+    """Top-1, none-on-clean and not-explained rates of diagnosed cases (truth, found, explained; a case's
+    ``accept``: the names that count as right, default its truth; two effects: ``a+b``, both named)."""
     names = sorted({c["truth"] for c in cases} | {c["found"] for c in cases})
     confusion = {t: {f: 0 for f in names} for t in names}
     for c in cases:
@@ -140,16 +146,29 @@ def score(cases: list) -> dict:
     return {
         "n_cases": len(cases), "n_effect_cases": len(lib), "n_clean_cases": len(clean),
         "n_out_of_library_cases": len(ool),
-        "top1_accuracy": rate(lib, lambda c: c["found"] == c["truth"]),
-        "explained_when_right": rate([c for c in lib if c["found"] == c["truth"]], lambda c: c["explained"] is True),
+        "top1_accuracy": rate(lib, _right),
+        "explained_when_right": rate([c for c in lib if _right(c)], lambda c: c["explained"] is True),
         "median_shrink": float(np.median([c["shrink"] for c in lib])) if lib else None,
         "none_on_clean": rate(clean, lambda c: c["found"] == "none"),
         "false_attribution_rate": rate(clean, lambda c: c["found"] != "none"),
         "not_explained_on_out_of_library": rate(ool, lambda c: c["explained"] is False),
-        "per_effect_top1": {e: rate([c for c in lib if c["truth"] == e], lambda c: c["found"] == c["truth"])
+        "per_effect_top1": {e: rate([c for c in lib if c["truth"] == e], _right)
                             for e in sorted({c["truth"] for c in lib})},
         "confusion": confusion,
     }
+
+
+def stratum(t: dict) -> str:
+    """A case's stratum: its inserted circuit and its campaign (``truth.json`` entry or a diagnosed case)."""
+    return f"{t['circuit']}@{t.get('campaign', 'lab')}"
+
+
+def population(truths: dict) -> dict:
+    """Cases per stratum in the committed set."""
+    out = {}
+    for t in truths.values():
+        out[stratum(t)] = out.get(stratum(t), 0) + 1
+    return out
 
 
 def stratified_sample(truths: dict, fraction: float, other: float = 0.25, minimum: int = 3) -> list:
@@ -158,7 +177,7 @@ def stratified_sample(truths: dict, fraction: float, other: float = 0.25, minimu
     kind are independent draws, so the first ones are a random sample of it)."""
     by = {}
     for cid, t in truths.items():
-        by.setdefault((t["circuit"], t["effect"] in ("none", "out_of_library")), []).append(cid)
+        by.setdefault((stratum(t), t["effect"] in ("none", "out_of_library")), []).append(cid)
     out = []
     for (_, rest), ids in by.items():
         out += ids[:min(len(ids), max(minimum, int(np.ceil((other if rest else fraction) * len(ids)))))]
@@ -167,12 +186,12 @@ def stratified_sample(truths: dict, fraction: float, other: float = 0.25, minimu
 
 def stratified_rate(cases: list, population: dict, ok) -> dict:
     """Estimate, over the whole committed set, the rate of ``ok`` on the diagnosed sample ``cases``
-    (stratified by ``circuit``; ``population``: cases per circuit in the set), with its 95 % interval
+    (stratified by ``stratum``; ``population``: cases per stratum in the set), with its 95 % interval
     (normal approximation, finite-population correction per stratum). ``half_width_worst``: the interval's
     half width were every stratum's rate 0.5 (what the sample's size guarantees whatever the outcome)."""
     strata = {}
     for c in cases:
-        strata.setdefault(c["circuit"], []).append(bool(ok(c)))
+        strata.setdefault(stratum(c), []).append(bool(ok(c)))
     n_all = sum(population[k] for k in strata)
     est, var, worst = 0.0, 0.0, 0.0
     for k, xs in strata.items():

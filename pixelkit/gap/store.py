@@ -8,8 +8,8 @@ of the model files they read and of the ngspice version. ``load_nominal``
 uses a stored surrogate only when its key is the key of the decks this kit
 would run for the design, and only after a check against fresh SPICE runs:
 
-- ``check_decks``: three full-chain decks at charges between the sweep's grid
-  points, one plain and two with a perturbation on each chain (every site of
+- ``check_decks``: five full-chain decks at charges between the sweep's grid
+  points, one plain and four with a perturbation on each chain (every site of
   ``responses`` and the readout-light current on vm) at amplitudes between
   the tables'; every probe must match the stored tables within ``CHECK_TOL_V``
   plus the surrogate's stated error (plain deck) or plus ``CHECK_TOL_REL`` of
@@ -85,6 +85,8 @@ CHECK = (
     {"primary": None, "s0": None, "s1": None, "s2": None},
     {"primary": ("fd", 9, 0.6), "s0": ("col_g", 15, 0.8), "s1": ("load", 9, -0.8), "s2": ("p1_vm", 12, 0.8)},
     {"primary": ("rst_fd", 9, 0.8), "s0": ("i_vm", 11, -11.5e-9), "s1": ("i_vm", 6, 3e-9), "s2": ("fd", 13, 0.6)},
+    {"primary": ("sf_w", 11, 0.5), "s0": ("c11", 12, -0.7), "s1": ("sf_w", 5, -0.6), "s2": ("c11", 8, 0.7)},
+    {"primary": ("a_ol", 10, 0.55), "s0": ("a_ol", 12, 0.55), "s1": ("a_ol", 6, 0.55), "s2": ("a_ol", 15, 0.55)},
 )
 PLAIN_K = {"primary": 6, "s0": 13, "s1": 4, "s2": 17}
 
