@@ -187,9 +187,44 @@ def test_undecodable_gap_files_are_one_line(tmp_path, cli, content, needle):
 
 def test_surrogate_selftest_command_contract(cli):
     """`gap selftest --kind surrogate` (the fitter on its own library: arithmetic only) reports its kind and counts."""
-    code, out, err = cli("gap", "selftest", "--json", "--kind", "surrogate", "--per-effect", 1, "--clean", 2, "--rows", 48)
+    code, out, err = cli("gap", "selftest", "--json", "--kind", "surrogate", "--per-effect", 1, "--clean", 2,
+                         "--rows", 48)
     assert code == 0, err
     r = json.loads(out)["surrogate"]
     assert r["kind"] == "surrogate-generated"
     from pixelkit.gap.effects import NAMES
     assert r["n_effect_cases"] == len(NAMES) and r["n_clean_cases"] == 2
+
+
+def test_conditions_that_cannot_separate_are_said(ref_design, nominal):
+    """Bad input: SPICE data (a dark current inserted as a current source on each PD) at one integration time,
+    one temperature and one wait: dark current and FD leakage scale only with those, so what they add is a
+    constant the set-up offset absorbs; the answer says these data cannot show them, why, and is not confident."""
+    from pixelkit.gap.diagnose import diagnose
+    rows, truth = silicon.simulate_case(ref_design, nominal, "dark_current", 77, campaign="one_condition")
+    table = silicon.table_of(ref_design, [{k: str(v) for k, v in r.items()} for r in rows], "one_condition")
+    d = diagnose(ref_design, table, nominal)
+    said = {d["best"], *d["indistinguishable"], *d["cannot_detect"]}
+    assert {"dark_current", "fd_leakage"} <= said, d["verdict"]
+    assert d["confident"] is False and "cannot show" in d["verdict"]
+    why = " ".join(d["why_indistinguishable"])
+    assert "integration time" in why and "wait" in why
+    assert "temperature (temp_C)" in d["fixed_conditions"]
+
+
+def test_two_look_alikes_at_once_are_both_named_and_plan_separates_them(ref_design, nominal, cli, tmp_path):
+    """Stray light and leakage on the storage node at once (two current pulses on FD, SPICE): both named,
+    explained; `gap plan` gives, for each pair, the operating point that tells them apart (a dark, hot,
+    long wait separates the leakage from the light)."""
+    from pixelkit.gap.diagnose import diagnose
+    cid = gapcases.ids("gse+fd_leakage")[0]
+    d = diagnose(ref_design, _table(ref_design, cid), nominal)
+    assert sorted(d["effects"]) == ["fd_leakage", "gse"] and d["explained"] is True, d["verdict"]
+    meas = gapcases.write_csv(cid, tmp_path / "m.csv")
+    code, out, err = cli("gap", "plan", REF, "--measured", meas, "--json")
+    assert code == 0, err
+    p = json.loads(out)
+    assert set(p["candidates"][:3]) == {"fd_leakage+gse", "fd_leakage", "gse"}
+    sep = {k: v for k, v in p["pairs"].items() if "+" not in k}
+    (pair, best), = sep.items()
+    assert best["separation_sigma"] > 10 and best["point"]["extra_wait_s"] > 0

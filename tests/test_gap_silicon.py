@@ -32,7 +32,12 @@ def test_committed_cases_cover_every_kind(committed, ref_design):
     assert set(silicon.IN_LIBRARY) <= set(kinds)
     assert {t["circuit"] for t in truths.values()} >= set(silicon.OUT_OF_LIBRARY)
     for cid, rows in cases.items():   # every case passes the checks a user's file gets
-        assert len(silicon.table_of(ref_design, rows, cid)) == 8 * silicon.N_OP
+        points = silicon.CAMPAIGNS[truths[cid].get("campaign", "lab")]["points"]
+        assert len(silicon.table_of(ref_design, rows, cid)) == 8 * points
+    # the added kinds: uniform changes, the columns' Monte Carlo, dark current in long hot dark frames, pairs
+    circuits = {t["circuit"] for t in truths.values()}
+    assert set(silicon.UNIFORM) | {"mc_columns"} | {p for p, _ in silicon.PAIRS} <= circuits
+    assert sum(t.get("campaign") == "dark_hot" and t["circuit"] == "dark_current" for t in truths.values()) >= 9
 
 
 def test_one_case_is_reproduced_by_spice(committed, ref_design, nominal):
@@ -46,7 +51,7 @@ def test_one_case_is_reproduced_by_spice(committed, ref_design, nominal):
     assert np.max(np.abs(got - want)) < 0.2e-3     # ngspice tolerances, below the stated 0.3 mV noise
 
 
-SAMPLE_FRACTION = 0.6
+SAMPLE_FRACTION = 0.4
 
 
 @pytest.fixture(scope="module")
@@ -59,17 +64,20 @@ def sample_run(committed, ref_design, nominal):
 
 
 def _population(truths):
-    pop = {}
-    for t in truths.values():
-        pop[t["circuit"]] = pop.get(t["circuit"], 0) + 1
-    return pop
+    from pixelkit.gap.selftest import population
+    return population(truths)
+
+
+def _right(c):
+    return c["found"] in c["accept"]
 
 
 def _right_population(lib, pop):
-    """Right-named cases per kind in the whole set, estimated from the sample's top-1 of that kind."""
+    """Right-named cases per stratum in the whole set, estimated from the sample's top-1 of that stratum."""
+    from pixelkit.gap.selftest import stratum
     out = {}
-    for k in {c["circuit"] for c in lib}:
-        xs = [c["found"] == c["truth"] for c in lib if c["circuit"] == k]
+    for k in {stratum(c) for c in lib}:
+        xs = [_right(c) for c in lib if stratum(c) == k]
         out[k] = max(pop[k] * sum(xs) / len(xs), sum(xs))
     return out
 
@@ -80,40 +88,43 @@ def test_spice_sample_is_large_enough(sample_run):
     r, truths = sample_run
     pop = _population(truths)
     lib = [c for c in r["cases"] if c["truth"] not in ("none", "out_of_library")]
-    right = [c for c in lib if c["found"] == c["truth"]]
+    right = [c for c in lib if _right(c)]
     assert stratified_rate(lib, pop, lambda c: True)["half_width_worst"] <= 0.10
     assert stratified_rate(right, _right_population(lib, pop), lambda c: True)["half_width_worst"] <= 0.10
 
 
 def test_spice_sample_blind(sample_run):
-    """The diagnosis on the sample (SPICE-made data, blind): the rates of docs/gap-diagnosis.md."""
+    """The diagnosis on the sample (SPICE-made data, blind), estimating the whole set's rates
+    (docs/gap-diagnosis.md gives both): top-1, explained when right, none on effect-free, not explained
+    out of library, uniform changes never named per column, real column mismatch named per column, two
+    effects at once both named, dark current in long hot dark exposures found."""
     from pixelkit.gap.selftest import stratified_rate
     r, truths = sample_run
     pop = _population(truths)
     lib = [c for c in r["cases"] if c["truth"] not in ("none", "out_of_library")]
-    top1 = stratified_rate(lib, pop, lambda c: c["found"] == c["truth"])
-    right = [c for c in lib if c["found"] == c["truth"]]
+    top1 = stratified_rate(lib, pop, _right)
+    right = [c for c in lib if _right(c)]
     expl = stratified_rate(right, _right_population(lib, pop), lambda c: c["explained"] is True)
-    assert top1["rate"] >= TOP1, top1
-    assert expl["rate"] >= EXPLAINED_WHEN_RIGHT, expl
+    assert top1["rate"] >= TOP1_SAMPLE, top1
+    assert expl["rate"] >= EXPLAINED_SAMPLE, expl
     assert r["none_on_clean"] == 1.0 and r["not_explained_on_out_of_library"] == 1.0
-    # no uniform change named as a per-column effect
-    assert not [c for c in lib if c["truth"] in UNIFORM and c["found"] in ("column_pixel", "column_afe")]
+    assert r["uniform_named_uniform"]["rate"] == 1.0 and r["mc_named_per_column"]["rate"] == 1.0
+    assert r["two_effects_both_named"]["rate"] >= 0.8 and r["dark_current_hot_named"]["rate"] == 1.0
 
 
-TOP1 = 0.9
-EXPLAINED_WHEN_RIGHT = 0.75
-UNIFORM = ("sf_gain", "afe_gain", "column_load")
+# measured on the sample (98 cases, 84 in-library): top-1 0.93 +- 0.04, explained when right 0.94 +- 0.03
+TOP1_SAMPLE = 0.85
+EXPLAINED_SAMPLE = 0.85
 
 
 @pytest.mark.slow
 def test_spice_selftest_full(committed, ref_design, nominal):
     """All committed cases against the issue's targets (docs/gap-diagnosis.md gives the measured figures)."""
     r = silicon.run_committed(ref_design, nominal)
-    assert r["top1_accuracy"] >= TOP1
-    assert r["explained_when_right"] >= EXPLAINED_WHEN_RIGHT
-    assert r["none_on_clean"] >= 0.9
-    assert r["not_explained_on_out_of_library"] >= 0.8
+    assert r["top1_accuracy"] >= 0.89 and r["explained_when_right"] >= 0.89 and r["median_shrink"] >= 0.9
+    assert r["none_on_clean"] == 1.0 and r["not_explained_on_out_of_library"] == 1.0
+    assert r["uniform_named_uniform"]["rate"] >= 0.9 and r["mc_named_per_column"]["rate"] >= 0.9
+    assert r["two_effects_both_named"]["rate"] >= 0.8 and r["dark_current_hot_named"]["rate"] >= 8 / 9
 
 
 def test_adding_cases_keeps_the_committed_ones(tmp_path, ref_design):

@@ -122,7 +122,10 @@ def plan(design, measured, top, gain_tol, offset_tol, backend, jobs, as_json):
           f"  {lv['factor']:<13} -> {lv['value']:<8} separation {lv['separation_sigma']:.1f} sigma" for lv in x["levers"]),
         "best operating points:",
         *(f"  {pt['separation_sigma']:7.1f} sigma  " + ", ".join(f"{k}={v}" for k, v in pt["point"].items())
-          for pt in x["points"])]))
+          for pt in x["points"]),
+        "the measurement that separates each pair:",
+        *(f"  {pair}: {v['separation_sigma']:.1f} sigma at " + ", ".join(f"{k}={w}" for k, w in v["point"].items())
+          for pair, v in x["pairs"].items())]))
 
 
 @gap.command()
@@ -159,12 +162,19 @@ def _pct(v):
 
 
 def _selftest_text(kind, x):
-    return "\n".join([
+    lines = [
         f"{x['kind']}: {x['n_cases']} blind cases ({x['n_effect_cases']} in-library, "
-        f"{x['n_out_of_library_cases']} out-of-library, {x['n_clean_cases']} effect-free)",
-        f"  top-1 {_pct(x['top1_accuracy'])}, 'not explained' on out-of-library {_pct(x['not_explained_on_out_of_library'])}, "
+        f"{x['n_out_of_library_cases']} out-of-library, {x['n_clean_cases']} effect-free)"
+        + (f", seeds {x['seeds'][0]} - {x['seeds'][1]}" if x.get("seeds") else ""),
+        f"  top-1 {_pct(x['top1_accuracy'])}, explained when right {_pct(x['explained_when_right'])}, "
+        f"median shrink {_pct(x['median_shrink'])}",
+        f"  'not explained' on out-of-library {_pct(x['not_explained_on_out_of_library'])}, "
         f"none on effect-free {_pct(x['none_on_clean'])}",
-        "  per effect: " + ", ".join(f"{k} {_pct(v)}" for k, v in x["per_effect_top1"].items())])
+        "  per effect: " + ", ".join(f"{k} {_pct(v)}" for k, v in x["per_effect_top1"].items())]
+    for k in ("uniform_named_uniform", "mc_named_per_column", "two_effects_both_named", "dark_current_hot_named"):
+        if x.get(k):
+            lines.append(f"  {k.replace('_', ' ')}: {_pct(x[k]['rate'])} of {x[k]['n']}")
+    return "\n".join(lines)
 
 
 @gap.command()

@@ -139,37 +139,123 @@ def analyse(design, table, nom, seed: int = 0, candidates=None, setup: SetupBoun
             r["heldout_dchi2_vs_best"] = fits[r["effect"]]["heldout_chi2"] - fits[best]["heldout_chi2"]
             if r["heldout_dchi2_vs_best"] < AMBIGUOUS_DCHI2:
                 ambiguous.append(r["effect"])
-    chi2 = fits[best]["heldout_chi2"]
     n_te = int(test.sum())
+    model, also, pair_tests = best, None, []
+    if known and best != "none" and best not in COLUMN_EFFECTS and \
+            stats.chi2.sf(fits[best]["heldout_chi2"], n_te) < P_EXPLAINED:
+        also, pair_tests = _second_effect(best, names, fits, nom, Xtr, Xte, y[train], y[test], w[train], w[test],
+                                          cols, setup)
+        if also:
+            model = f"{best}+{also}"
+    confused = confounded(best, [r["effect"] for r in winners[1:]], X) if best != "none" else []
+    fixed = set(fixed_factors(X))
+    blind = [(e, sorted(SCALES_WITH[e])) for e in names if e in SCALES_WITH and set(SCALES_WITH[e]) <= fixed
+             and e != best]
+    for o, _ in confused:
+        if o not in ambiguous:
+            ambiguous.append(o)
+    chi2 = fits[model]["heldout_chi2"]
     p_fit = float(stats.chi2.sf(chi2, n_te)) if known else None
     explained = None if not known else bool(p_fit >= P_EXPLAINED)
     resid_none = y - evaluate("none", nom, X, none)
-    resid_best = y - evaluate(best, nom, X, fits[best], cols)
-    before, after = none["heldout_rms_V"], fits[best]["heldout_rms_V"]
-    setup_flag = fits[best]["setup_at_bound"]
+    resid_best = y - evaluate(model, nom, X, fits[model], cols)
+    resid_te.setdefault(model, evaluate(model, nom, Xte, fits[model], cols) - y[test])
+    before, after = none["heldout_rms_V"], fits[model]["heldout_rms_V"]
+    setup_flag = fits[model]["setup_at_bound"]
     result = {
         "n_rows": int(len(y)), "n_train": int(train.sum()), "n_heldout": n_te,
         "candidates": list(names), "noise_source": noise_src,
         "noise_rms_V": float(np.sqrt(np.mean(sigma ** 2))) if known else None,
         "gap_before_rms_V": before, "gap_after_rms_V": after,
         "gap_before_max_V": float(np.max(np.abs(resid_te["none"]))),
-        "gap_after_max_V": float(np.max(np.abs(resid_te[best]))),
+        "gap_after_max_V": float(np.max(np.abs(resid_te[model]))),
         "shrink_frac": _shrink(before, after, float(np.sqrt(np.mean(sigma[test] ** 2))) if known else 0.0),
         "shrink_rms_frac": 1.0 - after / before if before > 0 else 0.0,
-        "best": best, "runner_up": top if best == "none" else (winners[1]["effect"] if len(winners) > 1 else None),
-        "indistinguishable": ambiguous,
+        "best": best, "also": also, "effects": [best] + ([also] if also else []), "pair_tests": pair_tests,
+        "runner_up": top if best == "none" else (winners[1]["effect"] if len(winners) > 1 else None),
+        "indistinguishable": ambiguous, "confident": not (ambiguous or blind),
+        "fixed_conditions": [FACTOR_NAMES[f] for f in sorted(fixed)],
+        "why_indistinguishable": [f"{best} and {o} differ only through the {', '.join(FACTOR_NAMES[f] for f in fs)}, "
+                                  f"which these data hold at one value" for o, fs in confused]
+        + [f"{e} scales only with the {', '.join(FACTOR_NAMES[f] for f in fs)}, which these data hold at one value: "
+           f"what it adds is a constant the test set-up's offset absorbs" for e, fs in blind],
+        "cannot_detect": [e for e, _ in blind],
         "explained": explained, "fit_p_value": p_fit, "heldout_chi2_per_row": chi2 / max(n_te, 1),
         "best_partial": (best if best != "none" else top) if explained is False else None,
         "setup_bounds": {"gain_tol": setup.gain_tol, "offset_V": setup.offset_V},
         "setup_at_bound": setup_flag,
         "ranking": ranking,
-        "regions": _regions(Xte, y[test], y[test] + resid_te["none"], y[test] + resid_te[best]),
+        "regions": _regions(Xte, y[test], y[test] + resid_te["none"], y[test] + resid_te[model]),
         "where": breakdown(X, resid_none),
         "remainder_where": _remainder(X, resid_best) if explained is False else [],
         "surrogate_error": nom.error,
-        "verdict": _verdict(best, explained, ambiguous, setup_flag, top),
+        "verdict": _verdict(model.replace("+", " and "), explained, ambiguous, setup_flag, top)
+        + ("; these data cannot show " + ", ".join(e for e, _ in blind) + " (one value of the conditions they scale "
+           "with)" if blind else ""),
     }
     return result, X, resid_none
+
+
+# the row quantities each effect's terms scale with (beyond the signal itself): two effects whose lists
+# differ only in quantities the data hold fixed cannot be told apart by any fit of these data
+SCALES_WITH = {"dark_current": ("t_int", "T"), "fd_leakage": ("t_wait", "T"), "gse": ("t_wait", "J"),
+               "crosstalk": ("J", "arr"), "lag": ("i_prev",), "readout_light": ("J", "afe"),
+               "charge_injection": ("afe",), "afe_gain": ("afe",), "column_afe": ("col", "afe"),
+               "column_pixel": ("col",), "supply": ("dvdd",), "settling": ("f_read",)}
+FACTOR_NAMES = {"t_int": "integration time (t_int_s)", "T": "temperature (temp_C)", "t_wait": "wait (t_wait_s)",
+                "J": "light level (i_ph_A)", "arr": "array", "afe": "probe", "col": "column",
+                "i_prev": "previous frame (i_ph_prev_A)", "dvdd": "supply (vdd_V)", "f_read": "read rate (f_read_Hz)"}
+
+
+def fixed_factors(X) -> list:
+    """The factors the data hold at one value."""
+    out = []
+    for f in FACTOR_NAMES:
+        v = np.asarray(X[f], float)
+        if f == "J":
+            v = (v > 0).astype(float) + v / max(float(np.max(v)), 1e-30)
+        if np.ptp(v) <= 1e-3 * float(np.max(np.abs(v))):   # one value (to 0.1 %: a row time on a 10 ms wait)
+            out.append(f)
+    return out
+
+
+def confounded(best, others, X) -> list:
+    """[(other effect, [fixed factors])]: the candidates ``best`` differs from only through factors these
+    data hold fixed (a T law at one temperature, an integration-time law at one t_int...)."""
+    fixed = set(fixed_factors(X))
+    out = []
+    for o in others:
+        diff = set(SCALES_WITH.get(best, ())) ^ set(SCALES_WITH.get(o, ()))
+        if diff and diff <= fixed:
+            out.append((o, sorted(diff)))
+    return out
+
+
+def _second_effect(best, names, fits, nom, Xtr, Xte, ytr, yte, wtr, wte, cols, setup):
+    """A second effect next to ``best`` when ``best`` alone leaves the held-out rows unexplained: each other
+    plain candidate is fitted together with it; the pair is kept when its held-out chi-square beats ``best``
+    alone by more than the (1 - P_BEAT) point of chi-square(its parameters) and its BIC by ``BIC_MARGIN``
+    (nested: the same tests a single effect passes against the nominal) and the two together explain the
+    held-out rows (a second effect that only soaks up part of a misfit is not named). The best pair wins."""
+    tests, keep = [], None
+    for c in names:
+        if c in (best, "none") or c in COLUMN_EFFECTS:
+            continue
+        name = f"{best}+{c}"
+        fr = fit(name, nom, Xtr, ytr, wtr, cols, setup)
+        r = evaluate(name, nom, Xte, fr, cols) - yte
+        fr["heldout_rms_V"], fr["heldout_chi2"] = _rms(r), float(np.sum((r / wte) ** 2))
+        gain = fits[best]["heldout_chi2"] - fr["heldout_chi2"]
+        ok = bool(gain > stats.chi2.isf(P_BEAT, fr["k"] - fits[best]["k"])
+                  and fits[best]["bic"] - fr["bic"] > BIC_MARGIN
+                  and stats.chi2.sf(fr["heldout_chi2"], len(yte)) >= P_EXPLAINED)
+        tests.append({"effects": [best, c], "heldout_dchi2_vs_single": gain,
+                      "dbic_vs_single": fits[best]["bic"] - fr["bic"],
+                      "significant": ok, "params": _params(name, fr), "setup": fr["setup"]})
+        if ok and (keep is None or fr["heldout_chi2"] < fits[keep]["heldout_chi2"]):
+            fits[name], keep = fr, name
+    tests.sort(key=lambda t: -t["heldout_dchi2_vs_single"])
+    return (keep.split("+")[1] if keep else None), tests[:5]
 
 
 def _remainder(X, resid):
@@ -195,9 +281,10 @@ def _verdict(best, explained, ambiguous, setup_flag, top):
     elif best == "none":
         s = "no effect needed: the nominal model explains the data" + ("" if explained else " (noise not stated)")
     else:
-        s = f"{best} explains the gap"
+        s = f"{best} explain{'' if ' and ' in best else 's'} the gap"
     if ambiguous:
-        s += "; indistinguishable on these data from " + ", ".join(ambiguous) + " (run `gap plan`)"
+        s += ("; not a confident name: indistinguishable on these data from " + ", ".join(ambiguous)
+              + " (run `gap plan`)")
     if setup_flag:
         s += "; the test set-up gain/offset sits on its plausible bound"
     return s

@@ -1,7 +1,8 @@
 """The next measurement: operating points that separate candidates the data cannot tell apart.
 
 Each candidate still in the running (the named one and those reported
-indistinguishable, or the three best when none explains the data) is refitted
+indistinguishable; two effects named at once and each of them alone; or the
+three best when none explains the data) is refitted
 on every row; its own prediction is then evaluated over a grid of operating
 points a lab can set (array, probe, integration time, light level including
 dark frames, extra wait before readout, temperature, read rate, supply). The
@@ -48,6 +49,8 @@ def _grid_table(design, nom, points, cols_seen) -> Table:
 def plan(design, table, nom, result: dict, setup: SetupBounds = SetupBounds(), top: int = 5) -> dict:
     """Operating points that best separate the candidates left by ``result`` (a ``diagnose`` answer)."""
     names = [result["best"]] + list(result["indistinguishable"])
+    if len(result.get("effects", [])) == 2:   # two effects at once: what separates each from the other
+        names = ["+".join(result["effects"])] + list(result["effects"]) + list(result["indistinguishable"])
     if len(names) < 2:
         ranked = [r["effect"] for r in result["ranking"]]
         names = list(dict.fromkeys(names + ranked))[:3]

@@ -84,28 +84,51 @@ RANGES = {
     "column_pixel": lambda g: {"load_w_rel_sd": g.uniform(0.02, 0.08)},
     "column_afe": lambda g: {"c11_rel_sd": g.uniform(0.003, 0.01), "c_clk_sd_F": g.uniform(0.3e-15, 1.5e-15)},
     "col_clamp": lambda g: {"clamp_at_frac": g.uniform(0.35, 0.6)},
+    # added later (ADDED_KINDS): uniform changes of the whole chip, and the columns' Monte Carlo mismatch
+    "load_current": lambda g: {"bias_rel": _sign(g) * g.uniform(0.05, 0.2)},     # column load current
+    "sf_size": lambda g: {"sf_w_factor": float(np.exp(g.uniform(np.log(0.6), np.log(1.6))))},
+    "c11_ratio": lambda g: {"c11_rel": _sign(g) * g.uniform(0.01, 0.05)},        # C11 / C13 ratio
+    "opamp_gain": lambda g: {"gain": 10 ** (g.uniform(30.0, 50.0) / 20)},        # DC gain 30 - 50 dB (60 designed)
+    "mc_columns": lambda g: {},                                                  # library Pelgrom draws per column
     "col_bridge": lambda g: {"r_bridge_ohm": g.uniform(1e5, 4e5)},
     "fd_pullup": lambda g: {"r_pullup_ohm": g.uniform(2e14, 1e15)},
 }
 
 
-def operating_points(design, nom, g) -> list[dict]:
-    """``N_OP`` lab-like operating points (one deck each)."""
+def operating_points(design, nom, g, campaign: str = "lab") -> list[dict]:
+    """Lab-like operating points (one deck each) of a ``CAMPAIGNS`` kind."""
+    c = CAMPAIGNS[campaign]
+    (t_lo, t_hi), (f_lo, f_hi) = c["t_int"], c["light"]
     ops = []
-    for k in range(N_OP):
-        t_int = float(np.exp(g.uniform(np.log(50e-6), np.log(2e-3))))
-        row = int(g.integers(0, design.primary.rows))
-        extra = float(g.choice([0.0, 10e-3, 40e-3]))
-        temp = float(g.choice([25.0, 45.0, 65.0]))
-        dark = g.random() < 0.12
+    for k in range(c["points"]):
+        t_int = float(np.exp(g.uniform(np.log(t_lo), np.log(t_hi))))
+        row = int(g.integers(0, c.get("rows", design.primary.rows)))
+        extra = float(g.choice(c.get("extra_wait", [0.0, 10e-3, 40e-3])))
+        temp = float(g.choice(c["temps"]))
+        dark = g.random() < c["dark"]
         i = {}
         for s in SUBS:
             arr = "primary" if s == "primary" else "secondary"
-            frac = 0.0 if dark else g.uniform(0.03, 0.6)
+            frac = 0.0 if dark else g.uniform(f_lo, f_hi)
             i[s] = frac * nom.q_grid[arr][-1] / t_int
         ops.append({"t_int": t_int, "row": row, "extra_wait": extra, "temp": temp, "i": i,
                     "i_prev": {s: i[s] * g.uniform(0.0, 2.0) for s in SUBS}, "col_p": k % 3})
     return ops
+
+
+# campaign -> operating points, t_int range (s), temperatures (degC), dark-frame probability, light as a fraction
+# of the full-well charge (and optionally: rows to draw from, extra waits). "lab": the committed set's; "rich":
+# 10 points, a quarter dark (two effects at once); "dark_hot": long, hot, mostly dark exposures (what a lab takes
+# to measure dark current); "one_condition": one integration time, temperature and wait (a set that cannot tell
+# the laws of t_int, T and t_wait apart: the bad-input check)
+CAMPAIGNS = {"lab": {"points": N_OP, "t_int": (50e-6, 2e-3), "temps": (25.0, 45.0, 65.0), "dark": 0.12,
+                     "light": (0.03, 0.6)},
+             "rich": {"points": 10, "t_int": (50e-6, 2e-3), "temps": (25.0, 45.0, 65.0), "dark": 0.25,
+                      "light": (0.03, 0.6)},
+             "dark_hot": {"points": 10, "t_int": (2e-3, 50e-3), "temps": (45.0, 65.0, 85.0), "dark": 0.5,
+                          "light": (0.02, 0.3)},
+             "one_condition": {"points": 3, "t_int": (2e-3, 2e-3), "temps": (65.0,), "dark": 0.0,
+                               "light": (0.02, 0.3), "rows": 1, "extra_wait": [10e-3]}}
 
 
 FD_LIMIT = 0.25     # storage-node charge kept below this fraction of the FD's own swing
@@ -136,6 +159,27 @@ def limit_waits(design, nom, ops, effect, p) -> None:
                 break
 
 
+PD_LIMIT = 0.6     # PD charge (light + dark) kept below this fraction of the full-well charge
+
+
+def limit_exposures(design, nom, ops, effect, p) -> None:
+    """Halve an operating point's integration time until the PD charge stays in range (a lab shortens a
+    hot dark exposure that would saturate): for the dark-current effect, whose T law can reach x 4000."""
+    if effect != "dark_current":
+        return
+    from ..physics.dark import dark_current
+    for op in ops:
+        for _ in range(12):
+            law = 2.0 ** ((op["temp"] - 25.0) / p["t_double_K"])
+            worst = max((op["i"][s] + dark_current(*nom.dark[_arr(s)], op["temp"] + 273.15, nom.pd)
+                         + p["i_d_A"] * law * (1.0 if s == "primary" else
+                                               design.secondary.perimeter / design.primary.perimeter))
+                        * op["t_int"] / nom.q_grid[_arr(s)][-1] for s in SUBS)
+            if worst < PD_LIMIT:
+                break
+            op["t_int"] /= 2
+
+
 def _t_wait(design, op, arr):
     f = design.primary.f_read if arr == "primary" else design.secondary.f_read
     return (op["row"] + 1) / f + op["extra_wait"]
@@ -162,21 +206,68 @@ def _columns(design, g, effect, p):
     elif effect == "column_afe":
         out = {k: {"c11": 1 + g.normal(0, p["c11_rel_sd"]), "cc": abs(g.normal(0, p["c_clk_sd_F"])),
                    "line": str(g.choice(["p1", "p1b"]))} for k in keys}
+    elif effect == "mc_columns":
+        out = {k: _mc_column(design, g) for k in keys}
     return out
 
 
+def _mc_column(design, g) -> dict:
+    """One column's Monte Carlo draw, Pelgrom with the model library's own coefficients (``mc.pelgrom``):
+    the load's threshold and current factor, C11 / C12 / C13 (the technology's capacitor matching) and
+    the op-amp's input offset (drawn as the difference of an 8 / 1 um input pair's thresholds)."""
+    from ..mc.pelgrom import cap_sigma_rel, sigma_beta, sigma_vth
+    dev, a = design.pixel.devices, design.afe
+    return {"dvt": float(g.normal(0, sigma_vth(design, dev.load_w, dev.load_l))),
+            "dbeta": float(g.normal(0, sigma_beta(design, dev.load_w, dev.load_l))),
+            "caps": {n: float(1 + g.normal(0, cap_sigma_rel(design, c))) for n, c in
+                     (("C11", a.c11), ("C12", a.c12), ("C13", a.c13))},
+            "vos": float(g.normal(0, np.sqrt(2) * sigma_vth(design, 8e-6, 1e-6)))}
+
+
+def _variant(design, parts):
+    """The design with the uniform changes of ``parts`` (a chip whose every column differs the same way)."""
+    from dataclasses import replace
+    for name, p in parts:
+        if name == "load_current":
+            design = replace(design, pixel=replace(design.pixel, sf_bias=design.pixel.sf_bias * (1 + p["bias_rel"])))
+        elif name == "sf_size":
+            dev = design.pixel.devices
+            design = replace(design, pixel=replace(design.pixel, devices=replace(dev, sf_w=dev.sf_w * p["sf_w_factor"])))
+        elif name == "c11_ratio":
+            design = replace(design, afe=replace(design.afe, c11=design.afe.c11 * (1 + p["c11_rel"])))
+        elif name == "opamp_gain":
+            design = replace(design, afe=replace(design.afe, gain=p["gain"]))
+    return design
+
+
 def deck(design, nom, op, effect, p, colp, title):
-    """The full-chain deck of one operating point with ``effect`` inserted."""
+    """The full-chain deck of one operating point with ``effect`` inserted (``a+b``: both)."""
     t_w = design.experiment.t_window
     from ..physics.dark import dark_current
+    parts = _parts(effect, p)
     q = {}
     for s in SUBS:
         arr = _arr(s)
         area, per = nom.dark[arr]
         q[s] = (op["i"][s] + dark_current(area, per, op["temp"] + 273.15, nom.pd)) * op["t_int"]
-    net = dual_pixel_bench(design, q["primary"] / t_w, tuple(q[s] / t_w for s in SUBS[1:]), with_afe=True,
-                           title=title)
+    net = dual_pixel_bench(_variant(design, parts), q["primary"] / t_w, tuple(q[s] / t_w for s in SUBS[1:]),
+                           with_afe=True, title=title)
     net = ce.specialise(net, design.secondary_per_pixel)
+    for name, pe in parts:
+        net = _insert(net, design, nom, op, name, pe, colp)
+    return net
+
+
+def _parts(effect, p) -> list:
+    """[(effect, its parameters)]: one, or the two of a two-effect case ``a+b``."""
+    if effect and "+" in effect:
+        return [(e, p[e]) for e in effect.split("+")]
+    return [(effect, p)]
+
+
+def _insert(net, design, nom, op, effect, p, colp):
+    """``effect`` as circuit elements in every chain of ``net``."""
+    t_w = design.experiment.t_window
     law = 2.0 ** ((op["temp"] - 25.0) / p["t_double_K"]) if "t_double_K" in p else 1.0
     for s in SUBS:
         arr, sub = _arr(s), ce.pixel_subckt(s)
@@ -215,6 +306,10 @@ def deck(design, nom, op, effect, p, colp, title):
                              afe, c["c11"])
         elif effect == "column_pixel":
             net = ce.scale_load(net, col, colp[(arr, _col_label(s, op))]["w"])
+        elif effect == "mc_columns":
+            c = colp[(arr, _col_label(s, op))]
+            net = ce.scale_load(ce.offset_gate(net, f"ld_{col}", c["dvt"]), col, 1.0 + c["dbeta"])
+            net = _set_vos(ce.scale_caps(net, afe, c["caps"]), afe, c["vos"])
         elif effect == "sf_gain":   # connected while the row is selected
             net = ce.column_conductance(net, design, col, float(nom.v_rst[arr].mean()), 1.0 / p["r_col_ohm"])
         elif effect == "col_clamp":
@@ -231,34 +326,48 @@ def deck(design, nom, op, effect, p, colp, title):
 
 def _scale_c11(net, afe, factor):
     """Scale C11 of one AFE copy (a number, or the subcircuit's ``c11`` parameter default)."""
+    return ce.scale_caps(net, afe, {"C11": factor})
+
+
+def _set_vos(net, afe, vos):
+    """The input offset of one AFE copy's op-amp macromodel (its ``vos`` parameter)."""
     from dataclasses import replace
-
-    from ..spice.netlist import Param
-    subs = []
-    for s in net.subckts:
-        if s.name == afe:
-            c11 = next(e for e in s.elements if e.name == "C11")
-            if isinstance(c11.value, Param):
-                s = replace(s, params=tuple((k, v * factor if k == c11.value.name else v) for k, v in s.params))
-            else:
-                s = replace(s, elements=tuple(replace(e, value=e.value * factor) if e.name == "C11" else e
-                                              for e in s.elements))
-        subs.append(s)
-    return replace(net, subckts=tuple(subs))
+    subs = tuple(replace(s, elements=tuple(replace(e, params=(*e.params, ("vos", vos))) if e.name == "Xop" else e
+                                           for e in s.elements)) if s.name == afe else s for s in net.subckts)
+    return replace(net, subckts=subs)
 
 
-def simulate_case(design, nom, effect: str | None, seed: int, backend="batch", jobs=None) -> tuple[list, dict]:
-    """(rows as dicts, truth) of one case: ``N_OP`` decks, noise and set-up added."""
+def simulate_case(design, nom, effect: str | None, seed: int, backend="batch", jobs=None,
+                  campaign: str | None = None) -> tuple[list, dict]:
+    """(rows as dicts, truth) of one case: its decks, noise and set-up added.
+
+    ``campaign`` None: the committed set's first cases (campaign "lab", one set-up gain and offset for
+    both probes, uniform +-2 % / +-20 mV). Otherwise (cases added later): that campaign and a set-up per
+    probe, gain N(1, 0.3 %) and offset N(0, 2 mV), as a real bench."""
     from ..spice import simulate_many
     g = np.random.default_rng(seed)
-    ops = operating_points(design, nom, g)
-    p = RANGES[effect](g) if effect else {}
-    limit_waits(design, nom, ops, effect, p)
-    colp = _columns(design, g, effect, p)
+    ops = operating_points(design, nom, g, campaign or "lab")
+    parts = [e for e in effect.split("+")] if effect else []
+    p = RANGES[effect](g) if effect and len(parts) == 1 else {e: RANGES[e](g) for e in parts}
+    for name, pe in _parts(effect, p):
+        limit_waits(design, nom, ops, name, pe)
+        if campaign is not None:
+            limit_exposures(design, nom, ops, name, pe)
+    colp = {}
+    for name, pe in _parts(effect, p):
+        colp.update(_columns(design, g, name, pe))
     nets = [deck(design, nom, op, effect, p, colp, f"si{seed}_{k}") for k, op in enumerate(ops)]
     kw = {"backend": backend} if jobs is None else {"backend": backend, "jobs": jobs}
-    res = simulate_many(nets, **kw)
-    gain, offset = 1 + g.uniform(-0.02, 0.02), g.uniform(-0.02, 0.02)
+    if campaign is None:
+        res = simulate_many(nets, **kw)
+    else:   # added cases: every deck at the kit's tolerances (a retried deck moved levels by mV)
+        from .nominal import simulate_exact
+        res = simulate_exact(nets, **kw)
+    if campaign is None:
+        gain, offset = 1 + g.uniform(-0.02, 0.02), g.uniform(-0.02, 0.02)
+        setup = {"pixel": (gain, offset), "afe": (gain, offset)}
+    else:
+        setup = {pr: (1 + g.normal(0, 0.003), g.normal(0, 0.002)) for pr in ("pixel", "afe")}
     tm = timings(design, design.experiment.t_window)
     rows = []
     for op, r in zip(ops, res):
@@ -271,12 +380,31 @@ def simulate_case(design, nom, effect: str | None, seed: int, backend="batch", j
                              "t_int_s": op["t_int"], "t_wait_s": _t_wait(design, op, arr), "temp_C": op["temp"],
                              "probe": probe, "v_clean_V": v, "i_ph_prev_A": op["i_prev"][s]})
     for row in rows:
+        gain, offset = setup[row["probe"]]
         row["v_V"] = offset + gain * row.pop("v_clean_V") + g.normal(0, NOISE_V / np.sqrt(N_AVG))
         row["v_std_V"], row["n_avg"] = NOISE_V, N_AVG
-    kind = "none" if effect is None else ("out_of_library" if effect in OUT_OF_LIBRARY else effect)
-    truth = {"effect": kind, "circuit": effect or "none", "params": p, "seed": seed,
-             "setup_gain": gain, "setup_offset_V": offset}
+    truth = {"effect": _expected(effect), "circuit": effect or "none", "params": p, "seed": seed}
+    if campaign is None:
+        truth.update({"setup_gain": setup["pixel"][0], "setup_offset_V": setup["pixel"][1]})
+    else:
+        truth.update({"campaign": campaign, "accept": ACCEPT.get(effect, [_expected(effect)]),
+                      "setup": {f"{k}_{pr}": v for pr, (gn, off) in setup.items()
+                                for k, v in (("gain", gn), ("offset_V", off))}})
     return rows, truth
+
+
+# the library effect a circuit change should be named as (a circuit of the library's own name: that name)
+EXPECTED = {"load_current": "column_load", "sf_size": "sf_strength", "c11_ratio": "afe_gain",
+            "opamp_gain": "afe_gain", "mc_columns": "column_pixel"}
+ACCEPT = {"mc_columns": ["column_pixel", "column_afe"]}   # real per-column mismatch: either per-column stage
+
+
+def _expected(effect):
+    if effect is None:
+        return "none"
+    if effect in OUT_OF_LIBRARY:
+        return "out_of_library"
+    return "+".join(sorted(EXPECTED.get(e, e) for e in effect.split("+")))
 
 
 def plan_cases(n_per_effect=9, n_readout_light=12, n_ool_per_kind=7, n_clean=20, n_more_readout_light=8,
@@ -292,6 +420,26 @@ def plan_cases(n_per_effect=9, n_readout_light=12, n_ool_per_kind=7, n_clean=20,
             if q:
                 out.append((q.pop(), seed0 + len(out)))
     out += [("readout_light", seed0 + len(out) + k) for k in range(n_more_readout_light)]
+    return out + plan_added(seed0 + len(out))
+
+
+UNIFORM = ("load_current", "sf_size", "c11_ratio", "opamp_gain")
+PAIRS = (("gse+fd_leakage", "rich"), ("sf_gain+afe_gain", "rich"), ("lag+crosstalk", "rich"),
+         ("dark_current+fd_leakage", "dark_hot"))
+
+
+def plan_added(seed0: int, n_uniform=9, n_mc=9, n_dark=9, n_pair=5) -> list[tuple]:
+    """(effect, seed, campaign) of the cases added after the first 151 (seeds continue from ``seed0``,
+    interleaved round-robin): each uniform change, the columns' Monte Carlo mismatch, dark current in a
+    campaign of long hot dark exposures, and two effects at once."""
+    queues = [[(e, "lab")] * n_uniform for e in UNIFORM] + [[("mc_columns", "lab")] * n_mc]
+    queues += [[("dark_current", "dark_hot")] * n_dark] + [[pc] * n_pair for pc in PAIRS]
+    out = []
+    while any(queues):
+        for q in queues:
+            if q:
+                e, c = q.pop()
+                out.append((e, seed0 + len(out), c))
     return out
 
 
@@ -319,11 +467,11 @@ def write_cases(design, nom, folder: Path = CASES_DIR, plan=None, progress=None,
             buf.write(fh.read())
     else:
         w.writerow(HEADER)
-    for k, (effect, seed) in enumerate(plan):
+    for k, (effect, seed, *campaign) in enumerate(plan):
         cid = f"c{seed}"
         if cid in truths:
             continue
-        rows, truth = simulate_case(design, nom, effect, seed, jobs=jobs)
+        rows, truth = simulate_case(design, nom, effect, seed, jobs=jobs, campaign=(campaign or [None])[0])
         truths[cid] = truth
         for r in rows:
             w.writerow([cid] + [_fmt(r[h]) for h in HEADER[1:]])
@@ -363,10 +511,32 @@ def run_committed(design, nom, folder: Path = CASES_DIR, only=None, only_ids=Non
         if (only and t["effect"] not in only) or (only_ids is not None and cid not in only_ids):
             continue
         d = diagnose(design, table_of(design, rows, f"{folder}/cases.csv#{cid}"), nom)
-        out.append({"case": cid, "truth": t["effect"], "circuit": t["circuit"], "found": d["best"],
-                    "explained": d["explained"], "indistinguishable": d["indistinguishable"],
-                    "shrink": d["shrink_frac"], "before_V": d["gap_before_rms_V"], "after_V": d["gap_after_rms_V"]})
+        out.append({"case": cid, "truth": t["effect"], "circuit": t["circuit"],
+                    "accept": t.get("accept", [t["effect"]]),
+                    "found": "+".join(sorted(d["effects"])), "explained": d["explained"],
+                    "indistinguishable": d["indistinguishable"], "shrink": d["shrink_frac"],
+                    "before_V": d["gap_before_rms_V"], "after_V": d["gap_after_rms_V"], "seed": t["seed"],
+                    "campaign": t.get("campaign", "lab")})
     r = score(out)
-    r.update({"kind": "SPICE-generated", "rows_per_case": 8 * N_OP, "noise_V": NOISE_V, "n_avg": N_AVG,
-              "cases": out})
+    r.update({"kind": "SPICE-generated", "noise_V": NOISE_V, "n_avg": N_AVG, "cases": out,
+              "seeds": [min(c["seed"] for c in out), max(c["seed"] for c in out)] if out else None,
+              **by_class(out)})
     return r
+
+
+def by_class(cases: list) -> dict:
+    """The rates of the added kinds: uniform changes named per column, real column mismatch named per column,
+    both of two effects named, dark current in long hot dark exposures."""
+    per_col = ("column_pixel", "column_afe")
+
+    def rate(xs, fn):
+        return {"rate": float(np.mean([fn(c) for c in xs])), "n": len(xs)} if xs else None
+    uni = [c for c in cases if c["circuit"] in UNIFORM]
+    return {"uniform_named_uniform": rate(uni, lambda c: c["found"] not in per_col),
+            "uniform_named_right": rate(uni, lambda c: c["found"] in c["accept"]),
+            "mc_named_per_column": rate([c for c in cases if c["circuit"] == "mc_columns"],
+                                        lambda c: c["found"] in per_col),
+            "two_effects_both_named": rate([c for c in cases if "+" in c["circuit"]],
+                                           lambda c: c["found"] == c["truth"]),
+            "dark_current_hot_named": rate([c for c in cases if c["circuit"] == "dark_current"
+                                            and c["campaign"] == "dark_hot"], lambda c: c["found"] == "dark_current")}
