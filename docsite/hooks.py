@@ -103,3 +103,41 @@ def on_page_markdown(markdown, page, config, files):
     docs = config["docs_dir"]
     return link_markdown(markdown, bibliography_keys(docs), src, "../" * src.count("/"),
                          is_bibliography=src == "bibliography.md", titles=page_titles(docs))
+
+
+#: an HTML tag, or a run of text between tags
+_HTML = re.compile(r"(<[^>]*>)")
+_KEEP = {"code", "pre", "a", "h1", "h2", "h3", "h4", "h5", "h6"}
+
+
+def link_html(html: str, keys: set[str], bib_url: str) -> str:
+    """Citation keys in generated HTML (the CLI reference from the commands' help, the API reference
+    from the docstrings: text the Markdown hook never sees) as links to ``bib_url#key``; text inside
+    code, links and headings kept as it is."""
+    out, inside = [], []
+    for part in _HTML.split(html):
+        tag = re.match(r"<(/?)([A-Za-z0-9]+)", part) if part.startswith("<") else None
+        if tag:
+            name = tag.group(2).lower()
+            if name in _KEEP and not part.endswith("/>"):
+                if tag.group(1):
+                    inside = inside[:-1] if inside and inside[-1] == name else inside
+                else:
+                    inside.append(name)
+            out.append(part)
+        elif inside or not part:
+            out.append(part)
+        else:
+            out.append(CITE.sub(lambda m: f'<a href="{bib_url}#{m.group(1).lower()}">[{m.group(1)}]</a>'
+                                if m.group(1) in keys else m.group(0), part))
+    return "".join(out)
+
+
+def on_page_content(html, page, config, files):
+    if page.file.src_uri == "bibliography.md":
+        return html
+    from mkdocs.utils import get_relative_url
+    bib = next((f for f in files if f.src_uri == "bibliography.md"), None)
+    if bib is None:
+        return html
+    return link_html(html, bibliography_keys(config["docs_dir"]), get_relative_url(bib.url, page.url))

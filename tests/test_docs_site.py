@@ -17,7 +17,7 @@ import yaml
 from conftest import ROOT
 
 sys.path.insert(0, str(ROOT))
-from docsite.hooks import link_markdown  # noqa: E402
+from docsite.hooks import link_html, link_markdown  # noqa: E402
 
 
 def build(config, site, cwd=ROOT):
@@ -70,6 +70,8 @@ def test_site_builds_strictly_with_every_command_and_api_name(site):
         "[pixel.devices]" in (ROOT / "docs" / "design-file.md").read_text()
     page = (site / "pixel-model" / "index.html").read_text()
     assert 'href="../bibliography/#thesis2019"' in page
+    # in generated text too: the commands' help (the CLI reference) and the docstrings (the API)
+    assert 'of <a href="../bibliography/#thesis2019">[Thesis2019]</a> (fig. A.1' in cli
     bib = (site / "bibliography" / "index.html").read_text()
     assert 'id="thesis2019"' in bib
 
@@ -86,6 +88,11 @@ def test_citation_and_page_links():
                         {"EMVA1288", "GF180MCU", "emva1288-py"}, root="")
     assert out == ("[[EMVA1288]](bibliography.md#emva1288), [[GF180MCU]](bibliography.md#gf180mcu) and "
                    "[[emva1288-py]](bibliography.md#emva1288-py); [stack], [models.corners], [a](x.md), [[b]].")
+    html = link_html('<p>As [Thesis2019] and [stack].</p><pre><code>[Thesis2019]</code></pre><h2>[Thesis2019]</h2>'
+                     '<a href="x">[Thesis2019]</a><br/>[Thesis2019]', {"Thesis2019"}, "../bibliography/")
+    link = '<a href="../bibliography/#thesis2019">[Thesis2019]</a>'
+    assert html == (f'<p>As {link} and [stack].</p><pre><code>[Thesis2019]</code></pre><h2>[Thesis2019]</h2>'
+                    f'<a href="x">[Thesis2019]</a><br/>{link}')
 
 
 @pytest.mark.parametrize("page, why", [
