@@ -293,13 +293,16 @@ def test_a_violation_is_pictured_where_the_deck_found_it(drc, gf, tmp_path):
 
 
 def test_report_section_signs_off_and_shows_the_open_junction(tmp_path, gf):
-    """The "Layout sign-off" section (quick profile: LVS and the shield; the deck runs in the full
-    report and in the DRC tests above): its tables, picture and checked figures."""
+    """The "Layout sign-off" section as the full report builds it (the foundry deck, LVS, the
+    shield; the quick profile leaves the deck out): its tables, picture and checked figures."""
     from pixelkit.report.sections import Context
     from pixelkit.report.sections.layout_signoff import build
-    s = build(Context(gf, tmp_path, quick=True))
+    s = build(Context(gf, tmp_path, quick=False))
     assert s.available, s.why
     tables = {t.name: t for t in s.tables}
+    assert tables["layout_signoff_drc"].rows == [["(none)", 0, "", "", ""]]
+    assert re.search(r"gf180mcu\.drc \(KLayout 0\.28\.5, deep mode, \d{3} rules in its report\) on CHIP_2X2_AFE: "
+                     r"no violation", " ".join(s.text)), s.text
     assert tables["layout_signoff_lvs"].rows[0][:2] == [TOP, "match"]
     areas = {r[1]: r for r in tables["layout_signoff_areas"].rows}
     assert areas["AFE_S"][2] == pytest.approx(gf.secondary.pitch * 1e6) and areas["AFE_P"][2] == pytest.approx(24)
@@ -308,4 +311,6 @@ def test_report_section_signs_off_and_shows_the_open_junction(tmp_path, gf):
     assert shield["AFE"][2] == 0 and shield["AFE"][1] > 0
     assert shield["all"][2] == pytest.approx(_openings(gf, 4) * 1e12, rel=0.01)
     assert (tmp_path / s.figures[0].file).stat().st_size > 5000
-    assert {c.name for c in s.checked} >= {"layout_signoff.lvs_match", "layout_signoff.open_m2"}
+    checked = {c.name: c for c in s.checked}
+    assert {"layout_signoff.lvs_match", "layout_signoff.open_m2"} <= set(checked)
+    assert checked["layout_signoff.drc_violations"].value == 0
