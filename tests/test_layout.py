@@ -37,6 +37,13 @@ def ref_cells(ref_design):
     return build_cells(ref_design)
 
 
+def _wide(d, load_w=12e-6, sw_w=12e-6):
+    """``d`` with column devices wider than its 8 um secondary pitch (the load 12 um, the switches
+    12 / 24 um): drawn folded into fingers."""
+    dev = d.pixel.devices
+    return replace(d, pixel=replace(d.pixel, devices=replace(dev, load_w=load_w, sw_w=sw_w)))
+
+
 @pytest.fixture(scope="module")
 def gds(tmp_path_factory, ref_design, ref_cells):
     return write_gds(to_library(ref_design, ref_cells, 2, 2), tmp_path_factory.mktemp("gds") / "ref.gds")
@@ -165,19 +172,22 @@ BROKEN = {"BAD_CONTACT": (_unenclosed_contact, "CO.6"), "BAD_IMPLANT": (_missing
 def drc(tmp_path_factory, ref_design, gf_design, ref_cells):
     """One run of the foundry deck (deep mode) over: every cell of both reference designs (c35_thesis
     and gf180mcu_3v3 draw with the same generators), their 2 x 2 arrays (cells abutting), a MIM
-    capacitor of the primitive library, and the three broken variants of the secondary subpixel."""
+    capacitor of the primitive library, the GF180 dual pixel with its column devices folded into
+    fingers (W_), and the three broken variants of the secondary subpixel."""
     from pixelkit.layout.primitives import mim_cap
     from pixelkit.layout.signoff.drc import run_drc
     folder = tmp_path_factory.mktemp("drc")
     lib = gdstk.Library(unit=1e-6, precision=1e-9)
     top = gdstk.Cell("TOP")
     x = 0.0
-    for prefix, d, cells in (("R_", ref_design, ref_cells), ("G_", gf_design, build_cells(gf_design))):
+    wide = _wide(gf_design)
+    for prefix, d, cells in (("R_", ref_design, ref_cells), ("G_", gf_design, build_cells(gf_design)),
+                             ("W_", wide, build_cells(wide))):
         sub = to_library(d, cells, 2, 2)
         for c in sub.cells:
             c.name = prefix + c.name
             lib.add(c)
-        for name in ("DUALPIX_COL", "ARRAY_2X2"):
+        for name in ("DUALPIX_COL",) if prefix == "W_" else ("DUALPIX_COL", "ARRAY_2X2"):
             cell = next(c for c in sub.cells if c.name == prefix + name)
             top.add(gdstk.Reference(cell, (x, 0)))
             (x0, _), (x1, _) = cell.bounding_box()
@@ -233,6 +243,23 @@ def test_lvs_matches_on_gf180(tmp_path, gf_design):
     gds = write_gds(build_library(gf_design), tmp_path / "g.gds")
     r = run_lvs(gds, "DUALPIX_COL", gf_design)
     assert r.match, r.mismatches
+
+
+def test_wide_column_devices_are_folded_and_match_their_netlist(tmp_path, gf_design):
+    """Column devices wider than the 8 um pitch allows are drawn as fingers of equal W (the deck
+    checks them in the DRC run above); LVS adds the fingers back up and matches the netlist's
+    single devices - and the same drawing against the unfolded design's netlist (1 um devices) is
+    a W mismatch, so the totals are what is compared."""
+    wide = _wide(gf_design)
+    gds = write_gds(build_library(wide), tmp_path / "w.gds")
+    lib = gdstk.read_gds(str(gds))
+    gates = {c.name: len(c.get_polygons(layer=30, datatype=0, depth=0)) for c in lib.cells
+             if c.name in ("COLUMN_S", "COLUMN_P")}
+    assert gates["COLUMN_S"] > 6 and gates["COLUMN_P"] > 6, gates     # 6 devices unfolded
+    r = run_lvs(gds, "DUALPIX_COL", wide)
+    assert r.match, r.mismatches
+    r = run_lvs(gds, "COLUMN_S", gf_design)
+    assert not r.match and any("W " in m for m in r.mismatches), r.mismatches
 
 
 def _lvs_of_variant(tmp_path, design, cells, edit):
@@ -361,6 +388,19 @@ def test_a_too_wide_transistor_names_its_own_field_and_circuit_commands_still_ru
     assert not (tmp_path / "o").exists() or not list((tmp_path / "o").glob("*.gds"))
     code, out, err = cli("models", bad)
     assert code == 0 and "transistors_fit" in err and "pixelkit layout" in err
+
+
+def test_a_column_device_that_cannot_be_folded_names_its_field(tmp_path, cli):
+    """A load of 11.995 um (2399 x 5 nm: no split into at most 64 equal fingers on the 5 nm grid
+    fits the 8 um column) is refused naming load_w, its value and the finger room, before any file."""
+    bad = tmp_path / "d.toml"
+    bad.write_text(re.sub(r'^load_w = "1 um"', 'load_w = "11.995 um"', GF.read_text(), flags=re.M))
+    code, out, err = cli("layout", bad, "--out", tmp_path / "o", "--json")
+    assert code == 2, err
+    e = json.loads(out)
+    assert e["field"] == "pixel.devices.load_w" and e["value"] == "11.995 um", e
+    assert "transistors_fit" in e["allowed"] and "fingers of at most" in e["allowed"], e
+    assert not (tmp_path / "o").exists()
 
 
 def test_a_missing_or_altered_deck_says_how_to_fetch_it(tmp_path, monkeypatch, ref_design):

@@ -33,7 +33,7 @@ from ..circuits.readout import afe_cell, opamp_cell
 from .canvas import Box, Canvas, box
 from .gridroute import GridRouter, Terminal
 from .mimstack import column, draw_stack
-from .primitives import Mos, mos_strip, pad_side, poly_resistor, resistor_heads, strip_height, tap, tap_size, well
+from .primitives import Mos, finger_nets, fold, mos_strip, pad_side, poly_resistor, resistor_heads, strip_height, tap, tap_size, well
 from .route import track
 from .rules import RuleError
 
@@ -92,25 +92,17 @@ def afe_devices(design) -> list[Device]:
 def _fingers(lt, dev: Device, wmax: int, field: str, value, place: str) -> tuple[int, int]:
     """(number of fingers, finger W in nm) of a device at most ``wmax`` wide per finger."""
     w = round(dev.w * 1e9)
-    n = max(1, math.ceil(w / wmax))
-    while n <= 64:
-        if w % n == 0 and (w // n) % lt.grid == 0 and w // n >= lt.width("active"):
-            return n, w // n
-        n += 1
-    raise RuleError("afe_fit", place, f"{dev.name} (W {w / 1000:g} um) cannot be folded into fingers of "
-                    f"at most {wmax / 1000:g} um (the pitch less 4 um of gate pads and wells) on the {lt.grid} nm grid",
-                    field, value)
+    got = fold(lt, w, wmax)
+    if got is None:
+        raise RuleError("afe_fit", place, f"{dev.name} (W {w / 1000:g} um) cannot be folded into fingers of "
+                        f"at most {wmax / 1000:g} um (the pitch less 4 um of gate pads and wells) on the {lt.grid} nm grid",
+                        field, value)
+    return got
 
 
 def _finger_nets(dev: Device, n: int) -> list[str]:
     d, g, s, _ = dev.nodes
-    ends = s if n % 2 == 0 else d
-    nets = [ends]
-    cur = ends
-    for _ in range(n):
-        cur = s if cur == d else d
-        nets += [g, cur]
-    return nets
+    return finger_nets(d, g, s, n, s if n % 2 == 0 else d)
 
 
 def cap_plate(lt, tech, c: float, w: int) -> int:

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from .canvas import Canvas, box
 from .dual import SUPPLIES
-from .primitives import Mos, mos_strip, pad_side, tap, tap_size, well
+from .primitives import Mos, finger_nets, fold, mos_strip, pad_side, tap, tap_size, well
 from .route import Lines, RouteError, route_all, route_to_line, stub_to_track, track, via_on
 from .rules import RuleError
 
@@ -29,6 +29,63 @@ def _sizes(design, lt):
                         low=lt.snap_up(design.tech.mos.lmin * 1e9), low_rule="mos.lmin")
         out[name] = (w * mult, l_)
     return out
+
+
+# the three strips, each two devices in series sharing a terminal: (name, size key, field, a, gate, b),
+# the strip running a -> b -> (the next device) as drawn unfolded
+STRIPS = {"load": (("ld", "load", "load_w", "col", "nbias", "vss"), ("bias", "load", "load_w", "vss", "nbias", "nbias")),
+          "sw": (("s1n", "sw", "sw_w", "out", "s1", "col"), ("s2n", "sw", "sw_w", "col", "s2", "out")),
+          "swp": (("s1p", "swp", "sw_w", "out", "s1b", "col"), ("s2p", "swp", "sw_w", "col", "s2b", "out"))}
+
+
+def _strip(sz: dict, devs, folds: dict) -> tuple[list, list]:
+    """Transistors and nets of a strip, each device folded into ``folds[name]`` = (n, finger W)."""
+    mos, nets = [], []
+    for i, (name, key, _, a, g, b) in enumerate(devs):
+        n, wf = folds.get(name, (1, sz[key][0]))
+        start = nets[-1] if nets else (b if n % 2 == 0 else a)     # the first ends on b, shared with the next
+        nets += finger_nets(a, g, b, n, start)[1 if nets else 0:]
+        mos += [Mos(name, wf, sz[key][1])] * n
+    return mos, nets
+
+
+def _folds(design, lt, sz: dict, x_r: int, edge: int, name: str) -> dict:
+    """Fingers per device: each strip's devices no wider than leaves its gate pads and well
+    (measured on the strip drawn unfolded) ``edge`` from the cell's left edge."""
+    out = {}
+    nw_e = lt.nm("nwell.enclosure.pcomp")
+    for key, devs in STRIPS.items():
+        trial = Canvas("trial", lt)
+        mos, nets = _strip(sz, devs, {})
+        st = mos_strip(trial, lt, "p" if key == "swp" else "n", x_r, 0, mos, nets, [True] * 3, "left")
+        left = min(st.extent.x0, st.comp.x0 - (nw_e if key == "swp" else 0))
+        wmax = ((max(m.w for m in mos) - (edge - left)) // lt.grid) * lt.grid
+        for dev, size, field, *_ in devs:
+            w = sz[size][0]
+            if w <= wmax:
+                continue
+            got = fold(lt, w, wmax)
+            if got is None:
+                value = getattr(design.pixel.devices, field)
+                raise RuleError("transistors_fit", f"{name} cell", f"{dev} (W {w / 1000:g} um) cannot be folded "
+                                f"into fingers of at most {max(wmax, 0) / 1000:g} um (the column pitch less its gate "
+                                f"pads, well and tracks) on the {lt.grid} nm grid", f"pixel.devices.{field}", value)
+            out[dev] = got
+    return out
+
+
+def _spines(cv: Canvas, lt, strip) -> None:
+    """Metal1 joining the gate pads of one net's fingers, along their outer edge."""
+    w1 = lt.width("metal1")
+    runs: list = []
+    for net, p in strip.gates:
+        if runs and runs[-1][0] == net:
+            runs[-1][1].append(p)
+        else:
+            runs.append((net, [p]))
+    for net, pads in runs:
+        if len(pads) > 1:
+            cv.add("metal1", box(pads[0].x0, pads[0].cy, pads[0].x0 + w1, pads[-1].cy), net)
 
 
 def column_cell(design, lt, kind: str, width: int, tracks: dict, reserved: list, array_side: str,
@@ -49,15 +106,14 @@ def column_cell(design, lt, kind: str, width: int, tracks: dict, reserved: list,
     y = lt.space("nplus") // 2 + iside // 2
     tap_p = tap(cv, lt, "p", x_r - side // 2, y, "vss")
     y = y - side // 2 + max(iside // 2 + enc_np + side // 2, side + lt.space("active"))
-    load = [Mos("ld", *sz["load"]), Mos("bias", *sz["load"])]
-    a = mos_strip(cv, lt, "n", x_r, y, load, ["col", "nbias", "vss", "nbias", "nbias"], [True] * 3, "left")
-    sw = [Mos("s1n", *sz["sw"]), Mos("s2n", *sz["sw"])]
-    b = mos_strip(cv, lt, "n", x_r, a.comp.y1 + lt.space("active"), sw, ["out", "s1", "col", "s2", "out"],
-                  [True] * 3, "left")
+    folds = _folds(design, lt, sz, x_r, lt.space("nwell") // 2, name)
+    strips = {k: _strip(sz, devs, folds) for k, devs in STRIPS.items()}
+    a = mos_strip(cv, lt, "n", x_r, y, *strips["load"], [True] * (len(strips["load"][0]) + 1), "left")
+    b = mos_strip(cv, lt, "n", x_r, a.comp.y1 + lt.space("active"), *strips["sw"],
+                  [True] * (len(strips["sw"][0]) + 1), "left")
     nw_e = lt.nm("nwell.enclosure.pcomp")
-    swp = [Mos("s1p", *sz["swp"]), Mos("s2p", *sz["swp"])]
     yc = b.comp.y1 + lt.nm("nwell.space_to.ncomp") + nw_e
-    c = mos_strip(cv, lt, "p", x_r, lt.snap_up(yc), swp, ["out", "s1b", "col", "s2b", "out"], [True] * 3, "left")
+    c = mos_strip(cv, lt, "p", x_r, lt.snap_up(yc), *strips["swp"], [True] * (len(strips["swp"][0]) + 1), "left")
     nside, niside = tap_size(lt, "n")
     ty = c.comp.y1 + max(lt.space("active"), lt.nm("pplus.enclosure.active") + lt.nm("pplus.space_to.active"),
                          lt.nm("nplus.space_to.active") + (niside - nside) // 2) + nside // 2
@@ -74,12 +130,15 @@ def column_cell(design, lt, kind: str, width: int, tracks: dict, reserved: list,
         return cv
     # per-column nets: metal4 tracks; col toward the array, out / nbias away from it
     terms = {"col": [p for n, p in a.sd + b.sd + c.sd if n == "col"],
-             "out": [p for n, p in b.sd + c.sd if n == "out"], "nbias": [dict(a.sd)["nbias"]]}
-    # nbias: the bias device is diode-connected, its two gates tied to its drain on metal1
-    g_ld, g_bias = a.gates[0][1], a.gates[1][1]
+             "out": [p for n, p in b.sd + c.sd if n == "out"], "nbias": [p for n, p in a.sd if n == "nbias"]}
+    # nbias: the bias device is diode-connected, every gate of the strip tied to its drain on metal1
+    for st in (b, c):
+        _spines(cv, lt, st)
+    g_ld, nb = a.gates[0][1], terms["nbias"][0]
     w1 = lt.width("metal1")
-    cv.add("metal1", box(g_ld.x0, g_ld.cy, g_ld.x0 + w1, terms["nbias"][0].cy), "nbias")
-    cv.add("metal1", box(g_ld.x0, terms["nbias"][0].y0, terms["nbias"][0].x1, terms["nbias"][0].y1), "nbias")
+    ys = [p.cy for _, p in a.gates] + [nb.cy]
+    cv.add("metal1", box(g_ld.x0, min(ys), g_ld.x0 + w1, max(ys)), "nbias")
+    cv.add("metal1", box(g_ld.x0, nb.y0, nb.x1, nb.y1), "nbias")
     for net, pads in terms.items():
         x = tracks[net]
         for p in pads:
@@ -91,9 +150,13 @@ def column_cell(design, lt, kind: str, width: int, tracks: dict, reserved: list,
         cv.label("metal4_label", x, (y0 + y1) // 2, net)
     half = lt.space("metal3") // 2
     lines = Lines("metal3", 0, width, [(half, height - half)])
-    terminals = {"s1": b.gates[0][1], "s2": b.gates[1][1], "s1b": c.gates[0][1], "s2b": c.gates[1][1],
-                 "vss": dict(a.sd)["vss"], "vdd": tap_n}
+    first = {n: p for n, p in reversed(b.gates + c.gates)}
+    vss = [p for n, p in a.sd if n == "vss"]
+    terminals = {"s1": first["s1"], "s2": first["s2"], "s1b": first["s1b"], "s2b": first["s2b"],
+                 "vss": vss[0], "vdd": tap_n}
     route_all(cv, lt, lines, terminals, sorted(terminals, key=lambda n: terminals[n].cy))
+    for p in vss[1:]:                                      # a folded load's other sources
+        route_to_line(cv, lt, lines, "vss", p)
     route_to_line(cv, lt, lines, "vss", tap_p[1])          # the substrate tap onto the vss line
     cv.ports = {"lines": dict(lines.y), "height": height, "tracks": dict(tracks)}
     return cv

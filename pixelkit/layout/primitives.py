@@ -88,6 +88,27 @@ class Strip:
     extent: Box = None
 
 
+def fold(lt, w: int, wmax: int) -> tuple[int, int] | None:
+    """(number of fingers, finger W in nm) splitting a ``w`` nm wide transistor into the fewest
+    fingers of equal W at most ``wmax`` on the grid and at least the COMP width; None: none do."""
+    n = max(1, -(-w // max(wmax, 1)))
+    while n <= 64:
+        if w % n == 0 and (w // n) % lt.grid == 0 and lt.width("active") <= w // n <= wmax:
+            return n, w // n
+        n += 1
+    return None
+
+
+def finger_nets(a: str, g: str, b: str, n: int, start: str) -> list[str]:
+    """The strip nets [sd0, g, sd1, g, ...] of ``n`` fingers between ``a`` and ``b`` (gate ``g``),
+    source and drain alternating from ``start``."""
+    nets, cur = [start], start
+    for _ in range(n):
+        cur = b if cur == a else a
+        nets += [g, cur]
+    return nets
+
+
 def _region_lengths(lt, devs: list[Mos], contacted: list[bool], wc: int, pad_h: int, m1pad: int) -> list[int]:
     """Lengths (y) of the n+1 source/drain regions of a strip of ``devs``."""
     cut, enc = lt.cut("contact"), lt.nm("contact.enclosure.active")
