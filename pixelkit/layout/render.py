@@ -38,9 +38,9 @@ def plot_2d(cell, tech, path: Path, title: str) -> Path:
     ax.set_xlabel("x (um)")
     ax.set_ylabel("y (um)")
     ax.set_title(title)
-    ax.legend(fontsize=7, loc="upper right")
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)   # off the chip
     path, tmp = atomic_target(path)
-    fig.savefig(tmp, dpi=110, format="png")
+    fig.savefig(tmp, dpi=110, format="png", bbox_inches="tight")
     plt.close(fig)
     return commit(path, tmp)
 
@@ -106,9 +106,9 @@ def plot_exposure(result: dict, exposure: dict, path: Path, title: str) -> Path:
     ax.set_xlabel("x (um)")
     ax.set_ylabel("y (um)")
     ax.set_title(title, fontsize=9)
-    ax.legend(fontsize=7, loc="upper right")
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)   # off the chip
     path, tmp = atomic_target(path)
-    fig.savefig(tmp, dpi=110, format="png")
+    fig.savefig(tmp, dpi=110, format="png", bbox_inches="tight")
     plt.close(fig)
     return commit(path, tmp)
 
