@@ -2,7 +2,7 @@
 the kit's LVS (target: DRC + LVS < 30 s on 2 cores).
 
 Measured in the same run, as the baseline: the same deck on an empty cell (its fixed cost: it
-executes every one of its rules - each logged line also forks ``pmap`` - whatever the layout
+executes every one of its rules whatever the layout
 holds). Printed: generation, DRC (deep mode, 2 threads), LVS, their sum against the target, the
 ratio of the DRC to the deck's empty-cell run, the CPU time of the DRC process (what it costs on
 free cores: the wall time under load is that much longer), and the machine's load (the 2 cores
@@ -66,7 +66,7 @@ def main(design_file: Path) -> None:
     print(f"  generation (all cells, GDS)          {gen:6.2f} s")
     print(f"  DRC, foundry deck, deep, 2 threads     {drc.seconds:6.2f} s  ({'clean' if drc.clean else drc.by_rule()})")
     print(f"  DRC of an empty cell (deck overhead)   {base.seconds:6.2f} s")
-    print(f"  CPU time of the DRC run (klayout + its pmap forks, user + system): {c2 - c1:.2f} s; of the "
+    print(f"  CPU time of the DRC run (klayout and its children, user + system): {c2 - c1:.2f} s; of the "
           f"empty-cell run {c1 - c0:.2f} s (what a run costs when the cores are free)")
     print(f"  LVS, kit extraction                    {lvs.seconds:6.2f} s  ({'match' if lvs.match else 'MISMATCH'})")
     print(f"  DRC + LVS                              {total:6.2f} s  (target < {TARGET_S:g} s: "
