@@ -11,7 +11,7 @@ must leave; ``<!-- expect: REGEX -->`` what its output (stdout and stderr) must 
 the effect the example's virtual silicon was made with); ``<!-- slow -->`` a block that takes
 minutes (DRC, sign-off, the reports); ``<!-- parse-only -->`` a block never run (it starts
 servers). Every page's whole walk is ``slow`` (``python -m pytest -m slow tests/test_tutorial.py``:
-the tutorial about 4 min on a warm cache); by default the quick blocks run and the slow blocks'
+the tutorial 64 s, the how-tos 130 s on a warm cache); by default the quick blocks run and the slow blocks'
 ``pixelkit`` command lines are parsed by the real click commands in the folder the quick blocks
 left (a renamed command or option, a bad value or a design file the page never made fails),
 without running them. Independent of the code under test: what is checked is what the page
