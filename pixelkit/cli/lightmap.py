@@ -15,7 +15,8 @@ def _text(r: dict) -> str:
     lines.append(f"  readout junctions exposed: {r['readout_area_m2'] * 1e12:.3f} um2")
     for c, v in r["columns"].items():
         lines.append(f"  {c}: AFE output error {v['error_V'] * 1e3:+.3f} mV, {v['error_over_noise']:.1f} x the read "
-                     f"noise there ({v['read_noise_V'] * 1e3:.3f} mV)")
+                     f"noise there ({v['read_noise_V'] * 1e3:.3f} mV); lit from the first row on "
+                     f"{v['error_from_row_V'] * 1e3:+.3f} mV ({v['error_from_row_over_noise']:.2g} x)")
     return "\n".join(lines)
 
 

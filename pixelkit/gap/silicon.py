@@ -338,12 +338,13 @@ def _set_vos(net, afe, vos):
 
 
 def simulate_case(design, nom, effect: str | None, seed: int, backend="batch", jobs=None,
-                  campaign: str | None = None) -> tuple[list, dict]:
+                  campaign: str | None = None, edit=None) -> tuple[list, dict]:
     """(rows as dicts, truth) of one case: its decks, noise and set-up added.
 
     ``campaign`` None: the committed set's first cases (campaign "lab", one set-up gain and offset for
     both probes, uniform +-2 % / +-20 mV). Otherwise (cases added later): that campaign and a set-up per
-    probe, gain N(1, 0.3 %) and offset N(0, 2 mV), as a real bench."""
+    probe, gain N(1, 0.3 %) and offset N(0, 2 mV), as a real bench. ``edit(net, op) -> net``: a further
+    change of each deck (``layout.pex.lightsilicon``'s light on the layout's open junctions)."""
     from ..spice import simulate_many
     g = np.random.default_rng(seed)
     ops = operating_points(design, nom, g, campaign or "lab")
@@ -357,6 +358,7 @@ def simulate_case(design, nom, effect: str | None, seed: int, backend="batch", j
     for name, pe in _parts(effect, p):
         colp.update(_columns(design, g, name, pe))
     nets = [deck(design, nom, op, effect, p, colp, f"si{seed}_{k}") for k, op in enumerate(ops)]
+    nets = nets if edit is None else [edit(n, op) for n, op in zip(nets, ops)]
     kw = {"backend": backend} if jobs is None else {"backend": backend, "jobs": jobs}
     if campaign is None:
         res = simulate_many(nets, **kw)

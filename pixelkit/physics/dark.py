@@ -46,8 +46,8 @@ def dark_scale(temperature_K: float, pd) -> float:
     """Factor I(T) / I(T_ref) of the technology's photodiode junction (its ``dark_law``)."""
     t, t0 = temperature_K, pd.t_ref
     if getattr(pd, "dark_law", "doubling") == "card":
-        return float((t / t0) ** (pd.dark_xti / pd.dark_n)
-                     * np.exp(pd.dark_eg / (pd.dark_n * K_B / Q) * (1.0 / t0 - 1.0 / t)))
+        f = (t / t0) ** (pd.dark_xti / pd.dark_n) * np.exp(pd.dark_eg / (pd.dark_n * K_B / Q) * (1.0 / t0 - 1.0 / t))
+        return float(f) if np.ndim(f) == 0 else f      # an array of temperatures as the doubling law takes
     return 2.0 ** ((t - t0) / pd.dark_doubling)
 
 

@@ -123,21 +123,26 @@ def afe_sources(afe_junctions) -> list:
     return [Element(f"Ilight{k}", pins, i) for k, (pins, i) in enumerate(sorted(acc.items()))]
 
 
-def output_error(design, junctions, backend: str = "batch", afe_junctions=()) -> dict:
+def output_error(design, junctions, backend: str = "batch", afe_junctions=(), from_row: bool = False) -> dict:
     """AFE output of each column with the junctions' photocurrents minus without (V), by SPICE
-    (``afe_junctions``: the drawn AFEs' exposed junctions, one list per AFE cell)."""
+    (``afe_junctions``: the drawn AFEs' exposed junctions, one list per AFE cell). The light is on for
+    the whole deck (the exposure included, while the bench's samplers and AFE are idle); ``from_row``:
+    from the first row's start only (what a readout clocked every row keeps of it)."""
     from dataclasses import replace as _r
     from ...circuits.testbench import dual_pixel_bench, timings
+    from ...gap.circuit_edits import EDGE, pulse
     from ...measure.afe import afe_output
     from ...spice import simulate_many
     n = design.secondary_per_pixel
-    base = dual_pixel_bench(design, 0.0, 0.0, with_afe=True, title="light_dark")
-    lit = dual_pixel_bench(design, 0.0, 0.0, with_afe=True, title="light_readout")
-    inner = afe_sources(afe_junctions)
-    subs = tuple(_r(sc, elements=sc.elements + tuple(inner)) if sc.name == "scafe" else sc for sc in lit.subckts)
-    lit = _r(lit, elements=(*lit.elements, *sources(junctions, n)), subckts=subs)
-    r0, r1 = simulate_many([base, lit], backend=backend)
     tm = timings(design, design.experiment.t_window)
+    t0, t1 = min(t.row(0) for t in tm.values()), min(t.t_stop for t in tm.values()) - EDGE
+    timed = (lambda els: [_r(e, value=pulse(t0, t1, e.value)) for e in els]) if from_row else (lambda els: els)
+    base = dual_pixel_bench(design, 0.0, 0.0, with_afe=True, title="light_dark")
+    lit = dual_pixel_bench(design, 0.0, 0.0, with_afe=True, title="light_readout_row" if from_row else "light_readout")
+    inner = timed(afe_sources(afe_junctions))
+    subs = tuple(_r(sc, elements=sc.elements + tuple(inner)) if sc.name == "scafe" else sc for sc in lit.subckts)
+    lit = _r(lit, elements=(*lit.elements, *timed(sources(junctions, n))), subckts=subs)
+    r0, r1 = simulate_many([base, lit], backend=backend)
     out = {}
     for col in ["col_p", *(f"col_s{k}" for k in range(n))]:
         t = tm["primary" if col == "col_p" else "secondary"]
@@ -167,6 +172,7 @@ def light_map(design, shield: str = "pixels", backend: str = "batch", geos: dict
     js = with_currents(design, exposed(geos["DUALPIX_COL"], shield))
     afe = {c: with_currents(design, exposed(geos[c], shield)) for c in ("AFE_P", "AFE_S")}
     err = output_error(design, js, backend, list(afe.values()))
+    err_row = output_error(design, js, backend, list(afe.values()), from_row=True)
     noise = read_noise_at_afe(design)
     e, _ = irradiance(design)
     rows = [{"cell": "DUALPIX_COL", "net": j.net, "node": bench_node(j.net, design.secondary_per_pixel) or "-",
@@ -177,7 +183,9 @@ def light_map(design, shield: str = "pixels", backend: str = "batch", geos: dict
                   "kind": KINDS[j.kind], "area_m2": j.area_m2, "current_A": j.current_A, "readout": True}
                  for j in lst]
     cols = {c: {"error_V": v, "read_noise_V": noise["primary" if c == "col_p" else "secondary"],
-                "error_over_noise": abs(v) / noise["primary" if c == "col_p" else "secondary"]}
+                "error_over_noise": abs(v) / noise["primary" if c == "col_p" else "secondary"],
+                "error_from_row_V": err_row[c],
+                "error_from_row_over_noise": abs(err_row[c]) / noise["primary" if c == "col_p" else "secondary"]}
             for c, v in err.items()}
     return {"shield": shield, "irradiance_W_m2": e, "junctions": rows, "columns": cols,
             "readout_area_m2": sum(r["area_m2"] for r in rows if r["readout"]),

@@ -55,8 +55,10 @@ def build(ctx) -> Section:
                             [[j["cell"], j["net"], j["node"], j["kind"], j["area_m2"] * 1e12, j["current_A"] * 1e12]
                              for j in m["junctions"]]))
     tables.append(Table("light_map_error", "AFE output error from the light on the exposed junctions (SPICE)",
-                        ["shield", "column", "error (mV)", "read noise there (mV)", "error / read noise"],
-                        [[s, c, v["error_V"] * 1e3, v["read_noise_V"] * 1e3, v["error_over_noise"]]
+                        ["shield", "column", "error (mV)", "read noise there (mV)", "error / read noise",
+                         "error, light from the first row on (mV)", "that / read noise"],
+                        [[s, c, v["error_V"] * 1e3, v["read_noise_V"] * 1e3, v["error_over_noise"],
+                          v["error_from_row_V"] * 1e3, v["error_from_row_over_noise"]]
                          for s, m in maps.items() for c, v in m["columns"].items()]))
     fig = ctx.figure("light_map.png")
     _picture(ctx, geo, fig)
@@ -70,7 +72,11 @@ def build(ctx) -> Section:
             f"Shield as drawn: {bad['readout_area_m2'] * 1e12:.2f} um2 of readout junctions open, the worst column "
             f"error {bad['worst_error_over_noise']:.0f} x its read noise; full shield: "
             f"{maps['full']['worst_error_over_noise']:.2g} x. Not counted: light through the gates into the "
-            "channels (collected by the devices' sources and drains)."]
+            "channels (collected by the devices' sources and drains).",
+            "The light is on for the whole bench, the exposure included, while the samplers and the AFE are idle "
+            "(their nodes float); lit from the first row's start only (what a readout clocked every row keeps), "
+            f"the worst error is {max(v['error_from_row_over_noise'] for v in bad['columns'].values()):.2g} x the "
+            "read noise: the failure is the charge the open nodes gather before the row is read."]
     return Section(TITLE, text=text, tables=tables,
                    figures=[Figure(fig.name, "Exposed junctions of DUALPIX_COL under the shield as drawn")],
                    checked=[Checked("light_map.worst_error_over_noise_pixels", bad["worst_error_over_noise"], "1",
