@@ -94,7 +94,7 @@ def test_report_section(gf, tmp_path):
     worst = next(c for c in s.checked if c.name == "light_map.worst_error_over_noise_pixels").value
     assert worst > 10
     ref = section.build(Context(load_design(ROOT / "designs" / "dual_pixel_revA.toml"), tmp_path))
-    assert not ref.available and "[stack]" in ref.why
+    assert not ref.available and "[stack]" in ref.needs and "no process stack" in ref.why
 
 
 @pytest.mark.slow

@@ -113,4 +113,4 @@ def test_report_section_post_layout_vs_schematic(tmp_path):
         if r[0] == "secondary" and r[2] == 0:
             assert r[6] == pytest.approx(ped[2] - ped[1], abs=10.0), r
     ref = section.build(Context(load_design(ROOT / "designs" / "dual_pixel_revA.toml"), tmp_path, quick=True))
-    assert not ref.available and "[stack]" in ref.why
+    assert not ref.available and "[stack]" in ref.needs and "no process stack" in ref.why
