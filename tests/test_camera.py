@@ -104,7 +104,7 @@ def test_gap_emva_finds_the_spice_k_and_read_noise(exported, spice_emva, which):
     nom = analyse(out / which)["nominal"]
     k, sigma_d = spice_emva[which]
     assert nom["K_DN_per_e"] == pytest.approx(k, rel=0.05)
-    assert nom["sigma_d_e"] == pytest.approx(sigma_d, rel=0.06)
+    assert nom["sigma_d_measured_e"] == pytest.approx(sigma_d, rel=0.06)
     assert nom["eta"] == pytest.approx(want["qe"], rel=0.05)
 
 

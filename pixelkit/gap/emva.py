@@ -334,7 +334,12 @@ def measure_steps(desc: dict, tp: dict) -> dict:
 
 
 def nominal_fit(m: dict, full_scale: float, fig: dict) -> dict:
-    """The linear camera model with the figures' K and R (the reference's fits)."""
+    """The linear camera model with the figures' K and R (the reference's fits).
+
+    ``sigma_d_measured_e`` is the dark temporal noise the dark steps show (less the quantisation
+    noise), the noise model of the gap analysis; the figures' ``sigma_d_e`` is the standard's,
+    computed as the reference implementation does from at least 0.24 DN^2, so on a camera whose
+    dark noise is below that floor the two differ (docs/howto-emva1288.md)."""
     t, mu_p, mu, var = m["b"].T
     td, _, mud, vard = m["d"].T
     mu_sat = mu[fig["index_saturation"]]
@@ -342,7 +347,8 @@ def nominal_fit(m: dict, full_scale: float, fig: dict) -> dict:
     D = np.polyfit(td, mud, 1)[0] if td.size > 1 else 0.0
     return {"K_DN_per_e": float(K), "R_DN_per_photon": float(R), "eta": float(R / K),
             "dark_DN": float(mud.mean()), "dark_current_DN_per_s": float(D),
-            "sigma_dark_DN": float(np.sqrt(vard.mean())), "sigma_d_e": float(np.sqrt(max(vard.mean() - 1 / 12, 0)) / K),
+            "sigma_dark_DN": float(np.sqrt(vard.mean())),
+            "sigma_d_measured_e": float(np.sqrt(max(vard.mean() - 1 / 12, 0)) / K),
             "mu_sat_DN": float(mu_sat), "full_scale_DN": full_scale,
             "mu_e_sat": float((mu_sat - mud.mean()) / K), "snr_max_dB": float(20 * np.log10(np.sqrt((mu_sat - mud.mean()) / K)))}
 
