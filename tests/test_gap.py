@@ -32,7 +32,7 @@ def _table(ref_design, cid):
 
 
 def test_shipped_surrogate_matches_fresh_spice(nominal, ref_design):
-    """Two fresh full-chain decks at charges / amplitudes between the tables' grid points."""
+    """Five fresh full-chain decks at charges / amplitudes between the tables' grid points (store.CHECK)."""
     from pixelkit.gap import store
     c = nominal.error.get("store_check") or store.check(ref_design, nominal)
     assert c["passed"] and c["max_deviation_V"] < 1e-3, c

@@ -32,9 +32,11 @@ Kind ``level``: the table holds the shift of the pixel probe and of the AFE
 probe. Between the charges, cubic splines; in the amplitude, the polynomial
 through zero and two measured amplitudes (quadratic), or piecewise linear
 through zero and four or six (``p1_vm``, ``sf_w``, ``a_ol``: steps from the
-op-amp's clamp, a log-like response); beyond the largest amplitude the same, so the
-library bounds its parameters to ``EXTRAPOLATE`` times it. ``tests/test_gap_responses.py`` checks the
-interpolation against decks at charges and amplitudes the table was not built on.
+op-amp's clamp, a log-like response; ``load``: the +-20 % a campaign draws, where a
+quadratic through +-15 % missed a 20 % change by 1 mV); beyond the largest amplitude the same, so the
+library bounds its parameters to ``EXTRAPOLATE`` times it. ``store.check`` (run before a stored
+surrogate is used; ``tests/test_gap.py::test_shipped_surrogate_matches_fresh_spice``) checks the
+interpolation against decks at charges and amplitudes the tables were not built on.
 """
 from __future__ import annotations
 
@@ -106,7 +108,7 @@ class Site:
 SITES = {
     "fd": Site("charge", _fd, lambda arr, q_max: (0.005 * q_max, 0.015 * q_max)),
     "col_g": Site("level", _col_g, lambda arr, q_max: (1 / 16e6, 1 / 6e6)),
-    "load": Site("level", _load, lambda arr, q_max: (-0.15, 0.15)),
+    "load": Site("level", _load, lambda arr, q_max: (-0.25, -0.16, -0.07, 0.07, 0.16, 0.25)),
     "rst_fd": Site("level", _rst_fd, lambda arr, q_max: (1e-17, 3e-17)),
     "p1_vm": Site("level", _p1_vm, lambda arr, q_max: (-3e-15, -1.5e-15, -0.6e-15, 0.6e-15, 1.5e-15, 3e-15)),
     "sf_w": Site("level", _sf_w, lambda arr, q_max: (-0.4, -0.15, 0.15, 0.6)),
