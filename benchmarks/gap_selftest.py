@@ -16,7 +16,7 @@ import time
 
 from common import reference_design
 from pixelkit.gap import silicon
-from pixelkit.gap.selftest import population, stratified_rate, stratified_sample
+from pixelkit.gap.selftest import population, right_population, stratified_rate, stratified_sample
 from pixelkit.gap.store import load_nominal
 
 
@@ -40,11 +40,12 @@ def main():
     right = [c for c in lib if c["found"] in c["accept"]]
     pop = population(truths)
     est = {"top1": stratified_rate(lib, pop, lambda c: c["found"] in c["accept"]),   # explained: per-stratum N
-           "explained_when_right": stratified_rate(right, pop, lambda c: c["explained"] is True)}
+           "explained_when_right": stratified_rate(right, right_population(lib, pop),
+                                                   lambda c: c["explained"] is True)}
     keys = ("n_cases", "n_effect_cases", "n_clean_cases", "n_out_of_library_cases", "top1_accuracy",
             "explained_when_right", "median_shrink", "none_on_clean", "not_explained_on_out_of_library",
-            "uniform_named_uniform", "uniform_named_right", "mc_named_per_column", "two_effects_both_named",
-            "dark_current_hot_named", "seeds")
+            "uniform_named_uniform", "uniform_named_right", "uniform_visible_named_right", "mc_named_per_column",
+            "two_effects_both_named", "dark_current_hot_named", "seeds")
     out = {k: r[k] for k in keys} | {"per_effect_top1": r["per_effect_top1"], "diagnosis_s": wall,
                                      "sample_fraction": a.sample, "stratified_estimate": est}
     if a.json:

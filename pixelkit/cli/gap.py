@@ -171,7 +171,8 @@ def _selftest_text(kind, x):
         f"  'not explained' on out-of-library {_pct(x['not_explained_on_out_of_library'])}, "
         f"none on effect-free {_pct(x['none_on_clean'])}",
         "  per effect: " + ", ".join(f"{k} {_pct(v)}" for k, v in x["per_effect_top1"].items())]
-    for k in ("uniform_named_uniform", "mc_named_per_column", "two_effects_both_named", "dark_current_hot_named"):
+    for k in ("uniform_named_uniform", "uniform_named_right", "uniform_visible_named_right", "mc_named_per_column",
+              "two_effects_both_named", "dark_current_hot_named"):
         if x.get(k):
             lines.append(f"  {k.replace('_', ' ')}: {_pct(x[k]['rate'])} of {x[k]['n']}")
     return "\n".join(lines)

@@ -184,6 +184,16 @@ def stratified_sample(truths: dict, fraction: float, other: float = 0.25, minimu
     return out
 
 
+def right_population(lib: list, population: dict) -> dict:
+    """Right-named cases per stratum in the whole set, estimated from the sample's top-1 of that stratum
+    (the population ``stratified_rate`` weighs a rate over right-named cases by)."""
+    out = {}
+    for k in {stratum(c) for c in lib}:
+        xs = [_right(c) for c in lib if stratum(c) == k]
+        out[k] = max(population[k] * sum(xs) / len(xs), sum(xs))
+    return out
+
+
 def stratified_rate(cases: list, population: dict, ok) -> dict:
     """Estimate, over the whole committed set, the rate of ``ok`` on the diagnosed sample ``cases``
     (stratified by ``stratum``; ``population``: cases per stratum in the set), with its 95 % interval
