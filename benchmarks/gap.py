@@ -4,9 +4,10 @@
 
 - ``cold_cli_s``: ``pixelkit gap diagnose`` of one measured CSV (a committed
   virtual-silicon case, 56 rows) in a fresh process with an EMPTY simulation
-  cache: importing the kit, reading the shipped surrogate, its key over the
-  ~290 decks and its check against 3 fresh full-chain SPICE decks, fitting every
-  candidate, printing the answer. Limit 10 s on 2 cores.
+  cache: importing the kit, reading the shipped surrogate, its key (76 of the
+  build's 451 decks and every charge and amplitude) and its check against 4 fresh
+  full-chain SPICE decks, fitting every candidate, printing the answer. Limit 10 s
+  on 2 cores.
 - ``diagnosis_s``: the diagnosis alone of an N-row dataset (default 2000 rows;
   the data come from the surrogate's own effect library, for timing only).
 - ``build_s`` (``--build``): the surrogate built from SPICE with an empty cache

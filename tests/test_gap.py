@@ -32,7 +32,7 @@ def _table(ref_design, cid):
 
 
 def test_shipped_surrogate_matches_fresh_spice(nominal, ref_design):
-    """Five fresh full-chain decks at charges / amplitudes between the tables' grid points (store.CHECK)."""
+    """Four fresh full-chain decks at charges / amplitudes between the tables' grid points (store.CHECK)."""
     from pixelkit.gap import store
     c = nominal.error.get("store_check") or store.check(ref_design, nominal)
     assert c["passed"] and c["max_deviation_V"] < 1e-3, c
@@ -50,6 +50,26 @@ def test_a_wrong_surrogate_fails_the_check(nominal, ref_design):
     bad = Response(r.kind, r.q, r.amps, {a: {k: v * 1.1 for k, v in t.items()} for a, t in r.tables.items()})
     wrong = replace(nominal, sites=dict(nominal.sites, col_g=bad))
     assert store.check(ref_design, wrong)["passed"] is False
+
+
+def test_deck_key_sees_charges_amplitudes_and_deck_text(ref_design, nominal, monkeypatch):
+    """The key hashes the end decks' text and every charge and amplitude: a load amplitude the decks between
+    the ends alone would carry, a grid index, or a changed deck generator each give another key."""
+    from dataclasses import replace as rep
+
+    from pixelkit.gap import responses, store
+    piv = store._pivots(nominal)
+    k0 = store.deck_key(ref_design, piv)
+    load = responses.SITES["load"]
+    monkeypatch.setitem(responses.SITES, "load", rep(load, amps=lambda arr, q: (-0.25, -0.16, -0.08, 0.07, 0.16, 0.25)))
+    assert store.deck_key(ref_design, piv) != k0
+    monkeypatch.setitem(responses.SITES, "load", load)
+    monkeypatch.setattr(responses, "Q_PICK", responses.Q_PICK[:-2] + (19, 21))
+    assert store.deck_key(ref_design, piv) != k0
+    monkeypatch.undo()
+    assert store.deck_key(ref_design, piv) == k0
+    assert store.deck_key(rep(ref_design, pixel=rep(ref_design.pixel, sf_bias=ref_design.pixel.sf_bias * 1.01)),
+                          piv) != k0
 
 
 def test_shipped_surrogate_key_unchanged(ref_design, nominal):
@@ -228,3 +248,25 @@ def test_two_look_alikes_at_once_are_both_named_and_plan_separates_them(ref_desi
     sep = {k: v for k, v in p["pairs"].items() if "+" not in k}
     (pair, best), = sep.items()
     assert best["separation_sigma"] > 10 and best["point"]["extra_wait_s"] > 0
+
+
+def test_pvalues_match_scipy_stats():
+    """gap.pvalue (scipy.special forms, to keep scipy.stats out of a cold diagnosis) against scipy.stats itself
+    on random data: chi-square sf / isf, one-sample t-test, one-way ANOVA, Pearson's r."""
+    from scipy import stats
+
+    from pixelkit.gap import pvalue
+    g = np.random.default_rng(3)
+    for k, x in ((1, 3.2), (7, 30.0), (40, 41.5), (200, 260.0)):
+        assert pvalue.chi2_sf(x, k) == pytest.approx(stats.chi2.sf(x, k), rel=1e-9)
+        assert pvalue.chi2_isf(1e-3, k) == pytest.approx(stats.chi2.isf(1e-3, k), rel=1e-9)
+    for n, shift in ((3, 0.0), (12, 0.4), (60, 0.1)):
+        r = g.normal(shift, 1.0, n)
+        assert pvalue.ttest_zero(r) == pytest.approx(stats.ttest_1samp(r, 0.0).pvalue, rel=1e-9)
+        groups = [g.normal(s, 1.0, n) for s in (0.0, shift, 2 * shift)]
+        assert pvalue.anova(groups) == pytest.approx(stats.f_oneway(*groups).pvalue, rel=1e-9)
+        x = g.normal(size=n + 3)
+        y = shift * x + g.normal(size=n + 3)
+        r_, p = pvalue.pearson(x, y)
+        ref = stats.pearsonr(x, y)
+        assert r_ == pytest.approx(ref[0], rel=1e-9) and p == pytest.approx(ref[1], rel=1e-6)

@@ -29,12 +29,12 @@ Statistics (all on rows the fit did not see, a deterministic 70/30 split):
 from __future__ import annotations
 
 import numpy as np
-from scipy import stats
 
 from .data import check_degenerate
 from .effects import COLUMN_EFFECTS, applicable
 from .fit import N_SETUP, SetupBounds, column_keys, evaluate, fit
 from .nominal import features
+from .pvalue import chi2_isf, chi2_sf
 from .where import breakdown
 
 TRAIN_FRACTION = 0.7
@@ -106,7 +106,7 @@ def analyse(design, table, nom, seed: int = 0, candidates=None, setup: SetupBoun
         if name in COLUMN_EFFECTS:   # is the column-to-column spread significant? (nested likelihood ratio)
             uni = fit(name, nom, Xtr, y[train], w[train], cols, setup, uniform=True)
             dof = (len(fits[name]["specs"]) - len(uni["specs"]))
-            spread[name] = float(stats.chi2.sf(max(uni["chi2"] - fits[name]["chi2"], 0.0), max(dof, 1)))
+            spread[name] = float(chi2_sf(max(uni["chi2"] - fits[name]["chi2"], 0.0), max(dof, 1)))
     resid_te, ranking = {}, []
     for name, fr in fits.items():
         resid_te[name] = evaluate(name, nom, Xte, fr, cols) - y[test]
@@ -121,7 +121,7 @@ def analyse(design, table, nom, seed: int = 0, candidates=None, setup: SetupBoun
                         "n_params": fr["k"] - N_SETUP, "params": _params(name, fr), "setup": fr["setup"],
                         "setup_at_bound": fr["setup_at_bound"], "heldout_dchi2_vs_none": gain,
                         "column_spread_p": spread.get(name),
-                        "beats_none": bool(name != "none" and gain > stats.chi2.isf(P_BEAT, max(fr["k"] - N_SETUP, 1))
+                        "beats_none": bool(name != "none" and gain > chi2_isf(P_BEAT, max(fr["k"] - N_SETUP, 1))
                                            and none["bic"] - fr["bic"] > BIC_MARGIN
                                            and spread.get(name, 0.0) < P_SPREAD)})
     ranking.sort(key=lambda r: r["bic"])
@@ -142,7 +142,7 @@ def analyse(design, table, nom, seed: int = 0, candidates=None, setup: SetupBoun
     n_te = int(test.sum())
     model, also, pair_tests = best, None, []
     if known and best != "none" and best not in COLUMN_EFFECTS and \
-            stats.chi2.sf(fits[best]["heldout_chi2"], n_te) < P_EXPLAINED:
+            chi2_sf(fits[best]["heldout_chi2"], n_te) < P_EXPLAINED:
         also, pair_tests = _second_effect(best, names, fits, nom, Xtr, Xte, y[train], y[test], w[train], w[test],
                                           cols, setup)
         if also:
@@ -155,7 +155,7 @@ def analyse(design, table, nom, seed: int = 0, candidates=None, setup: SetupBoun
         if o not in ambiguous:
             ambiguous.append(o)
     chi2 = fits[model]["heldout_chi2"]
-    p_fit = float(stats.chi2.sf(chi2, n_te)) if known else None
+    p_fit = float(chi2_sf(chi2, n_te)) if known else None
     explained = None if not known else bool(p_fit >= P_EXPLAINED)
     resid_none = y - evaluate("none", nom, X, none)
     resid_best = y - evaluate(model, nom, X, fits[model], cols)
@@ -246,9 +246,9 @@ def _second_effect(best, names, fits, nom, Xtr, Xte, ytr, yte, wtr, wte, cols, s
         r = evaluate(name, nom, Xte, fr, cols) - yte
         fr["heldout_rms_V"], fr["heldout_chi2"] = _rms(r), float(np.sum((r / wte) ** 2))
         gain = fits[best]["heldout_chi2"] - fr["heldout_chi2"]
-        ok = bool(gain > stats.chi2.isf(P_BEAT, fr["k"] - fits[best]["k"])
+        ok = bool(gain > chi2_isf(P_BEAT, fr["k"] - fits[best]["k"])
                   and fits[best]["bic"] - fr["bic"] > BIC_MARGIN
-                  and stats.chi2.sf(fr["heldout_chi2"], len(yte)) >= P_EXPLAINED)
+                  and chi2_sf(fr["heldout_chi2"], len(yte)) >= P_EXPLAINED)
         tests.append({"effects": [best, c], "heldout_dchi2_vs_single": gain,
                       "dbic_vs_single": fits[best]["bic"] - fr["bic"],
                       "significant": ok, "params": _params(name, fr), "setup": fr["setup"]})

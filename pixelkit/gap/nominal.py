@@ -278,17 +278,21 @@ def grids(design) -> dict:
     return {"primary": u * _q_max(design, "primary"), "secondary": u * _q_max(design, "secondary")}
 
 
-def stage_one(design) -> list:
-    """The sweep, the validation decks between its charges and the readout-light decks."""
+def stage_one(design, ends_only: bool = False) -> list:
+    """The sweep, the validation decks between its charges and the readout-light decks (``ends_only``: of
+    each kind only those at the first and last of its charges, ``store.deck_key``'s sample)."""
     t_w = design.experiment.t_window
     g = grids(design)
     qp, qs = g["primary"], g["secondary"]
-    nets = [dual_pixel_bench(design, a / t_w, b / t_w, with_afe=True, title=f"gapnom{k}")
-            for k, (a, b) in enumerate(zip(qp, qs))]
+
+    def ends(ks):
+        return (ks[0], ks[-1]) if ends_only else ks
+    nets = [dual_pixel_bench(design, qp[k] / t_w, qs[k] / t_w, with_afe=True, title=f"gapnom{k}")
+            for k in ends(range(len(qp)))]
     mid_p, mid_s = (qp[1:] + qp[:-1]) / 2, (qs[1:] + qs[:-1]) / 2
     nets += [dual_pixel_bench(design, mid_p[k] / t_w, mid_s[k] / t_w, with_afe=True, title=f"gapval{k}")
-             for k in VAL_PICK]
-    nets += [_light_deck(design, qp[k], qs[k], i_p, i_s, f"gaplt{k}_{j}") for k in LIGHT_Q_PICK
+             for k in ends(VAL_PICK)]
+    nets += [_light_deck(design, qp[k], qs[k], i_p, i_s, f"gaplt{k}_{j}") for k in ends(LIGHT_Q_PICK)
              for j, (i_p, i_s) in enumerate(LIGHT_I)]
     return nets
 

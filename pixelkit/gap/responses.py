@@ -117,8 +117,8 @@ SITES = {
 }
 
 
-def decks(design, q_grid: dict, v_rst: dict, sites=tuple(SITES)) -> list:
-    """(site, amplitude index, grid index, netlist) of every response deck."""
+def decks(design, q_grid: dict, v_rst: dict, sites=tuple(SITES), q_pick=Q_PICK) -> list:
+    """(site, amplitude index, grid index, netlist) of every response deck (at the grid indices ``q_pick``)."""
     from ..circuits.testbench import dual_pixel_bench
     t_w = design.experiment.t_window
     n = design.secondary_per_pixel
@@ -127,7 +127,7 @@ def decks(design, q_grid: dict, v_rst: dict, sites=tuple(SITES)) -> list:
         s = SITES[name]
         amps = {a: s.amps(a, q_grid[a][-1]) for a in ARRAYS}
         for j in range(len(amps["primary"])):
-            for k in Q_PICK:
+            for k in q_pick:
                 net = ce.specialise(dual_pixel_bench(design, q_grid["primary"][k] / t_w, q_grid["secondary"][k] / t_w,
                                                      with_afe=True, title=f"gapsite_{name}{j}_{k}"), n)
                 for which in ("primary",) + tuple(f"s{i}" for i in range(n)):

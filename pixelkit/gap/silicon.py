@@ -529,11 +529,10 @@ def run_committed(design, nom, folder: Path = CASES_DIR, only=None, only_ids=Non
 def _gap_visible(d) -> bool:
     """Does the nominal model alone leave the held-out rows unexplained (p < P_EXPLAINED)? If not, the
     inserted change is within the noise and the set-up's gain / offset on these data: nothing to name."""
-    from scipy import stats
-
     from .diagnose import P_EXPLAINED
+    from .pvalue import chi2_sf
     none = next(r for r in d["ranking"] if r["effect"] == "none")
-    return bool(stats.chi2.sf(none["heldout_chi2_per_row"] * d["n_heldout"], d["n_heldout"]) < P_EXPLAINED)
+    return bool(chi2_sf(none["heldout_chi2_per_row"] * d["n_heldout"], d["n_heldout"]) < P_EXPLAINED)
 
 
 def by_class(cases: list) -> dict:

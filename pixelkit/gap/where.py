@@ -2,7 +2,8 @@
 from __future__ import annotations
 
 import numpy as np
-from scipy import stats
+
+from .pvalue import anova, pearson, ttest_zero
 
 P_SIGNIFICANT = 1e-3
 
@@ -35,7 +36,7 @@ def breakdown(X, resid) -> list[dict]:
             r = resid[m]
             if r.size < 3:
                 continue
-            t, p = stats.ttest_1samp(r, 0.0)
+            p = ttest_zero(r)
             rows.append({"factor": factor, "level": label, "n": int(r.size), "mean_V": float(r.mean()),
                          "std_V": float(r.std(ddof=1)), "p": float(p), "significant": bool(p < P_SIGNIFICANT)})
     keys = X["arr"] * 100000 + X["col"].astype(int)
@@ -43,7 +44,7 @@ def breakdown(X, resid) -> list[dict]:
     col_means = [(k, r) for k, r in col_means if r.size >= 3]
     if len(col_means) >= 3:
         groups = [r for _, r in col_means]
-        f, p = stats.f_oneway(*groups)
+        p = anova(groups)
         rows.append({"factor": "column", "level": f"{len(groups)} columns (ANOVA)", "n": int(sum(map(len, groups))),
                      "mean_V": float(np.std([g.mean() for g in groups])), "std_V": float(np.std(resid)),
                      "p": float(p), "significant": bool(p < P_SIGNIFICANT)})
@@ -54,7 +55,7 @@ def breakdown(X, resid) -> list[dict]:
             if x.size < 5 or np.ptp(x) == 0 or np.ptp(r_) == 0:
                 continue
             u = (x - x.mean()) / np.ptp(x)   # scaled to a span of 1: pA and ms fit as well as volts
-            r, p = stats.pearsonr(u, r_)
+            r, p = pearson(u, r_)
             rows.append({"factor": f"trend vs {var}", "level": f"{stage}: r = {r:+.2f}", "n": int(x.size),
                          "mean_V": float(np.polyfit(u, r_, 1)[0]), "std_V": float(np.std(r_)),
                          "p": float(p), "significant": bool(p < P_SIGNIFICANT)})
