@@ -27,6 +27,14 @@ Domains (the term each effect feeds):
   the output sample), plus the column kick and the op-amp clamp in the
   non-overlap gap, both measured on the nominal circuit; and on the output
   stage (both probes), either sign;
+- readout light while the readout idles ``readout_light_idle``: junction
+  photocurrents (area x the irradiance) on the readout's floating nodes - the
+  column circuit's sampling node and the AFE's island - from the deck's start,
+  split as the layout's light map leaves them open; the nodes float before the
+  first row and S1X dumps what they gathered on the column (the light map's
+  failure); one figure, the open area; its response is measured
+  (``idlelight``). A candidate only when the surrogate carries that table (a
+  post-layout view's, built since it was added);
 - set-up conditions when the data vary them: ``supply`` (``vdd_V``: supply
   coupling of each probe) and ``settling`` (``f_read_Hz``: incomplete settling
   of the column, a signal loss growing as exp(-t_row / tau)).
@@ -62,6 +70,8 @@ class Param:
 
 # the readout-light area's scan (fit._scan): 12 values a decade, both signs, over the bounds
 AREA_SCAN = tuple(float(s * v) for s in (-1, 1) for v in np.geomspace(1e-12, 3e-9, 42))
+# the idle readout's open area (idlelight): 10 a decade from 0.01 to 1000 um2
+IDLE_SCAN = tuple(float(v) for v in np.geomspace(1e-14, 1e-9, 51))
 
 
 def _t_law(X, td):
@@ -103,6 +113,10 @@ def _sf_strength(X, p):    # the source follower's current factor (its W / L, mo
 
 def _readout_light(X, p):  # junction photocurrent on the AFE's vm (area x irradiance) and the output stage
     return {"i_vm": p[0] * X["J"], "dv_out": p[1] * X["J"]}
+
+
+def _readout_light_idle(X, p):  # open junctions of the readout's floating nodes, lit while it idles before the row
+    return {"i_idle": p[0] * X["J"]}
 
 
 def _crosstalk(X, p):      # light under the secondary's mask: irradiance x the masked area
@@ -156,6 +170,7 @@ EFFECTS = {
     # the vm response has the op-amp clamp's steps in the current: the fit scans AREA_SCAN for its starts
     "readout_light": ((Param("a_junction_m2", -3e-9, 3e-9, 1e-11, 0.0, AREA_SCAN),
                        Param("out_V_per_A_m2", -1.0, 1.0, 1e-5, 0.0)), _readout_light),
+    "readout_light_idle": ((Param("a_open_m2", 0.0, 1e-9, 1e-12, 0.0, IDLE_SCAN),), _readout_light_idle),
     "crosstalk": ((Param("k_xt", 0.0, 0.5, 1e-3, 1e-4),), _crosstalk),
     "column_pixel": ((), None),   # per-column terms: COLUMN_EFFECTS
     "column_afe": ((), None),
@@ -172,6 +187,8 @@ def applicable(X) -> tuple:
     """The candidates the data can say anything about (a factor that never varies cannot be fitted)."""
     out = []
     for name in NAMES:
+        if name == "readout_light_idle" and not X.get("has_idle_light"):
+            continue
         if name == "lag" and not X["has_prev"]:
             continue
         if name == "supply" and np.ptp(X["dvdd"]) == 0:

@@ -99,6 +99,7 @@ class Nominal:
     light: dict = None     # array -> (signal grid V, vm current grid A, pixel shift V, AFE shift beyond I t_f / C13 V)
     c13: float = 0.0
     sites: dict = None     # site -> ``responses.Response`` (measured response to a perturbation there)
+    idle_light: dict = None  # array -> ``idlelight`` table (light on the sampling node while the readout idles)
 
     def __post_init__(self):
         self._sig = {a: CubicSpline(self.q_grid[a], self.v_sig[a]) for a in ARRAYS}
@@ -137,7 +138,9 @@ class Nominal:
                 "eps_afe": self.eps_afe, "afe_resid": {a: [arr(x) for x in v] for a, v in self.afe_resid.items()},
                 "dark": {a: list(v) for a, v in self.dark.items()}, "error": self.error,
                 "light": {a: [arr(x) for x in v] for a, v in self.light.items()}, "c13": self.c13,
-                "sites": {k: r.as_dict() for k, r in self.sites.items()}}
+                "sites": {k: r.as_dict() for k, r in self.sites.items()},
+                **({} if self.idle_light is None else
+                   {"idle_light": {a: [arr(x) for x in v] for a, v in self.idle_light.items()}})}
 
     @classmethod
     def from_dict(cls, d: dict, pd) -> "Nominal":
@@ -148,7 +151,9 @@ class Nominal:
                    {a: tuple(np.array(x) for x in v) for a, v in d["afe_resid"].items()},
                    {a: tuple(v) for a, v in d["dark"].items()}, pd, d["error"],
                    {a: tuple(np.array(x) for x in v) for a, v in d["light"].items()}, d["c13"],
-                   {k: Response.from_dict(r) for k, r in d["sites"].items()})
+                   {k: Response.from_dict(r) for k, r in d["sites"].items()},
+                   None if "idle_light" not in d else
+                   {a: tuple(np.array(x) for x in v) for a, v in d["idle_light"].items()})
 
     def vsig_of(self, arr_idx, q):
         # beyond the grid (the swing's end): the column stays at its last level (saturated)
@@ -321,7 +326,7 @@ def simulate_exact(nets, backend: str = "batch", jobs: int | None = None) -> lis
 
 def build_nominal(design, backend: str = "batch") -> Nominal:
     """The surrogate from SPICE (``store.load_nominal`` uses a shipped one when its decks are these)."""
-    from . import responses
+    from . import idlelight, responses
     t_w = design.experiment.t_window
     tm = timings(design, t_w)
     g = grids(design)
@@ -353,7 +358,8 @@ def build_nominal(design, backend: str = "batch") -> Nominal:
     nom = Nominal(q_grid, v_sig, v_rst, a.vref, a.c11 / a.c13,
                   eps(a.c11, a.c13, a.gain), resid,
                   {w: (getattr(design, w).area, getattr(design, w).perimeter) for w in ARRAYS},
-                  design.tech.photodiode, {}, _light_table(design, tm, sweep, lt, sig_grid), a.c13, sites)
+                  design.tech.photodiode, {}, _light_table(design, tm, sweep, lt, sig_grid), a.c13, sites,
+                  idlelight.build(design, q_grid, backend))
     errs_pix, errs_afe = [], []
     for k, r in zip(pick, val):
         for arr, col, q in (("primary", "col_p", mid_p[k]), ("secondary", "col_s0", mid_s[k])):
@@ -401,7 +407,7 @@ def features(table, nom: Nominal, design) -> dict:
          "J": i / a_pa, "a_ref": design.primary.photoactive_area,
          "a_sub": np.where(arr == 0, design.primary.area, design.secondary.area),
          "f_read": f_read, "f_design": f_design, "t_hold": 1.0 / f_read, "t_float": t_float(design, f_read),
-         "vdd": vdd, "dvdd": vdd - design.tech.supply}
+         "vdd": vdd, "dvdd": vdd - design.tech.supply, "has_idle_light": nom.idle_light is not None}
     q = i * X["t_int"] + nom.dark_q(X["arr"], X["T"], X["t_int"])
     X["q"] = q
     X["signal"] = nom.vrst_of(arr, q) - nom.vsig_of(arr, q)
@@ -420,7 +426,8 @@ def predict(nom: Nominal, X: dict, terms: dict | None = None) -> np.ndarray:
     pivots at the reset level), ``dv_col`` (pixel-probe level shift that double
     sampling cancels), ``deps`` (extra AFE gain error), ``dv_afe`` (AFE output
     shift, V), ``dv_out`` (shift of both probes' output stage, V), ``i_vm``
-    (junction current on the AFE's vm node, A: ``Nominal.vm_light``), and the
+    (junction current on the AFE's vm node, A: ``Nominal.vm_light``), ``i_idle``
+    (junction current on the sampling node while the readout idles, A: ``idlelight``), and the
     amplitude of a measured site response (``responses``): ``col_g`` (S),
     ``load`` (relative), ``rst_fd`` (F), ``p1_vm`` (F, signed), ``sf_w`` and ``c11`` (relative),
     ``a_ol`` (A_design / A - 1 of the op-amp).
@@ -440,5 +447,9 @@ def predict(nom: Nominal, X: dict, terms: dict | None = None) -> np.ndarray:
             v_afe = v_afe + nom.site(name, "afe", X["arr"], q, t[name])
     if "i_vm" in t:
         lp, la = nom.vm_light(X["arr"], signal, np.broadcast_to(t["i_vm"], signal.shape).astype(float), X["t_float"])
+        v_pix, v_afe = v_pix + lp, v_afe + la
+    if "i_idle" in t:
+        from .idlelight import response
+        lp, la = response(nom.idle_light, X["arr"], signal, np.broadcast_to(t["i_idle"], signal.shape).astype(float))
         v_pix, v_afe = v_pix + lp, v_afe + la
     return np.where(X["afe"], v_afe, v_pix) + t.get("dv_out", 0.0)

@@ -218,7 +218,7 @@ def stratified_rate(cases: list, population: dict, ok) -> dict:
 
 def run(design, nom, n_per_effect: int = 10, n_clean: int = 20, seed: int = 1, rows: int = ROWS_PER_CASE) -> dict:
     rng = np.random.default_rng(seed)
-    labels = [e for e in NAMES for _ in range(n_per_effect)] + [None] * n_clean
+    labels = [e for e in NAMES if e in RANGES for _ in range(n_per_effect)] + [None] * n_clean
     cases = []
     for k, eff in enumerate(labels):
         table = campaign(design, nom, rng, n=rows)

@@ -6,13 +6,14 @@ same operating points, noise and test set-up) on the **post-layout** view of the
 light map's exposed junctions (``light.exposed`` under ``--shield pixels``: the column circuit's
 sampler node and column line, the drawn AFE's nodes) as current sources on their own nodes, each
 ``area x J`` (J the photocurrent density of the pixel the column reads: the same responsivity as
-its photodiode), on for the whole deck as the light map's are (``from_row``: from the row's start). Nothing of the fitter enters: its
-``readout_light`` effect is one current on ``vm`` while the row is read; the deck here spreads the
-light over every open node of the layout, of either sign (P+ in an n-well charges its node, N+
-discharges it).
+its photodiode), on for the whole deck as the light map's are (``from_row``: from the row's start),
+every node the map lights (driven ones included), of either sign (P+ in an n-well charges its node,
+N+ discharges it). The fitter's elements do not enter: its ``readout_light_idle`` effect lights the
+readout's signal nodes with the pattern ``open_readout`` gives the post-layout view, its response a
+table of its own decks (``gap.idlelight``).
 
 ``check(design)`` diagnoses those data with ``gap.diagnose`` on the post-layout surrogate and sets
-the effect's fitted junction area against the layout's exposed area on the nodes it loads.
+the effect's fitted open area against the layout's on one column's signal nodes.
 """
 from __future__ import annotations
 
@@ -34,6 +35,23 @@ def exposed_signal_area(geos, shield: str = "pixels") -> dict:
            "afe_nsd": sum(j.area_m2 for j in afe if j.kind != "psd") / 2}
     out["total"] = sum(out.values())
     return out
+
+
+def open_readout(col_geo, afe_geos, n_secondary: int, shield: str = "pixels") -> tuple:
+    """(bench node, kind, m2) of every junction ``shield`` leaves open on the readout's signal nodes: each
+    column's sampling node (``in_<col>``) and line (``<col>``) from ``DUALPIX_COL``, and the AFE's ``in``,
+    ``vm``, ``x``, ``c`` (``scafe.<node>``: the mean of the drawn AFEs, as one ``scafe`` serves every column)."""
+    from .light import bench_node, exposed
+    out = [(bench_node(j.net, n_secondary), j.kind, j.area_m2) for j in exposed(col_geo, shield)
+           if j.net.startswith(("out_", "col_"))]
+    out = [o for o in out if o[0] is not None]
+    afe = {}
+    for g in afe_geos:
+        for j in exposed(g, shield):
+            if j.net in SIGNAL_AFE:
+                k = (f"scafe.{j.net}", j.kind)
+                afe[k] = afe.get(k, 0.0) + j.area_m2 / len(afe_geos)
+    return tuple(out + [(node, kind, a) for (node, kind), a in sorted(afe.items())])
 
 
 def _lit(junctions, j_density: float):
@@ -99,7 +117,10 @@ def check(design, shield: str = "pixels", seed: int = 7, backend: str = "batch",
     geos = chip_geometry(design, ("DUALPIX_COL", "AFE_P", "AFE_S"))
     table = table_of(post, virtual_measurement(post, nom, geos, seed, shield, backend, only, from_row), "virtual measurement")
     r = diagnose(post, table, nom, seed=0)
-    fit = next((x for x in r["ranking"] if x["effect"] == "readout_light"), None)
+    def fitted(effect, param):
+        fit = next((x for x in r["ranking"] if x["effect"] == effect), None)
+        return None if fit is None else fit["params"].get(param)
     return {"diagnosis": r, "best": r["best"], "verdict": r["verdict"],
-            "a_junction_fit_m2": None if fit is None else fit["params"].get("a_junction_m2"),
+            "a_junction_fit_m2": fitted("readout_light", "a_junction_m2"),
+            "a_open_fit_m2": fitted("readout_light_idle", "a_open_m2"),
             "exposed": exposed_signal_area(geos, shield)}

@@ -40,6 +40,9 @@ class Parasitics:
     resistance: dict = field(default_factory=dict)  # line -> Ohm
     source: str = ""
     column_pairs: tuple = ()                        # (col, col, F): the other rows' share of each coupling
+    #: (bench node, kind, m2): the readout's signal-node junctions the drawn shield leaves open
+    #: (``lightsilicon.open_readout``: what gap's ``readout_light_idle`` lights)
+    open_readout: tuple = ()
 
     def node_wiring(self, which: str, node: str, a_sf: float | None = None) -> float:
         """Wiring capacitance (F) on ``node`` of ``which`` subpixel; couplings to nodes that follow FD
@@ -158,8 +161,10 @@ def build(design, pix_geo, col_geo, afe_geos=()) -> Parasitics:
     cells = place(pix, n)
     if afe_geos:
         cells["scafe"] = place_afe([capacitances(g, st) for g in afe_geos])
+    from .lightsilicon import open_readout
     return Parasitics(cells, column_cap, per_row, resistance,
-                      f"extracted from the drawn DUALPIX / DUALPIX_COL of {design.name} ({st.source})", pairs)
+                      f"extracted from the drawn DUALPIX / DUALPIX_COL of {design.name} ({st.source})", pairs,
+                      open_readout(col_geo, afe_geos, n) if afe_geos else ())
 
 
 _CACHE: dict = {}
@@ -186,7 +191,8 @@ def _stored(key: str) -> Parasitics | None:
         return None
     d = json.loads(files["parasitics.json"])
     return Parasitics({k: tuple(tuple(x) for x in v) for k, v in d["cells"].items()}, d["column_cap"],
-                      d["per_row"], d["resistance"], d["source"], tuple(tuple(x) for x in d["column_pairs"]))
+                      d["per_row"], d["resistance"], d["source"], tuple(tuple(x) for x in d["column_pairs"]),
+                      tuple(tuple(x) for x in d.get("open_readout", ())))
 
 
 def _store(key: str, p: Parasitics) -> None:

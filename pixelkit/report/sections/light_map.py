@@ -76,7 +76,10 @@ def build(ctx) -> Section:
             "The light is on for the whole bench, the exposure included, while the samplers and the AFE are idle "
             "(their nodes float); lit from the first row's start only (what a readout clocked every row keeps), "
             f"the worst error is {max(v['error_from_row_over_noise'] for v in bad['columns'].values()):.2g} x the "
-            "read noise: the failure is the charge the open nodes gather before the row is read."]
+            "read noise: the failure is the charge the open nodes gather before the row is read. [Thesis2019] does "
+            "not say whether its chip's AFE was clocked through the exposure (its pixel can integrate while reading; "
+            "every control came from an FPGA): the headline figure is the idle readout, the kit's bench; a readout "
+            "clocked every row would show the second figure."]
     return Section(TITLE, text=text, tables=tables,
                    figures=[Figure(fig.name, "Exposed junctions of DUALPIX_COL under the shield as drawn")],
                    checked=[Checked("light_map.worst_error_over_noise_pixels", bad["worst_error_over_noise"], "1",
