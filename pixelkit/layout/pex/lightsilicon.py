@@ -1,6 +1,6 @@
 """Virtual silicon of the chip with its readout open to light: the gap diagnosis's check on the light map.
 
-The thesis's chip failed because light reached junctions of its AFE and output stage. This module
+The thesis's chip [Thesis2019] failed because light reached junctions of its AFE and output stage. This module
 makes the lab data such a chip would give: the gap's SPICE virtual silicon (``gap.silicon``: the
 same operating points, noise and test set-up) on the **post-layout** view of the design, with the
 light map's exposed junctions (``light.exposed`` under ``--shield pixels``: the column circuit's
