@@ -77,6 +77,11 @@ class Timing:
     s2_on: float | None = _row_key(0.6, "S2 (reset sample) closes")
     s2_off: float | None = _row_key(0.9, "S2 opens (the reset level is taken)")
     rs_off: float | None = _row_key(0.98, "RS opens")
+    pre_on: float | None = qty("s", None, ge=0, le=1.0, plausible=_ROW,
+                               doc="column precharge: a switch pulls the column line (and C11 through S1X) to "
+                                   "ground from pre_on to pre_off, inside S1, so the source follower always "
+                                   "settles upwards; absent = no precharge")
+    pre_off: float | None = qty("s", None, ge=0, le=1.0, plausible=_ROW, doc="end of the column precharge")
 
     def row(self, t_row: float) -> dict:
         """Every row phase in s from the row's start, the absent ones at their fraction of ``t_row``."""
@@ -87,7 +92,8 @@ class Timing:
         ph = self.row(t_row)
 
         def refuse(key, allowed):
-            shown = as_written(raw, f"timing.{key}", si_text(ph[key], "s"))
+            value = ph[key] if key in ph else getattr(self, key)
+            shown = as_written(raw, f"timing.{key}", si_text(value, "s"))
             raise ConfigError(source, f"{where}.timing.{key}", shown, allowed + _row_note(self, key, t_row))
         e = self.edge
         for key in ("t_reset", "t_tg", "t_gap"):
@@ -95,13 +101,14 @@ class Timing:
                 raise ConfigError(source, f"{where}.timing.{key}", as_written(raw, f"timing.{key}", getattr(self, key)),
                                   f"a phase longer than the edge ({si_text(e, 's')})")
         names = [k for k, _ in ROW_FRACTIONS]
+        eps = 1e-9 * t_row    # "1000 ns" in a 1 MHz row is inside it, whatever the last bit says
         for key in names:
-            if ph[key] > t_row:
+            if ph[key] > t_row + eps:
                 refuse(key, f"a time inside the row (at most 1/f_read = {si_text(t_row, 's')})")
         for prev, key in zip(names, names[1:]):
             need = e if prev != "rs_on" else 0.0   # S1 may close while RS rises
             pulse = (prev, key) in PULSES
-            if ph[key] - ph[prev] > need or (not pulse and ph[key] - ph[prev] == need):
+            if ph[key] - ph[prev] > need + eps or (not pulse and ph[key] - ph[prev] >= need - eps):
                 continue
             what = ("a pulse longer than its edge" if pulse else
                     "phases in the order RS, S1, RST, S2 without overlap")
@@ -115,12 +122,29 @@ class Timing:
                              f"({key} {si_text(ph[key], 's')}{plus.replace('+', '-')}): {what}")
             refuse(key, f"a time {'after' if pulse else 'at least'} {si_text(ph[prev] + need, 's')} "
                         f"({prev} {si_text(ph[prev], 's')}{plus}): {what}")
-        if ph["s1_off"] - ph["s1_on"] <= nonoverlap + e:
+        self._check_precharge(ph, e, eps, refuse)
+        if ph["s1_off"] - ph["s1_on"] <= nonoverlap + e + eps:
             refuse("s1_off", f"an S1 longer than the AFE's non-overlap plus one edge "
                              f"({si_text(nonoverlap + e, 's')} after s1_on)")
-        if ph["rs_off"] + e > t_row + ph["rs_on"]:
+        if ph["rs_off"] + e > t_row + ph["rs_on"] + eps:
             refuse("rs_off", f"at most {si_text(t_row + ph['rs_on'] - e, 's')}: RS opens (edge included) before "
                              f"the next row's RS closes (row time 1/f_read = {si_text(t_row, 's')})")
+
+    def _check_precharge(self, ph, e, eps, refuse):
+        given = [k for k in ("pre_on", "pre_off") if getattr(self, k) is not None]
+        if not given:
+            return
+        if len(given) == 1:
+            other = "pre_off" if given[0] == "pre_on" else "pre_on"
+            refuse(given[0], f"a value together with {other} (a precharge has a start and an end)")
+        on, off = self.pre_on, self.pre_off
+        if on < ph["s1_on"] - eps:
+            refuse("pre_on", f"a time at least s1_on ({si_text(ph['s1_on'], 's')}): C11 is precharged through S1X")
+        if off - on <= e + eps:
+            refuse("pre_off", f"a time more than one edge after pre_on ({si_text(on, 's')})")
+        if off + e > ph["s1_off"] + eps:
+            refuse("pre_off", f"a time at most {si_text(ph['s1_off'] - e, 's')}: the precharge ends (edge "
+                              f"included) before S1 opens ({si_text(ph['s1_off'], 's')})")
 
     def check_exposure(self, t_exp: float, where: str, source: str, what: str, shown) -> None:
         """TG and the FD release fit inside an exposure of ``t_exp`` (``what``: the key giving it)."""
@@ -132,6 +156,6 @@ class Timing:
 
 
 def _row_note(t: Timing, key: str, t_row: float) -> str:
-    if getattr(t, key) is None:
+    if getattr(t, key) is None and key in dict(ROW_FRACTIONS):
         return f" (absent: {dict(ROW_FRACTIONS)[key]:g} / f_read; set the other row keys to fit)"
     return ""

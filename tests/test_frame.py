@@ -118,7 +118,7 @@ def test_array_command_with_a_scene(cli, tmp_path):
     sig = np.array(r["primary_signal_V"])
     assert sig.shape == (2, 2) and np.all(sig[:, 1] > sig[:, 0] + 0.05)
     head = (tmp_path / "o" / "frame.csv").read_text().splitlines()[0]
-    assert head == "kind,row,col,iph_A,signal_V,reset_level_V"
+    assert head == "kind,row,col,iph_A,signal_V,reset_level_V,settling_V"
     assert (tmp_path / "o" / "frame.png").read_bytes()[:4] == b"\x89PNG"
 
 

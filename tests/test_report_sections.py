@@ -45,6 +45,7 @@ def _value(summary, name):
     ("sizing", ["sizing_result", "sizing_constraints", "sizing_verify", "sizing_sensitivity"], ["sizing.png"]),
     ("afe", ["afe_summary", "afe_transfer"], ["afe_transfer.png"]),
     ("array", ["array_signals"], ["array_readout.png"]),
+    ("bright", ["bright_source"], []),
     ("layout", ["layout_extracted"], ["layout/dual_pixel_revA_dualpix.png", "layout/dual_pixel_revA_dualpix_3d.png"]),
 ])
 def test_section_is_available_with_tables_and_figures(report, key, tables, figures):
@@ -88,6 +89,8 @@ def test_array_signals_follow_the_gradient_and_the_split_decks(report):
             sig = [float(x["signal (mV)"]) for x in rows if x["array"] == kind and x["row"] == r]
             assert len(sig) >= 2 and all(b > a + 1.0 for a, b in zip(sig, sig[1:])), (kind, r, sig)
     assert _value(summary, "array.worst_split_vs_whole_mV") < 0.5
+    assert abs(_value(summary, "array.settling_worst_mV")) < 0.5        # the reference read settles
+    assert all(x["settling error vs long S1 (mV)"] not in ("", "-") for x in rows)
 
 
 def test_layout_c_a_is_the_thesis_ratio(report):

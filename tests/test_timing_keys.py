@@ -9,12 +9,13 @@ import re
 import pytest
 
 from conftest import REF
+from former_design import untimed
 from pixelkit.design import load_design
 from pixelkit.errors import ConfigError
 
 
 def _with(tmp_path, table: str, lines: str, name="d.toml", extra=()):
-    text = REF.read_text()
+    text = untimed()
     for a, b in extra:
         assert a in text
         text = text.replace(a, b)
@@ -36,10 +37,12 @@ def _rises(points, vdd=3.3):
     return up, down
 
 
-def test_defaults_are_the_former_fractions_of_the_row(ref_design):
+def test_defaults_are_the_former_fractions_of_the_row(tmp_path):
     """No timing table: S1 0.1 - 0.4, RST 0.45 - 0.55, S2 0.6 - 0.9, RS 0.02 - 0.98 of the row
-    (the thesis [Thesis2019] bench's read), read back from the deck's sources."""
+    (the thesis [Thesis2019] bench's read), read back from the deck's sources; no precharge."""
     from pixelkit.circuits.testbench import dual_pixel_bench, timings
+    (tmp_path / "u.toml").write_text(untimed())
+    ref_design = load_design(tmp_path / "u.toml")
     deck = dual_pixel_bench(ref_design, 1e-9, 1e-11, with_afe=True).text()
     t = timings(ref_design, ref_design.experiment.t_window)["primary"]
     t0, tr = t.row(0), 2e-6                       # 500 kHz
@@ -50,6 +53,21 @@ def test_defaults_are_the_former_fractions_of_the_row(ref_design):
     up, down = _rises(_pwl(deck, "Vs2_s"))       # secondary: 1 MHz
     ts = timings(ref_design, ref_design.experiment.t_window)["secondary"]
     assert down[0] == pytest.approx(ts.row(0) + 0.9e-6)
+    assert "Vpre" not in deck and "Xpre_" not in deck
+
+
+def test_reference_design_read_reaches_the_deck(ref_design):
+    """The reference design's own read: precharge switch per column, its pulse inside S1."""
+    from pixelkit.circuits.testbench import dual_pixel_bench, timings
+    deck = dual_pixel_bench(ref_design, 1e-9, 1e-11, with_afe=True).text()
+    t = timings(ref_design, ref_design.experiment.t_window)
+    for s, kind in (("p", "primary"), ("s", "secondary")):
+        up, down = _rises(_pwl(deck, f"Vpre_{s}"))
+        tk = getattr(ref_design, kind).timing
+        assert up[0] == pytest.approx(t[kind].row(0) + tk.pre_on) and down[0] == pytest.approx(t[kind].row(0) + tk.pre_off)
+        s1 = _rises(_pwl(deck, f"Vs1_{s}"))
+        assert s1[0][0] <= up[0] < down[0] < s1[1][0]
+    assert deck.count("Xpre_col_") == 1 + ref_design.secondary_per_pixel
 
 
 def test_keys_reach_the_deck(tmp_path):

@@ -57,21 +57,21 @@ def _at(design, corner, temp_c=27.0, supply=0.0):
     return conditions.at(design, conditions.Condition(corner, temp_c + 273.15, supply))
 
 
-def test_settling_slower_at_ss_than_ff(ref_design):
+def test_settling_slower_at_ss_than_ff(tmp_path, ref_design):
     """Slow devices (ss) leave a larger settling error at the same clocks than fast ones (ff); the
     same corner twice gives the same number (the inequality is not the noise of the solver).
-    The secondary (1 MHz) is time-constant limited: much worse at ss. The reference primary's error
-    is slewing of the column and C11 at the load's bias current (C11 memory, issue 27): no device
-    corner changes that current, but the MIM corner scales C11 (x1.1 at ss, x0.9 at ff, the model
-    library's mimcap sections): worse at ss, and equal (5 %) with C11 held at its typical value."""
-    ss = measure.settling(_at(ref_design, "ss"))
-    ff = measure.settling(_at(ref_design, "ff"))
-    assert ss["secondary"] > 2 * ff["secondary"], (ss, ff)
-    assert ss["primary"] > 1.2 * ff["primary"], (ss, ff)
-    assert measure.settling(_at(ref_design, "ff")) == ff
-    # the cause isolated: the device corners alone, C11 - C13 at their typical values
-    typ = {c: measure.settling(replace(_at(ref_design, c), afe=ref_design.afe))["primary"] for c in ("ss", "ff")}
-    assert typ["ss"] == pytest.approx(typ["ff"], rel=0.05), typ
+    On the former reference read (400 nA load, the default phases: it does not settle, issue
+    27): both arrays read worse at ss. The reference design itself settles at both corners."""
+    from former_design import former
+    p = tmp_path / "former.toml"
+    p.write_text(former())
+    old = load_design(p)
+    ss = measure.settling(_at(old, "ss"))
+    ff = measure.settling(_at(old, "ff"))
+    assert ss["secondary"] > 1.5 * ff["secondary"] and ss["primary"] > 1.5 * ff["primary"], (ss, ff)
+    assert measure.settling(_at(old, "ff")) == ff
+    for corner in ("ss", "ff"):
+        assert max(measure.settling(_at(ref_design, corner)).values()) < 0.5e-3, corner
 
 
 def test_pd_dark_drop_and_ktc_grow_with_temperature(ref_design):
@@ -127,8 +127,7 @@ def test_monte_carlo_is_reproducible_and_resumes_from_the_cache(tmp_path):
     from pixelkit.spice.engine import observe
     d = load_design(_design(tmp_path, {"afe_gain_error": {"max": "1 %"}}, {"mc": 5, "seed": 11}))
     kw = dict(corners=("tt",), temperatures=(300.15,), supplies=(0.0,))
-    import pixelkit as pk
-    a = pk.sign_off(d, **kw)                       # the documented API is the same function
+    a = verify(d, **kw)
     runs = []
     with observe(lambda event, n: runs.append(n) if event == "queued" else None):
         b = verify(d, **kw)

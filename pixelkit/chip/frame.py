@@ -36,6 +36,10 @@ previous row as a lead (the former row split) 0.39 mV off from the third row on.
 columns (no AFE, no memory beyond the line, which the row's own RS resets; 27-row column
 within 0.011 mV of the undivided deck). Refused with the AFE.
 
+Settling (``settling=True``, ``chip.settling``): every row's deck is run a second time with
+long S1 and S2 from the same hand-over (``columns``) or alone (``rows``), and each
+subpixel's double-sampled signal is compared with that settled read.
+
 ``split="none"``: each array as one deck, every row and column (the reference;
 ``tests/test_frame.py`` and ``pixelkit array --check`` compare the splits with it, and a
 Monte Carlo frame runs so). The arrays share only ideal sources, so one deck per array is
@@ -79,6 +83,20 @@ class Frame:
     split: str
     failures: list = field(default_factory=list)
     retried: list = field(default_factory=list)   # decks the engine re-ran with looser options
+    #: kind -> rows x cols array (V): the double-sampled signal minus that of the same read with
+    #: long S1 and S2 (``chip.settling``); NaN where not measured; empty: not measured
+    settling: dict = field(default_factory=dict)
+    settling_notes: list = field(default_factory=list)
+    #: kind -> rows x cols x 2 (V): the sampled signal level's and reset level's own errors
+    #: (sampled - settled; the settling error is the second minus the first)
+    settling_parts: dict = field(default_factory=dict)
+
+    def settling_summary(self, limit=None) -> dict | None:
+        """``limit``: V, or per array a dict (default ``settling.LIMIT_V``)."""
+        from .settling import LIMIT_V, summary
+        if not self.settling:
+            return None
+        return {**summary(self.settling, LIMIT_V if limit is None else limit), "notes": self.settling_notes}
 
     def as_dict(self) -> dict:
         out = {"rows": self.rows, "cols": self.cols, "split": self.split, "decks": self.decks,
@@ -88,6 +106,9 @@ class Frame:
             out[f"{k}_reset_level_V"] = _listed(self.reset_level[k])
             if k in self.afe:
                 out[f"{k}_afe_out_V"] = _listed(self.afe[k])
+            if k in self.settling:
+                out[f"{k}_settling_V"] = _listed(self.settling[k])
+        out["settling"] = self.settling_summary()
         return out
 
 
@@ -137,16 +158,50 @@ def _retried(res):
 
 
 def _probe(task):
-    """Simulate one tile (through the engine and its cache) and read its samples."""
+    """Simulate one tile (through the engine and its cache) and read its samples; with a
+    reference deck (``ref``: the same tile read with long S1 and S2), their settling errors."""
     from ..spice import simulate_many
-    net, backend, jobs, options, probes = task
+    net, backend, jobs, options, probes, ref = task
+    out = {"failures": [], "retried": [], "values": {}, "decks": 0, "settling": {}, "notes": []}
     try:
         res = simulate_many([net], backend=backend, jobs=jobs, options=options)[0]
     except SimulationError as exc:
-        return {"failures": [{"deck": net.title, "message": exc.message}], "retried": [], "values": {}, "decks": 0}
+        out["failures"].append({"deck": net.title, "message": exc.message})
+        return out
     why = _retried(res)
-    return {"failures": [], "retried": [{"deck": net.title, "message": why}] if why else [],
-            "values": _read(res, probes), "decks": 1}
+    out["retried"] += [{"deck": net.title, "message": why}] if why else []
+    out["values"], out["decks"] = _read(res, probes), 1
+    if ref is not None:
+        _settle(out, ref, probes, backend, jobs, options)
+    return out
+
+
+def _settle(out, ref, probes, backend, jobs, options):
+    """Run the long-S1/S2 reference ``ref`` = (deck, its timings) and put each probe's settling
+    error (double-sampled signal - the settled one) into ``out``. A reference that fails
+    leaves its cells not measured (a note), not a failed frame."""
+    from ..spice import simulate_many
+    from .settling import settled_level
+    net, tm_ref = ref
+    try:
+        res = simulate_many([net], backend=backend, jobs=jobs, options=options)[0]
+    except SimulationError as exc:
+        out["notes"].append(f"reference read {net.title} failed, its cells not measured: {exc.message[:200]}")
+        return
+    out["decks"] += 1
+    why = _retried(res)
+    out["retried"] += [{"deck": net.title, "message": why}] if why else []
+    for key, node, timing, row, _ in probes:
+        sig, sig_ok = settled_level(res, node, tm_ref[key[0]], timing, row)
+        rst, rst_ok = settled_level(res, node, tm_ref[key[0]], timing, row, which="reset")
+        signal, reset_level = out["values"][key][:2]
+        # error of the double-sampled signal (reset level - signal level) against the settled one
+        nan = float("nan")
+        out["settling"][key] = signal - (rst - sig) if sig_ok and rst_ok else nan
+        out.setdefault("parts", {})[key] = ((reset_level - signal) - sig if sig_ok else nan,
+                                           reset_level - rst if rst_ok else nan)
+        if not (sig_ok and rst_ok):
+            out["notes"].append(f"{key[0]} row {row} column {key[2]}: the long-S1 reference itself has not settled")
 
 
 def _chain(task):
@@ -154,20 +209,23 @@ def _chain(task):
     left at the row's start (see the module docstring). A failed deck ends the chain: its
     later rows are listed as failed too (they have no state to start from)."""
     from ..spice import simulate_many
-    design, ip, is_, tile, t_exp, with_afe, seed, max_step, backend, options, rows, title = task
+    design, ip, is_, tile, t_exp, with_afe, seed, max_step, backend, options, rows, title, settle, comp = task
+    from .settling import reference_timings
     tm = frame_timings(design, t_exp, rows)
     kind = tile.kinds[0]
+    tm_ref = reference_timings(tm, kind) if settle else None
     nodes = [m for j in tile.columns(kind, design.secondary_per_pixel)
              for m in state_nodes(design, kind, j, with_afe, rows > 1)]
     lines = [f"col_{PREFIX[kind]}_{j}" for j in tile.columns(kind, design.secondary_per_pixel)]
     t_rise = tm[kind].rs(0)[0][0]  # the first row's RS closes: the lines leave rest
-    out = {"failures": [], "retried": [], "values": {}, "decks": 0}
+    out = {"failures": [], "retried": [], "values": {}, "decks": 0, "settling": {}, "notes": []}
     hand, rest = None, {}
     for r in range(rows):
         t = replace(tile, rows=(r,))
         probes = _probes(design, t, tm, with_afe)
+        hand_r = hand
         net = _saved(array_bench(design, ip, is_, t, t_exp, with_afe, seed, max_step, title=f"{title}_r{r}",
-                                 handoff=hand), probes, nodes)
+                                 handoff=hand, compression=comp), probes, nodes)
         try:
             res = simulate_many([net], backend=backend, jobs=1, options=options)[0]
             out["decks"] += 1
@@ -187,6 +245,10 @@ def _chain(task):
         why = _retried(res)
         if why:
             out["retried"].append({"deck": net.title, "message": why})
+        if settle:
+            ref = _saved(array_bench(design, ip, is_, t, t_exp, with_afe, seed, max_step, title=f"{title}_r{r}_long_s1",
+                                     handoff=hand_r, tm=tm_ref, compression=comp), probes)
+            _settle(out, (ref, tm_ref), probes, backend, 1, options)
     return out
 
 
@@ -213,10 +275,14 @@ def default_split(with_afe: bool, seeded: bool = False) -> str:
 def simulate_frame(design, iph_p, iph_s, with_afe: bool = False, split: str | None = None,
                    t_exp: float | None = None, mismatch_seed: int | None = None, backend: str = "batch",
                    jobs: int | None = None, scheduler=None, options=None, max_step: float | None = None,
-                   kinds=KINDS) -> Frame:
+                   kinds=KINDS, settling: bool = False, compression: dict | None = None) -> Frame:
     """Simulate one frame; see the module docstring for ``split``. ``options``: simulator
     options over the kit's defaults (``spice.options``); ``kinds``: the arrays to simulate
-    (the others' results stay NaN)."""
+    (the others' results stay NaN); ``settling``: also read every row with a long S1 and
+    measure each subpixel's settling error (``chip.settling``; twice the decks; not for
+    ``split="none"``, whose decks hold every row); ``compression``: per array t_int / t_exp of
+    the currents (``scene.Photocurrents.compression``): the light falls back to the real one when
+    the exposure ends (``circuits.array.array_bench``)."""
     rows, cols = frame_shape(design, iph_p, iph_s)
     n = design.secondary_per_pixel
     split = default_split(with_afe, mismatch_seed is not None) if split is None else split
@@ -232,18 +298,28 @@ def simulate_frame(design, iph_p, iph_s, with_afe: bool = False, split: str | No
         tag = "_".join(PREFIX[k] for k in tile.kinds)
         if split == "columns":
             tasks.append((design, iph_p, iph_s, tile, t_exp, with_afe, mismatch_seed, max_step, backend, options,
-                          rows, f"frame_{rows}x{cols}_{tag}_c{tile.cols[0]}"))
+                          rows, f"frame_{rows}x{cols}_{tag}_c{tile.cols[0]}", settling, compression))
             continue
         tag += f"_r{tile.rows[0]}" if len(tile.rows) == 1 else ""
         probes = _probes(design, tile, tm, with_afe)
         net = _saved(array_bench(design, iph_p, iph_s, tile, t_exp, with_afe, mismatch_seed, max_step,
-                                 title=f"frame_{rows}x{cols}_{tag}"), probes)
-        tasks.append((net, backend, 1 if scheduler is not None else jobs, options, probes))
+                                 title=f"frame_{rows}x{cols}_{tag}", compression=compression), probes)
+        ref = None
+        if settling and split == "rows":
+            from .settling import reference_timings
+            tm_ref = reference_timings(tm, tile.kinds[0])
+            ref = (_saved(array_bench(design, iph_p, iph_s, tile, t_exp, with_afe, mismatch_seed, max_step,
+                                      title=f"frame_{rows}x{cols}_{tag}_long_s1", tm=tm_ref, compression=compression),
+                          probes), tm_ref)
+        tasks.append((net, backend, 1 if scheduler is not None else jobs, options, probes, ref))
     shape = {"primary": (rows, cols), "secondary": (rows, n * cols)}
     sig = {k: np.full(shape[k], np.nan) for k in KINDS}
     rst = {k: np.full(shape[k], np.nan) for k in KINDS}
     afe = {k: np.full(shape[k], np.nan) for k in KINDS} if with_afe else {}
     failures, retried, decks = [], [], 0
+    settle = {k: np.full(shape[k], np.nan) for k in KINDS if k in kinds} if settling else {}
+    parts = {k: np.full((*shape[k], 2), np.nan) for k in settle}
+    notes = [] if split != "none" else ["not measured: a frame with split='none' reads every row in one deck"]
     t0 = time.perf_counter()
     fn, desc = (_chain, "frame column chains") if split == "columns" else (_probe, "frame tiles")
     for i, out in run_tasks(fn, tasks, jobs=jobs, scheduler=scheduler, desc=desc):
@@ -254,7 +330,13 @@ def simulate_frame(design, iph_p, iph_s, with_afe: bool = False, split: str | No
             sig[k][r, j], rst[k][r, j] = s, lv
             if with_afe:
                 afe[k][r, j] = a
-    return Frame(rows, cols, sig, rst, afe, decks, time.perf_counter() - t0, split, failures, retried)
+        for (k, r, j), e in out.get("settling", {}).items():
+            settle[k][r, j] = e
+        for (k, r, j), e in out.get("parts", {}).items():
+            parts[k][r, j] = e
+        notes += out.get("notes", [])
+    return Frame(rows, cols, sig, rst, afe, decks, time.perf_counter() - t0, split, failures, retried,
+                 settle, notes if settling else [], parts)
 
 
 #: Tolerances at which a split is judged against the undivided deck: at the defaults two decks

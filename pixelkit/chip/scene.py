@@ -20,9 +20,10 @@ Exposure: a frame is simulated over ``t_exp`` (default the experiment window, 16
 so the whole array stays affordable) while the design integrates over ``t_int``
 (1 ms primary, 12 ms secondary). The kit keeps the charge of the real frame: it
 simulates ``I t_int / t_exp`` (charge-equivalent compression; dark current is not
-scaled, so the dark signal is that of ``t_exp``). Currents that would take the PD below
-``V_FLOOR`` within the exposure are clipped there (a saturated pixel, counted in
-``clipped``), so no PD is driven into forward bias.
+scaled, so the dark signal is that of ``t_exp``). A subpixel whose current would take its PD
+below ``V_FLOOR`` within the exposure is saturated: it is counted in ``clipped`` (and marked in
+``saturated``) and simulated at its full current, its PD forward-biasing as silicon does
+(``docs/timing-and-settling.md``); the stimulus is never capped.
 """
 from __future__ import annotations
 
@@ -37,7 +38,7 @@ from ..fileio import path_kind
 UNITS = ("lx", "W/m2", "A/m2", "rel", "fs")
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff")
 KINDS_OF_DEFAULT = ("gradient", "uniform")
-V_FLOOR = 0.2  # V: lowest PD voltage a clipped (saturated) photocurrent reaches
+V_FLOOR = 0.2  # V: a subpixel whose PD would go below this in the exposure is counted as clipped (saturated)
 
 
 @dataclass
@@ -45,7 +46,8 @@ class Photocurrents:
     iph_p: np.ndarray       # rows x cols (A, as simulated)
     iph_s: np.ndarray       # rows x N cols (A, as simulated)
     compression: dict       # kind -> t_int / t_exp
-    clipped: dict           # kind -> number of clipped subpixels
+    clipped: dict           # kind -> number of saturated subpixels (beyond full well)
+    saturated: dict = None  # kind -> rows x cols bool array: those subpixels
 
     def as_dict(self) -> dict:
         return {"iph_primary_A": self.iph_p.tolist(), "iph_secondary_A": self.iph_s.tolist(),
@@ -158,13 +160,14 @@ def photocurrents(design, rows: int, cols: int, m: np.ndarray, unit: str,
     n = design.secondary_per_pixel
     t_exp = design.experiment.t_window if t_exp is None else t_exp
     j = density(design, resample(np.asarray(m, float), rows, n * cols), unit)
-    out, comp, clipped = {}, {}, {}
+    out, comp, clipped, sat = {}, {}, {}, {}
     for kind in ("primary", "secondary"):
         sub = getattr(design, kind)
         jj = j if kind == "secondary" else j.reshape(rows, cols, n).mean(axis=2)
         comp[kind] = sub.t_int / t_exp if compress else 1.0
         i = jj * sub.photoactive_area * comp[kind]
         hi = i_floor(design, kind, t_exp)
-        clipped[kind] = int(np.count_nonzero(i > hi))
-        out[kind] = np.minimum(i, hi)
-    return Photocurrents(out["primary"], out["secondary"], comp, clipped)
+        sat[kind] = i > hi
+        clipped[kind] = int(np.count_nonzero(sat[kind]))
+        out[kind] = i
+    return Photocurrents(out["primary"], out["secondary"], comp, clipped, sat)

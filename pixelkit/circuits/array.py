@@ -178,18 +178,23 @@ def frame_timings(design, t_exp: float, rows: int) -> dict:
 
 def array_bench(design, iph_p, iph_s, tile: Tile | None = None, t_exp: float | None = None,
                 with_afe: bool = False, mismatch_seed: int | None = None, max_step: float | None = None,
-                title: str = "array_bench", handoff: Handoff | None = None):
-    """A frame (or a tile of it) read row by row; see the module docstring."""
+                title: str = "array_bench", handoff: Handoff | None = None, tm: dict | None = None,
+                compression: dict | None = None):
+    """A frame (or a tile of it) read row by row; see the module docstring. ``tm``: the frame's
+    timings, when not ``frame_timings`` (a long-S1 reference read, ``chip.settling``);
+    ``compression``: per array, t_int / t_exp of currents that carry the charge of ``t_int``
+    in the window (``chip.scene``): the light drops to current / compression when the exposure
+    ends (``pixel5t(compressed=True)``)."""
     from .opamp import opamp
     from .afe import sc_afe
     from .pixel5t import pixel5t
-    from .testbench import _deck, _options, _tran, controls, sample_clocks, supplies
+    from .testbench import _deck, _options, _tran, controls, precharge_clock, sample_clocks, supplies
     rows, cols = frame_shape(design, iph_p, iph_s)
     ip, is_ = np.asarray(iph_p, float), np.asarray(iph_s, float)
     tile = tile or whole(rows, cols)
     n = design.secondary_per_pixel
     t_exp = design.experiment.t_window if t_exp is None else t_exp
-    tm = frame_timings(design, t_exp, rows)
+    tm = tm or frame_timings(design, t_exp, rows)
     sim_rows = tile.rows
     el = [*supplies(design), *controls(design, tm, sim_rows, True, tile.kinds)]
     subckts = []
@@ -198,21 +203,33 @@ def array_bench(design, iph_p, iph_s, tile: Tile | None = None, t_exp: float | N
         subckts += [opamp(design), sc_afe(design)]
     for kind in tile.kinds:
         s, cur = PREFIX[kind], (ip if kind == "primary" else is_)
-        subckts.append(pixel5t(design, kind))
+        comp = float((compression or {}).get(kind, 1.0))
+        subckts.append(pixel5t(design, kind, compressed=comp != 1.0))
+        if comp != 1.0:
+            t = tm[kind]
+            el.append(Element(f"Vexpo_{s}", (f"expo_{s}", "0"),
+                              Pwl(((0.0, 1.0), (t.t_tx, 1.0), (t.t_tx + t.edge, 0.0)))))
         if with_afe:
             el += sample_clocks(design, tm[kind], s, sim_rows)
+        el += precharge_clock(design, tm[kind], s, sim_rows)
         for j in tile.columns(kind, n):
             col = f"col_{s}_{j}"
             for r in sim_rows:
-                el.append(Element(f"X{s}_{r}_{j}", ("vdd", "vpdr", "vrst", f"ec_{s}", f"tg_{s}", f"rst_{s}_{r}",
-                                                   f"rs_{s}_{r}", col), f"pix5t_{kind}",
-                                  (("iph", float(cur[r][j])),)))
+                ports = ("vdd", "vpdr", "vrst", f"ec_{s}", f"tg_{s}", f"rst_{s}_{r}", f"rs_{s}_{r}", col)
+                i = float(cur[r][j])
+                if comp == 1.0:
+                    el.append(Element(f"X{s}_{r}_{j}", ports, f"pix5t_{kind}", (("iph", i),)))
+                else:
+                    el.append(Element(f"X{s}_{r}_{j}", (*ports, f"expo_{s}"), f"pix5t_{kind}_c",
+                                      (("iph_read", i / comp), ("iph_exp", i - i / comp))))
             absent = rows - len(sim_rows)
             if absent:  # the other rows' RS switches (off) load the column: one device, m = their count
                 dev = design.pixel.devices
                 rs = mosfet(f"rsoff_{col}", f"sfo_off_{col}", "0", col, "0", dev.rs_w, dev.rs_l, design.tech)
                 el.append(replace(rs, params=(*rs.params, ("m", absent))))
             el += [*column.bias(design, f"nbias_{col}"), *column.load(design, col, f"nbias_{col}")]
+            if tm[kind].precharged:
+                el += column.precharge(design, col, f"pre_{s}")
             if with_afe:
                 el += column.sampler(design, col, f"in_{col}", f"s1_{s}", f"s2_{s}")
                 caps = afe_caps(design, mismatch_seed, kind, j)
@@ -225,7 +242,7 @@ def array_bench(design, iph_p, iph_s, tile: Tile | None = None, t_exp: float | N
                                              if n * c + k in tile.columns("secondary", n)}}
             el += column.line_couplings(design, lines, whole=True)
     last = max(tile.rows)
-    stop = max(tm[k].row(last + 1) + 0.05 * tm[k].t_row for k in tile.kinds)
+    stop = max(tm[k].row_end(last) + 0.05 * tm[k].t_row for k in tile.kinds)
     tran = replace(_tran(tm), stop=stop)
     if max_step is not None:
         tran = replace(tran, max_step=max_step)

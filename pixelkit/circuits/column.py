@@ -1,4 +1,5 @@
-"""Column circuitry: current-source loads of the source followers, and S1X/S2X samplers.
+"""Column circuitry: current-source loads of the source followers, S1X/S2X samplers and the
+optional column precharge.
 
 The load is an NMOS mirror of one bias current (the SF bias, ~400 nA in the
 simulations of [Thesis2019]); each column line carries its parasitic capacitance. S1X and S2X are
@@ -76,3 +77,11 @@ def line_couplings(design, lines: dict, whole: bool = False) -> tuple:
     k = rows / (rows - 1) if whole and rows > 1 else 1.0
     return tuple(Element(f"Ccc_{lines[a]}_{lines[b]}", (lines[a], lines[b]), c * k)
                  for a, b, c in pl.column_pairs if a in lines and b in lines)
+
+
+def precharge(design, col: str, ctl: str) -> tuple:
+    """The column precharge: an NMOS switch (the samplers' size) from ``col`` to ground, gate
+    ``ctl``: inside S1 it empties the line and C11, so the source follower then charges them
+    upwards (fast) instead of the load discharging them (slow: I_load / C)."""
+    dev = design.pixel.devices
+    return (mosfet(f"pre_{col}", col, ctl, "0", "0", dev.sw_w, dev.sw_l, design.tech),)

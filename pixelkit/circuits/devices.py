@@ -45,4 +45,26 @@ def photodiode_model(tech, temperature_K: float | None = None) -> tuple:
     return (Model(pd.spice_model, "d", (
         ("level", 1), ("is", pd.dark_area * k), ("jsw", pd.dark_perimeter * k), ("n", 1.0),
         ("cjo", pd.cj), ("m", pd.mj), ("vj", pd.pb), ("cjp", pd.cjsw), ("mjsw", pd.mjsw),
-        ("php", pd.pbsw), ("tnom", t - 273.15))),)
+        ("php", pd.pbsw), ("tnom", t - 273.15), ("fc", FC), ("fcs", sidewall_fc(pd)))),)
+
+
+#: Where the bottom junction's depletion charge turns linear in forward bias (SPICE's default).
+FC = 0.5
+
+
+def sidewall_fc(pd) -> float:
+    """The sidewall's FCS that keeps the junction's charge continuous in forward bias.
+
+    Beyond ``FCS * PHP`` ngspice (39 and the versions since, ``dioload.c``) continues the
+    sidewall charge from ``CJSW * F1``, where F1 = PB (1 - (1 - FC)^(1 - MJ)) / (1 - MJ) is
+    the *bottom* junction's; the sidewall's own charge there is PHP (1 - (1 - FCS)^(1 - MJSW))
+    / (1 - MJSW). With PB != PHP or MJ != MJSW the two differ, the charge jumps when an
+    over-exposed PD forward-biases past that point (0.277 V here) and the run stops
+    ("timestep too small"). This FCS makes them equal, so the charge is continuous whether
+    ngspice uses F1 or the sidewall's own value (depletion capacitance unchanged in reverse
+    bias, where the PD works)."""
+    f1 = pd.pb * (1 - (1 - FC) ** (1 - pd.mj)) / (1 - pd.mj)
+    x = 1 - f1 * (1 - pd.mjsw) / pd.pbsw
+    if not 0 < x < 1:   # no sidewall FCS in (0, 1) matches: the default, as before
+        return FC
+    return float(1 - x ** (1 / (1 - pd.mjsw)))

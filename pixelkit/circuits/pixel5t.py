@@ -27,14 +27,23 @@ from .devices import mosfet, photodiode
 PORTS = ("vdd", "vpdr", "vrst", "ec", "tg", "rst", "rs", "col")
 
 
-def pixel5t(design, which: str) -> Subckt:
-    """The 5T subpixel of ``which`` ("primary" or "secondary") of ``design``."""
+def pixel5t(design, which: str, compressed: bool = False) -> Subckt:
+    """The 5T subpixel of ``which`` ("primary" or "secondary") of ``design``.
+
+    ``compressed`` (frames that simulate a long ``t_int`` over a short window): the light is
+    ``iph_read`` (A, what the pixel really sees) plus ``iph_exp`` while the port ``expo`` is at
+    1 V (the exposure: the charge of ``t_int`` in the window), so the storage node and a PD
+    not held in reset see the real light while the rows wait, not the compressed one
+    (subckt ``pix5t_<which>_c``, port ``expo`` last)."""
     sub = getattr(design, which)
     dev = design.pixel.devices
     t = design.tech
-    return Subckt(f"pix5t_{which}", PORTS, (
+    light = (Element("Iph", ("pd", "nph"), Param("iph")),) if not compressed else (
+        Element("Iph", ("pd", "nph"), Param("iph_read")),
+        Element("Gexp", ("pd", "nph", "expo", "0"), Param("iph_exp")))
+    return Subckt(f"pix5t_{which}{'_c' if compressed else ''}", PORTS + (("expo",) if compressed else ()), (
         photodiode("pd", "pd", sub.area, sub.perimeter, t),
-        Element("Iph", ("pd", "nph"), Param("iph")),
+        *light,
         Element("Vph", ("nph", "0"), 0.0),             # senses the photocurrent for Fpls
         # storage node: parasitic light, 1/gse of the PD's photocurrent (its leakage is the
         # BSIM4 junction current of the TG and RST diffusions, in the device models)
@@ -45,7 +54,7 @@ def pixel5t(design, which: str) -> Subckt:
         mosfet("sf", "vdd", "fd", "sfo", "0", dev.sf_w, dev.sf_l, t),
         mosfet("rs", "sfo", "rs", "col", "0", dev.rs_w, dev.rs_l, t),
         *wiring(design, f"pix5t_{which}"),
-    ), (("iph", 0.0),))
+    ), (("iph_read", 0.0), ("iph_exp", 0.0)) if compressed else (("iph", 0.0),))
 
 
 def wiring(design, cell: str) -> tuple:

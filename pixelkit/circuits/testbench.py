@@ -104,6 +104,13 @@ def sample_clocks(design, t: GsTiming, prefix: str, rows: int) -> list:
     return out
 
 
+def precharge_clock(design, t: GsTiming, prefix: str, rows) -> list:
+    """The column precharge control of one array (none when its timing has no precharge)."""
+    if not t.precharged:
+        return []
+    return [Element(f"Vpre_{prefix}", (f"pre_{prefix}", "0"), waveform(t.pre(rows), design.tech.supply, t.edge))]
+
+
 def dual_pixel_bench(design, iph_p: float, iph_s, t_exp: float | None = None, with_afe: bool = False,
                      title: str = "dual_pixel_bench", tm: dict | None = None) -> Netlist:
     """One integrated pixel, its column loads, the GS sequence; ``iph_s`` per secondary.
@@ -123,6 +130,10 @@ def dual_pixel_bench(design, iph_p: float, iph_s, t_exp: float | None = None, wi
     for c in cols:
         el += column.load(design, c)
     el += column.line_couplings(design, {c: c for c in cols})
+    for arr, s in (("primary", "p"), ("secondary", "s")):
+        if tm[arr].precharged:
+            el += precharge_clock(design, tm[arr], s, 1)
+            el += [e for c in cols if (c == "col_p") == (s == "p") for e in column.precharge(design, c, f"pre_{s}")]
     subckts = list(dual_pixel(design))
     if with_afe:
         el.append(Element("Vref", ("vref", "0"), design.afe.vref))

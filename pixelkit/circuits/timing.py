@@ -49,6 +49,10 @@ class GsTiming:
     #: fraction of ``t_row`` (``readout_timing.ROW_FRACTIONS``)
     phases: tuple = ()
 
+    @property
+    def precharged(self) -> bool:
+        return any(k == "pre_on" for k, _ in self.phases)
+
     def phase(self, name: str) -> float:
         """Time of row phase ``name`` (``s1_off``, ...) from the row's start (s)."""
         for k, v in self.phases:
@@ -98,9 +102,14 @@ class GsTiming:
         """Instant the reset level is taken (end of S2)."""
         return self.s2_window(r)[1]
 
+    def row_end(self, r: int) -> float:
+        """End of row ``r``'s read: the next row's start, or later when RS (edge included)
+        stays on longer (a long-S1 reference read, ``chip.settling``)."""
+        return max(self.row(r + 1), self.row(r) + self.phase("rs_off") + self.edge)
+
     @property
     def t_stop(self) -> float:
-        return self.row(self.rows) + 0.05 * self.t_row
+        return self.row_end(self.rows - 1) + 0.05 * self.t_row
 
     # switch intervals ------------------------------------------------------
     def ec(self):
@@ -129,6 +138,10 @@ class GsTiming:
 
     def s2(self, rows=None):
         return [self.s2_window(r) for r in self.row_list(rows)]
+
+    def pre(self, rows=None):
+        """Column precharge windows (none unless the design sets ``pre_on`` / ``pre_off``)."""
+        return [self._window(r, "pre_on", "pre_off") for r in self.row_list(rows)] if self.precharged else []
 
 
 def timings(design, t_exp: float, rows: int = 1, t_exp_secondary: float | None = None,
@@ -163,4 +176,5 @@ def timings(design, t_exp: float, rows: int = 1, t_exp_secondary: float | None =
 
 
 def _given_phases(key) -> tuple:
-    return tuple((k, getattr(key, k)) for k, _ in ROW_FRACTIONS if getattr(key, k) is not None)
+    names = [k for k, _ in ROW_FRACTIONS] + ["pre_on", "pre_off"]
+    return tuple((k, getattr(key, k)) for k in names if getattr(key, k) is not None)

@@ -29,6 +29,12 @@ def _finite(value, param):
                    "with --afe); none: one deck per array (default with --seed). See pixelkit.chip.frame")
 @click.option("--check", is_flag=True, help="also run the split and the undivided deck of each array at converged "
               "tolerances (reltol 1e-6) and report the largest difference; exit 1 above 0.1 mV or when void")
+@click.option("--settling/--no-settling", default=True, show_default=True,
+              help="also read every row with a long S1 and report each subpixel's settling error (twice the decks)")
+@click.option("--settling-limit", type=click.FloatRange(min=0, min_open=True), default=None,
+              callback=lambda ctx, param, v: _finite(v, param),
+              help="largest settling error (mV) the frame accepts (default: the design's [spec.settling_<array>] "
+                   "max, else 0.5 mV)")
 @click.option("--seed", type=click.IntRange(0, 2**31 - 1), default=None, help="Monte Carlo mismatch draw (GF180 statistical models)")
 @click.option("--t-exp", "t_exp", type=click.FloatRange(0.0, 10.0, min_open=True), default=None,
               callback=lambda ctx, param, v: _finite(v, param),
@@ -38,8 +44,8 @@ def _finite(value, param):
 @spice_opts
 @post_layout_opt
 @json_opt
-def array_cmd(design, rows, cols, scene, unit, with_afe, split, check, seed, t_exp, scheduler, out,
-              backend, jobs, as_json):
+def array_cmd(design, rows, cols, scene, unit, with_afe, split, check, settling, settling_limit, seed, t_exp,
+              scheduler, out, backend, jobs, as_json):
     """Simulate one frame of both arrays (with column circuits) under a scene."""
     from ..chip.frame import check_split, default_split, simulate_frame
     from ..chip.report import frame_table, plot_frame
@@ -52,13 +58,17 @@ def array_cmd(design, rows, cols, scene, unit, with_afe, split, check, seed, t_e
     m, default_unit = default_map(rows, d.secondary_per_pixel * cols, scene) if scene in ("gradient", "uniform") else load_map(scene)
     ph = photocurrents(d, rows, cols, m, unit or default_unit, t_exp)
     kw = dict(with_afe=with_afe, t_exp=t_exp, mismatch_seed=seed, backend=backend, jobs=jobs,
-              scheduler=scheduler)
-    f = simulate_frame(d, ph.iph_p, ph.iph_s, split=split, **kw)
+              scheduler=scheduler, compression=ph.compression)
+    f = simulate_frame(d, ph.iph_p, ph.iph_s, split=split, settling=settling and seed is None, **kw)
+    from ..chip.settling import limits
+    limit = limits(d, None if settling_limit is None else settling_limit * 1e-3)
     folder = output_path(out, d, f"array_{rows}x{cols}")
     folder.mkdir(parents=True, exist_ok=True)
     write_atomic(folder / "frame.csv", frame_table(f, ph))
     data = {**f.as_dict(), **ph.as_dict(), "csv": str(folder / "frame.csv"),
-            "plot": str(plot_frame(f, folder / "frame.png", f"{d.name}: {rows} x {cols} frame"))}
+            "plot": str(plot_frame(f, folder / "frame.png", f"{d.name}: {rows} x {cols} frame", ph, limit))}
+    data["settling"] = f.settling_summary(limit)
+    data["verdict"] = verdict(data["settling"], ph.clipped, f.failures)
     if check:
         c = check_split(d, ph.iph_p, ph.iph_s, default_split(with_afe) if f.split == "none" else f.split, **kw)
         data["check"] = c
@@ -69,7 +79,8 @@ def array_cmd(design, rows, cols, scene, unit, with_afe, split, check, seed, t_e
 
     def text(x):
         lines = [f"{x['rows']} x {x['cols']} frame, {x['decks']} deck(s), {x['wall_s']:.1f} s",
-                 f"clipped (saturated): {x['clipped']}", f"table: {x['csv']}", f"plot: {x['plot']}"]
+                 f"clipped (saturated): {x['clipped']}", *settling_lines(x["settling"]),
+                 f"table: {x['csv']}", f"plot: {x['plot']}"]
         if "check" in x:
             c = x["check"]
             worst = "-" if x["check_max_diff_V"] is None else f"{x['check_max_diff_V'] * 1e3:.3f}"
@@ -81,9 +92,39 @@ def array_cmd(design, rows, cols, scene, unit, with_afe, split, check, seed, t_e
                 lines.append(f"check void: decks failed or ran at looser options: {', '.join(c['void'][:5])}")
         lines += [f"FAILED {e['deck']}: {e['message']}" for e in x["failures"]]
         lines += [f"retried with looser options {e['deck']}: {e['message']}" for e in x["retried"]]
+        lines.append(f"frame: {x['verdict']['text']}")
         return "\n".join(lines)
     emit(data, as_json, text)
     if f.failures:
         raise SystemExit(4)
-    if check and not data["check"]["ok"]:
+    if check and not (data["check"]["ok"] and data["verdict"]["ok"]):
         raise SystemExit(1)
+
+
+def settling_lines(s) -> list[str]:
+    from ..chip.settling import describe
+    if s is None:
+        return ["settling: not measured (--no-settling, or a Monte Carlo frame)"]
+    worst = ", ".join(f"{k} {'-' if v is None else f'{v * 1e3:.3f}'} mV" for k, v in s["worst_V"].items())
+    lim = ", ".join(f"{k} {v * 1e3:g} mV" for k, v in s["limit_V"].items())
+    lines = [f"settling (each row against the same read with long S1 and S2): worst {worst} (limit {lim})"]
+    return lines + [f"  beyond the limit: {ln}" for ln in describe(s)] + [f"  {n}" for n in s["notes"][:5]]
+
+
+def verdict(s, clipped: dict, failures) -> dict:
+    """``ok`` only when no deck failed, no subpixel is clipped and every measured settling
+    error is within its limit; ``text`` says which of these is not so."""
+    why = []
+    if failures:
+        why.append(f"{len(failures)} deck(s) failed")
+    if any(clipped.values()):
+        why.append("clipped subpixels: " + ", ".join(f"{k} {n}" for k, n in clipped.items() if n))
+    if s is None:
+        why.append("settling not measured")
+    else:
+        beyond = {k: len(v) for k, v in s["beyond"].items() if v}
+        if beyond:
+            why.append("settling beyond its limit: " + ", ".join(f"{k} {n}" for k, n in beyond.items()))
+        if s["not_measured"]:
+            why.append(f"settling of {s['not_measured']} subpixel(s) not measured")
+    return {"ok": not why, "text": "ok" if not why else "NOT ok: " + "; ".join(why)}

@@ -58,7 +58,19 @@ def sweep(design, ip, is_, backend="batch", jobs=None, tag="sweep"):
                             f"pixel.v_pd_reset = {design.pixel.v_pd_reset:g} V, "
                             f"pixel.v_fd_reset = {design.pixel.v_fd_reset:g} V, corner {design.corner_name}, "
                             f"{design.temperature - 273.15:g} degC)")
-    return simulate_many(nets, backend=backend, jobs=jobs)
+    return simulate_many(nets, backend=backend, jobs=jobs, failed="keep")
+
+
+def _kept(tag, ip, is_, res, failed: list):
+    """The points that simulated; the others go to ``failed`` with ngspice's message (and the
+    node where the run went wrong): one bad point never stops the experiment."""
+    from ..errors import SimulationError
+    ok = [k for k, r in enumerate(res) if not isinstance(r, SimulationError)]
+    failed += [{"sweep": tag, "iph_primary_A": float(ip[k]), "iph_secondary_A": float(is_[k]),
+                "message": res[k].message} for k in range(len(res)) if k not in ok]
+    if tag == "coarse" and (0 not in ok or len(ok) < 3):
+        raise next(r for r in res if isinstance(r, SimulationError))   # no dark point or too few to go on
+    return ip[ok], is_[ok], [res[k] for k in ok]
 
 
 def model_vs_spice(design, results, currents, which: str, tm) -> float:
@@ -113,7 +125,8 @@ def run_experiment(design, backend: str = "batch", jobs: int | None = None) -> d
     tm = timings(design, exp.t_window)
     ip = np.linspace(0, _i_max(design, "primary"), COARSE)
     is_ = np.linspace(0, _i_max(design, "secondary"), COARSE)
-    res = sweep(design, ip, is_, backend, jobs, "coarse")
+    failed: list = []
+    ip, is_, res = _kept("coarse", ip, is_, sweep(design, ip, is_, backend, jobs, "coarse"), failed)
     sp, ss = _signals(design, res, tm)
     dark_p, dark_s = sp[0], ss[0, 0]
     swing_p, swing_s = sp.max() - dark_p, ss[:, 0].max() - dark_s
@@ -124,8 +137,8 @@ def run_experiment(design, backend: str = "batch", jobs: int | None = None) -> d
     ks = int(np.searchsorted(np.maximum.accumulate(ss[:, 0]), tgt_s))
     ip2 = np.linspace(ip[kp - 1], ip[kp], REFINE + 2)[1:-1]
     is2 = np.linspace(is_[ks - 1], is_[ks], REFINE + 2)[1:-1]
-    res2 = sweep(design, ip2, is2, backend, jobs, "refine")
-    sp2, ss2 = _signals(design, res2, tm)
+    ip2, is2, res2 = _kept("refine", ip2, is2, sweep(design, ip2, is2, backend, jobs, "refine"), failed)
+    sp2, ss2 = _signals(design, res2, tm) if res2 else (np.zeros(0), np.zeros((0, design.secondary_per_pixel)))
     all_ip, all_sp = np.concatenate([ip, ip2]), np.concatenate([sp, sp2])
     all_is, all_ss = np.concatenate([is_, is2]), np.concatenate([ss[:, 0], ss2[:, 0]])
     i_mid = target_current(all_ip, all_sp, tgt_p)
@@ -152,6 +165,7 @@ def run_experiment(design, backend: str = "batch", jobs: int | None = None) -> d
         "model_vs_spice": {"max_err_frac": max(err_p, err_s), "primary": err_p, "secondary": err_s},
         "fig_a1": a1,
         "n_runs": len(runs) + 1,
+        "failed_points": failed,
         "retried": [dict(r.meta["retried"], deck=r.meta["title"]) for r in runs + [a1_result]
                     if r.meta.get("retried")],
         "n_cached": n_cached,

@@ -216,9 +216,18 @@ def _bilinear(sg, ig, table, s, i):
     return at(j) * (1 - ws) + at(j + 1) * ws
 
 
-def t_float(design, f_read):
-    """How long vm floats before the AFE's output sample: p1 opens t_no before 0.4 t_row, sampled at 0.9 t_row."""
-    return 0.5 / f_read + design.afe.nonoverlap
+def t_float(design, f_read, arr):
+    """How long vm floats before the AFE's output sample: p1 opens t_no before S1 does (the array's
+    ``timing.s1_off``), the output is sampled when S2 opens (``s2_off``), at row time 1 / ``f_read``
+    (array or scalar); ``arr``: the array's name or index (0 primary, 1 secondary), or an array of indices."""
+    t_row = 1.0 / np.asarray(f_read, float)
+
+    def span(kind):
+        ph = getattr(design, kind).timing.row(t_row)
+        return ph["s2_off"] - ph["s1_off"]
+    if isinstance(arr, str):
+        return span(arr) + design.afe.nonoverlap
+    return np.where(np.asarray(arr) == 0, span("primary"), span("secondary")) + design.afe.nonoverlap
 
 
 def _light_deck(design, qp, qs, i_p, i_s, title):
@@ -238,7 +247,7 @@ def _light_table(design, tm, sweep, res, sig):
     out = {}
     for arr, cols in (("primary", ("col_p",)), ("secondary", tuple(f"col_s{k}" for k in range(3)))):
         t = tm[arr]
-        tf = t_float(design, 1.0 / t.t_row)
+        tf = t_float(design, 1.0 / t.t_row, arr)
         pts = {}
         for n, k in enumerate(LIGHT_Q_PICK):
             base_pix, _ = levels(sweep[k], "col_s0" if arr == "secondary" else "col_p", t)
@@ -406,7 +415,7 @@ def features(table, nom: Nominal, design) -> dict:
          "perimeter_ratio": design.secondary.perimeter / design.primary.perimeter,
          "J": i / a_pa, "a_ref": design.primary.photoactive_area,
          "a_sub": np.where(arr == 0, design.primary.area, design.secondary.area),
-         "f_read": f_read, "f_design": f_design, "t_hold": 1.0 / f_read, "t_float": t_float(design, f_read),
+         "f_read": f_read, "f_design": f_design, "t_hold": 1.0 / f_read, "t_float": t_float(design, f_read, arr),
          "vdd": vdd, "dvdd": vdd - design.tech.supply, "has_idle_light": nom.idle_light is not None}
     q = i * X["t_int"] + nom.dark_q(X["arr"], X["T"], X["t_int"])
     X["q"] = q

@@ -154,7 +154,7 @@ def check(design, nom: Nominal, backend: str = "batch") -> dict:
             col = responses._col(s)
             f_read = getattr(design, arr).f_read
             X = {"arr": np.array([ARRAYS.index(arr)] * 2), "q": np.array([q, q]), "afe": np.array([False, True]),
-                 "t_float": np.full(2, t_float(design, f_read))}
+                 "t_float": np.full(2, t_float(design, f_read, arr))}
             want_v = predict(nom, X, terms)
             got = np.array([levels(r, col, tm[arr])[0], float(r.at(f"out_{col}", tm[arr].t_reset_level(0)))])
             base = predict(nom, X)

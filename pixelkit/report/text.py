@@ -75,7 +75,13 @@ def simulate_text(r: dict, reference: bool = False) -> str:
              f"  fig. A.1 (currents in ratio C_C): worst difference {r['fig_a1']['max_diff_frac'] * 100:.2f} % of swing",
              f"  analytic model vs SPICE over 10-90 % of swing: worst {m['max_err_frac'] * 100:.2f} %",
              f"  {r['n_runs']} SPICE runs ({r['n_cached']} from cache) in {r['wall_s']:.1f} s"]
-    return "\n".join(lines + _retried_lines(r))
+    return "\n".join(lines + _retried_lines(r) + _failed_lines(r))
+
+
+def _failed_lines(r: dict) -> list[str]:
+    """Sweep points that did not simulate (the figures come from the others)."""
+    return [f"  FAILED point ({x['sweep']} sweep, I_primary = {x['iph_primary_A'] * 1e9:.4g} nA, I_secondary = "
+            f"{x['iph_secondary_A'] * 1e12:.4g} pA), left out: {x['message'][:300]}" for x in r.get("failed_points", [])]
 
 
 def _retried_lines(r: dict) -> list[str]:

@@ -131,8 +131,13 @@ def _finishing(runs):
 
 
 def simulate_many(netlists, backend: str = "batch", jobs: int | None = None, options=None,
-                  use_cache: bool = True) -> list[Result]:
-    """Run every netlist (in parallel), each through the cache and the retry policy."""
+                  use_cache: bool = True, failed: str = "raise") -> list[Result]:
+    """Run every netlist (in parallel), each through the cache and the retry policy.
+
+    A deck that still fails after the retries: ``failed="raise"`` raises its SimulationError
+    once every other deck of the batch is done (and cached); ``"keep"`` puts the
+    SimulationError in its place in the returned list, so one bad point never costs the others.
+    """
     if backend not in BACKENDS:
         raise SimulationError("-", "-", f"unknown backend {backend!r}; allowed: {', '.join(BACKENDS)}")
     jobs = jobs or default_jobs()
@@ -150,6 +155,7 @@ def simulate_many(netlists, backend: str = "batch", jobs: int | None = None, opt
         _notify("cached", len(nets) - len(todo))
     failures: dict[int, str] = {}
     logs: dict[int, list] = {}  # every attempt's ngspice output, kept with a failed deck
+    given_up: dict[int, SimulationError] = {}
     for round_, loosen in enumerate((None, *RETRIES)):
         if not todo:
             break
@@ -168,7 +174,11 @@ def simulate_many(netlists, backend: str = "batch", jobs: int | None = None, opt
                 failures[i] = _message(lines)
                 logs.setdefault(i, []).append((_options_text(deck.options), lines))
                 if round_ == len(RETRIES):
-                    _give_up(deck, failures[i], logs[i])
+                    try:
+                        _give_up(deck, failures[i], logs[i], backend)
+                    except SimulationError as exc:
+                        given_up[i] = exc
+                    continue
                 still.append(i)
                 continue
             if loosen is not None:
@@ -181,6 +191,10 @@ def simulate_many(netlists, backend: str = "batch", jobs: int | None = None, opt
                 cache_mod.save_redirect(keys[i], own, res.meta["retried"]["reason"])
             results[i] = res
         todo = still
+    if given_up and failed == "raise":
+        raise given_up[min(given_up)]
+    for i, exc in given_up.items():
+        results[i] = exc
     return results
 
 
@@ -188,10 +202,14 @@ def _options_text(options) -> str:
     return " ".join(f"{k}={v}" for k, v in options)
 
 
-def _give_up(deck, message, logs):
-    """Keep the deck and the logs of every attempt, then raise in the user's terms."""
+def _give_up(deck, message, logs, backend="batch"):
+    """Keep the deck and the logs of every attempt, then raise in the user's terms (with the
+    forward-biased node, of its array, where a transient stopped: ``failure_site``)."""
     from . import failures
+    from .failure_site import locate
     folder = failures.keep(deck, deck.text(), logs)
+    site = locate(deck, message, lambda d: _to_result(d, *_run([d], backend, 1)[0], backend))
+    message = f"{message}; {site}" if site else message
     raise SimulationError(deck.title, deck.analysis.text(), message, what=failures.describe(deck),
                           folder=folder, tried=[label for label, _ in logs], hints=failures.hints(message))
 

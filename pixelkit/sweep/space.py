@@ -83,7 +83,9 @@ def parse_axis(spec: str) -> Axis:
 
 
 def _design_value(text: str):
-    """A design-file value as TOML would hold it: a number if it is one, else the text."""
+    """A design-file value as TOML would hold it: true / false, a number if it is one, else the text."""
+    if text in ("true", "false"):
+        return text == "true"
     try:
         return float(text) if re.match(r"^[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$", text) else text
     except ValueError:

@@ -74,9 +74,10 @@ _LIST = [
                "exposure over signal per second of storage under the same light (1 / PLS) (SPICE)",
                "pixel.gse x C_FD / (C_PD,node + C_FD) (physics.fd.signal_gse)"),
     *_per_kind("settling", "V", "mV", "settling",
-               "settling error at f_read of the {kind} array's AFE output: the second row of a column read "
-               "at the design's clocks against the same read with 10x longer phases (SPICE)",
-               "the long read itself (10x the time constant budget)"),
+               "settling error of the {kind} array: worst |double-sampled signal - that of the same read with "
+               "S1 and S2 four row times longer| over a 2-row dual column with its AFE (SPICE, chip.settling)",
+               "the long read's own convergence (a twice longer read within 0.1 mV; tests/test_settling.py)",
+               mc=False),
     Figure("criterion_secondary", "1", "%", "pixel",
            "the 5 % / mid-scale criterion of [Thesis2019]: the secondary's signal, in % of its swing, when the primary sits at "
            "mid_fraction of its swing under the same light (mask opening and integration times as designed; "

@@ -17,8 +17,8 @@ A *group* is a set of decks run together; ``run_group`` returns its raw measurem
 - ``dark``: the PD with its EC and TG, dark, over each subpixel's ``t_int``
   (``circuits.testbench.dark_bench``).
 - ``afe``: the SC AFE bench at three input steps.
-- ``settling``: a 2-row column of each array with its AFE at the design's clocks and
-  with 10x longer phases (``circuits.array.array_bench``).
+- ``settling``: a 2-row dual column with its AFE, each row against the same read with long
+  S1 and S2 from the same column state (``chip.settling``, as ``pixelkit array``).
 - ``power``: ``verify.power``.
 """
 from __future__ import annotations
@@ -36,8 +36,6 @@ SMALL = 1.0 / 40
 BRACKET = (0.98, 1.12)
 #: Storage of the GSE decks, in exposure windows.
 STORE = 4
-#: Phases of the long (settled) read: this many times the design's row time.
-SLOW = 10
 
 
 def _run(nets, design, draw, backend):
@@ -219,34 +217,19 @@ def afe(design, draw=None, backend="batch") -> dict:
     return {"gain": -slope, "ideal": a.c11 / a.c13}
 
 
-def _slow(sub):
-    """The array read SLOW times slower: the row time and every row phase the design sets."""
-    from ..readout_timing import ROW_FRACTIONS
-    t = sub.timing
-    longer = {k: getattr(t, k) * SLOW for k, _ in ROW_FRACTIONS if getattr(t, k) is not None}
-    return replace(sub, f_read=sub.f_read / SLOW, timing=replace(t, **longer))
-
-
 def settling(design, draw=None, backend="batch") -> dict:
-    from ..circuits.array import Tile, array_bench, frame_timings
+    """Worst |settling error| (V) of each array over a 2-row dual column with its AFE at the
+    default stimulus: each row's double-sampled signal against the same read with long S1 and
+    S2 from the same column state (``chip.settling``). Nominal devices: a Monte Carlo draw
+    does not enter (the figure's ``mc`` is false)."""
+    from ..chip.frame import simulate_frame
     from ..sweep.run import default_stimulus
     n = design.secondary_per_pixel
     stim = default_stimulus(design, design.experiment.t_window)
     ip, is_ = np.full((2, 1), stim["iph_p"]), np.full((2, n), stim["iph_s"])
-    # storage light and leakage off the question: the slow read waits 10x longer on FD
-    quiet = replace(design, pixel=replace(design.pixel, gse=1e9))
-    slow = replace(quiet, primary=_slow(quiet.primary), secondary=_slow(quiet.secondary))
-    # one deck per array: each stops after its own last row (an AFE left with both phases
-    # open drives the macromodel's rail-less output away, which costs the simulator dearly)
-    plan = [(kind, d, f"vfy_settle_{kind[0]}{'_slow' if d is slow else ''}")
-            for kind in ("primary", "secondary") for d in (quiet, slow)]
-    nets = [replace(array_bench(d, ip, is_, Tile((kind,), (0, 1), (0,)), with_afe=True, title=t),
-                    saves=(f"out_col_{kind[0]}_0",)) for kind, d, t in plan]
-    vals = {}
-    for (kind, d, _), r in zip(plan, _run(nets, design, draw, backend)):
-        tm = frame_timings(d, d.experiment.t_window, 2)[kind]
-        vals.setdefault(kind, []).append(float(r.at(f"out_col_{kind[0]}_0", tm.t_reset_level(1))))
-    return {k: abs(v[0] - v[1]) for k, v in vals.items()}
+    f = simulate_frame(design, ip, is_, with_afe=True, split="columns", settling=True, backend=backend, jobs=1)
+    return {k: float(np.nanmax(np.abs(f.settling[k]))) if np.isfinite(f.settling[k]).any() else float("nan")
+            for k in ("primary", "secondary")}
 
 
 def power(design, draw=None, backend="batch") -> dict:

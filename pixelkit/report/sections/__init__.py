@@ -76,6 +76,7 @@ REGISTRY: list[tuple[str, str, str]] = [
     ("sizing", "Sizing: mask opening and integration times", "report"),
     ("afe", "AFE transfer and its error", "report"),
     ("array", "2 x 2 array readout (fig. 3.13)", "report"),
+    ("bright", "Bright sources: over-exposure, black sun, blooming", "issue 27 (timing, settling, over-exposure)"),
     ("layout", "Layout", "report"),
     ("layout_signoff", "Layout sign-off", "issue 29 (readout layout, arrays, shield)"),
     ("post_layout", "Post-layout vs schematic", "issue 30 (extraction)"),

@@ -1,0 +1,110 @@
+"""Bright sources: pixels far beyond full well, with and without anti-blooming.
+
+A headlight at night puts pixels 10 - 1000x beyond full well. Per array, with EC holding
+the PD in reset while the rows wait (``timing.ec_hold``, anti-blooming) and without, at
+1 - 1000 full wells over the array's own ``t_int``, on a dual column of a frame with its
+AFE (rows dark, bright, dark; the bright charge carried over the experiment window, and the
+pixel's real light after the exposure ends, ``circuits.array.array_bench``):
+
+- **output**: the bright row's double-sampled signal (and the AFE's output), as a fraction
+  of the full-well signal. Double sampling subtracts a reset level taken after FD is reset;
+  if charge keeps reaching FD after that reset, the reset level falls and the pixel reads
+  *dark*: the "black sun" (``black_sun``: below half the full-well signal).
+- **charge onto FD after its reset**: from RST opening to the reset-level sample,
+  ``C_FD`` dV_FD in electrons, against what the storage node's own shielding lets in over
+  that time (I / gse, ``physics.fd.pls_current``: the independent part). The excess is
+  the PD overflowing through TG (blooming), which anti-blooming removes.
+- **recovery**: the dark row read after the bright one minus the dark row read before it
+  (column and AFE output).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..constants import Q
+
+#: Over-exposure factors, in full wells over the array's own t_int.
+FACTORS = (1.0, 10.0, 100.0, 1000.0)
+QUICK_FACTORS = (1.0, 1000.0)
+#: Below this fraction of the full-well signal an over-exposed pixel reads as a black sun.
+BLACK_SUN = 0.5
+KINDS = ("primary", "secondary")
+ROWS = 3          # dark, bright, dark
+
+
+def full_well_current(design, kind: str) -> float:
+    """The photocurrent that takes the PD by the design's swing over its t_int (A)."""
+    from .scene import i_floor
+    sub = getattr(design, kind)
+    return i_floor(design, kind, sub.t_int, design.pixel.v_pd_reset - design.pixel.swing)
+
+
+def _with_hold(design, hold: bool):
+    from dataclasses import replace
+    return replace(design, **{k: replace(getattr(design, k), timing=replace(getattr(design, k).timing, ec_hold=hold))
+                              for k in KINDS})
+
+
+def decks(design, factors=FACTORS) -> list:
+    """(hold, factor, deck): one frame deck per factor and anti-blooming setting: a dual column
+    of ``ROWS`` rows (dark, ``factor`` full wells, dark) with its AFE, both arrays, each array's
+    charge of its t_int over the experiment window and its real light after it."""
+    from ..circuits.array import array_bench
+    t_w = design.experiment.t_window
+    comp = {k: getattr(design, k).t_int / t_w for k in KINDS}
+    fw = {k: full_well_current(design, k) * comp[k] for k in KINDS}   # as simulated in the window
+    n = design.secondary_per_pixel
+    out = []
+    for hold in (True, False):
+        d = _with_hold(design, hold)
+        for f in factors:
+            ip = np.array([[0.0], [f * fw["primary"]], [0.0]])
+            is_ = np.array([[0.0] * n, [f * fw["secondary"]] * n, [0.0] * n])
+            net = array_bench(d, ip, is_, t_exp=t_w, with_afe=True, compression=comp,
+                              title=f"bright_{'ab' if hold else 'noab'}_{f:g}")
+            out.append((hold, f, net))
+    return out
+
+
+def figures(design, factors=FACTORS, backend="batch", jobs=None) -> list[dict]:
+    """Per array, anti-blooming setting and factor: the bright row's output (column and AFE),
+    the charge onto its FD after RST (the reset-level droop, e-) against its own light, and the
+    next dark row's recovery."""
+    from ..camera.spicenoise import sf_gain
+    from ..circuits.array import frame_timings
+    from ..measure.pixel import levels
+    from ..physics.fd import pls_current, response
+    from ..spice import simulate_many
+    plan = decks(design, factors)
+    res = simulate_many([net for _, _, net in plan], backend=backend, jobs=jobs, failed="keep")
+    a_sf = sf_gain(design)
+    c_fd = {k: response(design, k, a_sf)["c_fd_F"] for k in KINDS}
+    tm = frame_timings(design, design.experiment.t_window, ROWS)
+    out, full = [], {}
+    for (hold, f, _), r in zip(plan, res):
+        for kind, s in (("primary", "p"), ("secondary", "s")):
+            row = {"array": kind, "anti_blooming": hold, "full_wells": f,
+                   "current_A": f * full_well_current(design, kind)}
+            if isinstance(r, Exception):
+                out.append({**row, "failed": r.message})
+                continue
+            t, col = tm[kind], f"col_{s}_0"
+            sig = [levels(r, col, t, k) for k in range(ROWS)]
+            ds = [b - a for a, b in sig]
+            afe = [float(r.at(f"out_{col}", t.t_reset_level(k))) for k in range(ROWS)]
+            fd = f"x{s}_1_0.fd"
+            t0, t1 = t.rst_window(1)[1] + t.edge, t.t_reset_level(1)
+            droop = float(r.at(fd, t0)) - float(r.at(fd, t1))
+            row.update(signal_V=ds[1], afe_V=afe[1], reset_level_V=sig[1][1],
+                       fd_after_reset_e=c_fd[kind] * droop / Q,
+                       fd_light_e=pls_current(design, row["current_A"]) * (t1 - t0) / Q,
+                       recovery_V=ds[2] - ds[0], recovery_afe_V=afe[2] - afe[0])
+            if f == 1.0:
+                full[(hold, kind)] = ds[1]
+            out.append(row)
+    for row in out:
+        ref = full.get((row["anti_blooming"], row["array"]))
+        if "signal_V" in row and ref:
+            row["of_full_well_signal"] = row["signal_V"] / ref
+            row["black_sun"] = bool(row["of_full_well_signal"] < BLACK_SUN)
+    return out
