@@ -15,7 +15,7 @@ import numpy as np
 
 from ...camera.spicenoise import sf_gain
 from ...constants import Q
-from ...experiments.reference import THESIS
+from ...experiments.reference import THESIS, departures
 from ...physics.subpixel import model_table
 from .. import names as N
 from . import Checked, Section, Table
@@ -93,6 +93,7 @@ def build(ctx) -> Section:
     if ctx.reference:
         text.append("This design is the test chip of [Thesis2019]: its columns give the dissertation's table 3.2 "
                     "and sizing values beside the kit's, as a validation of the kit.")
+        text += [f"It departs from the dissertation in {x}." for x in departures(d)]
         tables = [Table("design_summary", "Key figures: [Thesis2019] table 3.2 beside the kit",
                         ["figure", "[Thesis2019] primary", "kit primary", "[Thesis2019] secondary", "kit secondary"],
                         rows),
