@@ -95,8 +95,17 @@ def test_power_scales_with_supply_and_matches_bias_currents(ref_design):
     assert lo["chip_W"] < nom["chip_W"] < hi["chip_W"]
     assert hi["chip_W"] / lo["chip_W"] == pytest.approx(1.1 / 0.9, rel=0.02)
     est = nom["estimate"]["chip_blocks_W"]
-    for block, rel in (("bias", 0.01), ("read", 0.10), ("afe", 0.01)):
+    for block, rel in (("bias", 0.01), ("afe", 0.01)):
         assert nom["chip_blocks_W"][block] == pytest.approx(est[block], rel=rel), block
+    # the read: without the column precharge the estimate holds (10 %); with it, the follower also
+    # recharges the grounded line and C11 (in the estimate) and drives the precharge switch while
+    # both conduct (a crowbar, not in it): the estimate is a lower bound the precharge must exceed
+    no_pre = {k: replace(getattr(ref_design, k), timing=replace(getattr(ref_design, k).timing, pre_on=None,
+                                                                     pre_off=None)) for k in ("primary", "secondary")}
+    bare = measure.power(replace(ref_design, **no_pre))
+    assert bare["chip_blocks_W"]["read"] == pytest.approx(bare["estimate"]["chip_blocks_W"]["read"], rel=0.10)
+    assert est["read"] > 1.3 * bare["estimate"]["chip_blocks_W"]["read"]
+    assert est["read"] < nom["chip_blocks_W"]["read"] < 3 * est["read"]
     # the transistor-level OTA draws its own current: SPICE against its mirror ratios (70 uA)
     ota = measure.power(replace(ref_design, afe=replace(ref_design.afe, opamp="ota")))
     assert ota["chip_blocks_W"]["afe"] == pytest.approx(ota["estimate"]["chip_blocks_W"]["afe"], rel=0.10)

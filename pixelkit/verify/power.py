@@ -22,7 +22,9 @@ Independent path (``estimate``): bias currents x supply: each column's load carr
 ``pixel.sf_bias`` while a row is read (rows t_row of every frame), its bias reference
 ``sf_bias`` always, its op-amp ``afe.supply_current`` always (the OTA: its mirror ratios);
 the column line (``physics.noise.column_capacitance``) is charged to the reset level (FD
-reset minus the SF's ~1.1 V) once per read; the resets move the charge of a mid-scale
+reset minus the SF's ~1.1 V) once per read, and with a column precharge (``timing.pre_on``)
+the line and C11 once more, from ground (a lower bound there: the follower also drives the
+precharge switch while both conduct, not estimated); the resets move the charge of a mid-scale
 signal back onto the PD once per frame.
 """
 from __future__ import annotations
@@ -147,7 +149,10 @@ def estimate(design) -> dict:
         duty = sub.rows / sub.f_read / t_frame
         # the load's current while a row is read, and the column line charged once per read
         c_col = noise.column_capacitance(design)
-        chip["read"] += sub.cols * vdd * (px.sf_bias * duty + c_col * (px.v_fd_reset - 1.1) * sub.rows / t_frame)
+        # a column precharge (timing.pre_on) grounds the line and C11 in S1: the follower charges
+        # both back to the level once more per read
+        c_read = c_col + (c_col + a.c11 if sub.timing.pre_on is not None else 0.0)
+        chip["read"] += sub.cols * vdd * (px.sf_bias * duty + c_read * (px.v_fd_reset - 1.1) * sub.rows / t_frame)
         chip["bias"] += sub.cols * vdd * px.sf_bias
         chip["afe"] += sub.cols * vdd * i_afe
         node = pd_node(design, kind, parasitics=True)
