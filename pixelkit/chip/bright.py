@@ -75,10 +75,12 @@ def figures(design, factors=FACTORS, backend="batch", jobs=None) -> list[dict]:
     from ..measure.pixel import levels
     from ..physics.fd import pls_current, response
     from ..spice import simulate_many
+    from ..tech.ekv import models_for
     plan = decks(design, factors)
     res = simulate_many([net for _, _, net in plan], backend=backend, jobs=jobs, failed="keep")
     a_sf = sf_gain(design)
-    c_fd = {k: response(design, k, a_sf)["c_fd_F"] for k in KINDS}
+    sf_models = models_for(design)
+    c_fd = {k: response(design, k, a_sf, sf_models)["c_fd_F"] for k in KINDS}
     tm = frame_timings(design, design.experiment.t_window, ROWS)
     out, full = [], {}
     for (hold, f, _), r in zip(plan, res):

@@ -157,14 +157,27 @@ def _retried(res):
     return res.meta["retried"]["reason"] if res.meta.get("retried") else None
 
 
+def _run_one(net, backend, jobs, options, settle: bool):
+    """One deck through the engine. A deck whose settling is measured and that only ran at the
+    engine's looser retry options (reltol 1e-4: a noise floor near the 0.5 mV limit) is run
+    again at ``CONVERGED`` tolerances, which the stiff edges that stopped it usually pass."""
+    from ..spice import simulate_many
+    from ..spice.options import merged
+    res = simulate_many([net], backend=backend, jobs=jobs, options=options)[0]
+    if settle and _retried(res):
+        tight = simulate_many([net], backend=backend, jobs=jobs, options=merged(options or (), CONVERGED))[0]
+        if not _retried(tight):
+            return tight
+    return res
+
+
 def _probe(task):
     """Simulate one tile (through the engine and its cache) and read its samples; with a
     reference deck (``ref``: the same tile read with long S1 and S2), their settling errors."""
-    from ..spice import simulate_many
     net, backend, jobs, options, probes, ref = task
     out = {"failures": [], "retried": [], "values": {}, "decks": 0, "settling": {}, "notes": []}
     try:
-        res = simulate_many([net], backend=backend, jobs=jobs, options=options)[0]
+        res = _run_one(net, backend, jobs, options, ref is not None)
     except SimulationError as exc:
         out["failures"].append({"deck": net.title, "message": exc.message})
         return out
@@ -180,11 +193,10 @@ def _settle(out, ref, probes, backend, jobs, options):
     """Run the long-S1/S2 reference ``ref`` = (deck, its timings) and put each probe's settling
     error (double-sampled signal - the settled one) into ``out``. A reference that fails
     leaves its cells not measured (a note), not a failed frame."""
-    from ..spice import simulate_many
     from .settling import settled_level
     net, tm_ref = ref
     try:
-        res = simulate_many([net], backend=backend, jobs=jobs, options=options)[0]
+        res = _run_one(net, backend, jobs, options, True)
     except SimulationError as exc:
         out["notes"].append(f"reference read {net.title} failed, its cells not measured: {exc.message[:200]}")
         return
@@ -208,7 +220,6 @@ def _chain(task):
     """Simulate a column chain: row 0, then each row from the state the previous row's deck
     left at the row's start (see the module docstring). A failed deck ends the chain: its
     later rows are listed as failed too (they have no state to start from)."""
-    from ..spice import simulate_many
     design, ip, is_, tile, t_exp, with_afe, seed, max_step, backend, options, rows, title, settle, comp = task
     from .settling import reference_timings
     tm = frame_timings(design, t_exp, rows)
@@ -227,7 +238,7 @@ def _chain(task):
         net = _saved(array_bench(design, ip, is_, t, t_exp, with_afe, seed, max_step, title=f"{title}_r{r}",
                                  handoff=hand, compression=comp), probes, nodes)
         try:
-            res = simulate_many([net], backend=backend, jobs=1, options=options)[0]
+            res = _run_one(net, backend, 1, options, settle)
             out["decks"] += 1
             out["values"].update(_read(res, probes))
             if r == 0:
