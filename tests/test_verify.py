@@ -255,3 +255,23 @@ def test_post_layout_view_lowers_the_pd_conversion_gain_by_its_wiring(tmp_path):
         assert ratio < 0.99
     with pytest.raises(ConfigError, match="stack"):
         verify(load_design(_design(tmp_path, {"afe_gain_error": {"max": "1 %"}})), post_layout=True, **kw)
+
+
+def test_settling_specs_fail_on_a_design_that_does_not_settle(tmp_path):
+    """The design's own settling specs (0.5 mV) through `pixelkit verify`: the former reference read
+    (400 nA load, the default phases; tens of mV of row-to-row memory, test_settling) fails both
+    and names them; the reference design passes both at the same condition."""
+    from former_design import former
+    out = {}
+    for name, text in (("former", former()), ("reference", REF.read_text())):
+        raw = tomllib.loads(text)
+        raw["spec"] = {k: v for k, v in raw["spec"].items() if k.startswith("settling_")}
+        raw["verify"] = {**raw.get("verify", {}), "mc": 0}
+        p = tmp_path / f"{name}.toml"
+        p.write_text(to_toml(raw))
+        code, stdout, err = run_cli("verify", p, "--corners", "tt", "--temperatures", "27degC", "--supplies", "0%",
+                                    "--out", tmp_path / name, "--json", timeout=600)
+        out[name] = (code, {r["spec"]: r["status"] for r in json.loads(stdout)["rows"]}, err)
+    assert out["former"][0] == 1 and "settling_primary at" in out["former"][2], out["former"]
+    assert out["former"][1] == {"settling_primary": "fail", "settling_secondary": "fail"}
+    assert out["reference"][0] == 0 and set(out["reference"][1].values()) == {"pass"}, out["reference"]
