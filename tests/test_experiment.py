@@ -13,6 +13,8 @@ from pixelkit.spice import simulate_many
 #: currents below), so a move beyond 3 % is a change of the bench, its timing or the models
 #: that must be looked at and re-pinned, not noise.
 # the reference design since issue 27 (1 uA load, precharged read); 1.1012 nA / 37.27 pA before
+# (the former design still gives those; the move, -6 %, is the swing lost to the SF at 1 uA and
+# is followed by the independent derivation below: -5.8 % / -5.4 %)
 PINNED = {"i_mid_A": 1.0351e-9, "i_5pct_A": 35.08e-12}
 PIN_REL = 0.03
 
@@ -86,3 +88,25 @@ def test_shared_backend_gives_the_same_experiment(ref_design, experiment):
     from pixelkit.experiments.thesis import run_experiment
     shared = run_experiment(ref_design, backend="shared")
     assert shared["ratio"] == pytest.approx(experiment["ratio"], rel=1e-3)
+
+
+def test_target_currents_against_the_charge_chain_derivation(ref_design, experiment):
+    """Independent path for the pinned i_mid / i_5pct: the analytic charge chain, not the sweep.
+    Electrons are added in small steps, each raising the output by the chain's gain at the node's
+    present bias (physics.fd.transfer: charge sharing, TG turn-off, RS turn-on; the SF gain from
+    its DC sweep) and lowering the shared PD / FD node by Q / C_transfer there, until the output
+    reaches the target fraction of SPICE's swing; i = N q / t_window. Measured: -3.1 % / -0.1 %
+    (reference design), -3.3 % / -0.6 % (the former read, 400 nA: 1.1012 nA / 37.27 pA in SPICE):
+    the primary's remainder is the SF gain taken as constant over half the swing."""
+    from pixelkit.camera.spicenoise import sf_gain
+    from pixelkit.physics import fd
+    from pixelkit.tech.ekv import models_for
+    d, q = ref_design, 1.602176634e-19
+    a, models = sf_gain(d), models_for(d)
+    for which, key, frac, step, rel in (("primary", "i_mid_A", d.experiment.mid_fraction, 200.0, 0.05),
+                                         ("secondary", "i_5pct_A", d.experiment.low_fraction, 50.0, 0.02)):
+        target, v, out, n = frac * experiment[which]["swing_V"], d.pixel.v_pd_reset, 0.0, 0.0
+        while out < target:
+            t = fd.transfer(d, which, a, models, v)
+            out, v, n = out + a * t["cg_fd_V_per_e"] * step, v - t["cg_transfer_V_per_e"] * step, n + step
+        assert n * q / d.experiment.t_window == pytest.approx(experiment[which][key], rel=rel), which
