@@ -6,12 +6,20 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 REF = ROOT / "designs" / "dual_pixel_revA.toml"
+#: The reference design with a read that settles (issue 27).
+SETTLED = ROOT / "designs" / "dual_pixel_revA_settled.toml"
 
 
 @pytest.fixture(scope="session")
 def ref_design():
     from pixelkit.design import load_design
     return load_design(REF)
+
+
+@pytest.fixture(scope="session")
+def settled_design():
+    from pixelkit.design import load_design
+    return load_design(SETTLED)
 
 
 def run_cli(*args, cwd=None, timeout=600):

@@ -8,9 +8,9 @@ comparison is a validation of the kit; for any other design it would be a figure
 the user is not designing, so it is left out. Device sizes, the AFE and the mask opening are
 not printed by the dissertation and do not take a design out of the comparison.
 
-Where the kit's own reference design departs from a stated value on purpose (``DEPARTURES``:
-the value it takes instead and why), a design at either value is the chip, and the
-comparison names the departure beside the dissertation's figures.
+Where the kit departs from a stated value on purpose (``DEPARTURES``: the value it takes instead
+and why; the settled read, designs/dual_pixel_revA_settled.toml), a design at either value is the
+chip, and the comparison names the departure beside the dissertation's figures.
 """
 from __future__ import annotations
 
@@ -35,7 +35,7 @@ _STATED = (
     ("experiment.t_window", 16e-6), ("experiment.mid_fraction", 0.5), ("experiment.low_fraction", 0.05),
 )
 TECHNOLOGY = "c35_thesis"
-#: Stated values the kit's reference design departs from: (its value, why).
+#: Stated values the kit departs from on purpose: (its value, why).
 DEPARTURES = {
     "pixel.sf_bias": (1e-6, "column load 1 uA where the dissertation's simulations used ~400 nA: at 400 nA "
                             "the column with its AFE does not settle in the 1 MHz row of the secondary "
