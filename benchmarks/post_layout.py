@@ -6,13 +6,16 @@
    rows and columns; the dual pixel alone is the baseline (target < 10 s).
 2. ``pixelkit array D --rows 2 --cols 2`` (fig. 3.13's 2 x 2), schematic and ``--post-layout``, each
    in a fresh process with an empty simulation cache (target: post-layout < 3 x schematic): the
-   post-layout run once with its extraction (empty cache), once with the extraction cached.
+   post-layout run once with its extraction (empty cache), once with the extraction cached. Wall
+   time and CPU time (the command and every process it waited for: ngspice, KLayout), the CPU
+   ratio being the one a shared machine's load does not move.
 
     python3 benchmarks/post_layout.py
 """
 from __future__ import annotations
 
 import os
+import resource
 import subprocess
 import sys
 import tempfile
@@ -44,7 +47,7 @@ def main():
         print(f"    {k}: {v:.0f} Ohm")
     print(f"    column line lumped C: primary {pl.post_layout.column_cap['primary'] * 1e15:.1f} fF, "
           f"secondary {pl.post_layout.column_cap['secondary'] * 1e15:.1f} fF")
-    times = {}
+    times, cpu = {}, {}
     for label, extra in (("schematic", []), ("post-layout, extraction included", ["--post-layout"]),
                          ("post-layout, extraction cached", ["--post-layout"])):
         if not label.endswith("cached"):
@@ -55,14 +58,18 @@ def main():
         env = dict(os.environ, PIXELKIT_CACHE=cache)
         with tempfile.TemporaryDirectory() as out:
             t0 = time.perf_counter()
+            c0 = resource.getrusage(resource.RUSAGE_CHILDREN)
             r = subprocess.run([sys.executable, "-m", "pixelkit", "array", str(GF), "--rows", "2", "--cols", "2",
                                 "--quiet", "--out", out, *extra], env=env, capture_output=True, text=True)
             times[label] = time.perf_counter() - t0
+            c1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+            cpu[label] = (c1.ru_utime - c0.ru_utime) + (c1.ru_stime - c0.ru_stime)
             if r.returncode:
                 sys.exit(f"{label} 2 x 2 failed: {r.stderr.strip()[-400:]}")
-        print(f"2 x 2 frame, {label}: {times[label]:.1f} s")
+        print(f"2 x 2 frame, {label}: {times[label]:.1f} s wall, {cpu[label]:.1f} s CPU")
     for label in ("post-layout, extraction included", "post-layout, extraction cached"):
-        print(f"{label} / schematic: {times[label] / times['schematic']:.2f} (target < 3)")
+        print(f"{label} / schematic: {times[label] / times['schematic']:.2f} wall, "
+              f"{cpu[label] / cpu['schematic']:.2f} CPU (target < 3)")
     print(f"load average {os.getloadavg()[0]:.1f}")
 
 
