@@ -1,6 +1,6 @@
 """The reference design's read, which does not settle with the AFE attached (issue 27), as text.
 
-The reference (designs/dual_pixel_revA.toml) keeps the thesis's ~400 nA load and the kit's default
+The reference (designs/dual_pixel_revA.toml) keeps the ~400 nA load of [Thesis2019] and the kit's default
 read; designs/dual_pixel_revA_settled.toml is the same chip with the read that settles."""
 from conftest import REF
 

@@ -96,7 +96,7 @@ def test_mc_command_with_corners_and_the_afe(cli, tmp_path, ref_design):
     and the offset FPN against the Pelgrom estimate, each in the chi-square band of its
     sample (secondary: 9 columns; offset: 2 x 3 dual pixels within columns).
 
-    At the thesis's clocks with the read that settles (designs/dual_pixel_revA_settled.toml, issue
+    At the clocks of [Thesis2019] with the read that settles (designs/dual_pixel_revA_settled.toml, issue
     27): the reference design's own read does not settle with the AFE's C11 attached (the column
     slews through S1: tt primary PRNU 13.5 % with the AFE against 0.18 % without), so this test
     ran at half its clocks before."""
