@@ -54,7 +54,16 @@ def verify_cmd(design, corners, temperatures, supplies, mc, seed, scheduler, out
     from ..fileio import json_default, write_atomic
     from ..verify.run import verify
     from ..verify.signoff import COLUMNS, csv_rows, text, where
-    d = load(design)   # with --post-layout: its post-layout view
+    from ..errors import ConfigError
+    from ..family import family_of
+    if family_of(design) == "ratio":   # its own figures (docs/verify.md); a WDR design is refused by load
+        from ..families.ratio.design import load_ratio_design
+        from ..families.ratio.signoff import verify
+        if click.get_current_context().meta.get("pixelkit.post_layout"):
+            raise ConfigError("verify", "--post-layout", True, "a dual-pixel design (the ratio family has no layout)")
+        d = load_ratio_design(design)
+    else:
+        d = load(design)   # with --post-layout: its post-layout view
     folder = output_path(out, d, "verify")
     r = verify(d, corners, temperatures, supplies, mc, seed, backend=backend, jobs=jobs, scheduler=scheduler)
     folder.mkdir(parents=True, exist_ok=True)

@@ -151,7 +151,7 @@ def text(result: dict) -> str:
         lines.append(f"power at {p['condition']}, frame {1e3 * p['frame_period_s']:.4g} ms: chip "
                      f"{1e3 * p['chip_W']:.4g} mW (estimate {1e3 * p['estimate']['chip_W']:.4g} mW): "
                      + ", ".join(f"{b} {1e6 * blocks[b]:.4g} uW ({1e6 * est[b]:.4g})" for b in blocks)
-                     + f"; per dual pixel {1e9 * p['pixel_W']:.4g} nW, per column {1e6 * p['column_W']:.4g} uW")
+                     + f"; per {'pixel' if result.get('family') == 'ratio' else 'dual pixel'} {1e9 * p['pixel_W']:.4g} nW, per column {1e6 * p['column_W']:.4g} uW")
     for e in result.get("errors", [])[:10]:
         lines.append(f"simulation failed at {e['condition']} ({e['group']}): {e['error']}")
     return "\n".join(lines)

@@ -6,7 +6,8 @@ from pathlib import Path
 
 from ...errors import ConfigError
 from ...physics.conversion import rectangle
-from ...schema import ident, integer, num, qty, table, text
+from ...schema import ident, integer, named, num, qty, table, text
+from ...verify.spec import Spec, VerifySettings, check_conditions
 from ..base import FamilyDesign, load_family_design
 
 
@@ -62,6 +63,15 @@ class Readout:
 
 
 @dataclass(frozen=True)
+class Array:
+    """The array the power figures scale to: the paper's prototype is 32 x 32 at 9600 frames/s."""
+    rows: int = integer(32, ge=1, le=100000, doc="pixel rows (read one at a time, back to back)")
+    cols: int = integer(32, ge=1, le=100000, doc="pixel columns (each with its four column lines, "
+                                                  "two counters and a bias mirror)")
+    frame_rate: float = qty("Hz", 9600.0, gt=0, doc="frames per second: a row slot lasts 1 / (rows x frame_rate)")
+
+
+@dataclass(frozen=True)
 class Experiment:
     ratio_intensity: float = num(10.0, gt=1, le=1000, doc="ratio used for the intensity sweep")
 
@@ -73,7 +83,26 @@ class RatioDesign(FamilyDesign):
     photodiodes: Photodiodes = table(Photodiodes, default=Photodiodes, doc="the photodiodes")
     readout: Readout = table(Readout, default=Readout, doc="bias, column capacitance, counter and column devices")
     experiment: Experiment = table(Experiment, default=Experiment, doc="the family's experiment")
+    array: Array = table(Array, default=Array, doc="array size and frame rate (pixelkit verify's power)")
+    verify: VerifySettings = table(VerifySettings, default=VerifySettings,
+                                   doc="the sign-off grid of pixelkit verify (no Monte Carlo for this family yet)")
+    spec: tuple = named(Spec, doc="specifications: one [spec.<name>] table each; this family measures "
+                                  "power_chip only (docs/verify.md)")
+
+    @property
+    def corner_name(self) -> str:
+        return self.corner or self.tech.models.default_corner
+
+
+#: the [spec] figures this family measures
+FIGURES = ("power_chip",)
 
 
 def load_ratio_design(path: str | Path) -> RatioDesign:
-    return load_family_design(RatioDesign, path)
+    d = load_family_design(RatioDesign, path)
+    for s in d.spec:
+        if s.fig.name not in FIGURES:
+            raise ConfigError(d.source, f"spec.{s.name}" + (".figure" if s.figure else ""), s.fig.name,
+                              f"a figure the ratio family measures: {', '.join(FIGURES)}")
+    check_conditions(d, d.tech)
+    return d
