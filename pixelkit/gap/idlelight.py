@@ -34,7 +34,8 @@ import numpy as np
 IDLE_Q_PICK = (2, 5, 8, 11, 13, 16, 20)
 I0 = 1e-15
 #: total currents (A) on a column's open nodes: dense where the sampling node reaches the column's level
-IDLE_I = (1e-14, 3e-14, 6e-14, 1e-13, 1.5e-13, 2.5e-13, 4e-13, 7e-13, 1.2e-12, 3e-12, 1e-11, 1e-10, 1e-9)
+IDLE_I = (1e-14, 3e-14, 6e-14, 1e-13, 1.5e-13, 2.5e-13, 4e-13, 4.7e-13, 5.2e-13, 5.7e-13, 6.3e-13, 7e-13, 1.2e-12,
+          3e-12, 1e-11, 1e-10, 1e-9)
 
 
 def _cols(design) -> tuple:
