@@ -108,9 +108,10 @@ def test_idle_light_effect_lights_what_the_light_map_lights(gf, geos):
     from pixelkit.circuits.testbench import dual_pixel_bench
     from pixelkit.gap import idlelight
     from pixelkit.gap.circuit_edits import specialise
-    from pixelkit.gap.nominal import simulate_exact
+    from pixelkit.gap.exact import simulate_exact
     from pixelkit.layout.pex.light import output_error, with_currents
-    from pixelkit.layout.pex.lightsilicon import SIGNAL_AFE, exposed_signal_area
+    from pixelkit.layout.pex.light import SIGNAL_AFE
+    from pixelkit.layout.pex.lightsilicon import exposed_signal_area
     from pixelkit.layout.pex.overlay import post_layout_view
     post = post_layout_view(gf)
     col = [j for j in with_currents(gf, exposed(geos["DUALPIX_COL"], "pixels")) if j.net.startswith(("out_", "col_"))]

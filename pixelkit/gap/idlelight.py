@@ -10,7 +10,7 @@ starts, p1 pulls the island back to Vref and S1X dumps the sampling node on the 
 the column load's current cannot pull back down within the signal sample: hundreds of mV. The
 error depends on how the light is split between the sampling node and the island (the island
 rising with the node takes C11's charge with it), so the effect lights the nodes the layout leaves
-open with the layout's areas (``design.post_layout.open_readout``: ``layout.pex.lightsilicon``'s
+open with the layout's areas (``design.post_layout.open_readout``: ``layout.pex.light``'s
 map of the drawn shield) and fits one figure, their total area: each junction carries
 ``a J area_j / A`` (A the column's open area, J the row's irradiance as a photocurrent density).
 
@@ -126,7 +126,7 @@ def table(design, plan: list, results: list) -> dict:
 
 def build(design, q_grid: dict, backend: str = "batch") -> dict | None:
     """The table of ``design`` (None: no layout's map of open junctions)."""
-    from .nominal import simulate_exact
+    from .exact import simulate_exact
     if len(pattern(design)) < len(_cols(design)):
         return None
     plan = decks(design, q_grid)

@@ -71,7 +71,7 @@ from ..measure.afe import eps, finite_gain_output
 from ..measure.pixel import levels
 from ..physics.dark import dark_current
 from ..physics.subpixel import pd_node
-from ..spice import simulate_many
+from .exact import simulate_exact
 
 ARRAYS = ("primary", "secondary")
 N_GRID = 22
@@ -309,28 +309,6 @@ def stage_one(design, ends_only: bool = False) -> list:
     nets += [_light_deck(design, qp[k], qs[k], i_p, i_s, f"gaplt{k}_{j}") for k in ends(LIGHT_Q_PICK)
              for j, (i_p, i_s) in enumerate(LIGHT_I)]
     return nets
-
-
-NUDGES = (0.97, 0.94, 0.91)
-
-
-def simulate_exact(nets, backend: str = "batch", jobs: int | None = None) -> list:
-    """``simulate_many``, but a deck the engine could only finish with looser tolerances (its retry
-    policy: reltol 1e-4, which moved a table entry by 3 mV) is re-run at the kit's tolerances with its
-    largest time step nudged (``NUDGES``), which moves the failing step; the first clean run is kept."""
-    from dataclasses import replace
-    res = simulate_many(nets, backend=backend, jobs=jobs)
-    for nudge in NUDGES:
-        todo = [i for i, r in enumerate(res) if r.meta.get("retried")]
-        if not todo:
-            break
-        again = simulate_many([replace(nets[i], analysis=replace(nets[i].analysis, max_step=nets[i].analysis.max_step
-                                                                  * nudge)) for i in todo], backend=backend,
-                              jobs=jobs)
-        for i, r in zip(todo, again):
-            if not r.meta.get("retried"):
-                res[i] = r
-    return res
 
 
 def build_nominal(design, backend: str = "batch") -> Nominal:

@@ -363,7 +363,7 @@ def simulate_case(design, nom, effect: str | None, seed: int, backend="batch", j
     if campaign is None:
         res = simulate_many(nets, **kw)
     else:   # added cases: every deck at the kit's tolerances (a retried deck moved levels by mV)
-        from .nominal import simulate_exact
+        from .exact import simulate_exact
         res = simulate_exact(nets, **kw)
     if campaign is None:
         gain, offset = 1 + g.uniform(-0.02, 0.02), g.uniform(-0.02, 0.02)

@@ -22,7 +22,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .nets import GROUND
+from .nets import AFE_NODES, GROUND
+
+SIGNAL_AFE = ("in", "vm", "x", "c")     # AFE nodes where a photocurrent leaves charge (out is driven)
 
 METALS = ("metal1", "metal2", "metal3", "metal4", "metal5")
 KINDS = {"nsd": "N+ diffusion", "psd": "P+ diffusion in an n-well", "well": "n-well", "pd_n": "photodiode well",
@@ -113,7 +115,6 @@ def afe_sources(afe_junctions) -> list:
     """Current sources inside the SC stage (``scafe``, one for every column: the mean of the drawn
     AFE_P's and AFE_S's exposed junctions) on the nodes it has; the op-amp's inner nodes are left out."""
     from ...spice.netlist import Element
-    from .overlay import AFE_NODES
     acc = {}
     for js in afe_junctions:
         for j in js:
@@ -194,3 +195,19 @@ def light_map(design, shield: str = "pixels", backend: str = "batch", geos: dict
 
 
 _AFE_SIMULATED = ("in", "out", "vm", "x", "c", "p1", "p1b", "p2", "p2b")
+
+
+def open_readout(col_geo, afe_geos, n_secondary: int, shield: str = "pixels") -> tuple:
+    """(bench node, kind, m2) of every junction ``shield`` leaves open on the readout's signal nodes: each
+    column's sampling node (``in_<col>``) and line (``<col>``) from ``DUALPIX_COL``, and the AFE's ``in``,
+    ``vm``, ``x``, ``c`` (``scafe.<node>``: the mean of the drawn AFEs, as one ``scafe`` serves every column)."""
+    out = [(bench_node(j.net, n_secondary), j.kind, j.area_m2) for j in exposed(col_geo, shield)
+           if j.net.startswith(("out_", "col_"))]
+    out = [o for o in out if o[0] is not None]
+    afe = {}
+    for g in afe_geos:
+        for j in exposed(g, shield):
+            if j.net in SIGNAL_AFE:
+                k = (f"scafe.{j.net}", j.kind)
+                afe[k] = afe.get(k, 0.0) + j.area_m2 / len(afe_geos)
+    return tuple(out + [(node, kind, a) for (node, kind), a in sorted(afe.items())])

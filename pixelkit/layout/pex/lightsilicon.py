@@ -19,14 +19,13 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-SIGNAL_AFE = ("in", "vm", "x", "c")     # AFE nodes where a photocurrent leaves charge (out is driven)
 
 
 def exposed_signal_area(geos, shield: str = "pixels") -> dict:
     """Exposed junction area (m2) of one column's readout on the nodes where light leaves charge:
     its sampler node and column line (``DUALPIX_COL``, the primary's) and the AFE's signal nodes
     (the mean of ``AFE_P`` and ``AFE_S``); P+ and N+ separately (they draw opposite currents)."""
-    from .light import exposed
+    from .light import SIGNAL_AFE, exposed
     col = [j for j in exposed(geos["DUALPIX_COL"], shield) if j.net in ("out_p", "col_p")]
     afe = [j for c in ("AFE_P", "AFE_S") for j in exposed(geos[c], shield) if j.net in SIGNAL_AFE]
     out = {"column_psd": sum(j.area_m2 for j in col if j.kind == "psd"),
@@ -35,23 +34,6 @@ def exposed_signal_area(geos, shield: str = "pixels") -> dict:
            "afe_nsd": sum(j.area_m2 for j in afe if j.kind != "psd") / 2}
     out["total"] = sum(out.values())
     return out
-
-
-def open_readout(col_geo, afe_geos, n_secondary: int, shield: str = "pixels") -> tuple:
-    """(bench node, kind, m2) of every junction ``shield`` leaves open on the readout's signal nodes: each
-    column's sampling node (``in_<col>``) and line (``<col>``) from ``DUALPIX_COL``, and the AFE's ``in``,
-    ``vm``, ``x``, ``c`` (``scafe.<node>``: the mean of the drawn AFEs, as one ``scafe`` serves every column)."""
-    from .light import bench_node, exposed
-    out = [(bench_node(j.net, n_secondary), j.kind, j.area_m2) for j in exposed(col_geo, shield)
-           if j.net.startswith(("out_", "col_"))]
-    out = [o for o in out if o[0] is not None]
-    afe = {}
-    for g in afe_geos:
-        for j in exposed(g, shield):
-            if j.net in SIGNAL_AFE:
-                k = (f"scafe.{j.net}", j.kind)
-                afe[k] = afe.get(k, 0.0) + j.area_m2 / len(afe_geos)
-    return tuple(out + [(node, kind, a) for (node, kind), a in sorted(afe.items())])
 
 
 def _lit(junctions, j_density: float):

@@ -20,6 +20,7 @@ from ...errors import PixelkitError
 #: Conductors at the substrate surface (the kit's LVS layers): diffusions and wells.
 SURFACE = ("nsd", "psd", "ptap", "ntap", "well", "pd_n")
 GROUND = "0"
+AFE_NODES = ("in", "out", "vref", "p1", "p1b", "p2", "p2b", "vdd", "vm", "x", "c")   # the drawn AFE's ports / nodes
 
 
 @dataclass

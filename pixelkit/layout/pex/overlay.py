@@ -25,7 +25,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 
-from .nets import GROUND
+from .nets import AFE_NODES, GROUND
 
 PIXEL_PORTS = ("vdd", "vpdr", "vrst", "ec", "tg", "rst", "rs", "col")
 _MIN_C = 1e-19    # couplings below 0.1 aF are dropped
@@ -41,7 +41,7 @@ class Parasitics:
     source: str = ""
     column_pairs: tuple = ()                        # (col, col, F): the other rows' share of each coupling
     #: (bench node, kind, m2): the readout's signal-node junctions the drawn shield leaves open
-    #: (``lightsilicon.open_readout``: what gap's ``readout_light_idle`` lights)
+    #: (``light.open_readout``: what gap's ``readout_light_idle`` lights)
     open_readout: tuple = ()
 
     def node_wiring(self, which: str, node: str, a_sf: float | None = None) -> float:
@@ -117,7 +117,6 @@ def _line_resistance(geo, stack, net: str, layer: str) -> float:
 
 
 #: the AFE's nodes the simulated ``scafe`` subcircuit has (its ports and its capacitors' nodes)
-AFE_NODES = ("in", "out", "vref", "p1", "p1b", "p2", "p2b", "vdd", "vm", "x", "c")
 
 
 def place_afe(cpls) -> tuple:
@@ -161,7 +160,7 @@ def build(design, pix_geo, col_geo, afe_geos=()) -> Parasitics:
     cells = place(pix, n)
     if afe_geos:
         cells["scafe"] = place_afe([capacitances(g, st) for g in afe_geos])
-    from .lightsilicon import open_readout
+    from .light import open_readout
     return Parasitics(cells, column_cap, per_row, resistance,
                       f"extracted from the drawn DUALPIX / DUALPIX_COL of {design.name} ({st.source})", pairs,
                       open_readout(col_geo, afe_geos, n) if afe_geos else ())
