@@ -67,7 +67,8 @@ def _kept(tag, ip, is_, res, failed: list):
     from ..errors import SimulationError
     ok = [k for k, r in enumerate(res) if not isinstance(r, SimulationError)]
     failed += [{"sweep": tag, "iph_primary_A": float(ip[k]), "iph_secondary_A": float(is_[k]),
-                "message": res[k].message} for k in range(len(res)) if k not in ok]
+                "message": res[k].message, "folder": res[k].details()["folder"], "tried": res[k].tried}
+               for k in range(len(res)) if k not in ok]
     if tag == "coarse" and (0 not in ok or len(ok) < 3):
         raise next(r for r in res if isinstance(r, SimulationError))   # no dark point or too few to go on
     return ip[ok], is_[ok], [res[k] for k in ok]

@@ -81,7 +81,9 @@ def simulate_text(r: dict, reference: bool = False) -> str:
 def _failed_lines(r: dict) -> list[str]:
     """Sweep points that did not simulate (the figures come from the others)."""
     return [f"  FAILED point ({x['sweep']} sweep, I_primary = {x['iph_primary_A'] * 1e9:.4g} nA, I_secondary = "
-            f"{x['iph_secondary_A'] * 1e12:.4g} pA), left out: {x['message'][:300]}" for x in r.get("failed_points", [])]
+            f"{x['iph_secondary_A'] * 1e12:.4g} pA), left out: {x['message'][:300]}"
+            + (f"; its deck and ngspice log are kept in {x['folder']}" if x.get("folder") else "")
+            for x in r.get("failed_points", [])]
 
 
 def _retried_lines(r: dict) -> list[str]:
