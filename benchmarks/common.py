@@ -15,3 +15,22 @@ def reference_design():
     os.environ["PIXELKIT_CACHE"] = tempfile.mkdtemp(prefix="pk-bench-")
     from pixelkit.design import load_design
     return load_design(ROOT / "designs" / "dual_pixel_revA.toml")
+
+
+def child_cpu_s() -> float:
+    """CPU seconds (user + system) of every child process waited for so far (ngspice, KLayout)."""
+    import resource
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
+def empty_gds(path: Path, design) -> Path:
+    """A GDS of one cell EMPTY holding a 1 um boundary box: the DRC deck's fixed cost on nothing."""
+    import gdstk
+    lib = gdstk.Library(unit=1e-6, precision=1e-9)
+    cell = gdstk.Cell("EMPTY")
+    b = design.tech.layer("boundary")
+    cell.add(gdstk.rectangle((0, 0), (1, 1), layer=b.layer, datatype=b.datatype))
+    lib.add(cell)
+    lib.write_gds(str(path))
+    return path

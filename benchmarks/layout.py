@@ -13,13 +13,12 @@ are shared).
 from __future__ import annotations
 
 import os
-import resource
 import sys
 import tempfile
 import time
 from pathlib import Path
 
-from common import ROOT
+from common import ROOT, child_cpu_s, empty_gds
 
 from pixelkit.design import load_design
 from pixelkit.layout.flow import SIGNOFF_TOP, write_gds
@@ -30,22 +29,6 @@ from pixelkit.layout.signoff.lvs import run_lvs
 TARGET_S = 30.0
 
 
-def _empty_gds(path: Path, design) -> Path:
-    import gdstk
-    lib = gdstk.Library(unit=1e-6, precision=1e-9)
-    cell = gdstk.Cell("EMPTY")
-    b = design.tech.layer("boundary")
-    cell.add(gdstk.rectangle((0, 0), (1, 1), layer=b.layer, datatype=b.datatype))
-    lib.add(cell)
-    lib.write_gds(str(path))
-    return path
-
-
-def _child_cpu() -> float:
-    r = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return r.ru_utime + r.ru_stime
-
-
 def main(design_file: Path) -> None:
     d = load_design(design_file)
     work = Path(tempfile.mkdtemp(prefix="pk-layout-bench-"))
@@ -54,11 +37,11 @@ def main(design_file: Path) -> None:
     cells = build_cells(d)
     gds = write_gds(to_library(d, cells), work / "x.gds")
     gen = time.perf_counter() - t0
-    c0 = _child_cpu()
-    base = run_drc(_empty_gds(work / "empty.gds", d), "EMPTY", d.tech, work / "base")
-    c1 = _child_cpu()
+    c0 = child_cpu_s()
+    base = run_drc(empty_gds(work / "empty.gds", d), "EMPTY", d.tech, work / "base")
+    c1 = child_cpu_s()
     drc = run_drc(gds, SIGNOFF_TOP, d.tech, work / "drc")
-    c2 = _child_cpu()
+    c2 = child_cpu_s()
     lvs = run_lvs(gds, SIGNOFF_TOP, d)
     total = drc.seconds + lvs.seconds
     print(f"design {d.name} ({d.tech.name}), cell {SIGNOFF_TOP}; {drc.klayout}; load average {load0:.2f} "

@@ -14,13 +14,12 @@ shared: wall times under load are longer by about the load over the cores).
 from __future__ import annotations
 
 import os
-import resource
 import sys
 import tempfile
 import time
 from pathlib import Path
 
-from common import ROOT
+from common import ROOT, child_cpu_s, empty_gds
 
 from pixelkit.design import load_design
 from pixelkit.layout.flow import write_gds
@@ -30,22 +29,6 @@ from pixelkit.layout.signoff.drc import run_drc
 from pixelkit.layout.signoff.lvs import run_lvs
 
 TARGET_2X2_S, TARGET_GEN_S, TARGET_DRC_S = 60.0, 120.0, 600.0
-
-
-def _empty_gds(path: Path, design) -> Path:
-    import gdstk
-    lib = gdstk.Library(unit=1e-6, precision=1e-9)
-    cell = gdstk.Cell("EMPTY")
-    b = design.tech.layer("boundary")
-    cell.add(gdstk.rectangle((0, 0), (1, 1), layer=b.layer, datatype=b.datatype))
-    lib.add(cell)
-    lib.write_gds(str(path))
-    return path
-
-
-def _cpu() -> float:
-    r = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return r.ru_utime + r.ru_stime
 
 
 def _generate(d, rows, cols, path):
@@ -59,12 +42,12 @@ def main(design_file: Path, chip_drc: bool) -> None:
     d = load_design(design_file)
     work = Path(tempfile.mkdtemp(prefix="pk-readout-bench-"))
     print(f"design {d.name} ({d.tech.name}); load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
-    c0 = _cpu()
-    base = run_drc(_empty_gds(work / "empty.gds", d), "EMPTY", d.tech, work / "base")
-    c1 = _cpu()
+    c0 = child_cpu_s()
+    base = run_drc(empty_gds(work / "empty.gds", d), "EMPTY", d.tech, work / "base")
+    c1 = child_cpu_s()
     g2, gds2, top2, _ = _generate(d, 2, 2, work / "chip2.gds")
     drc2 = run_drc(gds2, top2, d.tech, work / "drc2")
-    c2 = _cpu()
+    c2 = child_cpu_s()
     lvs2 = run_lvs(gds2, top2, d)
     s2 = drc2.seconds + lvs2.seconds
     print(f"  DRC of an empty cell (deck overhead)       {base.seconds:7.2f} s  (CPU {c1 - c0:.1f} s)")
@@ -85,9 +68,9 @@ def main(design_file: Path, chip_drc: bool) -> None:
     print(f"    junction left open, per block            {time.perf_counter() - t0:7.2f} s  "
           + ", ".join(f"{k} {v['exposed_m2'] * 1e12:.4g} um2" for k, v in ex.items()))
     if chip_drc:
-        c3 = _cpu()
+        c3 = child_cpu_s()
         drc = run_drc(gds, top, d.tech, work / "drc")
-        c4 = _cpu()
+        c4 = child_cpu_s()
         print(f"    DRC, foundry deck, deep, 2 threads       {drc.seconds:7.2f} s  (target < {TARGET_DRC_S:g} s: "
               f"{'met' if drc.seconds < TARGET_DRC_S else 'NOT met'}; {'clean' if drc.clean else drc.by_rule()}; "
               f"CPU {c4 - c3:.1f} s; {drc.seconds / base.seconds:.2f} x the empty cell)")

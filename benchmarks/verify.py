@@ -14,27 +14,21 @@ from __future__ import annotations
 
 import json
 import os
-import resource
 import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-
-
-def _cpu() -> float:
-    r = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return r.ru_utime + r.ru_stime
+from common import ROOT, child_cpu_s
 
 
 def run(env: dict, out: Path, mc: str | None) -> tuple[float, dict, int, float]:
     cmd = [sys.executable, "-m", "pixelkit", "verify", str(ROOT / "designs" / "dual_pixel_revA.toml"),
            "--out", str(out), "--json", *(["--mc", mc] if mc else [])]
-    t0, c0 = time.perf_counter(), _cpu()
+    t0, c0 = time.perf_counter(), child_cpu_s()
     p = subprocess.run(cmd, capture_output=True, text=True, env=env, cwd=ROOT)
-    wall, cpu = time.perf_counter() - t0, _cpu() - c0
+    wall, cpu = time.perf_counter() - t0, child_cpu_s() - c0
     if p.returncode not in (0, 1, 4):
         raise SystemExit(f"pixelkit verify exited {p.returncode}: {p.stderr[-2000:]}")
     return wall, json.loads(p.stdout), p.returncode, cpu
