@@ -66,6 +66,29 @@ def test_every_extracted_capacitance_is_placed_once(views):
     assert placed == pytest.approx(total + twice, rel=1e-3, abs=0)
 
 
+def test_view_without_the_afes_keeps_the_pixels_wiring_and_refuses_an_afe(views):
+    """``array`` without ``--afe`` asks for the view extracted without the AFEs (not drawn, not extracted):
+    its pixels' and lines' wiring is the full view's (DUALPIX / DUALPIX_COL are drawn alike), it has no
+    AFE wiring, and an AFE's netlist or the light map refuse it rather than run without that wiring; asked
+    with the AFEs again, it is the full view (cached apart), never the one without them."""
+    from pixelkit.circuits.afe import sc_afe
+    from pixelkit.gap.idlelight import pattern
+    sch, post = views
+    bare = post_layout_view(sch, afe=False)
+    assert post.post_layout.afe and post.post_layout.cells["scafe"] and post.post_layout.open_readout
+    assert not bare.post_layout.afe and "scafe" not in bare.post_layout.cells and not bare.post_layout.open_readout
+    for cell in ("pix5t_primary", "pix5t_secondary", "dualpix"):    # alike to the rounding of the sums' order
+        b_, p_ = bare.post_layout.cells[cell], post.post_layout.cells[cell]
+        assert [x[:2] for x in b_] == [x[:2] for x in p_], cell
+        assert [x[2] for x in b_] == pytest.approx([x[2] for x in p_], rel=1e-12, abs=0), cell
+    assert bare.post_layout.column_cap == pytest.approx(post.post_layout.column_cap, rel=1e-12, abs=0)
+    for use in (sc_afe, pattern):
+        with pytest.raises(ValueError, match="without the AFEs"):
+            use(bare)
+    assert post_layout_view(bare).post_layout == post.post_layout
+    assert post_layout_view(post, afe=False).post_layout == bare.post_layout
+
+
 def test_netlist_post_layout_runs_in_ngspice(tmp_path):
     out = tmp_path / "pl.cir"
     code, _, err = run_cli("netlist", GF, "--post-layout", "--out", out, timeout=300)

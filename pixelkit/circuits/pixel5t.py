@@ -62,4 +62,6 @@ def wiring(design, cell: str) -> tuple:
     pl = design.post_layout
     if pl is None:
         return ()
+    if cell == "scafe":
+        pl.require_afe("the AFE's wiring (scafe)")
     return tuple(Element(f"Cw{k}", (a, b), c) for k, (a, b, c) in enumerate(pl.cells.get(cell, ())))

@@ -54,7 +54,7 @@ def array_cmd(design, rows, cols, scene, unit, with_afe, split, check, settling,
     if check and seed is not None:
         raise click.UsageError("--check compares a split frame with the undivided deck; a Monte Carlo frame "
                                "(--seed) is simulated as one deck already")
-    d = load(design)
+    d = load(design, afe=with_afe)   # the post-layout view extracts the AFEs only for --afe
     m, default_unit = default_map(rows, d.secondary_per_pixel * cols, scene) if scene in ("gradient", "uniform") else load_map(scene)
     ph = photocurrents(d, rows, cols, m, unit or default_unit, t_exp)
     kw = dict(with_afe=with_afe, t_exp=t_exp, mismatch_seed=seed, backend=backend, jobs=jobs,

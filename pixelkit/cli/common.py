@@ -154,20 +154,22 @@ post_layout_opt = click.option("--post-layout", is_flag=True, expose_value=False
                                     "design's own layout (docs/post-layout.md)")
 
 
-def load(design_path: str, drawable: bool = True):
+def load(design_path: str, drawable: bool = True, afe: bool = True):
     """Load a design for a command: warnings on stderr (and in the JSON output)
     (``drawable=False``: no warning that the layout cannot be drawn - ``layout`` says it as an error);
-    with ``--post-layout`` the post-layout view (a technology without a stack is refused, naming it)."""
+    with ``--post-layout`` the post-layout view (a technology without a stack is refused, naming it;
+    ``afe=False``: a command that simulates no AFE, the view extracted without them)."""
     from ..api import load_design
-    return view(load_design(design_path, warn=warn, drawable=drawable))
+    return view(load_design(design_path, warn=warn, drawable=drawable), afe)
 
 
-def view(design):
-    """``design`` as the command asked: its post-layout view with ``--post-layout``, else as loaded."""
+def view(design, afe: bool = True):
+    """``design`` as the command asked: its post-layout view with ``--post-layout`` (with the AFEs'
+    extraction unless ``afe`` is False), else as loaded."""
     ctx = click.get_current_context(silent=True)
     if ctx is not None and ctx.meta.get("pixelkit.post_layout"):
         from ..layout.pex.overlay import post_layout_view
-        return post_layout_view(design)
+        return post_layout_view(design, afe)
     return design
 
 

@@ -47,7 +47,9 @@ def pattern(design) -> dict:
     the column's open area (top-level bench nodes, or ``scafe.<node>`` inside the column's AFE); {} when the
     design carries no layout's map or nothing is open."""
     pl = getattr(design, "post_layout", None)
-    js = getattr(pl, "open_readout", ()) if pl is not None else ()
+    if pl is not None:
+        pl.require_afe("the readout's open junctions")
+    js = pl.open_readout if pl is not None else ()
     out = {}
     for c in _cols(design):
         mine = [(n, k, a) for n, k, a in js if n in (f"in_{c}", c) or n.startswith("scafe.")]

@@ -11,16 +11,20 @@ import tempfile
 from pathlib import Path
 
 
-def chip_geometry(design, tops=("DUALPIX", "DUALPIX_COL", "AFE_P", "AFE_S")) -> dict:
-    """{cell: nets.NetGeometry} of the cells ``tops``, drawn as a 2 x 2 chip with its AFEs (the AFEs
-    exist only in a chip) under the full shield."""
+AFE_CELLS = ("AFE_P", "AFE_S")
+
+
+def chip_geometry(design, tops=("DUALPIX", "DUALPIX_COL", *AFE_CELLS)) -> dict:
+    """{cell: nets.NetGeometry} of the cells ``tops``, drawn as a 2 x 2 chip under the full shield, with
+    its AFEs when ``tops`` names one (the AFEs exist only in a chip; the other cells are drawn alike
+    without them, their grid router being the costly part of the drawing)."""
     from ...tech.stack import require_stack
     from ..flow import write_gds
     from ..library import build_chip_cells, to_library
     from .nets import net_geometry
     require_stack(design.tech)
     with tempfile.TemporaryDirectory(prefix="pixelkit-pex-") as tmp:
-        cells, _top = build_chip_cells(design, 2, 2, True, "full")
+        cells, _top = build_chip_cells(design, 2, 2, any(t in AFE_CELLS for t in tops), "full")
         gds = write_gds(to_library(design, cells), Path(tmp) / f"{design.name}.gds")
         return {t: net_geometry(gds, t, design) for t in tops}
 

@@ -16,7 +16,10 @@ command runs the schematic or the post-layout view of one design with one flag. 
   the dual pixel's other column lines, to ground) plus the column circuit's wiring; and
   (``column.line_couplings``) the other rows' share of each column-to-column coupling.
 - ``scafe``: the drawn AFEs' wiring (``AFE_P``, ``AFE_S``; their mean) among the SC stage's nodes
-  (``in``, ``vm``, ``x``, ``c``, ``out``, clocks, supplies); the op-amp's inner nodes as ground;
+  (``in``, ``vm``, ``x``, ``c``, ``out``, clocks, supplies); the op-amp's inner nodes as ground.
+  Only in a view made with ``afe=True`` (``Parasitics.afe``; the default): a command that simulates
+  no AFE (``array`` without ``--afe``) asks for the view without them, which is drawn and extracted
+  without the AFEs and cached apart, and which every AFE's netlist and the light map refuse;
 - resistance: every long line's end-to-end resistance (column lines over the array's rows, row
   lines over its columns) from its length, width and the stack's sheet resistance; reported,
   not simulated (``docs/post-layout.md``: at 90 mOhm/sq the column line's RC is below 1 ns).
@@ -43,6 +46,15 @@ class Parasitics:
     #: (bench node, kind, m2): the readout's signal-node junctions the drawn shield leaves open
     #: (``light.open_readout``: what gap's ``readout_light_idle`` lights)
     open_readout: tuple = ()
+    #: whether the AFEs were drawn and extracted (``scafe``'s wiring, ``open_readout``)
+    afe: bool = True
+
+    def require_afe(self, what: str) -> None:
+        """Refuse (an internal fault: the command asked for the wrong view) to serve ``what`` of the AFEs
+        from a view extracted without them."""
+        if not self.afe:
+            raise ValueError(f"{what}: the post-layout view was extracted without the AFEs "
+                             "(post_layout_view(design, afe=False)); a command that simulates an AFE needs afe=True")
 
     def node_wiring(self, which: str, node: str, a_sf: float | None = None) -> float:
         """Wiring capacitance (F) on ``node`` of ``which`` subpixel; couplings to nodes that follow FD
@@ -163,18 +175,19 @@ def build(design, pix_geo, col_geo, afe_geos=()) -> Parasitics:
     from .light import open_readout
     return Parasitics(cells, column_cap, per_row, resistance,
                       f"extracted from the drawn DUALPIX / DUALPIX_COL of {design.name} ({st.source})", pairs,
-                      open_readout(col_geo, afe_geos, n) if afe_geos else ())
+                      open_readout(col_geo, afe_geos, n) if afe_geos else (), bool(afe_geos))
 
 
 _CACHE: dict = {}
 
 
-def _key(design) -> str:
-    """Cache key of a design's extraction: the code that draws and extracts it and the design."""
+def _key(design, afe: bool) -> str:
+    """Cache key of a design's extraction: the code that draws and extracts it, the design and whether
+    the AFEs are in it."""
     import hashlib
     from pathlib import Path
     pkg = Path(__file__).resolve().parents[2]
-    h = hashlib.sha256(repr(design).encode())
+    h = hashlib.sha256(repr((design, afe)).encode())
     for sub in ("layout", "tech", "circuits"):
         for p in sorted((pkg / sub).rglob("*.py")) + sorted((pkg / sub).rglob("*.toml")):
             h.update(str(p.relative_to(pkg)).encode())
@@ -191,7 +204,7 @@ def _stored(key: str) -> Parasitics | None:
     d = json.loads(files["parasitics.json"])
     return Parasitics({k: tuple(tuple(x) for x in v) for k, v in d["cells"].items()}, d["column_cap"],
                       d["per_row"], d["resistance"], d["source"], tuple(tuple(x) for x in d["column_pairs"]),
-                      tuple(tuple(x) for x in d.get("open_readout", ())))
+                      tuple(tuple(x) for x in d["open_readout"]), d["afe"])
 
 
 def _store(key: str, p: Parasitics) -> None:
@@ -201,21 +214,23 @@ def _store(key: str, p: Parasitics) -> None:
     Store("pex", "report-cache", "extracting again").save(key, {"parasitics.json": json.dumps(asdict(p)).encode()})
 
 
-def post_layout_view(design):
+def post_layout_view(design, afe: bool = True):
     """``design`` with its extracted parasitics (``design.post_layout``); a clear error when its
-    technology has no stack or its layout does not match its netlist. Extractions are cached in
-    ``$PIXELKIT_CACHE/pex`` (key: the design and the code that draws and extracts it)."""
+    technology has no stack or its layout does not match its netlist. ``afe=False``: without the
+    AFEs' extraction (for commands that simulate no AFE; see ``Parasitics.afe``). Extractions are
+    cached in ``$PIXELKIT_CACHE/pex`` (key: the design, ``afe`` and the code that draws and extracts it)."""
     from ...tech.stack import require_stack
-    from . import chip_geometry
+    from . import AFE_CELLS, chip_geometry
     require_stack(design.tech)
-    if getattr(design, "post_layout", None) is not None:
+    if getattr(design, "post_layout", None) is not None and design.post_layout.afe == afe:
         return design
-    key = _key(design)
+    design = replace(design, post_layout=None)
+    key = _key(design, afe)
     if key not in _CACHE:
         found = _stored(key)
         if found is None:
-            g = chip_geometry(design)
-            found = build(design, g["DUALPIX"], g["DUALPIX_COL"], [g["AFE_P"], g["AFE_S"]])
+            g = chip_geometry(design, ("DUALPIX", "DUALPIX_COL", *(AFE_CELLS if afe else ())))
+            found = build(design, g["DUALPIX"], g["DUALPIX_COL"], [g[c] for c in AFE_CELLS if afe])
             _store(key, found)
         _CACHE[key] = found
     return replace(design, post_layout=_CACHE[key])
