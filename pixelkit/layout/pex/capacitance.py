@@ -166,7 +166,6 @@ def _fringe_band(cpl, net, band, below, above, eps, t, z, edge_len, band_area, d
 
 def capacitances(geo, stack) -> Couplings:
     """Every wiring capacitance of ``geo`` (a ``nets.NetGeometry``) with ``stack``'s numbers."""
-    import klayout.db as kdb
     cpl = Couplings()
     eps, dbu = stack.eps, geo.dbu
     halo = int(round(stack.halo / dbu))
@@ -181,24 +180,15 @@ def capacitances(geo, stack) -> Couplings:
         for net, reg in nets.items():
             for m, a, h in _under(reg, below, z, cond.device_below):
                 cpl.add(net, m, eps * a * dbu * dbu / h)
-        # lateral: facing edges of different nets, nearest only (one shielded space check of the layer)
-        layer = kdb.Region()
-        ids = {}
-        for k, (net, reg) in enumerate(sorted(nets.items())):
-            ids[k + 1] = net
+        # lateral: facing edges of different nets, nearest only (a shielded space check of the layer)
+        polys, labels = [], []
+        for k, (_net, reg) in enumerate(sorted(nets.items())):
             for p in reg.each():
-                layer.insert(kdb.PolygonWithProperties(p, {0: k + 1}))
+                polys.append(p)
+                labels.append(k + 1)
         shielded = defaultdict(float)    # (net, edge key) -> length in dbu lost to a neighbour, weighted
         if len(nets) > 1:
-            pairs = layer.space_check(halo, False, kdb.Region.Projection, None, None, None, True,
-                                      kdb.Region.NoOppositeFilter, kdb.Region.NoRectFilter, False,
-                                      kdb.Region.DifferentPropertiesConstraint)
-            seen = set()
-            for ep in pairs.each():
-                canon = tuple(sorted((_canon(ep.first), _canon(ep.second))))
-                if canon in seen:
-                    continue        # the check reports a pair from each side
-                seen.add(canon)
+            for ep in _facing(polys, labels, halo):
                 (a_net, wa), (b_net, wb) = _net_of(nets, ep.first, dbu), _net_of(nets, ep.second, dbu)
                 if a_net is None or b_net is None or a_net == b_net:
                     continue
@@ -221,6 +211,29 @@ def capacitances(geo, stack) -> Couplings:
             length = max(0.0, perim - shielded.get(net, 0.0))
             _fringe_band(cpl, net, band, below, above, eps, t, z, length, band.area(), cond.device_below)
     return cpl
+
+
+def _facing(polys, labels, halo: int) -> list:
+    """The facing edge pairs of different nets (``labels``) less than ``halo`` (dbu) apart, unshielded, each
+    once: ``facing.facing_pairs`` on a Manhattan layer, else KLayout's shielded space check (the same pairs,
+    slower at the stack's halo; it reports a pair from each side)."""
+    import klayout.db as kdb
+    from .facing import facing_pairs, manhattan
+    if manhattan(polys):
+        return facing_pairs(polys, labels, halo)
+    layer = kdb.Region()
+    for p, n in zip(polys, labels):
+        layer.insert(kdb.PolygonWithProperties(p, {0: n}))
+    pairs = layer.space_check(halo, False, kdb.Region.Projection, None, None, None, True,
+                              kdb.Region.NoOppositeFilter, kdb.Region.NoRectFilter, False,
+                              kdb.Region.DifferentPropertiesConstraint)
+    seen, out = set(), []
+    for ep in pairs.each():
+        canon = tuple(sorted((_canon(ep.first), _canon(ep.second))))
+        if canon not in seen:
+            seen.add(canon)
+            out.append(ep)
+    return out
 
 
 def _canon(e):
