@@ -22,6 +22,12 @@ each net on it:
   et al., "Multilevel metal capacitance models for CAD design synthesis systems", IEEE Electron
   Device Letters 13(1), 1992: ``eps [1.144 (T/S) (H/(H+2.059 S))^0.0944 + 0.7428 (W/(W+1.592
   S))^1.144 + 1.158 (W/(W+1.874 S))^0.1612 (H/(H+0.9801 S))^1.179] l``.
+- **corner fields** (``cornerfield.py``, its derivation there): an edge and a conductor of another net
+  on a higher layer beside it in plan (B's sidewall to A's top face and A's sidewall to B's underside,
+  by quarter-circle field lines; one constant, set with FastCap2 on a metal1 / metal2 line pair), and
+  sidewalls of one layer that see each other round a corner with no facing projection (perpendicular
+  faces, flush faces end to end: circular field lines, no constant). Each takes half its charge from
+  the fringe of each of its two edges.
 
 Every coupling is between two named nets; ``0`` is ground (substrate, and the shield).
 """
@@ -29,6 +35,7 @@ from __future__ import annotations
 
 from collections import defaultdict
 
+from .cornerfield import corner_couplings, wedge_couplings
 from .nets import GROUND
 
 SHIELD_K = 0.7     # fringe kept beside a neighbour: S / (S + SHIELD_K h)
@@ -169,6 +176,7 @@ def capacitances(geo, stack) -> Couplings:
     cpl = Couplings()
     eps, dbu = stack.eps, geo.dbu
     halo = int(round(stack.halo / dbu))
+    spent = defaultdict(float)          # (layer, net) -> fringe length (m) the corner field took
     for i, cond in enumerate(stack.conductors):
         nets = geo.wires.get(cond.name, {})
         if not nets:
@@ -201,14 +209,16 @@ def capacitances(geo, stack) -> Couplings:
                 keep = s / (s + SHIELD_K * z)
                 shielded[a_net] += (1 - keep) * la
                 shielded[b_net] += (1 - keep) * lb
-        # fringe downwards, less what neighbours take (a capacitor's top plate has none: its bottom plate,
-        # which encloses it, takes its sidewalls' field - the device's)
+        corner_couplings(cpl, geo, stack, i, spent)
+        wedge_couplings(cpl, geo, stack, i, spent)
+        # fringe downwards, less what neighbours and the corner field take (a capacitor's top plate has
+        # none: its bottom plate, which encloses it, takes its sidewalls' field - the device's)
         for net, reg in (nets.items() if not cond.device_below else ()):
             h = z
             wb = max(1, int(round(h / dbu)))
             band = reg.sized(wb) - reg
             perim = reg.perimeter() * dbu
-            length = max(0.0, perim - shielded.get(net, 0.0))
+            length = max(0.0, perim - shielded.get(net, 0.0) - spent[(cond.name, net)])
             _fringe_band(cpl, net, band, below, above, eps, t, z, length, band.area(), cond.device_below)
     return cpl
 
