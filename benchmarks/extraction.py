@@ -4,7 +4,8 @@ and the time of extracting the dual pixel (target < 10 s).
 Compared, each on a window of the dual pixel of ``designs/dual_pixel_gf180.toml`` (both tools see
 the same shapes, cut at the window's edge): the FD node of the primary and of a secondary (total
 and each coupling above 2 %), a column line (col_s0 between its neighbours) and its coupling to
-the next column, the TG row line's coupling to FD. Target: every named figure within 15 %.
+the next column, FD's couplings to its TG, RST and RS row lines, its reset drain ``vrst`` and ground.
+Target: every named figure within 15 %.
 Baseline in the same run: drawing the dual pixel (the GDS generation extraction starts from).
 
     python3 benchmarks/extraction.py [--mesh UM]
@@ -52,8 +53,8 @@ def main(mesh=0.25e-6):
     t_ext = time.perf_counter() - t0
     print(f"dual pixel: drawing {t_draw:.2f} s (baseline), extraction (draw + LVS match + 2.5D) {t_ext:.2f} s "
           f"(target < 10 s), ratio {t_ext / t_draw:.1f}")
-    cases = [("FD, primary", "p.fd", window_of(geo, "p.fd"), ["tg_p"]),
-             ("FD, secondary", "s0.fd", window_of(geo, "s0.fd"), ["tg_s"]),
+    cases = [("FD, primary", "p.fd", window_of(geo, "p.fd"), ["0", "tg_p", "rst_p", "rs_p", "vrst"]),
+             ("FD, secondary", "s0.fd", window_of(geo, "s0.fd"), ["0", "tg_s", "rst_s", "rs_s", "vrst"]),
              ("column line col_s0 (4 um of it)", "col_s0", (15e-6, 12e-6, 24.5e-6, 16e-6), ["col_p", "col_s1"])]
     worst = 0.0
     for title, net, win, named in cases:

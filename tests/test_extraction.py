@@ -44,7 +44,7 @@ def _window(geo, net, margin=1.5e-6):
 def test_fd_node_within_15_percent_of_fastcap(gf, dualpix):
     """The secondary's FD wiring (its metal1 lane and SF gate poly with every neighbour within
     1.5 um): its total, kit vs FastCap2 on the same clipped shapes (each coupling's figures are in
-    benchmarks/extraction.py: the row lines' to FD are not within 15 %, docs/post-layout.md)."""
+    benchmarks/extraction.py; the row lines' are checked below, docs/post-layout.md says which miss)."""
     geo = clip(dualpix, _window(dualpix, "s0.fd"))
     r = compare(geo, gf.tech.stack, "s0.fd", mesh=0.4e-6)
     assert 0.3e-15 < r["total_fastcap_F"] < 1.2e-15            # a sub-fF wiring node, not a plate
