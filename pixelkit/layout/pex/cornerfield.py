@@ -76,6 +76,7 @@ def corner_couplings(cpl, geo, stack, i, spent) -> None:
         lower += r
     lower.merge()
     inner = lower.sized(-1)            # flush edges (d = 0) are then 1 dbu apart: the separation check finds them
+    own = _labelled(nets)
     blocking = [(top, lower)]          # (height, conductors) between A's top and the upper layer
     for cb in stack.conductors[i + 1:]:
         up = geo.wires.get(cb.name, {})
@@ -90,19 +91,17 @@ def corner_couplings(cpl, geo, stack, i, spent) -> None:
         for zk, rk in blocking:
             grow = int(round((zk - top) / 2 / dbu))
             block += rk.sized(grow) if grow > 0 else rk
-        block.merge()
+        rects = _rects(block)
+        theirs = _labelled(up)
         apart = inner.separation_check(upper, reach, False, kdb.Region.Projection, None, None, None, True)
         over = lower.overlap_check(upper, reach, False, kdb.Region.Projection, None, None, None, True)
         for ep, flush in [(e, False) for e in apart.each()] + [(e, True) for e in over.each()]:
-            a_net, b_net = _net_at(nets, ep.first), _net_at(up, ep.second)
+            a_net, b_net = _net_at(own, ep.first), _net_at(theirs, ep.second)
             if a_net is None or b_net is None or a_net == b_net:
                 continue
             d = 0.0 if flush else ep.distance() * dbu
-            free = 1.0
-            if not flush:
-                gap = kdb.Region(ep.polygon(0))
-                if gap.area() > 0:
-                    free = 1 - (gap & block).area() / gap.area()
+            gap = ep.polygon(0).bbox()
+            free = 1.0 if flush or gap.area() == 0 else 1 - _covered(rects, gap) / gap.area()
             c = corner(eps, cb.thickness, g, d) * free * (ep.first.length() + ep.second.length()) / 2 * dbu
             if c <= 0:
                 continue
@@ -112,15 +111,39 @@ def corner_couplings(cpl, geo, stack, i, spent) -> None:
         blocking.append((cb.z, upper))
 
 
-def _net_at(nets, edge):
-    """The net whose shape carries ``edge`` (or lies within 2 dbu of its midpoint)."""
+def _rects(region):
+    """The merged ``region`` as non-overlapping boxes (its trapezoids' boxes: exact on a Manhattan layer),
+    an array of (left, bottom, right, top)."""
     import klayout.db as kdb
-    c = edge.p1 + (edge.p2 - edge.p1) * 0.5
-    probe = kdb.Region(kdb.Box(c.x - 2, c.y - 2, c.x + 2, c.y + 2))
-    for net, reg in nets.items():
-        if not reg.interacting(probe).is_empty():
-            return net
-    return None
+    import numpy as np
+    boxes = [(b.left, b.bottom, b.right, b.top) for p in region.merged().each()
+             for b in (t.bbox() for t in p.decompose_trapezoids(kdb.Polygon.TD_htrapezoids))]
+    return np.array(boxes, dtype=float).reshape(-1, 4)
+
+
+def _covered(rects, box) -> float:
+    """Area (dbu2) of ``box`` that ``rects`` (``_rects``) cover."""
+    import numpy as np
+    w = np.clip(np.minimum(rects[:, 2], box.right) - np.maximum(rects[:, 0], box.left), 0, None)
+    h = np.clip(np.minimum(rects[:, 3], box.top) - np.maximum(rects[:, 1], box.bottom), 0, None)
+    return float(np.sum(w * h))
+
+
+def _labelled(nets):
+    """Every net's shapes as boxes (``_rects``) and the net of each box: (boxes, [net])."""
+    import numpy as np
+    parts = [(_rects(reg), net) for net, reg in nets.items()]
+    boxes = np.concatenate([b for b, _ in parts]) if parts else np.zeros((0, 4))
+    return boxes, [net for b, net in parts for _ in range(len(b))]
+
+
+def _net_at(labelled, edge):
+    """The net whose shape carries ``edge`` (a box of it within 2 dbu of the edge's midpoint)."""
+    import numpy as np
+    boxes, names = labelled
+    x, y = (edge.p1.x + edge.p2.x) / 2, (edge.p1.y + edge.p2.y) / 2
+    hit = np.nonzero((boxes[:, 0] - 2 <= x) & (x <= boxes[:, 2] + 2) & (boxes[:, 1] - 2 <= y) & (y <= boxes[:, 3] + 2))[0]
+    return names[hit[0]] if len(hit) else None
 
 
 def wedge(eps: float, t: float, angle: float, r_in: float, r_out: float) -> float:
@@ -156,10 +179,12 @@ def wedge_couplings(cpl, geo, stack, i, spent) -> None:
         return
     a = np.array(rows, dtype=float)
     reach = cond.z / geo.dbu
+    rects = _rects(layer)
 
     def add(a_net, b_net, angle, lo, hi, box):
-        region = kdb.Region(box)
-        free = 1 - (region & layer).area() / region.area() if region.area() else 0.0
+        if box.area() == 0:
+            return
+        free = 1 - _covered(rects, box) / box.area()
         c = wedge(stack.eps, cond.thickness, angle, lo * geo.dbu, hi * geo.dbu) * free
         if c > 0:
             _couple(cpl, spent, stack, cond, names[int(a_net)], names[int(b_net)], c)
