@@ -45,7 +45,7 @@ def main():
     keys = ("n_cases", "n_effect_cases", "n_clean_cases", "n_out_of_library_cases", "top1_accuracy",
             "explained_when_right", "median_shrink", "none_on_clean", "not_explained_on_out_of_library",
             "uniform_named_uniform", "uniform_named_right", "uniform_visible_named_right", "mc_named_per_column",
-            "two_effects_both_named", "dark_current_hot_named", "seeds")
+            "two_effects_both_named", "dark_current_hot_named", "none_on_clean_calibrated", "seeds")
     out = {k: r[k] for k in keys} | {"per_effect_top1": r["per_effect_top1"], "diagnosis_s": wall,
                                      "sample_fraction": a.sample, "stratified_estimate": est}
     if a.json:

@@ -95,3 +95,20 @@ def test_fuzz_cli_sample(tmp_path, base, cli):
             json.loads(out, parse_constant=lambda c: pytest.fail(f"{c} in the answer"))
         else:
             assert col in json.loads(out)["error"]
+
+
+@pytest.mark.parametrize("opt,value", [("--gain-sd", "0"), ("--gain-sd", "-0.01"), ("--gain-sd", "nan"),
+                                       ("--offset-sd", "0"), ("--offset-sd", "2"), ("--offset-sd", "1e")])
+def test_bench_calibration_out_of_range_is_named(tmp_path, base, cli, opt, value):
+    """A stated calibration must be a positive standard deviation within the set-up's plausible range: exit 2
+    naming the option before anything is fitted."""
+    from conftest import REF
+    header, rows = base
+    p = tmp_path / "m.csv"
+    with open(p, "w", newline="") as fh:
+        w = csv.DictWriter(fh, header)
+        w.writeheader()
+        w.writerows(rows)
+    code, out, err = cli("gap", "diagnose", REF, "--measured", p, opt, value, "--json")
+    assert code == 2 and "Traceback" not in err
+    assert opt in json.loads(out)["error"]

@@ -7,6 +7,7 @@ import click
 import numpy as np
 
 from .common import design_arg, emit, json_opt, load, main, out_opt, output_path, spice_opts, post_layout_opt
+from .types import FiniteRange
 
 
 @main.group()
@@ -41,10 +42,21 @@ def predict(design, conditions, out, backend, jobs, as_json):
 
 
 def setup_opts(f):
-    f = click.option("--gain-tol", type=click.FloatRange(0.0, 0.5), default=0.05, show_default=True,
+    f = click.option("--gain-tol", type=FiniteRange(0.0, 0.5), default=0.05, show_default=True,
                      help="plausible test set-up gain: 1 +- this")(f)
-    return click.option("--offset-tol", type=click.FloatRange(0.0, 1.0), default=0.025, show_default=True,
-                        help="plausible test set-up offset: +- this (V)")(f)
+    f = click.option("--offset-tol", type=FiniteRange(0.0, 1.0), default=0.025, show_default=True,
+                     help="plausible test set-up offset: +- this (V)")(f)
+    f = click.option("--gain-sd", type=FiniteRange(0.0, 0.5, min_open=True), default=None,
+                     help="the bench's calibration: each probe's gain known to 1 +- this (one standard deviation); "
+                          "default: not stated")(f)
+    return click.option("--offset-sd", type=FiniteRange(0.0, 1.0, min_open=True), default=None,
+                        help="the bench's calibration: each probe's offset known to 0 +- this (V, one standard "
+                             "deviation); default: not stated")(f)
+
+
+def _setup(gain_tol, offset_tol, gain_sd, offset_sd):
+    from ..gap.fit import SetupBounds
+    return SetupBounds(gain_tol, offset_tol, gain_sd, offset_sd)
 
 
 def _prepare(design, measured, backend):
@@ -67,12 +79,11 @@ def _prepare(design, measured, backend):
 @spice_opts
 @post_layout_opt
 @json_opt
-def diagnose(design, measured, out, seed, gain_tol, offset_tol, backend, jobs, as_json):
+def diagnose(design, measured, out, seed, gain_tol, offset_tol, gain_sd, offset_sd, backend, jobs, as_json):
     """Where the data leave the simulation, which effect explains it, whether the gap is explained."""
     from ..gap.diagnose import analyse
-    from ..gap.fit import SetupBounds
     d, table, nom = _prepare(design, measured, backend)
-    r, X, resid = analyse(d, table, nom, seed=seed, setup=SetupBounds(gain_tol, offset_tol))
+    r, X, resid = analyse(d, table, nom, seed=seed, setup=_setup(gain_tol, offset_tol, gain_sd, offset_sd))
     if out:
         from ..gap.report import write_section
         r["html"] = str(write_section(r, d.name, X, resid, Path(out)))
@@ -87,6 +98,7 @@ def _text(r):
              f"({r['noise_source']}); held-out chi2/row {r['heldout_chi2_per_row']:.2f}"]
     lines += [f"  {x['effect']:<18} held-out {x['heldout_rms_V'] * 1e3:8.3f} mV   BIC {x['bic']:11.1f}"
               f"{'   beats none' if x['beats_none'] else ''}" for x in r["ranking"]]
+    lines.append("bench calibration: " + _calibration_text(r["calibration"]))
     if r["remainder_where"]:
         lines.append("the remainder lies in:")
         lines += [f"  {w['factor']:<16} {w['level']:<24} mean {w['mean_V'] * 1e3:+8.3f} mV  p={w['p']:.2g}"
@@ -97,6 +109,15 @@ def _text(r):
     return "\n".join(lines)
 
 
+def _calibration_text(cal):
+    if not cal["stated"]:
+        return cal["note"]
+    gain = "not stated" if cal["gain_sd"] is None else f"+-{cal['gain_sd']:.2%}"
+    off = "not stated" if cal["offset_sd_V"] is None else f"+-{cal['offset_sd_V'] * 1e3:g} mV"
+    return (f"gain {gain}, offset {off} (one sd, per probe); the named model's set-up sits at chi2 "
+            f"{cal['chi2']:.1f} ({cal['terms']} terms) from it")
+
+
 @gap.command()
 @design_arg
 @click.option("--measured", type=click.Path(dir_okay=False), required=True)
@@ -104,13 +125,12 @@ def _text(r):
 @setup_opts
 @spice_opts
 @json_opt
-def plan(design, measured, top, gain_tol, offset_tol, backend, jobs, as_json):
+def plan(design, measured, top, gain_tol, offset_tol, gain_sd, offset_sd, backend, jobs, as_json):
     """Operating points that would separate the candidates these data cannot tell apart."""
     from ..gap.diagnose import diagnose as run_diagnose
-    from ..gap.fit import SetupBounds
     from ..gap.plan import plan as make_plan
     d, table, nom = _prepare(design, measured, backend)
-    setup = SetupBounds(gain_tol, offset_tol)
+    setup = _setup(gain_tol, offset_tol, gain_sd, offset_sd)
     r = run_diagnose(d, table, nom, setup=setup)
     p = make_plan(d, table, nom, r, setup, top)
     p["diagnosis"] = {"best": r["best"], "indistinguishable": r["indistinguishable"], "verdict": r["verdict"]}

@@ -5,6 +5,7 @@ import click
 
 from ..errors import ConfigError
 from .common import design_arg, emit, json_opt, load, main, out_opt, output_path
+from .types import FiniteRange
 
 _TEST_POINT = (("c", "6 m", "m", "lateral distance camera - line of motion"),
                ("gamma", "44 deg", "rad", "angle of the image plane to the motion"),
@@ -24,7 +25,7 @@ def _quantity(opt: str, text: str, dim: str) -> float:
 def _test_point_options(f):
     for name, default, _dim, help_text in reversed(_TEST_POINT):
         f = click.option(f"--{name}", default=default, show_default=True, help=help_text)(f)
-    return click.option("--pixel-error-px", type=click.FloatRange(0, 100), default=1.0, show_default=True,
+    return click.option("--pixel-error-px", type=FiniteRange(0, 100), default=1.0, show_default=True,
                         help="angle uncertainty in pixels (the thesis [Thesis2019]: 1)")(f)
 
 
@@ -58,13 +59,13 @@ def speed(pixel_error_px, as_json, **values):
 
 
 @sensor.command()
-@click.option("--h", "h", type=click.FloatRange(0.5, 2000), required=True, help="object height (rows)")
-@click.option("--window", type=click.FloatRange(0.5, 2000), required=True,
+@click.option("--h", "h", type=FiniteRange(0.5, 2000), required=True, help="object height (rows)")
+@click.option("--window", type=FiniteRange(0.5, 2000), required=True,
               help="accumulation window H = n rows (T_acc / T_row)")
-@click.option("--speed", "s", type=click.FloatRange(0, 0.95, min_open=True), required=True,
+@click.option("--speed", "s", type=FiniteRange(0, 0.95, min_open=True), required=True,
               help="object speed as a fraction of the scan speed (rows or columns per line time)")
 @click.option("--direction", type=click.Choice(["down", "up", "right"]), required=True)
-@click.option("--l", "l", type=click.FloatRange(0.5, 2000), default=8.0, show_default=True,
+@click.option("--l", "l", type=FiniteRange(0.5, 2000), default=8.0, show_default=True,
               help="object width (columns)")
 @out_opt("picture of the two sensors' images and the compensated one (PNG)")
 @json_opt
@@ -117,7 +118,7 @@ def car(design, speed_text, times, dc_text, seed, out, as_json):
 @click.option("--row-length", type=click.IntRange(1, 100000), default=1650, show_default=True,
               help="pixel clocks per row, blanking included")
 @click.option("--f-pixclk", "f_text", default="22 MHz", show_default=True, help="pixel clock")
-@click.option("--gse", type=click.FloatRange(1, 1e9), default=310.0, show_default=True,
+@click.option("--gse", type=FiniteRange(1, 1e9), default=310.0, show_default=True,
               help="global shutter efficiency eta_pd / eta_mem")
 @click.option("--t-int", "t_text", default="0.2 ms", show_default=True, help="exposure the thesis set")
 @out_opt("picture: sharpness, trace contrast and their product against t_int / (t_wait / GSE) (PNG)")

@@ -24,7 +24,18 @@ Statistics (all on rows the fit did not see, a deterministic 70/30 split):
   separates them);
 - absolute goodness of fit: the held-out chi-square of the named model against
   the stated noise; p < ``P_EXPLAINED`` means the gap is *not explained*, and the
-  answer gives the best partial candidate and where the remainder lies.
+  answer gives the best partial candidate and where the remainder lies;
+- the bench's calibration, when stated (``SetupBounds.gain_sd`` / ``offset_sd_V``):
+  one more measurement of each set-up gain and offset of a probe in the data. It
+  is a term of every fit (``fit``) and of its BIC, and every held-out chi-square
+  above adds how far the fit's set-up sits from it (``calibration_chi2``; its
+  terms add to the degrees of freedom). Since the fit has seen it, a candidate
+  can gain on it what it takes from the set-up: in-sample, at most a chi-square
+  with its own parameters, which the (1 - ``P_BEAT``) point already allows.
+  Without a calibration, a uniform gain and offset change of one probe's path
+  (an op-amp's DC gain a few dB low) is the set-up's own gain and offset within
+  their tolerances: the data cannot show it, and the answer says so
+  (``calibration``).
 """
 from __future__ import annotations
 
@@ -32,7 +43,7 @@ import numpy as np
 
 from .data import check_degenerate
 from .effects import COLUMN_EFFECTS, applicable
-from .fit import N_SETUP, SetupBounds, column_keys, evaluate, fit
+from .fit import N_SETUP, SetupBounds, calibration_terms, column_keys, evaluate, fit
 from .nominal import features
 from .pvalue import chi2_isf, chi2_sf
 from .where import breakdown
@@ -99,6 +110,7 @@ def analyse(design, table, nom, seed: int = 0, candidates=None, setup: SetupBoun
     w = sigma if known else np.ones(len(y))
     Xtr, Xte = _sub(X, train), _sub(X, test)
     cols = np.unique(column_keys(X))
+    cal = calibration_terms(setup, X["afe"])
     fits = {"none": fit("none", nom, Xtr, y[train], w[train], setup=setup)}
     spread = {}
     for name in names:
@@ -111,7 +123,7 @@ def analyse(design, table, nom, seed: int = 0, candidates=None, setup: SetupBoun
     for name, fr in fits.items():
         resid_te[name] = evaluate(name, nom, Xte, fr, cols) - y[test]
         fr["heldout_rms_V"] = _rms(resid_te[name])
-        fr["heldout_chi2"] = float(np.sum((resid_te[name] / w[test]) ** 2))
+        fr["heldout_chi2"] = float(np.sum((resid_te[name] / w[test]) ** 2)) + fr["calibration_chi2"]
     none = fits["none"]
     for name, fr in fits.items():
         gain = none["heldout_chi2"] - fr["heldout_chi2"]
@@ -120,7 +132,7 @@ def analyse(design, table, nom, seed: int = 0, candidates=None, setup: SetupBoun
                         "train_rms_V": _rms(evaluate(name, nom, Xtr, fr, cols) - y[train]),
                         "n_params": fr["k"] - N_SETUP, "params": _params(name, fr), "setup": fr["setup"],
                         "setup_at_bound": fr["setup_at_bound"], "heldout_dchi2_vs_none": gain,
-                        "column_spread_p": spread.get(name),
+                        "column_spread_p": spread.get(name), "calibration_chi2": fr["calibration_chi2"],
                         "beats_none": bool(name != "none" and gain > chi2_isf(P_BEAT, max(fr["k"] - N_SETUP, 1))
                                            and none["bic"] - fr["bic"] > BIC_MARGIN
                                            and spread.get(name, 0.0) < P_SPREAD)})
@@ -140,11 +152,12 @@ def analyse(design, table, nom, seed: int = 0, candidates=None, setup: SetupBoun
             if r["heldout_dchi2_vs_best"] < AMBIGUOUS_DCHI2:
                 ambiguous.append(r["effect"])
     n_te = int(test.sum())
+    dof = n_te + len(cal)
     model, also, pair_tests = best, None, []
     if known and best != "none" and best not in COLUMN_EFFECTS and \
-            chi2_sf(fits[best]["heldout_chi2"], n_te) < P_EXPLAINED:
+            chi2_sf(fits[best]["heldout_chi2"], dof) < P_EXPLAINED:
         also, pair_tests = _second_effect(best, names, fits, nom, Xtr, Xte, y[train], y[test], w[train], w[test],
-                                          cols, setup)
+                                          cols, setup, cal)
         if also:
             model = f"{best}+{also}"
     confused = confounded(best, [r["effect"] for r in winners[1:]], X) if best != "none" else []
@@ -155,7 +168,7 @@ def analyse(design, table, nom, seed: int = 0, candidates=None, setup: SetupBoun
         if o not in ambiguous:
             ambiguous.append(o)
     chi2 = fits[model]["heldout_chi2"]
-    p_fit = float(chi2_sf(chi2, n_te)) if known else None
+    p_fit = float(chi2_sf(chi2, dof)) if known else None
     explained = None if not known else bool(p_fit >= P_EXPLAINED)
     resid_none = y - evaluate("none", nom, X, none)
     resid_best = y - evaluate(model, nom, X, fits[model], cols)
@@ -163,7 +176,8 @@ def analyse(design, table, nom, seed: int = 0, candidates=None, setup: SetupBoun
     before, after = none["heldout_rms_V"], fits[model]["heldout_rms_V"]
     setup_flag = fits[model]["setup_at_bound"]
     result = {
-        "n_rows": int(len(y)), "n_train": int(train.sum()), "n_heldout": n_te,
+        "n_rows": int(len(y)), "n_train": int(train.sum()), "n_heldout": n_te, "n_calibration": len(cal),
+        "calibration": _calibration(setup, fits[model], cal),
         "candidates": list(names), "noise_source": noise_src,
         "noise_rms_V": float(np.sqrt(np.mean(sigma ** 2))) if known else None,
         "gap_before_rms_V": before, "gap_after_rms_V": after,
@@ -231,7 +245,7 @@ def confounded(best, others, X) -> list:
     return out
 
 
-def _second_effect(best, names, fits, nom, Xtr, Xte, ytr, yte, wtr, wte, cols, setup):
+def _second_effect(best, names, fits, nom, Xtr, Xte, ytr, yte, wtr, wte, cols, setup, cal):
     """A second effect next to ``best`` when ``best`` alone leaves the held-out rows unexplained: each other
     plain candidate is fitted together with it; the pair is kept when its held-out chi-square beats ``best``
     alone by more than the (1 - P_BEAT) point of chi-square(its parameters) and its BIC by ``BIC_MARGIN``
@@ -244,11 +258,11 @@ def _second_effect(best, names, fits, nom, Xtr, Xte, ytr, yte, wtr, wte, cols, s
         name = f"{best}+{c}"
         fr = fit(name, nom, Xtr, ytr, wtr, cols, setup)
         r = evaluate(name, nom, Xte, fr, cols) - yte
-        fr["heldout_rms_V"], fr["heldout_chi2"] = _rms(r), float(np.sum((r / wte) ** 2))
+        fr["heldout_rms_V"], fr["heldout_chi2"] = _rms(r), float(np.sum((r / wte) ** 2)) + fr["calibration_chi2"]
         gain = fits[best]["heldout_chi2"] - fr["heldout_chi2"]
         ok = bool(gain > chi2_isf(P_BEAT, fr["k"] - fits[best]["k"])
                   and fits[best]["bic"] - fr["bic"] > BIC_MARGIN
-                  and chi2_sf(fr["heldout_chi2"], len(yte)) >= P_EXPLAINED)
+                  and chi2_sf(fr["heldout_chi2"], len(yte) + len(cal)) >= P_EXPLAINED)
         tests.append({"effects": [best, c], "heldout_dchi2_vs_single": gain,
                       "dbic_vs_single": fits[best]["bic"] - fr["bic"],
                       "significant": ok, "params": _params(name, fr), "setup": fr["setup"]})
@@ -256,6 +270,16 @@ def _second_effect(best, names, fits, nom, Xtr, Xte, ytr, yte, wtr, wte, cols, s
             fits[name], keep = fr, name
     tests.sort(key=lambda t: -t["heldout_dchi2_vs_single"])
     return (keep.split("+")[1] if keep else None), tests[:5]
+
+
+def _calibration(setup, fr, cal) -> dict:
+    """What the bench's calibration says and how the named model's set-up sits against it."""
+    if not cal:
+        return {"stated": False, "note": "not stated (--gain-sd / --offset-sd): a uniform gain and offset change "
+                f"of one probe's path within +-{setup.gain_tol:.1%} / +-{setup.offset_V * 1e3:g} mV (an op-amp's DC "
+                "gain a few dB low) is taken whole by the set-up's own gain and offset: these data cannot show it"}
+    return {"stated": True, "gain_sd": setup.gain_sd, "offset_sd_V": setup.offset_sd_V,
+            "chi2": fr["calibration_chi2"], "terms": len(cal)}
 
 
 def _remainder(X, resid):

@@ -6,7 +6,12 @@ probe are read through different paths), bounded to a stated plausible range
 (``SetupBounds``; default gain 1 +- 5 %, offset +- 25 mV): a fit that needs
 more sits on the bound, and the result says so instead of silently accepting
 a set-up gain of 0.9. The set-up's parameters are reported apart and are not
-counted as the effect's. Rows are weighted by their noise ``sigma``
+counted as the effect's. A bench whose calibration is stated (``gain_sd``,
+``offset_sd_V``: its gain and offset known to that standard deviation) adds
+one independent measurement of each set-up parameter of a probe in the data:
+a Gaussian term of the fit (which also settles the split between an effect
+and the set-up where the rows alone cannot), reported as ``calibration_chi2``
+and counted in the BIC and, by ``diagnose``, beside the held-out rows. Rows are weighted by their noise ``sigma``
 (measurement noise of the averaged value plus the surrogate's own error).
 Parameter intervals come from the Jacobian at the optimum (95 %); a parameter
 whose interval spans more than its own value, or which sits on a bound, is
@@ -33,9 +38,36 @@ from .nominal import predict
 
 @dataclass(frozen=True)
 class SetupBounds:
-    """Plausible test set-up: gain within 1 +- ``gain_tol``, offset within +- ``offset_V``."""
+    """Plausible test set-up: gain within 1 +- ``gain_tol``, offset within +- ``offset_V``; and, when the
+    bench's calibration is stated, its gain known to 1 +- ``gain_sd`` and its offset to 0 +- ``offset_sd_V``
+    (one standard deviation, per probe)."""
     gain_tol: float = 0.05
     offset_V: float = 0.025
+    gain_sd: float | None = None
+    offset_sd_V: float | None = None
+
+    @property
+    def calibrated(self) -> bool:
+        return self.gain_sd is not None or self.offset_sd_V is not None
+
+
+def calibration_terms(setup: SetupBounds, afe) -> list:
+    """(index into SETUP, value the calibration says, its sd) for each stated calibration of a probe in the
+    data (``afe``: the rows' probe flags)."""
+    out = []
+    for present, (i_off, i_gain) in ((bool((~afe).any()), (0, 1)), (bool(afe.any()), (2, 3))):
+        if not present:
+            continue
+        if setup.offset_sd_V is not None:
+            out.append((i_off, 0.0, setup.offset_sd_V))
+        if setup.gain_sd is not None:
+            out.append((i_gain, 1.0, setup.gain_sd))
+    return out
+
+
+def _calibration_resid(theta, terms) -> np.ndarray:
+    """How far a set-up sits from the bench's stated calibration, in standard deviations."""
+    return np.array([(theta[i] - v) / sd for i, v, sd in terms])
 
 
 def column_keys(X):
@@ -135,9 +167,15 @@ def fit(name, nom, X_train, y_train, sigma, cols=None, setup: SetupBounds = Setu
     has_prior = bool(np.isfinite(prior).any())
     prior_w = np.where(np.isfinite(prior), scales[N_SETUP:] / prior, 0.0)
 
+    cal = calibration_terms(setup, X_train["afe"])
+
     def resid(u):
-        r = (f(u * scales) - y_train) / sigma
-        return np.concatenate([r, u[N_SETUP:] * prior_w]) if has_prior else r
+        r = [(f(u * scales) - y_train) / sigma]
+        if has_prior:
+            r.append(u[N_SETUP:] * prior_w)
+        if cal:
+            r.append(_calibration_resid(u * scales, cal))
+        return np.concatenate(r)
 
     starts = [x0]
     if specs and plain:
@@ -159,11 +197,12 @@ def fit(name, nom, X_train, y_train, sigma, cols=None, setup: SetupBounds = Setu
     theta = best.x * scales
     n, k = len(y_train), len(theta)
     chi2 = float(np.sum(best.fun[:n] ** 2))
+    cal_chi2 = float(np.sum(_calibration_resid(theta, cal) ** 2))
     info = _intervals(best, scales, n, k, lo * scales, hi * scales, theta)
     at = [bool(np.isclose(abs(theta[i] - 1), setup.gain_tol, rtol=1e-3)) for i in (1, 3)] + \
          [bool(np.isclose(abs(theta[i]), setup.offset_V, rtol=1e-3)) for i in (0, 2)]
     return {"theta": theta, "chi2": chi2, "k": k, "n": n,
-            "bic": chi2 + k * math.log(n),
+            "bic": chi2 + cal_chi2 + k * math.log(n), "calibration_chi2": cal_chi2,
             "specs": specs, "intervals": info, "setup_at_bound": any(at),
             "setup": dict(zip(SETUP, map(float, theta[:N_SETUP]))), "uniform": uniform}
 

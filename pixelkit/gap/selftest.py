@@ -159,8 +159,10 @@ def score(cases: list) -> dict:
 
 
 def stratum(t: dict) -> str:
-    """A case's stratum: its inserted circuit and its campaign (``truth.json`` entry or a diagnosed case)."""
-    return f"{t['circuit']}@{t.get('campaign', 'lab')}"
+    """A case's stratum: its inserted circuit, its campaign and its bench (``truth.json`` entry or a diagnosed
+    case; the cases added after the first 151 come from a calibrated bench, ``silicon.stated_setup``)."""
+    bench = t.get("bench") or ("calibrated" if "campaign" in t else "free")
+    return f"{t['circuit']}@{t.get('campaign', 'lab')}/{bench}"
 
 
 def population(truths: dict) -> dict:

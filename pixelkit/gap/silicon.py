@@ -57,6 +57,10 @@ from .nominal import ARRAYS
 N_OP = 7
 NOISE_V = 0.6e-3
 N_AVG = 4
+# the bench of the cases added after the first 151: each probe's gain and offset drawn around 1 and 0 with these
+# standard deviations, which that bench states as its calibration (``stated_setup``)
+BENCH_GAIN_SD = 0.003
+BENCH_OFFSET_SD_V = 0.002
 SUBS = ("primary", "s0", "s1", "s2")
 CASES_DIR = Path(__file__).with_name("silicon_cases")
 IN_LIBRARY = ("gse", "fd_leakage", "dark_current", "charge_injection", "sf_gain", "afe_gain", "readout_light",
@@ -369,7 +373,7 @@ def simulate_case(design, nom, effect: str | None, seed: int, backend="batch", j
         gain, offset = 1 + g.uniform(-0.02, 0.02), g.uniform(-0.02, 0.02)
         setup = {"pixel": (gain, offset), "afe": (gain, offset)}
     else:
-        setup = {pr: (1 + g.normal(0, 0.003), g.normal(0, 0.002)) for pr in ("pixel", "afe")}
+        setup = {pr: (1 + g.normal(0, BENCH_GAIN_SD), g.normal(0, BENCH_OFFSET_SD_V)) for pr in ("pixel", "afe")}
     tm = timings(design, design.experiment.t_window)
     rows = []
     for op, r in zip(ops, res):
@@ -422,7 +426,8 @@ def plan_cases(n_per_effect=9, n_readout_light=12, n_ool_per_kind=7, n_clean=20,
             if q:
                 out.append((q.pop(), seed0 + len(out)))
     out += [("readout_light", seed0 + len(out) + k) for k in range(n_more_readout_light)]
-    return out + plan_added(seed0 + len(out))
+    out += plan_added(seed0 + len(out))
+    return out + plan_clean_bench(seed0 + len(out))
 
 
 UNIFORM = ("load_current", "sf_size", "c11_ratio", "opamp_gain")
@@ -443,6 +448,12 @@ def plan_added(seed0: int, n_uniform=9, n_mc=9, n_dark=9, n_pair=5) -> list[tupl
                 e, c = q.pop()
                 out.append((e, seed0 + len(out), c))
     return out
+
+
+def plan_clean_bench(seed0: int, n_clean=20) -> list[tuple]:
+    """(None, seed, "lab") of the effect-free chips measured on the calibrated bench, added after the cases of
+    ``plan_added``: with the bench's calibration stated, the diagnosis must still answer ``none`` there."""
+    return [(None, seed0 + k, "lab") for k in range(n_clean)]
 
 
 def _fmt(v):
@@ -502,8 +513,20 @@ def table_of(design, rows, source):
     return validate(header, rows, design, True, source)
 
 
+def stated_setup(truth: dict):
+    """The test set-up a case's bench states, as a user passes it (``--gain-sd`` / ``--offset-sd``): the cases
+    added after the first 151 come from a calibrated bench (gain and offset per probe within ``BENCH_GAIN_SD``
+    / ``BENCH_OFFSET_SD_V``); the first 151 from a bench with a gain within +-2 % and an offset within +-20 mV
+    and no calibration (the default tolerances hold it)."""
+    from .fit import SetupBounds
+    if "campaign" not in truth:
+        return SetupBounds()
+    return SetupBounds(gain_sd=BENCH_GAIN_SD, offset_sd_V=BENCH_OFFSET_SD_V)
+
+
 def run_committed(design, nom, folder: Path = CASES_DIR, only=None, only_ids=None) -> dict:
-    """Diagnose every committed SPICE case (blind; ``only``: these kinds, ``only_ids``: these cases); score."""
+    """Diagnose every committed SPICE case (blind; ``only``: these kinds, ``only_ids``: these cases), each with
+    the set-up its bench states (``stated_setup``); score."""
     from .diagnose import diagnose
     from .selftest import score
     cases, truths = load_cases(folder)
@@ -512,13 +535,14 @@ def run_committed(design, nom, folder: Path = CASES_DIR, only=None, only_ids=Non
         t = truths[cid]
         if (only and t["effect"] not in only) or (only_ids is not None and cid not in only_ids):
             continue
-        d = diagnose(design, table_of(design, rows, f"{folder}/cases.csv#{cid}"), nom)
+        d = diagnose(design, table_of(design, rows, f"{folder}/cases.csv#{cid}"), nom, setup=stated_setup(t))
         out.append({"case": cid, "truth": t["effect"], "circuit": t["circuit"],
                     "accept": t.get("accept", [t["effect"]]),
                     "found": "+".join(sorted(d["effects"])), "explained": d["explained"],
                     "indistinguishable": d["indistinguishable"], "shrink": d["shrink_frac"],
                     "before_V": d["gap_before_rms_V"], "after_V": d["gap_after_rms_V"], "seed": t["seed"],
-                    "campaign": t.get("campaign", "lab"), "gap_visible": _gap_visible(d)})
+                    "campaign": t.get("campaign", "lab"), "bench": "calibrated" if "campaign" in t else "free",
+                    "gap_visible": _gap_visible(d)})
     r = score(out)
     r.update({"kind": "SPICE-generated", "noise_V": NOISE_V, "n_avg": N_AVG, "cases": out,
               "seeds": [min(c["seed"] for c in out), max(c["seed"] for c in out)] if out else None,
@@ -532,13 +556,15 @@ def _gap_visible(d) -> bool:
     from .diagnose import P_EXPLAINED
     from .pvalue import chi2_sf
     none = next(r for r in d["ranking"] if r["effect"] == "none")
-    return bool(chi2_sf(none["heldout_chi2_per_row"] * d["n_heldout"], d["n_heldout"]) < P_EXPLAINED)
+    return bool(chi2_sf(none["heldout_chi2_per_row"] * d["n_heldout"], d["n_heldout"] + d["n_calibration"])
+                < P_EXPLAINED)
 
 
 def by_class(cases: list) -> dict:
     """The rates of the added kinds: uniform changes named per column, named right (all, and those whose data
     show a gap: the nominal model alone not explained), real column mismatch named per column, both of two
-    effects named, dark current in long hot dark exposures."""
+    effects named, dark current in long hot dark exposures, ``none`` on effect-free chips of the calibrated
+    bench (its calibration stated)."""
     per_col = ("column_pixel", "column_afe")
 
     def rate(xs, fn):
@@ -553,4 +579,6 @@ def by_class(cases: list) -> dict:
             "two_effects_both_named": rate([c for c in cases if "+" in c["circuit"]],
                                            lambda c: c["found"] == c["truth"]),
             "dark_current_hot_named": rate([c for c in cases if c["circuit"] == "dark_current"
-                                            and c["campaign"] == "dark_hot"], lambda c: c["found"] == "dark_current")}
+                                            and c["campaign"] == "dark_hot"], lambda c: c["found"] == "dark_current"),
+            "none_on_clean_calibrated": rate([c for c in cases if c["truth"] == "none" and c["bench"] == "calibrated"],
+                                             lambda c: c["found"] == "none")}
