@@ -95,6 +95,17 @@ def test_array_signals_follow_the_gradient_and_the_split_decks(report):
     assert all(x["settling error vs long S1 (mV)"] not in ("", "-") for x in rows)
 
 
+def test_quick_bright_table_runs_the_design_as_it_is(report, ref_design):
+    """The quick profile's bright-source table: both arrays at 1 and 1000 full wells, each with the design's own
+    anti-blooming setting only (the reference sets no ``timing.ec_hold``: off); the full profile adds the other
+    setting (``tests/test_overexposure.py`` runs both)."""
+    out, _ = report
+    rows = _csv(out, "bright_source")
+    assert not ref_design.primary.timing.ec_hold and not ref_design.secondary.timing.ec_hold
+    assert sorted((r["array"], r["anti-blooming"], float(r["full wells"])) for r in rows) == \
+        [(k, "off", f) for k in ("primary", "secondary") for f in (1.0, 1000.0)]
+
+
 def test_layout_c_a_is_the_thesis_ratio(report):
     _, summary = report
     assert _value(summary, "layout.c_a") == pytest.approx(15.1 * 13.55 / 25.0, rel=1e-3)

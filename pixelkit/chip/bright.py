@@ -16,6 +16,10 @@ pixel's real light after the exposure ends, ``circuits.array.array_bench``):
   the PD overflowing through TG (blooming), which anti-blooming removes.
 - **recovery**: the dark row read after the bright one minus the dark row read before it
   (column and AFE output).
+
+``holds``: the anti-blooming settings run, ``True`` / ``False`` forced on both arrays, ``None``
+each array's own (``timing.ec_hold``; off where the design does not set it). The report's quick
+profile runs the design as it is; the full profile both settings.
 """
 from __future__ import annotations
 
@@ -26,6 +30,8 @@ from ..constants import Q
 #: Over-exposure factors, in full wells over the array's own t_int.
 FACTORS = (1.0, 10.0, 100.0, 1000.0)
 QUICK_FACTORS = (1.0, 1000.0)
+#: Anti-blooming on and off, forced on both arrays.
+HOLDS = (True, False)
 #: Below this fraction of the full-well signal an over-exposed pixel reads as a black sun.
 BLACK_SUN = 0.5
 KINDS = ("primary", "secondary")
@@ -45,28 +51,36 @@ def _with_hold(design, hold: bool):
                               for k in KINDS})
 
 
-def decks(design, factors=FACTORS) -> list:
-    """(hold, factor, deck): one frame deck per factor and anti-blooming setting: a dual column
-    of ``ROWS`` rows (dark, ``factor`` full wells, dark) with its AFE, both arrays, each array's
-    charge of its t_int over the experiment window and its real light after it."""
-    from ..circuits.array import array_bench
+def _anti_blooming(design, kind: str) -> bool:
+    return bool(getattr(design, kind).timing.ec_hold)
+
+
+def decks(design, factors=FACTORS, holds=HOLDS) -> list:
+    """(design run, factor, array, deck): one frame deck per factor, anti-blooming setting and array: the
+    array's columns of a dual column, ``ROWS`` rows (dark, ``factor`` full wells, dark) with their AFEs, the
+    charge of the array's t_int over the experiment window and its real light after it. One deck per array,
+    as the frame's reference (``chip.frame``: the arrays share only ideal sources; in one deck their two row
+    clocks interleave every step, ~30 % more CPU)."""
+    from ..circuits.array import Tile, array_bench
     t_w = design.experiment.t_window
     comp = {k: getattr(design, k).t_int / t_w for k in KINDS}
     fw = {k: full_well_current(design, k) * comp[k] for k in KINDS}   # as simulated in the window
     n = design.secondary_per_pixel
     out = []
-    for hold in (True, False):
-        d = _with_hold(design, hold)
+    for hold in holds:
+        d = design if hold is None else _with_hold(design, hold)
         for f in factors:
             ip = np.array([[0.0], [f * fw["primary"]], [0.0]])
             is_ = np.array([[0.0] * n, [f * fw["secondary"]] * n, [0.0] * n])
-            net = array_bench(d, ip, is_, t_exp=t_w, with_afe=True, compression=comp,
-                              title=f"bright_{'ab' if hold else 'noab'}_{f:g}")
-            out.append((hold, f, net))
+            for kind in KINDS:
+                net = array_bench(d, ip, is_, tile=Tile((kind,), tuple(range(ROWS)), (0,)), t_exp=t_w,
+                                  with_afe=True, compression=comp,
+                                  title=f"bright_{'design' if hold is None else 'ab' if hold else 'noab'}_{f:g}_{kind}")
+                out.append((d, f, kind, net))
     return out
 
 
-def figures(design, factors=FACTORS, backend="batch", jobs=None) -> list[dict]:
+def figures(design, factors=FACTORS, backend="batch", jobs=None, holds=HOLDS) -> list[dict]:
     """Per array, anti-blooming setting and factor: the bright row's output (column and AFE),
     the charge onto its FD after RST (the reset-level droop, e-) against its own light, and the
     next dark row's recovery."""
@@ -76,34 +90,35 @@ def figures(design, factors=FACTORS, backend="batch", jobs=None) -> list[dict]:
     from ..physics.fd import pls_current, response
     from ..spice import simulate_many
     from ..tech.ekv import models_for
-    plan = decks(design, factors)
-    res = simulate_many([net for _, _, net in plan], backend=backend, jobs=jobs, failed="keep")
+    plan = decks(design, factors, holds)
+    res = simulate_many([net for *_, net in plan], backend=backend, jobs=jobs, failed="keep")
     a_sf = sf_gain(design)
     sf_models = models_for(design)
     c_fd = {k: response(design, k, a_sf, sf_models)["c_fd_F"] for k in KINDS}
     tm = frame_timings(design, design.experiment.t_window, ROWS)
     out, full = [], {}
-    for (hold, f, _), r in zip(plan, res):
-        for kind, s in (("primary", "p"), ("secondary", "s")):
-            row = {"array": kind, "anti_blooming": hold, "full_wells": f,
-                   "current_A": f * full_well_current(design, kind)}
-            if isinstance(r, Exception):
-                out.append({**row, "failed": r.message})
-                continue
-            t, col = tm[kind], f"col_{s}_0"
-            sig = [levels(r, col, t, k) for k in range(ROWS)]
-            ds = [b - a for a, b in sig]
-            afe = [float(r.at(f"out_{col}", t.t_reset_level(k))) for k in range(ROWS)]
-            fd = f"x{s}_1_0.fd"
-            t0, t1 = t.rst_window(1)[1] + t.edge, t.t_reset_level(1)
-            droop = float(r.at(fd, t0)) - float(r.at(fd, t1))
-            row.update(signal_V=ds[1], afe_V=afe[1], reset_level_V=sig[1][1],
-                       fd_after_reset_e=c_fd[kind] * droop / Q,
-                       fd_light_e=pls_current(design, row["current_A"]) * (t1 - t0) / Q,
-                       recovery_V=ds[2] - ds[0], recovery_afe_V=afe[2] - afe[0])
-            if f == 1.0:
-                full[(hold, kind)] = ds[1]
-            out.append(row)
+    for (d, f, kind, _), r in zip(plan, res):
+        s = "p" if kind == "primary" else "s"
+        hold = _anti_blooming(d, kind)
+        row = {"array": kind, "anti_blooming": hold, "full_wells": f,
+               "current_A": f * full_well_current(design, kind)}
+        if isinstance(r, Exception):
+            out.append({**row, "failed": r.message})
+            continue
+        t, col = tm[kind], f"col_{s}_0"
+        sig = [levels(r, col, t, k) for k in range(ROWS)]
+        ds = [b - a for a, b in sig]
+        afe = [float(r.at(f"out_{col}", t.t_reset_level(k))) for k in range(ROWS)]
+        fd = f"x{s}_1_0.fd"
+        t0, t1 = t.rst_window(1)[1] + t.edge, t.t_reset_level(1)
+        droop = float(r.at(fd, t0)) - float(r.at(fd, t1))
+        row.update(signal_V=ds[1], afe_V=afe[1], reset_level_V=sig[1][1],
+                   fd_after_reset_e=c_fd[kind] * droop / Q,
+                   fd_light_e=pls_current(design, row["current_A"]) * (t1 - t0) / Q,
+                   recovery_V=ds[2] - ds[0], recovery_afe_V=afe[2] - afe[0])
+        if f == 1.0:
+            full[(hold, kind)] = ds[1]
+        out.append(row)
     for row in out:
         ref = full.get((row["anti_blooming"], row["array"]))
         if "signal_V" in row and ref:

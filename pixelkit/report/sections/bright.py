@@ -13,10 +13,10 @@ TITLE = "Bright sources: over-exposure, black sun, blooming"
 
 
 def build(ctx) -> Section:
-    from ...chip.bright import BLACK_SUN, FACTORS, QUICK_FACTORS, figures
-    factors = QUICK_FACTORS if ctx.quick else FACTORS
+    from ...chip.bright import BLACK_SUN, FACTORS, HOLDS, QUICK_FACTORS, figures
+    factors, holds = (QUICK_FACTORS, (None,)) if ctx.quick else (FACTORS, HOLDS)
     ctx.progress("bright: over-exposed dual columns", 0, 1)
-    rows = figures(ctx.design, factors, backend=ctx.backend, jobs=ctx.jobs)
+    rows = figures(ctx.design, factors, backend=ctx.backend, jobs=ctx.jobs, holds=holds)
     ctx.progress("bright: over-exposed dual columns", 1, 1)
     base = {(r["array"], r["anti_blooming"]): r.get("fd_after_reset_e") for r in rows if r["full_wells"] == 1.0}
     table, checked, failed = [], [], []
@@ -44,9 +44,12 @@ def build(ctx) -> Section:
     text = [
         f"Each array's pixel driven to 1 - {top:g} full wells over its own integration time (primary "
         f"{ctx.design.primary.t_int * 1e3:g} ms, secondary {ctx.design.secondary.t_int * 1e3:g} ms), on a "
-        "dual column of a frame with its AFE (rows dark, bright, dark), with EC holding the PD in reset "
-        "while rows wait (anti-blooming, timing.ec_hold) and without. The charge of the integration time "
-        "is carried over the experiment window; after the exposure each pixel sees its real light.",
+        "dual column of a frame with its AFE (rows dark, bright, dark), "
+        + ("with the design's own anti-blooming setting (timing.ec_hold; the quick profile: the full one also "
+           "runs the other)" if ctx.quick else "with EC holding the PD in reset while rows wait (anti-blooming, "
+           "timing.ec_hold) and without")
+        + ". The charge of the integration time is carried over the experiment window; after the exposure "
+        "each pixel sees its real light.",
         f"Black sun (the bright pixel reads below {BLACK_SUN:.0%} of its full-well signal, because charge "
         "keeps reaching FD after its reset and pulls the reset level down): "
         + ("; ".join(suns) if suns else "none") + ". Charge onto FD after its reset, beyond the full-well "
