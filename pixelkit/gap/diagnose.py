@@ -205,7 +205,9 @@ def analyse(design, table, nom, seed: int = 0, candidates=None, setup: SetupBoun
         "surrogate_error": nom.error,
         "verdict": _verdict(model.replace("+", " and "), explained, ambiguous, setup_flag, top)
         + ("; these data cannot show " + ", ".join(e for e, _ in blind) + " (one value of the conditions they scale "
-           "with)" if blind else ""),
+           "with)" if blind else "")
+        + ("; the bench's calibration is not stated (--gain-sd / --offset-sd): a gain and offset of one probe's path "
+           "within the set-up's tolerances cannot be told from the set-up's own" if model == "none" and not cal else ""),
     }
     return result, X, resid_none
 
