@@ -106,6 +106,8 @@ def transfer(design, which: str, a_sf: float, sf_models: dict, v: float | None =
        off) the follower's source floats: its gate sees its depletion capacitance
        ``Cox W L (n - 1) / n`` (weak inversion); selected, the gate-source capacitance bootstrapped,
        ``(1 - A_sf)(2/3 Cox W L + C_ov)`` (``sf_gate``): FD's voltage is ``C_FD,store / C_FD,read`` of the stored one.
+       Post-layout, RS's rise kicks the floating FD up by ``C(fd, rs) V_dd / C_FD,store`` through the
+       extracted wiring, and C_FD,read is taken there.
 
     ``eta`` and ``n`` are those of the pixel's NMOS at the node's voltage: the follower's EKV parameters
     (``sf_models["sf"]``, ``tech.ekv.models_for``). The single-capacitance sharing ``q / (C_PD,node + C_FD,read)`` lacks 1 and 3
@@ -125,14 +127,21 @@ def transfer(design, which: str, a_sf: float, sf_models: dict, v: float | None =
     # (counted (1 - A_sf) at the read); stored, the column line is held by its load and the floating
     # source follows the gate by 1 / n
     pl = getattr(design, "post_layout", None)
-    w_sfo = w_col = 0.0
+    w_sfo = w_col = w_rs = 0.0
     for a, b, c in (pl.cells.get(f"pix5t_{which}", ()) if pl is not None else ()):
         if {a, b} == {"fd", "sfo"}:
             w_sfo += c
         elif {a, b} == {"fd", "col"}:
             w_col += c
+        elif {a, b} == {"fd", "rs"}:
+            w_rs += c
     c_store = (c_read - (1.0 - a_sf) * (c_gs + w_sfo + w_col) + mos.cox * dev.sf_w * dev.sf_l * (n - 1.0) / n
                + w_col + (1.0 - 1.0 / n) * w_sfo)
+    # post-layout: RS's rise (0 to the supply) kicks the floating FD through their wiring coupling, its
+    # charge kept: the read sees FD w_rs V_dd / C_FD,store higher
+    if w_rs:
+        v_read = v + w_rs * design.tech.supply / c_store
+        c_read = float(fd_node(design, a_sf, v_read, which).capacitance(v_read))
     c_t = float(c_node + c_store + c_ch + 2.0 * (ov_on - ov_off))
     k_tg = float(1.0 + (1.0 + eta) * ((c_ch + 2.0 * ov_on) / c_t - ov_on / c_store))
     k_rs = c_store / c_read
