@@ -16,7 +16,11 @@ each net on it:
   30(2), 1983 (their isolated-line formula less its plate term). A neighbour of another net on
   the same layer at a spacing S keeps ``S / (S + 0.7 h)`` of that edge's fringe (the rest ends
   on the neighbour, counted below); the 0.7 was set with FastCap2 on a pair of metal1 lines
-  (docs/post-layout.md, the fit structure; the checks use other geometries).
+  (docs/post-layout.md, the fit structure; the checks use other geometries). That fringe is an
+  isolated edge's, its top face's field wrapping round the edge: where a conductor of another net
+  lies over the top face within h of the edge (a MIM capacitor's top plate over its bottom plate, a
+  line crossing over another) it takes the top face's share from under it (``topface.py``, derived
+  there from the field of a half-plane over a ground plane: no constant), coupled to that conductor.
 - **lateral**: facing edges of two nets on the same layer, S apart over a projected length l
   (nearest only: a shape between them shields), couple by the coupling formula of J.-H. Chern
   et al., "Multilevel metal capacitance models for CAD design synthesis systems", IEEE Electron
@@ -36,14 +40,11 @@ from __future__ import annotations
 from collections import defaultdict
 
 from .cornerfield import corner_couplings, wedge_couplings
+from .fringe import fringe
 from .nets import GROUND
+from .topface import covered_top
 
 SHIELD_K = 0.7     # fringe kept beside a neighbour: S / (S + SHIELD_K h)
-
-
-def fringe(eps: float, t: float, h: float) -> float:
-    """Fringe capacitance per length (F/m) of one edge of a conductor of thickness t, h above a plane."""
-    return eps * 1.40 * (t / h) ** 0.222
 
 
 def lateral(eps: float, t: float, h: float, w: float, s: float) -> float:
@@ -211,14 +212,18 @@ def capacitances(geo, stack) -> Couplings:
                 shielded[b_net] += (1 - keep) * lb
         corner_couplings(cpl, geo, stack, i, spent)
         wedge_couplings(cpl, geo, stack, i, spent)
-        # fringe downwards, less what neighbours and the corner field take (a capacitor's top plate has
-        # none: its bottom plate, which encloses it, takes its sidewalls' field - the device's)
+        # fringe downwards, less what neighbours, the corner field and covers over its top face take (a
+        # capacitor's top plate has none: its bottom plate, which encloses it, takes its sidewalls' field)
         for net, reg in (nets.items() if not cond.device_below else ()):
             h = z
             wb = max(1, int(round(h / dbu)))
             band = reg.sized(wb) - reg
             perim = reg.perimeter() * dbu
-            length = max(0.0, perim - shielded.get(net, 0.0) - spent[(cond.name, net)])
+            taken = 0.0
+            for m, lost in covered_top(net, reg, above, z, t, dbu):
+                cpl.add(net, m, fringe(eps, t, h) * lost)
+                taken += lost
+            length = max(0.0, perim - shielded.get(net, 0.0) - spent[(cond.name, net)] - taken)
             _fringe_band(cpl, net, band, below, above, eps, t, z, length, band.area(), cond.device_below)
     return cpl
 

@@ -44,11 +44,13 @@ corner covered by other shapes of the layer is taken off; r_out is at most the f
 
 Charge: each of these fields was counted by the 2.5D terms as fringe of the edges bounding it (going
 mostly to the substrate), so a coupling c takes half its length-equivalent from each edge's fringe:
-``c / 2 / fringe(T, z)`` of its fringe length (``capacitance.fringe``).
+``c / 2 / fringe(T, z)`` of its fringe length (``fringe.fringe``).
 """
 from __future__ import annotations
 
 import math
+
+from .fringe import fringe
 
 KAPPA = 1.6    # the two sidewall-to-face regions (2 by the construction), set on a metal1 / metal2 pair
 
@@ -63,7 +65,6 @@ def corner_couplings(cpl, geo, stack, i, spent) -> None:
     """Add the corner field of layer ``i``'s edges to every higher layer's conductors of other nets to
     ``cpl``, and the fringe length (m) it takes from each edge to ``spent[(layer, net)]``."""
     import klayout.db as kdb
-    from .capacitance import fringe
     cond = stack.conductors[i]
     nets = geo.wires.get(cond.name, {})
     if not nets:
@@ -228,7 +229,6 @@ def wedge_couplings(cpl, geo, stack, i, spent) -> None:
 
 def _couple(cpl, spent, stack, cond, a_net, b_net, c):
     """Add ``c`` between the two nets, half of it taken from each one's fringe on ``cond``."""
-    from .capacitance import fringe
     cpl.add(a_net, b_net, c)
     f = fringe(stack.eps, cond.thickness, cond.z)
     spent[(cond.name, a_net)] += c / 2 / f
