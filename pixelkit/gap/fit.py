@@ -46,10 +46,6 @@ class SetupBounds:
     gain_sd: float | None = None
     offset_sd_V: float | None = None
 
-    @property
-    def calibrated(self) -> bool:
-        return self.gain_sd is not None or self.offset_sd_V is not None
-
 
 def calibration_terms(setup: SetupBounds, afe) -> list:
     """(index into SETUP, value the calibration says, its sd) for each stated calibration of a probe in the

@@ -158,11 +158,15 @@ def score(cases: list) -> dict:
     }
 
 
+def bench(t: dict) -> str:
+    """A case's bench (``truth.json`` entry or a diagnosed case): ``calibrated`` for the cases added after the
+    first 151, which carry their campaign and state their calibration (``silicon.stated_setup``), else ``free``."""
+    return t.get("bench") or ("calibrated" if "campaign" in t else "free")
+
+
 def stratum(t: dict) -> str:
-    """A case's stratum: its inserted circuit, its campaign and its bench (``truth.json`` entry or a diagnosed
-    case; the cases added after the first 151 come from a calibrated bench, ``silicon.stated_setup``)."""
-    bench = t.get("bench") or ("calibrated" if "campaign" in t else "free")
-    return f"{t['circuit']}@{t.get('campaign', 'lab')}/{bench}"
+    """A case's stratum: its inserted circuit, its campaign and its bench."""
+    return f"{t['circuit']}@{t.get('campaign', 'lab')}/{bench(t)}"
 
 
 def population(truths: dict) -> dict:

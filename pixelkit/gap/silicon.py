@@ -519,7 +519,8 @@ def stated_setup(truth: dict):
     / ``BENCH_OFFSET_SD_V``); the first 151 from a bench with a gain within +-2 % and an offset within +-20 mV
     and no calibration (the default tolerances hold it)."""
     from .fit import SetupBounds
-    if "campaign" not in truth:
+    from .selftest import bench
+    if bench(truth) == "free":
         return SetupBounds()
     return SetupBounds(gain_sd=BENCH_GAIN_SD, offset_sd_V=BENCH_OFFSET_SD_V)
 
@@ -528,7 +529,7 @@ def run_committed(design, nom, folder: Path = CASES_DIR, only=None, only_ids=Non
     """Diagnose every committed SPICE case (blind; ``only``: these kinds, ``only_ids``: these cases), each with
     the set-up its bench states (``stated_setup``); score."""
     from .diagnose import diagnose
-    from .selftest import score
+    from .selftest import bench, score
     cases, truths = load_cases(folder)
     out = []
     for cid, rows in cases.items():
@@ -541,7 +542,7 @@ def run_committed(design, nom, folder: Path = CASES_DIR, only=None, only_ids=Non
                     "found": "+".join(sorted(d["effects"])), "explained": d["explained"],
                     "indistinguishable": d["indistinguishable"], "shrink": d["shrink_frac"],
                     "before_V": d["gap_before_rms_V"], "after_V": d["gap_after_rms_V"], "seed": t["seed"],
-                    "campaign": t.get("campaign", "lab"), "bench": "calibrated" if "campaign" in t else "free",
+                    "campaign": t.get("campaign", "lab"), "bench": bench(t),
                     "gap_visible": _gap_visible(d)})
     r = score(out)
     r.update({"kind": "SPICE-generated", "noise_V": NOISE_V, "n_avg": N_AVG, "cases": out,
