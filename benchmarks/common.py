@@ -1,4 +1,5 @@
-"""Shared set-up of the benchmark scripts: import path, a fresh cache, the reference design."""
+"""Shared set-up of the benchmark scripts: import path, a fresh cache, the reference design and the
+thesis read (the chip the gap module's virtual silicon is of)."""
 from __future__ import annotations
 
 import os
@@ -10,11 +11,14 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 
-def reference_design():
-    """A fresh, empty simulation cache for this run, and the reference design."""
+THESIS_READ = ROOT / "designs" / "dual_pixel_revA_thesis_read.toml"
+
+
+def reference_design(path: Path = ROOT / "designs" / "dual_pixel_revA.toml"):
+    """A fresh, empty simulation cache for this run, and the design at ``path`` (the reference design)."""
     os.environ["PIXELKIT_CACHE"] = tempfile.mkdtemp(prefix="pk-bench-")
     from pixelkit.design import load_design
-    return load_design(ROOT / "designs" / "dual_pixel_revA.toml")
+    return load_design(path)
 
 
 def child_cpu_s() -> float:

@@ -24,7 +24,7 @@ import time
 
 import numpy as np
 
-from common import ROOT, reference_design
+from common import ROOT, THESIS_READ, reference_design
 from pixelkit.experiments.thesis import run_experiment
 
 CASE = "c1004"
@@ -48,7 +48,7 @@ def cold_cli() -> float:
         env = dict(os.environ, PIXELKIT_CACHE=os.path.join(tmp, "cache"), PYTHONPATH=str(ROOT))
         t0 = time.perf_counter()
         p = subprocess.run([sys.executable, "-m", "pixelkit", "gap", "diagnose",
-                            str(ROOT / "designs" / "dual_pixel_revA.toml"), "--measured", _case_csv(tmp), "--json"],
+                            str(THESIS_READ), "--measured", _case_csv(tmp), "--json"],
                            capture_output=True, text=True, env=env, cwd=tmp)
         wall = time.perf_counter() - t0
         if p.returncode != 0:
@@ -89,7 +89,7 @@ def main():
     ap.add_argument("--rows", type=int, default=2000)
     ap.add_argument("--build", action="store_true")
     a = ap.parse_args()
-    r = measure(reference_design(), a.rows, a.build)
+    r = measure(reference_design(THESIS_READ), a.rows, a.build)
     base = r["spice_s"]
     print(f"baseline: one SPICE experiment run (16 decks)          {base:7.2f} s")
     print(f"gap diagnose, one measured CSV, cold cache, new process {r['cold_cli_s']:7.2f} s  "

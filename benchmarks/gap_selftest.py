@@ -14,7 +14,7 @@ import argparse
 import json
 import time
 
-from common import reference_design
+from common import THESIS_READ, reference_design
 from pixelkit.gap import silicon
 from pixelkit.gap.selftest import population, right_population, stratified_rate, stratified_sample
 from pixelkit.gap.store import load_nominal
@@ -26,7 +26,7 @@ def main():
     ap.add_argument("--json", action="store_true")
     ap.add_argument("--cases-out", default=None, help="write every diagnosed case (truth, found, explained) as JSON")
     a = ap.parse_args()
-    d = reference_design()
+    d = reference_design(THESIS_READ)
     nom = load_nominal(d)
     _, truths = silicon.load_cases()
     ids = stratified_sample(truths, a.sample) if a.sample else None

@@ -5,9 +5,10 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
+#: The reference design: the chip of [Thesis2019] with a read that settles (issue 27).
 REF = ROOT / "designs" / "dual_pixel_revA.toml"
-#: The reference design with a read that settles (issue 27).
-SETTLED = ROOT / "designs" / "dual_pixel_revA_settled.toml"
+#: The same chip with the thesis's own read (~400 nA, does not settle with the AFE): the gap module's silicon.
+THESIS_READ = ROOT / "designs" / "dual_pixel_revA_thesis_read.toml"
 
 
 @pytest.fixture(scope="session")
@@ -17,9 +18,9 @@ def ref_design():
 
 
 @pytest.fixture(scope="session")
-def settled_design():
+def thesis_read_design():
     from pixelkit.design import load_design
-    return load_design(SETTLED)
+    return load_design(THESIS_READ)
 
 
 def run_cli(*args, cwd=None, timeout=600):
@@ -55,3 +56,9 @@ os.environ.setdefault("PIXELKIT_CACHE", tempfile.mkdtemp(prefix="pixelkit-test-c
 def experiment(ref_design):
     from pixelkit.experiments.thesis import run_experiment
     return run_experiment(ref_design)
+
+
+@pytest.fixture(scope="session")
+def thesis_read_experiment(thesis_read_design):
+    from pixelkit.experiments.thesis import run_experiment
+    return run_experiment(thesis_read_design)

@@ -23,9 +23,9 @@ CORPUS = ["", " ", "nan", "NaN", "inf", "-inf", "1e300", "-1e300", "1e-300", "-1
 
 
 @pytest.fixture(scope="module")
-def nominal(ref_design):
+def nominal(thesis_read_design):
     from pixelkit.gap.store import load_nominal
-    return load_nominal(ref_design)
+    return load_nominal(thesis_read_design)
 
 
 @pytest.fixture(scope="module")
@@ -45,7 +45,7 @@ def _roundtrip(header, rows):
     return r.fieldnames, list(r)
 
 
-def test_fuzz_every_column(base, ref_design, nominal):
+def test_fuzz_every_column(base, thesis_read_design, nominal):
     from pixelkit.gap.diagnose import diagnose
     header, rows = base
     rng = np.random.default_rng(2024)
@@ -60,7 +60,7 @@ def test_fuzz_every_column(base, ref_design, nominal):
                 h, rr = _roundtrip(header, mutated)
                 n += 1
                 try:
-                    table = validate(h, rr, ref_design, True, "fuzz.csv")
+                    table = validate(h, rr, thesis_read_design, True, "fuzz.csv")
                 except PixelkitError as e:
                     assert str(e).startswith("fuzz.csv") and "\n" not in str(e).split(": ", 1)[0]
                     continue
@@ -70,7 +70,7 @@ def test_fuzz_every_column(base, ref_design, nominal):
     for k in order:
         col, value, scope, table = passed[k]
         try:
-            d = diagnose(ref_design, table, nominal)
+            d = diagnose(thesis_read_design, table, nominal)
         except PixelkitError:
             continue   # a degenerate set refused before naming an effect
         json.dumps(d, allow_nan=False, default=float)   # no NaN / infinity in a successful answer
@@ -79,7 +79,7 @@ def test_fuzz_every_column(base, ref_design, nominal):
 def test_fuzz_cli_sample(tmp_path, base, cli):
     """A few mutated files through the command line: exit 2 with one line, or 0 with finite JSON."""
     header, rows = base
-    from conftest import REF
+    from conftest import THESIS_READ
     for k, (col, value) in enumerate([("i_ph_A", "1e300"), ("row", "1_0"), ("v_std_V", "-1"), ("n_avg", "0"),
                                       ("temp_C", "nan"), ("probe", "AFE ")]):
         mutated = [dict(r) for r in rows]
@@ -89,7 +89,7 @@ def test_fuzz_cli_sample(tmp_path, base, cli):
             w = csv.DictWriter(fh, header)
             w.writeheader()
             w.writerows(mutated)
-        code, out, err = cli("gap", "diagnose", REF, "--measured", p, "--json")
+        code, out, err = cli("gap", "diagnose", THESIS_READ, "--measured", p, "--json")
         assert code in (0, 2) and "Traceback" not in err, (col, value, err)
         if code == 0:
             json.loads(out, parse_constant=lambda c: pytest.fail(f"{c} in the answer"))
@@ -102,13 +102,13 @@ def test_fuzz_cli_sample(tmp_path, base, cli):
 def test_bench_calibration_out_of_range_is_named(tmp_path, base, cli, opt, value):
     """A stated calibration must be a positive standard deviation within the set-up's plausible range: exit 2
     naming the option before anything is fitted."""
-    from conftest import REF
+    from conftest import THESIS_READ
     header, rows = base
     p = tmp_path / "m.csv"
     with open(p, "w", newline="") as fh:
         w = csv.DictWriter(fh, header)
         w.writeheader()
         w.writerows(rows)
-    code, out, err = cli("gap", "diagnose", REF, "--measured", p, opt, value, "--json")
+    code, out, err = cli("gap", "diagnose", THESIS_READ, "--measured", p, opt, value, "--json")
     assert code == 2 and "Traceback" not in err
     assert opt in json.loads(out)["error"]

@@ -17,24 +17,24 @@ import numpy as np
 import pytest
 
 import gapcases
-from conftest import REF
+from conftest import THESIS_READ
 from pixelkit.gap import silicon
 
 
 @pytest.fixture(scope="module")
-def nominal(ref_design):
+def nominal(thesis_read_design):
     from pixelkit.gap.store import load_nominal
-    return load_nominal(ref_design)
+    return load_nominal(thesis_read_design)
 
 
-def _table(ref_design, cid):
-    return silicon.table_of(ref_design, gapcases.rows(cid), cid)
+def _table(thesis_read_design, cid):
+    return silicon.table_of(thesis_read_design, gapcases.rows(cid), cid)
 
 
-def test_shipped_surrogate_matches_fresh_spice(nominal, ref_design):
+def test_shipped_surrogate_matches_fresh_spice(nominal, thesis_read_design):
     """Four fresh full-chain decks at charges / amplitudes between the tables' grid points (store.CHECK)."""
     from pixelkit.gap import store
-    c = nominal.error.get("store_check") or store.check(ref_design, nominal)
+    c = nominal.error.get("store_check") or store.check(thesis_read_design, nominal)
     assert c["passed"] and c["max_deviation_V"] < 1e-3, c
     assert nominal.error["pixel_max_V"] < 0.5e-3 and nominal.error["afe_max_V"] < 2e-3
     # storage-node charge sees C_FD only: its response exceeds the PD's (shared C_PD + C_FD) on both arrays
@@ -42,50 +42,50 @@ def test_shipped_surrogate_matches_fresh_spice(nominal, ref_design):
         assert all(1.5 < r < 30 for r in ratio[1][:-1]), (arr, ratio)
 
 
-def test_a_wrong_surrogate_fails_the_check(nominal, ref_design):
+def test_a_wrong_surrogate_fails_the_check(nominal, thesis_read_design):
     """The check can fail: a column-conductance table 10 % off (a few mV where the column slews)."""
     from pixelkit.gap import store
     from pixelkit.gap.responses import Response
     r = nominal.sites["col_g"]
     bad = Response(r.kind, r.q, r.amps, {a: {k: v * 1.1 for k, v in t.items()} for a, t in r.tables.items()})
     wrong = replace(nominal, sites=dict(nominal.sites, col_g=bad))
-    assert store.check(ref_design, wrong)["passed"] is False
+    assert store.check(thesis_read_design, wrong)["passed"] is False
 
 
-def test_deck_key_sees_charges_amplitudes_and_deck_text(ref_design, nominal, monkeypatch):
+def test_deck_key_sees_charges_amplitudes_and_deck_text(thesis_read_design, nominal, monkeypatch):
     """The key hashes the end decks' text and every charge and amplitude: a load amplitude the decks between
     the ends alone would carry, a grid index, or a changed deck generator each give another key."""
     from dataclasses import replace as rep
 
     from pixelkit.gap import responses, store
     piv = store._pivots(nominal)
-    k0 = store.deck_key(ref_design, piv)
+    k0 = store.deck_key(thesis_read_design, piv)
     load = responses.SITES["load"]
     monkeypatch.setitem(responses.SITES, "load", rep(load, amps=lambda arr, q: (-0.25, -0.16, -0.08, 0.07, 0.16, 0.25)))
-    assert store.deck_key(ref_design, piv) != k0
+    assert store.deck_key(thesis_read_design, piv) != k0
     monkeypatch.setitem(responses.SITES, "load", load)
     monkeypatch.setattr(responses, "Q_PICK", responses.Q_PICK[:-2] + (19, 21))
-    assert store.deck_key(ref_design, piv) != k0
+    assert store.deck_key(thesis_read_design, piv) != k0
     monkeypatch.undo()
-    assert store.deck_key(ref_design, piv) == k0
-    assert store.deck_key(rep(ref_design, pixel=rep(ref_design.pixel, sf_bias=ref_design.pixel.sf_bias * 1.01)),
+    assert store.deck_key(thesis_read_design, piv) == k0
+    assert store.deck_key(rep(thesis_read_design, pixel=rep(thesis_read_design.pixel, sf_bias=thesis_read_design.pixel.sf_bias * 1.01)),
                           piv) != k0
 
 
-def test_shipped_surrogate_key_unchanged(ref_design, nominal):
+def test_shipped_surrogate_key_unchanged(thesis_read_design, nominal):
     """Change detector: the shipped surrogate is the one of this kit's decks (else diagnose rebuilds it,
     2 - 4 min; regenerate with ``pixelkit gap surrogate``)."""
     from pixelkit.gap import store
-    assert store.read(ref_design) is not None
+    assert store.read(thesis_read_design) is not None
     assert "store_check" in nominal.error
 
 
-def test_predict_is_the_spice_level_of_an_effect_free_case(tmp_path, ref_design, cli):
+def test_predict_is_the_spice_level_of_an_effect_free_case(tmp_path, thesis_read_design, cli):
     """`gap predict` on an effect-free SPICE case: the case's levels with its set-up gain / offset removed."""
     cid = gapcases.ids("none")[0]
     t = gapcases.truths()[cid]
     cond = gapcases.write_csv(cid, tmp_path / "cond.csv", drop=("v_V",))
-    code, out, err = cli("gap", "predict", REF, "--conditions", cond, "--out", tmp_path / "p.csv")
+    code, out, err = cli("gap", "predict", THESIS_READ, "--conditions", cond, "--out", tmp_path / "p.csv")
     assert code == 0, err
     got = list(csv.DictReader(open(tmp_path / "p.csv")))
     want = [(float(r["v_V"]) - t["setup_offset_V"]) / t["setup_gain"] for r in gapcases.rows(cid)]
@@ -96,12 +96,12 @@ def test_predict_is_the_spice_level_of_an_effect_free_case(tmp_path, ref_design,
 
 
 @pytest.mark.parametrize("cid", gapcases.ids("sf_gain")[:3])
-def test_column_load_is_named_with_its_conductance_and_the_setup_gain(ref_design, nominal, cid):
+def test_column_load_is_named_with_its_conductance_and_the_setup_gain(thesis_read_design, nominal, cid):
     """A conductance switched onto each column (SPICE circuit edit) is sf_gain, with the inserted
     conductance inside the fit's interval and the applied set-up gain recovered (not absorbed)."""
     from pixelkit.gap.diagnose import diagnose
     t = gapcases.truths()[cid]
-    d = diagnose(ref_design, _table(ref_design, cid), nominal)
+    d = diagnose(thesis_read_design, _table(thesis_read_design, cid), nominal)
     assert d["best"] == "sf_gain" and d["explained"] is True, d["verdict"]
     top = next(r for r in d["ranking"] if r["effect"] == "sf_gain")
     g = top["params"]["g_col_S"]
@@ -110,11 +110,11 @@ def test_column_load_is_named_with_its_conductance_and_the_setup_gain(ref_design
         assert top["setup"][f"gain_{probe}"] == pytest.approx(t["setup_gain"], abs=0.004)
 
 
-def test_afe_gain_and_charge_injection_are_separated(ref_design, nominal, cli, tmp_path):
+def test_afe_gain_and_charge_injection_are_separated(thesis_read_design, nominal, cli, tmp_path):
     """A capacitor across C13 (SPICE) is afe_gain, not an injection offset; `gap plan` runs on it."""
     from pixelkit.gap.diagnose import diagnose
     cid = gapcases.ids("afe_gain")[0]
-    d = diagnose(ref_design, _table(ref_design, cid), nominal)
+    d = diagnose(thesis_read_design, _table(thesis_read_design, cid), nominal)
     assert d["best"] == "afe_gain" and "charge_injection" not in d["indistinguishable"], d["verdict"]
     from pixelkit.gap.diagnose import AMBIGUOUS_DCHI2
     ranks = {r["effect"]: r for r in d["ranking"]}
@@ -122,7 +122,7 @@ def test_afe_gain_and_charge_injection_are_separated(ref_design, nominal, cli, t
         d["n_heldout"]
     assert dchi2 > AMBIGUOUS_DCHI2, dchi2   # the held-out rows tell them apart
     meas = gapcases.write_csv(cid, tmp_path / "m.csv")
-    code, out, err = cli("gap", "plan", REF, "--measured", meas, "--json")
+    code, out, err = cli("gap", "plan", THESIS_READ, "--measured", meas, "--json")
     assert code == 0, err
     p = json.loads(out)
     assert p["candidates"][0] == "afe_gain" and len(p["candidates"]) >= 2
@@ -135,7 +135,7 @@ def test_diagnose_json_and_html(tmp_path, cli):
     cid = "c1036"
     assert gapcases.truths()[cid]["effect"] == "readout_light"
     meas = gapcases.write_csv(cid, tmp_path / "m.csv")
-    code, out, err = cli("gap", "diagnose", REF, "--measured", meas, "--json", "--out", tmp_path / "rep")
+    code, out, err = cli("gap", "diagnose", THESIS_READ, "--measured", meas, "--json", "--out", tmp_path / "rep")
     assert code == 0, err
     r = json.loads(out)
     for key in ("gap_before_rms_V", "gap_after_rms_V", "shrink_frac", "best", "ranking", "where", "explained",
@@ -147,10 +147,10 @@ def test_diagnose_json_and_html(tmp_path, cli):
 
 
 @pytest.mark.parametrize("circuit", silicon.OUT_OF_LIBRARY)
-def test_unexplained_gap_is_said_to_be_unexplained(ref_design, nominal, circuit):
+def test_unexplained_gap_is_said_to_be_unexplained(thesis_read_design, nominal, circuit):
     """A diode clamping the column, a bridge between columns, a leak to the supply (SPICE): not explained."""
     from pixelkit.gap.diagnose import diagnose
-    d = diagnose(ref_design, _table(ref_design, gapcases.ids(circuit)[0]), nominal)
+    d = diagnose(thesis_read_design, _table(thesis_read_design, gapcases.ids(circuit)[0]), nominal)
     assert d["explained"] is False
     assert d["best_partial"] is not None and d["remainder_where"]
     assert "not explained" in d["verdict"]
@@ -190,7 +190,7 @@ def _set(r, row, col, value):
 def test_malformed_data_reported_by_row_and_column(tmp_path, cli, mutate, needles):
     meas = gapcases.write_csv(gapcases.ids("none")[0], tmp_path / "meas.csv")
     bad = _rewrite(meas, tmp_path / "bad.csv", mutate)
-    code, out, err = cli("gap", "diagnose", REF, "--measured", bad, "--json")
+    code, out, err = cli("gap", "diagnose", THESIS_READ, "--measured", bad, "--json")
     assert code == 2 and "Traceback" not in err
     message = json.loads(out)["error"]  # with --json the error is a JSON object on stdout
     for n in needles:
@@ -201,7 +201,7 @@ def test_malformed_data_reported_by_row_and_column(tmp_path, cli, mutate, needle
 def test_undecodable_gap_files_are_one_line(tmp_path, cli, content, needle):
     p = tmp_path / "x.csv"
     p.write_bytes(content)
-    code, out, err = cli("gap", "diagnose", REF, "--measured", p)
+    code, out, err = cli("gap", "diagnose", THESIS_READ, "--measured", p)
     assert code == 2 and "Traceback" not in err and needle in err and len(err.strip().splitlines()) == 1
 
 
@@ -217,14 +217,14 @@ def test_surrogate_selftest_command_contract(cli):
     assert r["n_effect_cases"] == sum(e in RANGES for e in NAMES) == len(NAMES) - 1 and r["n_clean_cases"] == 2
 
 
-def test_conditions_that_cannot_separate_are_said(ref_design, nominal):
+def test_conditions_that_cannot_separate_are_said(thesis_read_design, nominal):
     """Bad input: SPICE data (a dark current inserted as a current source on each PD) at one integration time,
     one temperature and one wait: dark current and FD leakage scale only with those, so what they add is a
     constant the set-up offset absorbs; the answer says these data cannot show them, why, and is not confident."""
     from pixelkit.gap.diagnose import diagnose
-    rows, truth = silicon.simulate_case(ref_design, nominal, "dark_current", 77, campaign="one_condition")
-    table = silicon.table_of(ref_design, [{k: str(v) for k, v in r.items()} for r in rows], "one_condition")
-    d = diagnose(ref_design, table, nominal)
+    rows, truth = silicon.simulate_case(thesis_read_design, nominal, "dark_current", 77, campaign="one_condition")
+    table = silicon.table_of(thesis_read_design, [{k: str(v) for k, v in r.items()} for r in rows], "one_condition")
+    d = diagnose(thesis_read_design, table, nominal)
     said = {d["best"], *d["indistinguishable"], *d["cannot_detect"]}
     assert {"dark_current", "fd_leakage"} <= said, d["verdict"]
     assert d["confident"] is False and "cannot show" in d["verdict"]
@@ -233,16 +233,16 @@ def test_conditions_that_cannot_separate_are_said(ref_design, nominal):
     assert "temperature (temp_C)" in d["fixed_conditions"]
 
 
-def test_two_look_alikes_at_once_are_both_named_and_plan_separates_them(ref_design, nominal, cli, tmp_path):
+def test_two_look_alikes_at_once_are_both_named_and_plan_separates_them(thesis_read_design, nominal, cli, tmp_path):
     """Stray light and leakage on the storage node at once (two current pulses on FD, SPICE): both named,
     explained; `gap plan` gives, for each pair, the operating point that tells them apart (a dark, hot,
     long wait separates the leakage from the light)."""
     from pixelkit.gap.diagnose import diagnose
     cid = gapcases.ids("gse+fd_leakage")[0]
-    d = diagnose(ref_design, _table(ref_design, cid), nominal)
+    d = diagnose(thesis_read_design, _table(thesis_read_design, cid), nominal)
     assert sorted(d["effects"]) == ["fd_leakage", "gse"] and d["explained"] is True, d["verdict"]
     meas = gapcases.write_csv(cid, tmp_path / "m.csv")
-    code, out, err = cli("gap", "plan", REF, "--measured", meas, "--json")
+    code, out, err = cli("gap", "plan", THESIS_READ, "--measured", meas, "--json")
     assert code == 0, err
     p = json.loads(out)
     assert set(p["candidates"][:3]) == {"fd_leakage+gse", "fd_leakage", "gse"}

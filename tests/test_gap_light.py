@@ -35,21 +35,21 @@ def _deck(d, scale, title):
 
 
 @pytest.fixture(scope="module")
-def runs(ref_design):
-    return simulate_many([_deck(ref_design, 0.0, "lt_zero"), _deck(ref_design, 1.0, "lt_on")])
+def runs(thesis_read_design):
+    return simulate_many([_deck(thesis_read_design, 0.0, "lt_zero"), _deck(thesis_read_design, 1.0, "lt_on")])
 
 
 @pytest.fixture(scope="module")
-def former_read(ref_design):
+def former_read(thesis_read_design):
     """The reference design as it was before its read was retimed for settling (400 nA load, the kit's
     default read: S1 0.1 - 0.4, S2 0.6 - 0.9 of the row): its 200 ns open-loop gap lets the output of a
     0.42 V signal reach the clamp; the reference design's own read leaves 100 ns, and the output stays
     below the supply (docs/timing-and-settling.md)."""
     from dataclasses import replace
     from pixelkit.readout_timing import Timing
-    d = replace(ref_design, primary=replace(ref_design.primary, timing=Timing()),
-                secondary=replace(ref_design.secondary, timing=Timing()),
-                pixel=replace(ref_design.pixel, sf_bias=400e-9))
+    d = replace(thesis_read_design, primary=replace(thesis_read_design.primary, timing=Timing()),
+                secondary=replace(thesis_read_design.secondary, timing=Timing()),
+                pixel=replace(thesis_read_design.pixel, sf_bias=400e-9))
     return d, simulate_many([_deck(d, 0.0, "lt_zero_former"), _deck(d, 1.0, "lt_on_former")])
 
 
@@ -65,28 +65,28 @@ def _shift(runs, d, col, arr):
     return dv, gap_max, t
 
 
-def test_vm_island_charge_is_current_times_float_time(runs, ref_design):
+def test_vm_island_charge_is_current_times_float_time(runs, thesis_read_design):
     """Charge conservation on the vm island at every signal level, clamped or not: dQ = -I t_float."""
-    a = ref_design.afe
+    a = thesis_read_design.afe
     for col, arr, i in (("col_p", "primary", I_P), *((f"col_s{k}", "secondary", I_S) for k in range(3))):
-        dv, _, t = _shift(runs, ref_design, col, arr)
+        dv, _, t = _shift(runs, thesis_read_design, col, arr)
         dq = a.c11 * (dv["vm"] - dv["in"]) + a.c12 * (dv["vm"] - dv["x"]) + a.c13 * (dv["vm"] - dv["out"])
         # 3 %: the switch opens over a 10 ns edge (1 - 2 % of t_float) and ngspice's charge tolerance
-        assert dq == pytest.approx(-i * t_float(ref_design, 1.0 / t.t_row, arr), rel=0.03), col
+        assert dq == pytest.approx(-i * t_float(thesis_read_design, 1.0 / t.t_row, arr), rel=0.03), col
 
 
-def test_output_shift_is_charge_over_c13_below_the_clamp(runs, ref_design):
+def test_output_shift_is_charge_over_c13_below_the_clamp(runs, thesis_read_design):
     """Where the op-amp's open-loop output stays below the supply in the p1-p2 gap, the island's charge
     balance gives dVout = I t_float / C13 + (C11 / C13) (dVsig - dVrst): the light's charge over C13, plus
     the AFE's own response to the levels it holds on C11 (in at p1 opening, in at the sample; the in node's
     floating charge moves the reset level a little), both measured on the nodes of the same deck."""
-    a = ref_design.afe
+    a = thesis_read_design.afe
     k = eps(a.c11, a.c13, a.gain)
     checked = 0
     for col, arr, i in (("col_p", "primary", I_P), ("col_s0", "secondary", I_S), ("col_s1", "secondary", I_S)):
-        dv, gap_max, t = _shift(runs, ref_design, col, arr)
-        assert gap_max < ref_design.tech.supply, col          # these levels do not reach the clamp
-        want = (i * t_float(ref_design, 1.0 / t.t_row, arr) / a.c13 + a.c11 / a.c13 * (dv["sig"] - dv["in"])) / (1 + k)
+        dv, gap_max, t = _shift(runs, thesis_read_design, col, arr)
+        assert gap_max < thesis_read_design.tech.supply, col          # these levels do not reach the clamp
+        want = (i * t_float(thesis_read_design, 1.0 / t.t_row, arr) / a.c13 + a.c11 / a.c13 * (dv["sig"] - dv["in"])) / (1 + k)
         # 3 % + 0.05 mV: the island charge's 3 % above, and ngspice's tolerance on two decks
         assert dv["out"] == pytest.approx(want, rel=0.03, abs=0.05e-3), col
         checked += 1
@@ -98,12 +98,12 @@ def test_clamp_departure_is_the_charge_put_on_x(former_read):
     puts charge dQx on x's island; the output then departs from I t_float / C13 by
     -(C11 + C12 + C13) dQx / (C12 C13) (charge balance with x at virtual ground; plus the held levels' term
     of the test above), here turning it negative: the sign change the virtual silicon showed."""
-    ref_design, runs = former_read
-    a = ref_design.afe
-    dv, gap_max, t = _shift(runs, ref_design, "col_s2", "secondary")
-    assert gap_max > ref_design.tech.supply + 0.3
+    thesis_read_design, runs = former_read
+    a = thesis_read_design.afe
+    dv, gap_max, t = _shift(runs, thesis_read_design, "col_s2", "secondary")
+    assert gap_max > thesis_read_design.tech.supply + 0.3
     dqx = a.c12 * (dv["x"] - dv["vm"])
-    lin = I_S * t_float(ref_design, 1.0 / t.t_row, "secondary") / a.c13
+    lin = I_S * t_float(thesis_read_design, 1.0 / t.t_row, "secondary") / a.c13
     departure = dv["out"] - lin
     assert departure < -lin                                    # the response changes sign
     want = -(a.c11 + a.c12 + a.c13) * dqx / (a.c12 * a.c13) + a.c11 / a.c13 * (dv["sig"] - dv["in"])

@@ -14,9 +14,9 @@ from pixelkit.gap import silicon
 
 
 @pytest.fixture(scope="module")
-def nominal(ref_design):
+def nominal(thesis_read_design):
     from pixelkit.gap.store import load_nominal
-    return load_nominal(ref_design)
+    return load_nominal(thesis_read_design)
 
 
 @pytest.fixture(scope="module")
@@ -24,7 +24,7 @@ def committed():
     return silicon.load_cases()
 
 
-def test_committed_cases_cover_every_kind(committed, ref_design):
+def test_committed_cases_cover_every_kind(committed, thesis_read_design):
     cases, truths = committed
     kinds = [t["effect"] for t in truths.values()]
     assert sum(k not in ("none", "out_of_library") for k in kinds) >= 100
@@ -33,18 +33,18 @@ def test_committed_cases_cover_every_kind(committed, ref_design):
     assert {t["circuit"] for t in truths.values()} >= set(silicon.OUT_OF_LIBRARY)
     for cid, rows in cases.items():   # every case passes the checks a user's file gets
         points = silicon.CAMPAIGNS[truths[cid].get("campaign", "lab")]["points"]
-        assert len(silicon.table_of(ref_design, rows, cid)) == 8 * points
+        assert len(silicon.table_of(thesis_read_design, rows, cid)) == 8 * points
     # the added kinds: uniform changes, the columns' Monte Carlo, dark current in long hot dark frames, pairs
     circuits = {t["circuit"] for t in truths.values()}
     assert set(silicon.UNIFORM) | {"mc_columns"} | {p for p, _ in silicon.PAIRS} <= circuits
     assert sum(t.get("campaign") == "dark_hot" and t["circuit"] == "dark_current" for t in truths.values()) >= 9
 
 
-def test_one_case_is_reproduced_by_spice(committed, ref_design, nominal):
+def test_one_case_is_reproduced_by_spice(committed, thesis_read_design, nominal):
     """Re-simulate a readout-light case (7 decks; the session's SPICE cache is empty) and compare."""
     cases, truths = committed
     cid = next(c for c, t in truths.items() if t["effect"] == "readout_light")
-    rows, truth = silicon.simulate_case(ref_design, nominal, "readout_light", truths[cid]["seed"])
+    rows, truth = silicon.simulate_case(thesis_read_design, nominal, "readout_light", truths[cid]["seed"])
     got = np.array([r["v_V"] for r in rows])
     want = np.array([float(r["v_V"]) for r in cases[cid]])
     assert truth["params"] == pytest.approx(truths[cid]["params"])
@@ -55,12 +55,12 @@ SAMPLE_FRACTION = 0.4
 
 
 @pytest.fixture(scope="module")
-def sample_run(committed, ref_design, nominal):
+def sample_run(committed, thesis_read_design, nominal):
     """The stratified sample, diagnosed blind (``selftest.stratified_sample``)."""
     from pixelkit.gap.selftest import stratified_sample
     _, truths = committed
     ids = stratified_sample(truths, SAMPLE_FRACTION)
-    return silicon.run_committed(ref_design, nominal, only_ids=ids), truths
+    return silicon.run_committed(thesis_read_design, nominal, only_ids=ids), truths
 
 
 def _population(truths):
@@ -112,7 +112,7 @@ def test_spice_sample_blind(sample_run):
     assert r["two_effects_both_named"]["rate"] >= 0.8 and r["dark_current_hot_named"]["rate"] == 1.0
 
 
-def test_bench_calibration_shows_an_opamp_gain_the_set_up_would_take(committed, ref_design, nominal):
+def test_bench_calibration_shows_an_opamp_gain_the_set_up_would_take(committed, thesis_read_design, nominal):
     """An op-amp DC gain of 50 dB (60 designed), SPICE-made (case c1204, a bench with each probe's gain and
     offset within 0.3 % / 2 mV). With the set-up free within its tolerances (+-5 % / +-25 mV) the AFE probe's
     gain and offset take the change whole: the nominal model explains the data and the answer is ``none``,
@@ -122,11 +122,11 @@ def test_bench_calibration_shows_an_opamp_gain_the_set_up_would_take(committed, 
     from pixelkit.gap.diagnose import diagnose
     cases, truths = committed
     assert truths["c1204"]["circuit"] == "opamp_gain" and 300 < truths["c1204"]["params"]["gain"] < 320
-    table = silicon.table_of(ref_design, cases["c1204"], "c1204")
-    free = diagnose(ref_design, table, nominal)
+    table = silicon.table_of(thesis_read_design, cases["c1204"], "c1204")
+    free = diagnose(thesis_read_design, table, nominal)
     assert free["best"] == "none" and free["explained"] is True
     assert not free["calibration"]["stated"] and "cannot show" in free["calibration"]["note"]
-    stated = diagnose(ref_design, table, nominal, setup=silicon.stated_setup(truths["c1204"]))
+    stated = diagnose(thesis_read_design, table, nominal, setup=silicon.stated_setup(truths["c1204"]))
     assert stated["best"] == "afe_gain" and stated["explained"] is True, stated["verdict"]
     ranks = {x["effect"]: x for x in stated["ranking"]}
     assert ranks["none"]["calibration_chi2"] > 15 and stated["calibration"]["chi2"] < 9
@@ -139,9 +139,9 @@ EXPLAINED_SAMPLE = 0.85
 
 
 @pytest.mark.slow
-def test_spice_selftest_full(committed, ref_design, nominal):
+def test_spice_selftest_full(committed, thesis_read_design, nominal):
     """All committed cases against the issue's targets (docs/gap-diagnosis.md gives the measured figures)."""
-    r = silicon.run_committed(ref_design, nominal)
+    r = silicon.run_committed(thesis_read_design, nominal)
     assert r["top1_accuracy"] >= 0.89 and r["explained_when_right"] >= 0.89 and r["median_shrink"] >= 0.9
     assert r["none_on_clean"] >= 0.95 and r["not_explained_on_out_of_library"] == 1.0
     assert r["uniform_named_uniform"]["rate"] >= 0.9 and r["mc_named_per_column"]["rate"] >= 0.9
@@ -149,13 +149,13 @@ def test_spice_selftest_full(committed, ref_design, nominal):
     assert r["two_effects_both_named"]["rate"] >= 0.8 and r["dark_current_hot_named"]["rate"] >= 8 / 9
 
 
-def test_adding_cases_keeps_the_committed_ones(tmp_path, ref_design):
+def test_adding_cases_keeps_the_committed_ones(tmp_path, thesis_read_design):
     """``write_cases(keep=True)`` simulates only planned cases the folder lacks: with the committed plan
     nothing is run (no surrogate given) and both files come back with the same content."""
     import shutil
     for f in ("cases.csv", "truth.json"):
         shutil.copy(silicon.CASES_DIR / f, tmp_path / f)
-    r = silicon.write_cases(ref_design, None, tmp_path, silicon.plan_cases()[-3:], keep=True)
+    r = silicon.write_cases(thesis_read_design, None, tmp_path, silicon.plan_cases()[-3:], keep=True)
     assert r["n_cases"] == len(silicon.plan_cases())
     assert (tmp_path / "cases.csv").read_bytes() == (silicon.CASES_DIR / "cases.csv").read_bytes()
     assert silicon.load_cases(tmp_path)[1] == silicon.load_cases()[1]

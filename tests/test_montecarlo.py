@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from mismatch_estimate import effective_dof, estimate, sample_band
 
-from conftest import SETTLED
+from conftest import REF
 from pixelkit.mc.montecarlo import run_monte_carlo
 from pixelkit.mc.pelgrom import cap_sigma_rel, coefficients, sigma_vth
 
@@ -96,11 +96,11 @@ def test_mc_command_with_corners_and_the_afe(cli, tmp_path, ref_design):
     and the offset FPN against the Pelgrom estimate, each in the chi-square band of its
     sample (secondary: 9 columns; offset: 2 x 3 dual pixels within columns).
 
-    At the clocks of [Thesis2019] with the read that settles (designs/dual_pixel_revA_settled.toml, issue
+    At the clocks of [Thesis2019] with the read that settles (designs/dual_pixel_revA.toml, issue
     27): the reference design's own read does not settle with the AFE's C11 attached (the column
     slews through S1: tt primary PRNU 13.5 % with the AFE against 0.18 % without), so this test
     ran at half its clocks before."""
-    design = SETTLED
+    design = REF
     code, out, err = cli("mc", design, "--rows", "2", "--cols", "3", "--seed", "3", "--corner", "tt",
                          "--corner", "ff", "--afe", "--json", "--out", tmp_path / "mc")
     assert code == 0, err

@@ -95,13 +95,13 @@ def test_a_failed_point_is_left_out_and_named_with_its_array(tmp_path, monkeypat
     assert "primary node x1.xp.pd" in msg and "forward-biased" in msg, msg
 
 
-def test_bright_source_figures(settled_design):
+def test_bright_source_figures(ref_design):
     """1000 full wells: with anti-blooming the pixel reads at the top and the extra charge onto FD
     after its reset is its own light (I / gse, within 15 %); without, the primary reads dark
     (black sun) and FD takes ~100x that; the column recovers within 0.5 mV on the next row (on the
     read that settles: the reference design's own read carries the bright row into the next)."""
     from pixelkit.chip.bright import QUICK_FACTORS, figures
-    rows = figures(settled_design, QUICK_FACTORS)
+    rows = figures(ref_design, QUICK_FACTORS)
     by = {(r["array"], r["anti_blooming"], r["full_wells"]): r for r in rows}
     assert not any("failed" in r for r in rows)
     for kind in ("primary", "secondary"):

@@ -11,18 +11,20 @@ from pixelkit.experiments.reference import departures, differences, is_reference
 from pixelkit.report.text import simulate_text
 
 
-def test_the_shipped_reference_design_is_the_thesis_chip(ref_design):
-    assert is_reference(ref_design), differences(ref_design)
-    p, s = ref_design.primary, ref_design.secondary
+def test_the_thesis_read_is_the_thesis_chip(thesis_read_design):
+    """designs/dual_pixel_revA_thesis_read.toml: the chip at every value the dissertation states."""
+    d = thesis_read_design
+    assert is_reference(d), differences(d)
+    p, s = d.primary, d.secondary
     assert (p.rows, p.cols, s.rows, s.cols) == (27, 50, 27, 150)                  # table 3.2
     assert round(p.pd_width * 1e6, 2) == 15.1 and round(p.pd_height * 1e6, 2) == 13.55
-    assert not departures(ref_design)
+    assert round(d.pixel.sf_bias * 1e9, 6) == 400 and not departures(d)
 
 
-def test_the_settled_read_is_the_chip_with_its_departure_named(settled_design):
-    """designs/dual_pixel_revA_settled.toml (issue 27): the chip with a 1 uA load, named as a departure."""
-    assert is_reference(settled_design)
-    assert [x.split(":")[0] for x in departures(settled_design)] == ["pixel.sf_bias 1e-06"]
+def test_the_reference_is_the_chip_with_its_departure_named(ref_design):
+    """designs/dual_pixel_revA.toml (issue 27): the chip with a 1 uA load, named as a departure."""
+    assert is_reference(ref_design)
+    assert [x.split(":")[0] for x in departures(ref_design)] == ["pixel.sf_bias 1e-06"]
 
 
 def test_one_stated_value_changed_is_another_design(ref_design):

@@ -4,15 +4,15 @@ Independent paths: the reference is another operating point of the circuit (S1 h
 row times longer), not the frame's own numbers; and the physics the test writes down
 itself: under uniform light every row of a column must read the same level, so the
 settled levels of a column whose raw samples differ row to row by > 50 mV must agree.
-The unsettled design is the reference design's read (400 nA load, the default read); the settled
-one is designs/dual_pixel_revA_settled.toml.
+The unsettled design is the thesis's read (designs/dual_pixel_revA_thesis_read.toml: 400 nA load, the
+default read); the settled one is the reference, designs/dual_pixel_revA.toml.
 """
 import json
 
 import numpy as np
 import pytest
 
-from conftest import SETTLED
+from conftest import REF
 from former_design import former
 from pixelkit.design import load_design
 
@@ -36,7 +36,7 @@ def _frame(design, rows=3, levels=None, options=None):
 
 def test_array_tells_an_unsettled_frame_from_a_settled_one(tmp_path, cli):
     outs = {}
-    for name, path in (("former", _former(tmp_path)), ("settled", SETTLED)):
+    for name, path in (("former", _former(tmp_path)), ("settled", REF)):
         code, out, err = cli("array", path, "--rows", 3, "--cols", 1, "--afe", "--scene", "uniform", "--json",
                              "--out", tmp_path / name)
         assert code == 0, err
@@ -62,7 +62,7 @@ def test_settled_levels_are_the_same_in_every_row_of_a_uniform_column(tmp_path):
     assert np.all(np.abs(f.settling["primary"][1:, 0]) > 0.05)
 
 
-def test_reference_is_converged_and_flags_itself_when_too_short(settled_design, monkeypatch):
+def test_reference_is_converged_and_flags_itself_when_too_short(ref_design, monkeypatch):
     """A reference twice as long moves the settled level by < 0.1 mV (at converged tolerances: at
     the kit's reltol 1e-5 two decks' reset levels scatter by ~0.2 mV); one row time is too short
     to settle and the check says so (NaN and a note), instead of reporting a number."""
@@ -71,13 +71,13 @@ def test_reference_is_converged_and_flags_itself_when_too_short(settled_design, 
     levels = {}
     for factor in (4, 8):
         monkeypatch.setattr(st, "LONG_S1", factor)
-        f = _frame(settled_design, rows=2, options=CONVERGED)
+        f = _frame(ref_design, rows=2, options=CONVERGED)
         levels[factor] = {k: f.signal[k] - f.settling[k] for k in f.settling}   # the settled signals
         assert not f.settling_notes
     for k in levels[4]:
         assert np.max(np.abs(levels[4][k] - levels[8][k])) < 1e-4, k
     monkeypatch.setattr(st, "LONG_S1", 1)
-    f = _frame(settled_design, rows=2)
+    f = _frame(ref_design, rows=2)
     assert np.isnan(f.settling["primary"]).all() and "has not settled" in f.settling_notes[0]
 
 
@@ -91,26 +91,25 @@ def test_verdict_names_what_is_not_ok():
     assert verdict(None, {"primary": 0}, [])["text"] == "NOT ok: settling not measured"
 
 
-def test_settled_design_reads_its_sizing_targets_on_a_frame_with_the_afe(settled_design, experiment, tmp_path):
+def test_settled_design_reads_its_sizing_targets_on_a_frame_with_the_afe(ref_design, experiment,
+                                                                        thesis_read_design, thesis_read_experiment):
     """The 5 % / mid-scale point of the [Thesis2019] simulation experiment (one dual pixel, its column, no AFE) read
     on a frame column with the AFE, after a full row and after a dark one: within 3 % of the
-    target fractions; the reference design's own read (``experiment``) gives 0.74 and 0.12 there (its
-    column does not settle)."""
+    target fractions; the thesis's own read gives 0.74 and 0.12 there (its column does not settle)."""
     from pixelkit.chip.targets import frame_targets, worst_departure
-    from pixelkit.experiments.thesis import run_experiment
-    t = frame_targets(settled_design, run_experiment(settled_design))
+    t = frame_targets(ref_design, experiment)
     assert not t["failures"] and worst_departure(t) < 0.03, t["arrays"]
-    assert worst_departure(frame_targets(load_design(_former(tmp_path)), experiment)) > 0.3
+    assert worst_departure(frame_targets(thesis_read_design, thesis_read_experiment)) > 0.3
 
 
 @pytest.mark.slow
-def test_27_row_column_settles_at_both_clocks(settled_design):
+def test_27_row_column_settles_at_both_clocks(ref_design):
     """Every row of a 27-row dual column with its AFE (primary 500 kHz, secondary 1 MHz), rows
     cycling dark / 5 % / 30 % / full / 3x and 30x full well, within 0.5 mV of the long read at
     converged tolerances (reltol 1e-6): measured 0.044 / 0.30 mV."""
     from pixelkit.chip.frame import CONVERGED
     cycle = [0.05, 1.0, 0.0, 30.0, 0.3, 0.8, 0.02, 3.0, 0.5]
-    f = _frame(settled_design, levels=[cycle[r % len(cycle)] for r in range(27)], options=CONVERGED)
+    f = _frame(ref_design, levels=[cycle[r % len(cycle)] for r in range(27)], options=CONVERGED)
     assert not f.failures and not f.retried and not f.settling_notes
     for k in ("primary", "secondary"):
         assert np.nanmax(np.abs(f.settling[k])) < 0.5e-3, k

@@ -56,18 +56,18 @@ def test_defaults_are_the_former_fractions_of_the_row(tmp_path):
     assert "Vpre" not in deck and "Xpre_" not in deck
 
 
-def test_settled_read_reaches_the_deck(settled_design):
-    """The settled read (designs/dual_pixel_revA_settled.toml): precharge switch per column, its pulse inside S1."""
+def test_settled_read_reaches_the_deck(ref_design):
+    """The settled read (designs/dual_pixel_revA.toml): precharge switch per column, its pulse inside S1."""
     from pixelkit.circuits.testbench import dual_pixel_bench, timings
-    deck = dual_pixel_bench(settled_design, 1e-9, 1e-11, with_afe=True).text()
-    t = timings(settled_design, settled_design.experiment.t_window)
+    deck = dual_pixel_bench(ref_design, 1e-9, 1e-11, with_afe=True).text()
+    t = timings(ref_design, ref_design.experiment.t_window)
     for s, kind in (("p", "primary"), ("s", "secondary")):
         up, down = _rises(_pwl(deck, f"Vpre_{s}"))
-        tk = getattr(settled_design, kind).timing
+        tk = getattr(ref_design, kind).timing
         assert up[0] == pytest.approx(t[kind].row(0) + tk.pre_on) and down[0] == pytest.approx(t[kind].row(0) + tk.pre_off)
         s1 = _rises(_pwl(deck, f"Vs1_{s}"))
         assert s1[0][0] <= up[0] < down[0] < s1[1][0]
-    assert deck.count("Xpre_col_") == 1 + settled_design.secondary_per_pixel
+    assert deck.count("Xpre_col_") == 1 + ref_design.secondary_per_pixel
 
 
 def test_keys_reach_the_deck(tmp_path):

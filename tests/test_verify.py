@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from conftest import REF, ROOT, SETTLED, run_cli
+from conftest import REF, ROOT, run_cli
 from pixelkit.design import load_design
 from pixelkit.errors import ConfigError, PixelkitError
 from pixelkit.schema import to_toml
@@ -57,11 +57,11 @@ def _at(design, corner, temp_c=27.0, supply=0.0):
     return conditions.at(design, conditions.Condition(corner, temp_c + 273.15, supply))
 
 
-def test_settling_slower_at_ss_than_ff(ref_design, settled_design):
+def test_settling_slower_at_ss_than_ff(ref_design, ref_design):
     """Slow devices (ss) leave a larger settling error at the same clocks than fast ones (ff); the
     same corner twice gives the same number (the inequality is not the noise of the solver).
     On the reference design's read (400 nA load, the default phases: it does not settle, issue
-    27): both arrays read worse at ss. The settled read (designs/dual_pixel_revA_settled.toml)
+    27): both arrays read worse at ss. The settled read (designs/dual_pixel_revA.toml)
     settles at both corners."""
     old = ref_design
     ss = measure.settling(_at(old, "ss"))
@@ -69,7 +69,7 @@ def test_settling_slower_at_ss_than_ff(ref_design, settled_design):
     assert ss["secondary"] > 1.5 * ff["secondary"] and ss["primary"] > 1.5 * ff["primary"], (ss, ff)
     assert measure.settling(_at(old, "ff")) == ff
     for corner in ("ss", "ff"):
-        assert max(measure.settling(_at(settled_design, corner)).values()) < 0.5e-3, corner
+        assert max(measure.settling(_at(ref_design, corner)).values()) < 0.5e-3, corner
 
 
 def test_pd_dark_drop_and_ktc_grow_with_temperature(ref_design):
@@ -86,7 +86,7 @@ def test_pd_dark_drop_and_ktc_grow_with_temperature(ref_design):
         assert k[2] / k[0] == pytest.approx(math.sqrt(358.15 / 253.15), rel=0.02)
 
 
-def test_power_scales_with_supply_and_matches_bias_currents(ref_design, settled_design):
+def test_power_scales_with_supply_and_matches_bias_currents(ref_design, ref_design):
     """Every block is fed from the supply at a bias current the supply does not set: power goes as
     V (ratio 1.1 / 0.9 within 2 %). SPICE per block against bias currents x supply x duty. With a
     column precharge (the settled read) the follower also recharges the grounded line and C11 (in
@@ -98,10 +98,10 @@ def test_power_scales_with_supply_and_matches_bias_currents(ref_design, settled_
     est = nom["estimate"]["chip_blocks_W"]
     for block, rel in (("bias", 0.01), ("read", 0.10), ("afe", 0.01)):
         assert nom["chip_blocks_W"][block] == pytest.approx(est[block], rel=rel), block
-    pre = measure.power(settled_design)
-    no_pre = {k: replace(getattr(settled_design, k), timing=replace(getattr(settled_design, k).timing, pre_on=None,
+    pre = measure.power(ref_design)
+    no_pre = {k: replace(getattr(ref_design, k), timing=replace(getattr(ref_design, k).timing, pre_on=None,
                                                                          pre_off=None)) for k in ("primary", "secondary")}
-    bare = measure.power(replace(settled_design, **no_pre))
+    bare = measure.power(replace(ref_design, **no_pre))
     assert bare["chip_blocks_W"]["read"] == pytest.approx(bare["estimate"]["chip_blocks_W"]["read"], rel=0.10)
     est_pre = pre["estimate"]["chip_blocks_W"]["read"]
     assert est_pre > 1.3 * bare["estimate"]["chip_blocks_W"]["read"]
@@ -263,7 +263,7 @@ def test_settling_specs_fail_on_a_design_that_does_not_settle(tmp_path):
     and names them; the settled read passes both at the same condition."""
     from former_design import former
     out = {}
-    for name, text in (("former", former()), ("settled", SETTLED.read_text())):
+    for name, text in (("former", former()), ("settled", REF.read_text())):
         raw = tomllib.loads(text)
         raw["spec"] = {k: v for k, v in raw["spec"].items() if k.startswith("settling_")}
         raw["verify"] = {**raw.get("verify", {}), "mc": 0}

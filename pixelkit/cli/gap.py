@@ -9,6 +9,9 @@ import numpy as np
 from .common import design_arg, emit, json_opt, load, main, out_opt, output_path, spice_opts, post_layout_opt
 from .types import FiniteRange
 
+#: The chip the gap module's virtual silicon and committed cases are of: the thesis's read (docs/gap-diagnosis.md).
+THESIS_READ = "designs/dual_pixel_revA_thesis_read.toml"
+
 
 @main.group()
 def gap():
@@ -149,7 +152,7 @@ def plan(design, measured, top, gain_tol, offset_tol, gain_sd, offset_sd, backen
 
 
 @gap.command()
-@click.argument("design", type=click.Path(dir_okay=False), required=False, default="designs/dual_pixel_revA.toml")
+@click.argument("design", type=click.Path(dir_okay=False), required=False, default=THESIS_READ)
 @click.option("--per-effect", type=click.IntRange(1, 1000), default=10, show_default=True)
 @click.option("--clean", type=click.IntRange(0, 10000), default=20, show_default=True)
 @click.option("--rows", type=click.IntRange(40, 100000), default=240, show_default=True,
@@ -199,7 +202,7 @@ def _selftest_text(kind, x):
 
 
 @gap.command()
-@click.argument("design", type=click.Path(dir_okay=False), required=False, default="designs/dual_pixel_revA.toml")
+@click.argument("design", type=click.Path(dir_okay=False), required=False, default=THESIS_READ)
 @out_opt("folder for cases.csv and truth.json (default: the kit's pixelkit/gap/silicon_cases)", folder=True)
 @spice_opts
 @json_opt
@@ -220,7 +223,7 @@ def silicon(design, out, backend, jobs, as_json):
 
 
 @gap.command()
-@click.argument("design", type=click.Path(dir_okay=False), required=False, default="designs/dual_pixel_revA.toml")
+@click.argument("design", type=click.Path(dir_okay=False), required=False, default=THESIS_READ)
 @out_opt("surrogate file (default: the kit's pixelkit/gap/surrogates/<design>.json)")
 @spice_opts
 @json_opt

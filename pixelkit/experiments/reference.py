@@ -9,7 +9,7 @@ the user is not designing, so it is left out. Device sizes, the AFE and the mask
 not printed by the dissertation and do not take a design out of the comparison.
 
 Where the kit departs from a stated value on purpose (``DEPARTURES``: the value it takes instead
-and why; the settled read, designs/dual_pixel_revA_settled.toml), a design at either value is the
+and why; the reference design's settled read, designs/dual_pixel_revA.toml), a design at either value is the
 chip, and the comparison names the departure beside the dissertation's figures.
 """
 from __future__ import annotations
