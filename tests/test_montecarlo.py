@@ -97,7 +97,7 @@ def test_mc_command_with_corners_and_the_afe(cli, tmp_path, ref_design):
     sample (secondary: 9 columns; offset: 2 x 3 dual pixels within columns).
 
     At the clocks of [Thesis2019] with the read that settles (designs/dual_pixel_revA.toml, issue
-    27): the reference design's own read does not settle with the AFE's C11 attached (the column
+    27): the thesis's read (designs/dual_pixel_revA_thesis_read.toml) does not settle with the AFE's C11 attached (the column
     slews through S1: tt primary PRNU 13.5 % with the AFE against 0.18 % without), so this test
     ran at half its clocks before."""
     design = REF

@@ -57,13 +57,13 @@ def _at(design, corner, temp_c=27.0, supply=0.0):
     return conditions.at(design, conditions.Condition(corner, temp_c + 273.15, supply))
 
 
-def test_settling_slower_at_ss_than_ff(ref_design, ref_design):
+def test_settling_slower_at_ss_than_ff(thesis_read_design, ref_design):
     """Slow devices (ss) leave a larger settling error at the same clocks than fast ones (ff); the
     same corner twice gives the same number (the inequality is not the noise of the solver).
-    On the reference design's read (400 nA load, the default phases: it does not settle, issue
-    27): both arrays read worse at ss. The settled read (designs/dual_pixel_revA.toml)
+    On the thesis's read (400 nA load, the default phases: it does not settle, issue
+    27): both arrays read worse at ss. The reference design's settled read (designs/dual_pixel_revA.toml)
     settles at both corners."""
-    old = ref_design
+    old = thesis_read_design
     ss = measure.settling(_at(old, "ss"))
     ff = measure.settling(_at(old, "ff"))
     assert ss["secondary"] > 1.5 * ff["secondary"] and ss["primary"] > 1.5 * ff["primary"], (ss, ff)
@@ -86,13 +86,13 @@ def test_pd_dark_drop_and_ktc_grow_with_temperature(ref_design):
         assert k[2] / k[0] == pytest.approx(math.sqrt(358.15 / 253.15), rel=0.02)
 
 
-def test_power_scales_with_supply_and_matches_bias_currents(ref_design, ref_design):
+def test_power_scales_with_supply_and_matches_bias_currents(thesis_read_design, ref_design):
     """Every block is fed from the supply at a bias current the supply does not set: power goes as
     V (ratio 1.1 / 0.9 within 2 %). SPICE per block against bias currents x supply x duty. With a
     column precharge (the settled read) the follower also recharges the grounded line and C11 (in
     the estimate) and drives the precharge switch while both conduct (a crowbar, not in it): there
     the estimate is a lower bound."""
-    lo, nom, hi = (measure.power(_at(ref_design, "tt", 27.0, s)) for s in (-0.1, 0.0, 0.1))
+    lo, nom, hi = (measure.power(_at(thesis_read_design, "tt", 27.0, s)) for s in (-0.1, 0.0, 0.1))
     assert lo["chip_W"] < nom["chip_W"] < hi["chip_W"]
     assert hi["chip_W"] / lo["chip_W"] == pytest.approx(1.1 / 0.9, rel=0.02)
     est = nom["estimate"]["chip_blocks_W"]
