@@ -69,6 +69,14 @@ def test_array_zero_exposure_is_a_usage_error(cli, value):
     assert code == 2 and "--t-exp" in err and "Traceback" not in err and "internal error" not in err, err
 
 
+@pytest.mark.parametrize("value", ["0", "-0.5", "nan", "inf", "-inf"])
+def test_array_settling_limit_must_be_a_finite_positive_number(cli, value):
+    """An infinite limit would let a frame that does not settle read ``ok`` (issue 27): refused, as NaN and <= 0;
+    skipping the measurement is ``--no-settling``, whose verdict says settling was not measured."""
+    code, out, err = cli("array", REF, "--settling-limit", value)
+    assert code == 2 and "--settling-limit" in err and "Traceback" not in err and "internal error" not in err, err
+
+
 def test_where_trends_fit_picoamperes_without_a_warning():
     """The trend slope of residuals against a photocurrent in pA (x spans 1e-12): no RankWarning
     (the fit is made on x scaled to a span of 1) and the slope equals the least-squares one."""

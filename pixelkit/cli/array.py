@@ -4,12 +4,7 @@ from __future__ import annotations
 import click
 
 from .common import design_arg, emit, json_opt, load, main, out_opt, output_path, scheduler_address, spice_opts, post_layout_opt
-
-
-def _finite(value, param):
-    if value is not None and value != value:   # NaN passes FloatRange's comparisons
-        raise click.BadParameter(f"{value} is not a number", param=param)
-    return value
+from .types import FiniteRange
 
 
 @main.command("array")
@@ -31,13 +26,12 @@ def _finite(value, param):
               "tolerances (reltol 1e-6) and report the largest difference; exit 1 above 0.1 mV or when void")
 @click.option("--settling/--no-settling", default=True, show_default=True,
               help="also read every row with a long S1 and report each subpixel's settling error (twice the decks)")
-@click.option("--settling-limit", type=click.FloatRange(min=0, min_open=True), default=None,
-              callback=lambda ctx, param, v: _finite(v, param),
-              help="largest settling error (mV) the frame accepts (default: the design's [spec.settling_<array>] "
-                   "max, else 0.5 mV)")
+@click.option("--settling-limit", type=FiniteRange(min=0, min_open=True), default=None,
+              help="largest settling error (mV) the frame accepts, finite (default: the design's "
+                   "[spec.settling_<array>] max, else 0.5 mV; --no-settling skips the measurement, and the "
+                   "verdict then says it was not measured)")
 @click.option("--seed", type=click.IntRange(0, 2**31 - 1), default=None, help="Monte Carlo mismatch draw (GF180 statistical models)")
-@click.option("--t-exp", "t_exp", type=click.FloatRange(0.0, 10.0, min_open=True), default=None,
-              callback=lambda ctx, param, v: _finite(v, param),
+@click.option("--t-exp", "t_exp", type=FiniteRange(0.0, 10.0, min_open=True), default=None,
               help="simulated exposure in s (default: the experiment window); charge of t_int kept")
 @click.option("--scheduler", default=None, callback=scheduler_address, help="Dask scheduler address (default: local workers)")
 @out_opt("folder for frame.csv and frame.png (default reports/<design>/array_RxC)", folder=True)
