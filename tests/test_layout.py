@@ -94,12 +94,16 @@ def test_full_chip_array_is_built_by_reference(tmp_path, ref_design, ref_cells):
     assert big - small < 200
 
 
-def test_geometry_unchanged(ref_design):
-    """Change detector: the generated GDS against the committed one (XOR per cell and layer)."""
-    golden = gdstk.read_gds(str(ROOT / "layouts" / "golden" / f"{ref_design.name}.gds"))
-    report = xor_report(golden, build_library(ref_design, 2, 2))
+@pytest.mark.parametrize("which", ["ref_design", "thesis_read_design"])
+def test_geometry_unchanged(request, which):
+    """Change detector: the generated GDS against the committed one (XOR per cell and layer): the
+    reference design, whose columns precharge, and the same chip with the thesis's read (no
+    precharge: its column cells are drawn as they were before the precharge was)."""
+    d = request.getfixturevalue(which)
+    golden = gdstk.read_gds(str(ROOT / "layouts" / "golden" / f"{d.name}.gds"))
+    report = xor_report(golden, build_library(d, 2, 2))
     assert identical(report), f"layout changed: {report}; review, then `python -m pixelkit layout " \
-                              f"designs/dual_pixel_revA.toml --golden`"
+                              f"{d.source} --golden`"
 
 
 def test_xor_catches_a_changed_opening(ref_design):

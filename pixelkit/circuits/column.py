@@ -39,13 +39,26 @@ def sampler(design, col: str, out: str, s1: str = "s1", s2: str = "s2") -> tuple
 CELL_PORTS = ("vdd", "col", "nbias", "out", "s1", "s1b", "s2", "s2b")
 
 
+def precharged(design, kind: str) -> bool:
+    """Array ``kind`` reads with a column precharge (its timing sets ``pre_on`` / ``pre_off``, as
+    the benches' ``GsTiming.precharged`` has it)."""
+    return getattr(design, kind).timing.pre_on is not None
+
+
+def pre_clock(design, kind: str, name: str = "pre") -> tuple:
+    """The precharge clock node ``name`` of array ``kind``, as a tuple: empty without a precharge."""
+    return (name,) if precharged(design, kind) else ()
+
+
 def column_cell(design, kind: str):
     """One column's circuit as a subcircuit ``column_<kind>`` (the cell the layout draws under /
     over each column line): the load bias NMOS (its reference current comes in at ``nbias``),
-    the current-source load of the line and the S1X / S2X samplers to ``out``."""
+    the current-source load of the line, the S1X / S2X samplers to ``out`` and, when the array
+    reads with one, the precharge switch (gate ``pre``, a port after ``CELL_PORTS``)."""
     from ..spice.netlist import Subckt
-    return Subckt(f"column_{kind}", CELL_PORTS,
-                  (*bias(design)[1:], *load(design, "col"), *sampler(design, "col", "out")))
+    pre = precharge(design, "col", "pre") if precharged(design, kind) else ()
+    return Subckt(f"column_{kind}", (*CELL_PORTS, *pre_clock(design, kind)),
+                  (*bias(design)[1:], *load(design, "col"), *sampler(design, "col", "out"), *pre))
 
 
 def dual_pixel_column(design):
@@ -55,14 +68,16 @@ def dual_pixel_column(design):
     from .dual_pixel import ports
     n = design.secondary_per_pixel
     pix = ports(n)
-    outer = (*pix, "nbias_p", "out_p", "s1_p", "s1b_p", "s2_p", "s2b_p",
+    pre = {"p": pre_clock(design, "primary", "pre_p"), "s": pre_clock(design, "secondary", "pre_s")}
+    outer = (*pix, "nbias_p", "out_p", "s1_p", "s1b_p", "s2_p", "s2b_p", *pre["p"],
              *(f"nbias_s{k}" for k in range(n)), *(f"out_s{k}" for k in range(n)),
-             "s1_s", "s1b_s", "s2_s", "s2b_s")
+             "s1_s", "s1b_s", "s2_s", "s2b_s", *pre["s"])
     elems = [Element("Xpix", pix, "dualpix"),
-             Element("Xcp", ("vdd", "col_p", "nbias_p", "out_p", "s1_p", "s1b_p", "s2_p", "s2b_p"), "column_primary")]
+             Element("Xcp", ("vdd", "col_p", "nbias_p", "out_p", "s1_p", "s1b_p", "s2_p", "s2b_p", *pre["p"]),
+                     "column_primary")]
     for k in range(n):
         elems.append(Element(f"Xcs{k}", ("vdd", f"col_s{k}", f"nbias_s{k}", f"out_s{k}", "s1_s", "s1b_s", "s2_s",
-                                          "s2b_s"), "column_secondary"))
+                                          "s2b_s", *pre["s"]), "column_secondary"))
     return Subckt("dualpix_col", outer, tuple(elems))
 
 

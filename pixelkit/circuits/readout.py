@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from ..spice.netlist import Element, Subckt
 from .afe import PORTS as AFE_PORTS, sc_afe
-from .column import CELL_PORTS, column_cell
+from .column import CELL_PORTS, column_cell, pre_clock
 from .opamp import PORTS as OPAMP_PORTS, opamp_ota
 
 BIAS = "nb"
@@ -47,15 +47,16 @@ def afe_cell(design, kind: str = "secondary") -> Subckt:
 
 
 #: ports of a column's readout (its circuit and its AFE): the column circuit's, the AFE's
-#: clocks, reference and bias, and its output
+#: clocks, reference and bias, and its output (and the precharge clock ``pre`` of an array that has one)
 READOUT_PORTS = ("vdd", "col", "nbias", "s1", "s1b", "s2", "s2b", "vref", "p1", "p1b", "p2", "p2b", "nb", "out")
 
 
 def readout_cell(design, kind: str) -> Subckt:
     """One column's readout: ``column_<kind>`` whose sampler output is the AFE input."""
-    col = Element("Xcol", ("vdd", "col", "nbias", "in", "s1", "s1b", "s2", "s2b"), f"column_{kind}")
+    pre = pre_clock(design, kind)
+    col = Element("Xcol", ("vdd", "col", "nbias", "in", "s1", "s1b", "s2", "s2b", *pre), f"column_{kind}")
     afe = Element("Xafe", ("in", "out", "vref", "p1", "p1b", "p2", "p2b", "vdd", "nb"), f"afe_{kind}")
-    return Subckt(f"readout_{kind}", READOUT_PORTS, (col, afe))
+    return Subckt(f"readout_{kind}", (*READOUT_PORTS, *pre), (col, afe))
 
 
 def readout_cells(design) -> list:
@@ -74,6 +75,7 @@ def chip_ports(design, rows: int, cols: int, afe: bool) -> tuple:
     for kind in KINDS:
         s = SUFFIX[kind]
         out += [f"{c}_{s}" for c in ("s1", "s1b", "s2", "s2b")]
+        out += pre_clock(design, kind, f"pre_{s}")
         if afe:
             out += [f"{c}_{s}" for c in ("p1", "p1b", "p2", "p2b")]
         for j in range(ncol[kind]):
@@ -94,15 +96,16 @@ def chip(design, rows: int, cols: int, afe: bool) -> Subckt:
     ncol = {"primary": cols, "secondary": n * cols}
     for kind in KINDS:
         s = SUFFIX[kind]
+        pre = pre_clock(design, kind, f"pre_{s}")
         for j in range(ncol[kind]):
             col = f"col_{s}_{j}"
             if afe:
                 elems.append(Element(f"Xro_{s}{j}", ("vdd", col, f"nbias_{s}_{j}", f"s1_{s}", f"s1b_{s}", f"s2_{s}",
                                                      f"s2b_{s}", "vref", f"p1_{s}", f"p1b_{s}", f"p2_{s}", f"p2b_{s}",
-                                                     f"nb_{s}_{j}", f"out_{s}_{j}"), f"readout_{kind}"))
+                                                     f"nb_{s}_{j}", f"out_{s}_{j}", *pre), f"readout_{kind}"))
             else:
                 elems.append(Element(f"Xc_{s}{j}", ("vdd", col, f"nbias_{s}_{j}", f"out_{s}_{j}", f"s1_{s}",
-                                                    f"s1b_{s}", f"s2_{s}", f"s2b_{s}"), f"column_{kind}"))
+                                                    f"s1b_{s}", f"s2_{s}", f"s2b_{s}", *pre), f"column_{kind}"))
     return Subckt(f"chip_{rows}x{cols}{'_afe' if afe else ''}", chip_ports(design, rows, cols, afe), tuple(elems))
 
 

@@ -1,23 +1,24 @@
 """The column circuit drawn from ``circuits.column.column_cell`` - the load bias NMOS, the line's
-current-source load and the S1X / S2X transmission gates - and the dual pixel with its columns.
+current-source load, the S1X / S2X transmission gates and, when the array reads with one, the
+column precharge switch - and the dual pixel with its columns.
 
 A column cell is as wide as the column pitch it serves (8 um under a secondary column, 24 um
 over the primary one: column-parallel circuits are tall and narrow). From the edge away from
-the array: the P+ substrate tap, the load / bias strip (col | LOAD | vss | BIAS | nbias), the
-N-channel sampler strip (out | S1 | col | S2 | out) and the P-channel one in its n-well (with
-the well's N+ tap). The clocks and supplies (s1, s1b, s2, s2b, vdd, vss) are full-width metal3
-lines; ``col`` continues the array's column line (metal4, same x) and ``out`` / ``nbias`` leave
-on metal4 tracks on the other side, at x the dual pixel leaves free.
+the array: the P+ substrate tap, the load / bias strip (col | LOAD | vss | BIAS | nbias), with a
+precharge its strip (vss | PRE | col), the N-channel sampler strip (out | S1 | col | S2 | out)
+and the P-channel one in its n-well (with the well's N+ tap). The clocks and supplies (s1, s1b,
+s2, s2b, pre, vdd, vss) are full-width metal3 lines; ``col`` continues the array's column line
+(metal4, same x) and ``out`` / ``nbias`` leave on metal4 tracks on the other side, at x the dual
+pixel leaves free.
 """
 from __future__ import annotations
 
+from ..circuits.column import precharged
 from .canvas import Canvas, box
 from .dual import SUPPLIES
 from .primitives import Mos, finger_nets, fold, mos_strip, pad_side, tap, tap_size, well
 from .route import Lines, RouteError, route_all, route_to_line, stub_to_track, track, via_on
 from .rules import RuleError
-
-LINES = ("s1", "s1b", "s2", "s2b", "vdd", "vss")
 
 
 def _sizes(design, lt):
@@ -36,6 +37,22 @@ def _sizes(design, lt):
 STRIPS = {"load": (("ld", "load", "load_w", "col", "nbias", "vss"), ("bias", "load", "load_w", "vss", "nbias", "nbias")),
           "sw": (("s1n", "sw", "sw_w", "out", "s1", "col"), ("s2n", "sw", "sw_w", "col", "s2", "out")),
           "swp": (("s1p", "swp", "sw_w", "out", "s1b", "col"), ("s2p", "swp", "sw_w", "col", "s2b", "out"))}
+#: the precharge switch (``circuits.column.precharge``: the samplers' size), a strip of its own
+PRE = (("pre", "sw", "sw_w", "vss", "pre", "col"),)
+
+
+def _strips_of(design, kind: str) -> dict:
+    """The strips of ``kind``'s column cell: ``STRIPS`` and, when the array has a precharge, ``pre``."""
+    return {**STRIPS, "pre": PRE} if precharged(design, kind) else STRIPS
+
+
+def _stack_gap(lt) -> int:
+    """COMP gap above the precharge strip: its top pad (col) and the sampler strip's first (col
+    when its devices fold into an even number of fingers) both stack to the col track, so their
+    metal1 - metal3 pads keep the metals' spacing."""
+    cut, enc = lt.cut("contact"), lt.nm("contact.enclosure.active")
+    room = max(pad_side(lt, m) + lt.space(m) for m in ("metal1", "metal2", "metal3"))
+    return lt.snap_up(max(lt.space("active"), room - 2 * enc - cut))
 
 
 def _strip(sz: dict, devs, folds: dict) -> tuple[list, list]:
@@ -49,15 +66,15 @@ def _strip(sz: dict, devs, folds: dict) -> tuple[list, list]:
     return mos, nets
 
 
-def _folds(design, lt, sz: dict, x_r: int, edge: int, name: str) -> dict:
+def _folds(design, lt, sz: dict, strips: dict, x_r: int, edge: int, name: str) -> dict:
     """Fingers per device: each strip's devices no wider than leaves its gate pads and well
     (measured on the strip drawn unfolded) ``edge`` from the cell's left edge."""
     out = {}
     nw_e = lt.nm("nwell.enclosure.pcomp")
-    for key, devs in STRIPS.items():
+    for key, devs in strips.items():
         trial = Canvas("trial", lt)
         mos, nets = _strip(sz, devs, {})
-        st = mos_strip(trial, lt, "p" if key == "swp" else "n", x_r, 0, mos, nets, [True] * 3, "left")
+        st = mos_strip(trial, lt, "p" if key == "swp" else "n", x_r, 0, mos, nets, [True] * (len(mos) + 1), "left")
         left = min(st.extent.x0, st.comp.x0 - (nw_e if key == "swp" else 0))
         wmax = ((max(m.w for m in mos) - (edge - left)) // lt.grid) * lt.grid
         for dev, size, field, *_ in devs:
@@ -106,10 +123,14 @@ def column_cell(design, lt, kind: str, width: int, tracks: dict, reserved: list,
     y = lt.space("nplus") // 2 + iside // 2
     tap_p = tap(cv, lt, "p", x_r - side // 2, y, "vss")
     y = y - side // 2 + max(iside // 2 + enc_np + side // 2, side + lt.space("active"))
-    folds = _folds(design, lt, sz, x_r, lt.space("nwell") // 2, name)
-    strips = {k: _strip(sz, devs, folds) for k, devs in STRIPS.items()}
+    plan = _strips_of(design, kind)
+    folds = _folds(design, lt, sz, plan, x_r, lt.space("nwell") // 2, name)
+    strips = {k: _strip(sz, devs, folds) for k, devs in plan.items()}
     a = mos_strip(cv, lt, "n", x_r, y, *strips["load"], [True] * (len(strips["load"][0]) + 1), "left")
-    b = mos_strip(cv, lt, "n", x_r, a.comp.y1 + lt.space("active"), *strips["sw"],
+    pre = [mos_strip(cv, lt, "n", x_r, a.comp.y1 + lt.space("active"), *strips["pre"],
+                     [True] * (len(strips["pre"][0]) + 1), "left")] if "pre" in strips else []
+    y = pre[0].comp.y1 + _stack_gap(lt) if pre else a.comp.y1 + lt.space("active")
+    b = mos_strip(cv, lt, "n", x_r, y, *strips["sw"],
                   [True] * (len(strips["sw"][0]) + 1), "left")
     nw_e = lt.nm("nwell.enclosure.pcomp")
     yc = b.comp.y1 + lt.nm("nwell.space_to.ncomp") + nw_e
@@ -121,7 +142,7 @@ def column_cell(design, lt, kind: str, width: int, tracks: dict, reserved: list,
     ntap_comp, tap_n = tap(cv, lt, "n", x_r - nside // 2, ty, "vdd")
     nw = well(cv, lt, [c.comp, ntap_comp], "vdd")
     height = lt.snap_up(nw.y1 + lt.space("nwell") // 2 + lt.space("nwell") // 2)
-    if min(a.extent.x0, b.extent.x0, c.extent.x0, nw.x0) < lt.space("nwell") // 2:
+    if min(*(st.extent.x0 for st in (a, *pre, b, c)), nw.x0) < lt.space("nwell") // 2:
         raise RuleError("transistors_fit", f"{name} cell", f"the column circuit needs "
                         f"{(width - min(a.extent.x0, nw.x0) + lt.space('nwell')) / 1000:g} um of the "
                         f"{width / 1000:g} um column pitch", "pixel.devices.sw_w", design.pixel.devices.sw_w)
@@ -129,10 +150,11 @@ def column_cell(design, lt, kind: str, width: int, tracks: dict, reserved: list,
     if place_only:
         return cv
     # per-column nets: metal4 tracks; col toward the array, out / nbias away from it
-    terms = {"col": [p for n, p in a.sd + b.sd + c.sd if n == "col"],
+    pre_sd = [t for st in pre for t in st.sd]
+    terms = {"col": [p for n, p in a.sd + pre_sd + b.sd + c.sd if n == "col"],
              "out": [p for n, p in b.sd + c.sd if n == "out"], "nbias": [p for n, p in a.sd if n == "nbias"]}
     # nbias: the bias device is diode-connected, every gate of the strip tied to its drain on metal1
-    for st in (b, c):
+    for st in (*pre, b, c):
         _spines(cv, lt, st)
     g_ld, nb = a.gates[0][1], terms["nbias"][0]
     w1 = lt.width("metal1")
@@ -151,11 +173,11 @@ def column_cell(design, lt, kind: str, width: int, tracks: dict, reserved: list,
     half = lt.space("metal3") // 2
     lines = Lines("metal3", 0, width, [(half, height - half)])
     first = {n: p for n, p in reversed(b.gates + c.gates)}
-    vss = [p for n, p in a.sd if n == "vss"]
+    vss = [p for n, p in a.sd + pre_sd if n == "vss"]
     terminals = {"s1": first["s1"], "s2": first["s2"], "s1b": first["s1b"], "s2b": first["s2b"],
-                 "vss": vss[0], "vdd": tap_n}
+                 "vss": vss[0], "vdd": tap_n, **{"pre": st.gates[0][1] for st in pre}}
     route_all(cv, lt, lines, terminals, sorted(terminals, key=lambda n: terminals[n].cy))
-    for p in vss[1:]:                                      # a folded load's other sources
+    for p in vss[1:]:                                      # a folded load's other sources, the precharge's
         route_to_line(cv, lt, lines, "vss", p)
     route_to_line(cv, lt, lines, "vss", tap_p[1])          # the substrate tap onto the vss line
     cv.ports = {"lines": dict(lines.y), "height": height, "tracks": dict(tracks)}
@@ -202,13 +224,14 @@ def dual_pixel_column(design, lt, dual: Canvas) -> tuple[dict, Canvas]:
     top = Canvas("DUALPIX_COL", lt)
     for k in range(n):
         top.place(cs, k * ps, 0, {"col": f"col_s{k}", "out": f"out_s{k}", "nbias": f"nbias_s{k}",
-                                   "s1": "s1_s", "s1b": "s1b_s", "s2": "s2_s", "s2b": "s2b_s",
+                                   "s1": "s1_s", "s1b": "s1b_s", "s2": "s2_s", "s2b": "s2b_s", "pre": "pre_s",
                                    "vdd": "vdd", "vss": "vss"}, name=f"xcs{k}")
     dual_nets = {p: p for p in ("vdd", "vpdr", "vrst", "vss", "col_p", *(f"col_s{k}" for k in range(n)),
                                 *(f"{c}_{a}" for c in ("ec", "tg", "rst", "rs") for a in ("p", "s")))}
     top.place(dual, 0, hs, dual_nets, name="xpix")
     top.place(cp, 0, hs + hd, {"col": "col_p", "out": "out_p", "nbias": "nbias_p", "s1": "s1_p",
-                               "s1b": "s1b_p", "s2": "s2_p", "s2b": "s2b_p", "vdd": "vdd", "vss": "vss"},
+                               "s1b": "s1b_p", "s2": "s2_p", "s2b": "s2b_p", "pre": "pre_p", "vdd": "vdd",
+                               "vss": "vss"},
               name="xcp")
     # vdd and vss: the dual pixel's metal4 verticals on through the column cells, onto their lines
     for net in ("vdd", "vss"):
@@ -216,13 +239,11 @@ def dual_pixel_column(design, lt, dual: Canvas) -> tuple[dict, Canvas]:
         if not xs:
             raise RouteError("DUALPIX_COL", net, "no supply track in the dual pixel")
         x = min(xs)
-        k = x // ps
         track(top, lt, net, "metal4", x, 0, hs)
         via_on(top, lt, net, x, cs.ports["lines"][net], "metal3", "metal4")
         hc = cp.ports["height"]
         track(top, lt, net, "metal4", x, hs + hd, hs + hd + hc)
         via_on(top, lt, net, x, hs + hd + cp.ports["lines"][net], "metal3", "metal4")
-        del k
     # the dual pixel's own ports, named again at this level (its row lines and supply tracks)
     w3 = lt.width("metal3")
     for c in ("ec", "tg", "rst", "rs"):

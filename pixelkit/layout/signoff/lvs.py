@@ -214,9 +214,11 @@ def _describe(xref) -> list[str]:
             continue
         extra, missing = [], []
         for dp in xref.each_device_pair(cp):
-            if dp.status() not in bad:
-                continue
             da, db = dp.first(), dp.second()
+            # paired by its nets with other sizes (the comparer warns): still a mismatch, named
+            resized = dp.status() == kdb.NetlistCrossReference.MatchWithWarning and da and db and _params(da, db)
+            if dp.status() not in bad and not resized:
+                continue
             if da and db:
                 out.append(f"{cname}: device {db.expanded_name()} ({db.device_class().name}): "
                            + ("; ".join(_params(da, db)) or "its nets differ"))
