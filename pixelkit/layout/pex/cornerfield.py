@@ -1,6 +1,5 @@
-"""The corner fields the 2.5D terms of ``capacitance.py`` leave out: between an edge and a conductor
-of a higher layer beside it (offset in plan), and between sidewalls of one layer that see each other
-round a corner.
+"""The corner field the 2.5D terms of ``capacitance.py`` leave out between an edge and a conductor of a
+higher layer beside it (offset in plan); the same-layer field round a corner is ``wedge.py``'s.
 
 The 2.5D terms send an edge's field down (the fringe, to what lies under the strip beside it), up
 only where another net's conductor lies over that strip (shared by area), and sideways only to a
@@ -8,10 +7,9 @@ same-layer edge facing it in projection (Chern et al.'s lateral term). Against F
 most of the coupling of conductors whose edges face each other a short way apart in plan on
 different layers: a metal1 line 0.23 um wide and a metal2 line 0.38 um wide beside it (6 um long,
 over the substrate) couple by 48.0 / 43.6 / 37.8 / 28.2 aF/um with their facing edges 0 / 0.23 /
-0.5 / 1.0 um apart in plan, those terms alone give 17.2 / 17.2 / 17.2 / 14.3; and it misses the field
-between an edge's end face and another net's side face beside it, which no projection pairs. On FD
-(a metal1 node of 0.88 um2 with edges of 0.2 - 0.5 um, metal1 - 3 lines a few tenths of a um beside
-them) those are most of its row lines' and supplies' coupling (docs/post-layout.md).
+0.5 / 1.0 um apart in plan, those terms alone give 17.2 / 17.2 / 17.2 / 14.3. On FD (a metal1 node
+of 0.88 um2 with edges of 0.2 - 0.5 um, metal1 - 3 lines a few tenths of a um beside them) that is
+most of its row lines' and supplies' coupling (docs/post-layout.md).
 
 **Edge to an upper conductor beside it** (``corner``; derived here). A lower conductor A (top at
 z_A + T_A) and an upper one B (bottom z_B, thickness T_B), g = z_B - z_A - T_A apart in height, with
@@ -34,13 +32,19 @@ the plan gap between the edges covered by a conductor of A's layer or of a layer
 by half its height over A's top: the lines from A's corner spread as they rise) is taken off. Edges
 further apart in plan than A's height over the substrate (the fringe strip's width) are not coupled.
 
-**Sidewalls round a corner on one layer** (``wedge``; no constant). Two perpendicular sidewalls of
-different nets (an end face beside another net's side face, a corner beside a corner), whose faces
-span r_in .. r_out from their common corner line, couple along circular field lines (quarter circles
-about that line) by ``eps (2/pi) ln(r_out / r_in)`` per height T, the exact field of a right-angle
-wedge; two flush side faces of shapes end to end across a gap s, by half circles about the gap's
-middle, ``eps (1/pi) ln(r_out / (s / 2))`` per height. The part of the field's square beside the
-corner covered by other shapes of the layer is taken off; r_out is at most the fringe strip's width.
+**Where the lines land** (``_landing_free``; no constant). The quarter circles of the first region
+leave B's sidewall towards A and land on A's top face within g + T_B of B's edge (their largest
+radius plus the gap); those of the second leave A's sidewall and land on B's underside within
+g + T_A of A's edge. A conductor of a third net over that part of A's top face (on a layer above A, up
+to B's own: a line of B's layer beside B, over A, faces B's sidewall first) or under that part of B's
+underside (on a layer between) takes the lines that would land there. So each region keeps the
+uncovered fraction of its landing strip, and the two regions count half each: ``c`` times the mean
+of the two fractions. A metal1 block (3 x 0.6 um) with a metal3 line beside its long edge (d = 0.23 um)
+and a third net's metal3 line over its top face ending 0.045 um short of that edge: FastCap2 47.5 aF
+between the block and the line beside it, the kit 47.2 (59.4 without this, +25 %;
+``tests/test_extraction.py``). The drawn case: the secondary's FD foot under TG's metal3 line with
+RST's metal3 line 0.23 um beside it (RST to FD +18.6 -> +12.8 %), the primary's FD foot half under
+VPDR's metal2 with TG's metal2 line 0.98 um beside it (TG to FD +18.2 -> +10.7 %).
 
 Charge: each of these fields was counted by the 2.5D terms as fringe of the edges bounding it (going
 mostly to the substrate), so a coupling c takes half its length-equivalent from each edge's fringe:
@@ -79,6 +83,7 @@ def corner_couplings(cpl, geo, stack, i, spent) -> None:
     inner = lower.sized(-1)            # flush edges (d = 0) are then 1 dbu apart: the separation check finds them
     own = _labelled(nets)
     blocking = [(top, lower)]          # (height, conductors) between A's top and the upper layer
+    covers = {}                        # net -> Region: the conductors of the layers above A so far
     for cb in stack.conductors[i + 1:]:
         up = geo.wires.get(cb.name, {})
         if not up:
@@ -94,6 +99,10 @@ def corner_couplings(cpl, geo, stack, i, spent) -> None:
             block += rk.sized(grow) if grow > 0 else rk
         rects = _rects(block)
         theirs = _labelled(up)
+        covers_under = dict(covers)            # other conductors between A's top and B's bottom, by net
+        for n, r in up.items():
+            covers[n] = covers[n] + r if n in covers else r.dup()
+        covers_top = covers                    # ... and on B's layer
         apart = inner.separation_check(upper, reach, False, kdb.Region.Projection, None, None, None, True)
         over = lower.overlap_check(upper, reach, False, kdb.Region.Projection, None, None, None, True)
         for ep, flush in [(e, False) for e in apart.each()] + [(e, True) for e in over.each()]:
@@ -103,6 +112,8 @@ def corner_couplings(cpl, geo, stack, i, spent) -> None:
             d = 0.0 if flush else ep.distance() * dbu
             gap = ep.polygon(0).bbox()
             free = 1.0 if flush or gap.area() == 0 else 1 - _covered(rects, gap) / gap.area()
+            free *= _landing_free(ep, flush, nets[a_net], up[b_net], g + cb.thickness, g + cond.thickness, dbu,
+                                  _others(covers_top, a_net, b_net), _others(covers_under, a_net, b_net))
             c = corner(eps, cb.thickness, g, d) * free * (ep.first.length() + ep.second.length()) / 2 * dbu
             if c <= 0:
                 continue
@@ -110,6 +121,47 @@ def corner_couplings(cpl, geo, stack, i, spent) -> None:
             spent[(cond.name, a_net)] += c / 2 / fringe(eps, cond.thickness, cond.z)
             spent[(cb.name, b_net)] += c / 2 / fringe(eps, cb.thickness, cb.z)
         blocking.append((cb.z, upper))
+
+
+def _others(by_net, a_net, b_net):
+    """The conductors of ``by_net`` ({net: Region}) of nets other than the two."""
+    import klayout.db as kdb
+    out = kdb.Region()
+    for n, r in by_net.items():
+        if n not in (a_net, b_net):
+            out += r
+    return out
+
+
+def _landing_free(ep, flush, a_reg, b_reg, w_top, w_under, dbu, cov_top, cov_under) -> float:
+    """The share of the corner field whose lines land free: the mean of B's sidewall field's landing strip on
+    A's top face (within ``w_top`` = g + T_B of B's edge, on its outer side, on A) and A's sidewall field's on
+    B's underside (within g + T_A of A's edge, on B), each less the part another net's conductor covers
+    (over A's face, up to B's layer: ``cov_top``; under B's, between the layers: ``cov_under``)."""
+    import klayout.db as kdb
+    a, b = ep.first, ep.second
+    horizontal = a.dy() == 0
+    ca = a.p1.y if horizontal else a.p1.x
+    cb = b.p1.y if horizontal else b.p1.x
+    if ca == cb:
+        return 1.0
+    lo = max(min(a.p1.x, a.p2.x), min(b.p1.x, b.p2.x)) if horizontal else max(min(a.p1.y, a.p2.y), min(b.p1.y, b.p2.y))
+    hi = min(max(a.p1.x, a.p2.x), max(b.p1.x, b.p2.x)) if horizontal else min(max(a.p1.y, a.p2.y), max(b.p1.y, b.p2.y))
+    if hi <= lo:
+        return 1.0
+    towards_a = 1 if ca > cb else -1
+    n_b = -towards_a if flush else towards_a      # B's outer side
+    n_a = towards_a if flush else -towards_a      # A's outer side
+
+    def strip(c0, n, w):
+        c1 = c0 + n * int(round(w / dbu))
+        c0, c1 = min(c0, c1), max(c0, c1)
+        return kdb.Region(kdb.Box(lo, c0, hi, c1) if horizontal else kdb.Box(c0, lo, c1, hi))
+
+    def free(face, cov):
+        area = face.area()
+        return 1.0 if area == 0 else 1 - (face & cov).area() / area
+    return (free(strip(cb, n_b, w_top) & a_reg, cov_top) + free(strip(ca, n_a, w_under) & b_reg, cov_under)) / 2
 
 
 def _rects(region):
@@ -145,91 +197,3 @@ def _net_at(labelled, edge):
     x, y = (edge.p1.x + edge.p2.x) / 2, (edge.p1.y + edge.p2.y) / 2
     hit = np.nonzero((boxes[:, 0] - 2 <= x) & (x <= boxes[:, 2] + 2) & (boxes[:, 1] - 2 <= y) & (y <= boxes[:, 3] + 2))[0]
     return names[hit[0]] if len(hit) else None
-
-
-def wedge(eps: float, t: float, angle: float, r_in: float, r_out: float) -> float:
-    """Coupling (F) of two sidewalls t high at ``angle`` (rad) to each other whose faces span r_in ..
-    r_out from the line their circular field lines centre on: ``eps ln(r_out / r_in) / angle`` per height."""
-    return eps * math.log(r_out / r_in) / angle * t
-
-
-def wedge_couplings(cpl, geo, stack, i, spent) -> None:
-    """Add the field of layer ``i``'s sidewalls of different nets that face no other sidewall in
-    projection (so have no lateral term) but see each other round a corner, to ``cpl``, and the fringe
-    length (m) it takes from each edge to ``spent[(layer, net)]``: perpendicular faces (an end face
-    beside another net's side face, a corner beside a corner; quarter circles about their corner line)
-    and flush side faces of two shapes end to end across a gap s (half circles about the gap's middle,
-    each face from s / 2 out)."""
-    import klayout.db as kdb
-    import numpy as np
-    cond = stack.conductors[i]
-    nets = geo.wires.get(cond.name, {})
-    if len(nets) < 2:
-        return
-    names = sorted(nets)
-    layer = kdb.Region()
-    rows = []                      # x1, y1, x2, y2, outward normal x, y, net index
-    for k, net in enumerate(names):
-        reg = nets[net].merged()
-        layer += reg
-        for e in reg.edges().each():
-            dx, dy = e.p2.x - e.p1.x, e.p2.y - e.p1.y
-            if dx == 0 or dy == 0:
-                rows.append((e.p1.x, e.p1.y, e.p2.x, e.p2.y, -np.sign(dy), np.sign(dx), k))
-    if not rows:
-        return
-    a = np.array(rows, dtype=float)
-    reach = cond.z / geo.dbu
-    rects = _rects(layer)
-
-    def add(a_net, b_net, angle, lo, hi, box):
-        if box.area() == 0:
-            return
-        free = 1 - _covered(rects, box) / box.area()
-        c = wedge(stack.eps, cond.thickness, angle, lo * geo.dbu, hi * geo.dbu) * free
-        if c > 0:
-            _couple(cpl, spent, stack, cond, names[int(a_net)], names[int(b_net)], c)
-
-    for axis in (0, 1):            # 0: vertical edges against horizontal ones; 1: the same turned by 90 degrees
-        v = a[a[:, 4] != 0] if axis == 0 else a[a[:, 5] != 0]
-        h = a[a[:, 5] != 0] if axis == 0 else a[a[:, 4] != 0]
-        # (u, w): coordinates across / along v's edges; v's outward normal is along u
-        vu, vw0, vw1, vn = (v[:, 0], np.minimum(v[:, 1], v[:, 3]), np.maximum(v[:, 1], v[:, 3]), v[:, 4]) if axis == 0 \
-            else (v[:, 1], np.minimum(v[:, 0], v[:, 2]), np.maximum(v[:, 0], v[:, 2]), v[:, 5])
-        hw, hu0, hu1, hn = (h[:, 1], np.minimum(h[:, 0], h[:, 2]), np.maximum(h[:, 0], h[:, 2]), h[:, 5]) if axis == 0 \
-            else (h[:, 0], np.minimum(h[:, 1], h[:, 3]), np.maximum(h[:, 1], h[:, 3]), h[:, 4])
-        for k in range(len(v)):
-            u, w0, w1, n, net = vu[k], vw0[k], vw1[k], vn[k], v[k, 6]
-            if axis == 0:
-                # quarter circles: h beyond v's plane on v's outward side, v's part on h's outward side
-                r0 = np.where(n > 0, hu0 - u, u - hu1)
-                r1 = np.where(n > 0, hu1 - u, u - hu0)
-                q0 = np.where(hn > 0, w0 - hw, hw - w1)
-                q1 = np.where(hn > 0, w1 - hw, hw - w0)
-                lo = np.maximum(np.maximum(r0, q0), 1.0)
-                hi = np.minimum(np.minimum(r1, q1), reach)
-                for j in np.nonzero((h[:, 6] != net) & (r0 > 0) & (hi > lo))[0]:
-                    add(net, h[j, 6], math.pi / 2, lo[j], hi[j],
-                        kdb.Box(int(u), int(hw[j]), int(u + n * hi[j]), int(hw[j] + hn[j] * hi[j])))
-            # half circles: another edge of the same orientation, flush with this one (within half the
-            # gap), end to end across a gap along them
-            same = v[:, 6] != net
-            gap = np.maximum(vw0 - w1, w0 - vw1)
-            flush = same & (vn == n) & (gap > 0) & (np.abs(vu - u) <= gap / 2) & (gap < 2 * reach)
-            for j in np.nonzero(flush & (np.arange(len(v)) > k))[0]:
-                s = gap[j]
-                lo, hi = s / 2, min(s / 2 + min(w1 - w0, vw1[j] - vw0[j]), reach)
-                mid = (min(w1, vw1[j]) + max(w0, vw0[j])) / 2
-                plane = max(u, vu[j]) if n > 0 else min(u, vu[j])
-                box = kdb.Box(int(plane), int(mid - hi), int(plane + n * hi), int(mid + hi)) if axis == 0 \
-                    else kdb.Box(int(mid - hi), int(plane), int(mid + hi), int(plane + n * hi))
-                if hi > lo:
-                    add(net, v[j, 6], math.pi, lo, hi, box)
-
-
-def _couple(cpl, spent, stack, cond, a_net, b_net, c):
-    """Add ``c`` between the two nets, half of it taken from each one's fringe on ``cond``."""
-    cpl.add(a_net, b_net, c)
-    f = fringe(stack.eps, cond.thickness, cond.z)
-    spent[(cond.name, a_net)] += c / 2 / f
-    spent[(cond.name, b_net)] += c / 2 / f
