@@ -29,7 +29,7 @@ each net on it:
   of the fringe, one far out in the band (beyond its own fringe strip, ~ its gap wide) little. Weighed
   by a / h alone (before), a part 1 um beside a metal2 edge and 0.6 um under it took four times the
   substrate's share per area: a metal1 block with a metal2 line 1 um beside it, FastCap2 151 aF, the
-  kit 187 so, 134 now; TG's metal2 line to FD +31 / +21 % -> +11 / +12 %. Over one gap (lines over
+  kit 187 so, 134 now; TG's metal2 line to FD +31 / +21 % -> +10 / +12 %. Over one gap (lines over
   the substrate alone) the total is unchanged; only its spread moves.
 - **lateral**: facing edges of two nets on the same layer, S apart over a projected length l
   (nearest only: a shape between them shields), couple by the coupling formula of J.-H. Chern

@@ -43,8 +43,8 @@ of the two fractions. A metal1 block (3 x 0.6 um) with a metal3 line beside its 
 and a third net's metal3 line over its top face ending 0.045 um short of that edge: FastCap2 47.5 aF
 between the block and the line beside it, the kit 47.2 (59.4 without this, +25 %;
 ``tests/test_extraction.py``). The drawn case: the secondary's FD foot under TG's metal3 line with
-RST's metal3 line 0.23 um beside it (RST to FD +18.6 -> +12.8 %), the primary's FD foot half under
-VPDR's metal2 with TG's metal2 line 0.98 um beside it (TG to FD +18.2 -> +10.7 %).
+RST's metal3 line 0.23 um beside it (RST to FD +19 -> +13 %), the primary's FD foot half under
+VPDR's metal2 with TG's metal2 line 0.98 um beside it (TG to FD +18 -> +10 %).
 
 Charge: each of these fields was counted by the 2.5D terms as fringe of the edges bounding it (going
 mostly to the substrate), so a coupling c takes half its length-equivalent from each edge's fringe:

@@ -24,10 +24,11 @@ circles that cross its box are taken off (a shape between the two faces cuts the
 not a share of the field by its area). Faces are taken out to the fringe strip's width (the layer's
 height over the substrate: further out the field goes down).
 
-Against FastCap2, FD of the primary with its eight metal1 neighbours alone (the other layers left
-out; ``tests/test_extraction.py``): FD to ground 215.5 -> 192.6 aF (FastCap2 194.0), to RST 29.6 ->
-38.3 (44.1), to the photodiode line 51.5 -> 62.9 (68.3), to VDD 19.3 -> 25.5 (26.5), to TG 0 -> 5.0
-(9.6), to VRST 98.0 -> 111.3 (107.4).
+Against FastCap2, the secondary's FD with its eight metal1 neighbours alone (the other layers and
+the diffusions left out; ``tests/test_extraction.py``), quarter circles over the faces' common span
+(about the term before) -> this term (FastCap2), aF: ground 214.2 -> 192.7 (199.2), RST 29.8 -> 37.8
+(38.2), the photodiode line 53.2 -> 62.9 (68.3), VDD 20.0 -> 25.5 (27.1), VRST 98.0 -> 111.3 (107.2),
+TG's pad 0 -> 5.0 (11.3; diagonal corners stay low).
 
 **Flush faces** (``wedge`` at angle pi; no constant): two side faces of shapes end to end across a gap
 s, by half circles about the gap's middle, ``eps (1/pi) ln(r_out / (s / 2))`` per height; the part of
