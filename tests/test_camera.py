@@ -33,12 +33,19 @@ def exported(ref_design, tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def spice_emva(ref_design, exported):
-    """{array: (K in DN/e-, sigma_d in e-)} an EMVA measurement of the SPICE pixel finds, derived
-    here: a sweep of the dual-pixel bench of its own (25 currents from dark to the one that
-    takes the PD node through the design swing), var = f'(n)^2 n + sigma_read^2 (finite
-    differences; sigma_read from ngspice .noise), saturation at the variance maximum, K the
-    slope of var - var_dark against the mean over 0 - 70 % of it (EMVA 1288, through the origin),
-    sigma_d = sigma_read / K, all in DN of the camera's ADC."""
+    """{array: {"standard": (K in DN/e-, sigma_d in e-), "readers": (...)}} an EMVA measurement of
+    the SPICE pixel finds, derived here: a sweep of the dual-pixel bench of its own (25 currents from
+    dark to the one that takes the PD node through the design swing), var = f'(n)^2 n +
+    sigma_read^2 (finite differences; sigma_read from ngspice .noise), K the slope of var - var_dark
+    against the mean over 0 - 70 % of saturation (EMVA 1288, through the origin), sigma_d =
+    sigma_read / K, all in DN of the camera's ADC. "standard": saturation at the variance
+    maximum, as EMVA 1288 and the camera's own figures take it. "readers": saturation as the
+    readers find it on a camera's images: the reference implementation scans the variance from
+    the brightest exposure down and stops at the first maximum, which on a chip with mismatch is
+    the bump where pixels reach the column's clip one after another, so its fit runs to 70 % of
+    the clip level (the largest signal of the sweep). The two differ by how much the column
+    compresses below its clip: 5.6 % on the secondary at the reference design's 1 uA load,
+    4.3 % at the thesis's 400 nA, so each reader is held to its own definition."""
     from pixelkit.experiments.thesis import _i_max
     d = ref_design
     t_w = d.experiment.t_window
@@ -54,9 +61,11 @@ def spice_emva(ref_design, exported):
         n = cur[which] * t_w / Q
         read = pixel_noise(d, which)["pixel_V"] / lsb
         var = np.gradient(s, n) ** 2 * n + read ** 2
-        lin = s <= 0.7 * s[int(np.argmax(var))]
-        k = float(np.sum(s[lin] * (var[lin] - var[0])) / np.sum(s[lin] ** 2))
-        out[which] = (k, read / k)
+        ks = {}
+        for name, top in (("standard", s[int(np.argmax(var))]), ("readers", s.max())):
+            lin = s <= 0.7 * top
+            ks[name] = float(np.sum(s[lin] * (var[lin] - var[0])) / np.sum(s[lin] ** 2))
+        out[which] = {name: (k, read / k) for name, k in ks.items()}
     return out
 
 
@@ -76,35 +85,36 @@ def _reference_results(folder):
 @pytest.mark.parametrize("which", ["primary", "secondary"])
 def test_reference_implementation_finds_the_spice_k_and_read_noise(exported, spice_emva, which):
     """Independent reference: SPICE (a sweep of its own, ngspice .noise) through EMVA's
-    definitions written here, against emva1288's reading of the images: K within 5 %, sigma_d
-    within 6 %. Why 5 %: the column compresses before it clips, so the variance peak that
-    marks saturation is broad, and where a reader finds it on noisy data moves the 0 - 70 %
-    fit range (K moves 2.5 % between 60 % and 80 % of saturation); emva1288 finds 0.3 % /
-    3.2 % below. The noise chain the camera draws and SPICE's .noise agree to 0.3 %. QE against
-    the camera's own EMVA figure (the same definition on its curves). Saturation is not
-    compared: on that broad peak emva1288 takes the first local maximum scanning down from the
-    brightest exposure, the camera (and EMVA 1288) the maximum, and the two are 1.8x apart
-    in mu_p.sat."""
+    definitions written here, saturation where the reference implementation finds it
+    (``spice_emva``), against emva1288's reading of the images: K within 4 %, sigma_d within
+    5 %. Measured on the reference design: K +2.7 / +0.3 %, sigma_d -3.5 / -0.8 % (primary /
+    secondary; the thesis's read: +1.9 / +1.2 %, -1.7 / -0.9 %); the remainder is where on the
+    noisy 50-step series the reader finds the clip's variance bump. The noise chain the camera
+    draws and SPICE's .noise agree to 0.3 %. QE against the camera's own EMVA figure (the same
+    definition on its curves). Saturation is not compared: emva1288 takes the first local
+    maximum scanning down from the brightest exposure (the clip), the camera (and EMVA 1288) the
+    maximum, and the two are 1.8x apart in mu_p.sat."""
     r, out = exported
     want = r[which]["figures"]
     got = _reference_results(out / which)
-    k, sigma_d = spice_emva[which]
-    assert got.K == pytest.approx(k, rel=0.05)
-    assert got.sigma_d == pytest.approx(sigma_d, rel=0.06)
+    k, sigma_d = spice_emva[which]["readers"]
+    assert got.K == pytest.approx(k, rel=0.04)
+    assert got.sigma_d == pytest.approx(sigma_d, rel=0.05)
     assert got.QE / 100 == pytest.approx(want["qe"], rel=0.05)
 
 
 @pytest.mark.parametrize("which", ["primary", "secondary"])
 def test_gap_emva_finds_the_spice_k_and_read_noise(exported, spice_emva, which):
     """The kit's own EMVA reader (``pixelkit gap emva``, written for measured data) on the
-    virtual camera's dataset, against the same SPICE-derived K (5 %) and read noise (6 %)."""
+    virtual camera's dataset, against the same SPICE-derived K (4 %) and read noise (5 %): it finds
+    saturation as the reference implementation does."""
     from pixelkit.gap.emva import analyse
     r, out = exported
     want = r[which]["figures"]
     nom = analyse(out / which)["nominal"]
-    k, sigma_d = spice_emva[which]
-    assert nom["K_DN_per_e"] == pytest.approx(k, rel=0.05)
-    assert nom["sigma_d_measured_e"] == pytest.approx(sigma_d, rel=0.06)
+    k, sigma_d = spice_emva[which]["readers"]
+    assert nom["K_DN_per_e"] == pytest.approx(k, rel=0.04)
+    assert nom["sigma_d_measured_e"] == pytest.approx(sigma_d, rel=0.05)
     assert nom["eta"] == pytest.approx(want["qe"], rel=0.05)
 
 
@@ -148,7 +158,7 @@ def test_camera_cli_figures_against_spice(cli, tmp_path, spice_emva):
     d = json.loads(out)
     for which in ("primary", "secondary"):
         f = d[which]
-        k, sigma_d = spice_emva[which]
+        k, sigma_d = spice_emva[which]["standard"]
         assert f["k_dn_per_e"] == pytest.approx(k, rel=0.015)
         assert f["read_noise_e"] == pytest.approx(sigma_d, rel=0.02)
         assert f["cg_out_V_per_e"] == pytest.approx(f["cg_out_spice_V_per_e"], rel=0.03)
