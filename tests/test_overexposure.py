@@ -112,3 +112,30 @@ def test_bright_source_figures(ref_design):
         assert all(abs(r["recovery_V"]) < 0.5e-3 for r in rows)
     off = by[("primary", False, 1000.0)]
     assert off["black_sun"] and off["fd_after_reset_e"] > 50 * off["fd_light_e"]
+
+
+def test_bright_deck_reads_its_column_alone_as_the_whole_dual_column(ref_design, monkeypatch):
+    """The secondary's bright deck keeps only the column the figures read (chip.bright._first_column):
+    the dual column's other secondary columns are copies under the same light that share only ideal
+    sources with it. The whole dual column's deck, simulated here, reads the same dark, 1000-full-well
+    and dark rows there within 0.3 mV (the two decks' step sequences differ: the figures moved by up
+    to 0.13 mV, both designs and anti-blooming settings, 1 and 1000 full wells)."""
+    import pixelkit.chip.bright as bright
+    from pixelkit.circuits.array import frame_timings
+    from pixelkit.measure.pixel import levels
+    from pixelkit.spice import simulate_many
+
+    def secondary(plan):
+        return next(net for _, _, kind, net in plan if kind == "secondary")
+    alone = secondary(bright.decks(ref_design, (1000.0,), (None,)))
+    monkeypatch.setattr(bright, "_first_column", lambda net, kind, n: net)
+    whole = secondary(bright.decks(ref_design, (1000.0,), (None,)))
+    nodes = {x for e in alone.elements for x in e.nodes}
+    assert "col_s_0" in nodes and "in_col_s_0" in nodes and not any(x.endswith(("col_s_1", "col_s_2")) for x in nodes)
+    assert len(alone.elements) < len(whole.elements)
+    t = frame_timings(ref_design, ref_design.experiment.t_window, bright.ROWS)["secondary"]
+    a, w = simulate_many([alone, whole])
+    for row in range(bright.ROWS):
+        sig_a, rst_a = levels(a, "col_s_0", t, row)
+        sig_w, rst_w = levels(w, "col_s_0", t, row)
+        assert abs((rst_a - sig_a) - (rst_w - sig_w)) < 0.3e-3, row

@@ -23,6 +23,8 @@ profile runs the design as it is; the full profile both settings.
 """
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from ..constants import Q
@@ -46,7 +48,6 @@ def full_well_current(design, kind: str) -> float:
 
 
 def _with_hold(design, hold: bool):
-    from dataclasses import replace
     return replace(design, **{k: replace(getattr(design, k), timing=replace(getattr(design, k).timing, ec_hold=hold))
                               for k in KINDS})
 
@@ -57,10 +58,10 @@ def _anti_blooming(design, kind: str) -> bool:
 
 def decks(design, factors=FACTORS, holds=HOLDS) -> list:
     """(design run, factor, array, deck): one frame deck per factor, anti-blooming setting and array: the
-    array's columns of a dual column, ``ROWS`` rows (dark, ``factor`` full wells, dark) with their AFEs, the
+    array's first column of a dual column, ``ROWS`` rows (dark, ``factor`` full wells, dark) with its AFE, the
     charge of the array's t_int over the experiment window and its real light after it. One deck per array,
     as the frame's reference (``chip.frame``: the arrays share only ideal sources; in one deck their two row
-    clocks interleave every step, ~30 % more CPU)."""
+    clocks interleave every step, ~30 % more CPU), and one column (:func:`_first_column`)."""
     from ..circuits.array import Tile, array_bench
     t_w = design.experiment.t_window
     comp = {k: getattr(design, k).t_int / t_w for k in KINDS}
@@ -76,8 +77,20 @@ def decks(design, factors=FACTORS, holds=HOLDS) -> list:
                 net = array_bench(d, ip, is_, tile=Tile((kind,), tuple(range(ROWS)), (0,)), t_exp=t_w,
                                   with_afe=True, compression=comp,
                                   title=f"bright_{'design' if hold is None else 'ab' if hold else 'noab'}_{f:g}_{kind}")
-                out.append((d, f, kind, net))
+                out.append((d, f, kind, _first_column(net, kind, n)))
     return out
+
+
+def _first_column(net, kind: str, n: int):
+    """``net`` without the elements of the array's other columns: the figures read column 0, and the
+    secondary's other columns of the dual column (``col_s_1`` ...) are copies of it under the same
+    light that share only ideal sources with it (``circuits.array``: own bias, load, sampler and AFE;
+    no coupling between the columns of one array's deck), 2/3 of the deck's time."""
+    others = [f"col_s_{j}" for j in range(1, n)] if kind == "secondary" else []
+
+    def theirs(node):
+        return any(node == c or node.endswith(f"_{c}") for c in others)
+    return replace(net, elements=tuple(e for e in net.elements if not any(map(theirs, e.nodes))))
 
 
 def figures(design, factors=FACTORS, backend="batch", jobs=None, holds=HOLDS) -> list[dict]:

@@ -36,9 +36,12 @@ previous row as a lead (the former row split) 0.39 mV off from the third row on.
 columns (no AFE, no memory beyond the line, which the row's own RS resets; 27-row column
 within 0.011 mV of the undivided deck). Refused with the AFE.
 
-Settling (``settling=True``, ``chip.settling``): every row's deck is run a second time with
+Settling (``settling=True``, ``chip.settling``): every row's deck is read a second time with
 long S1 and S2 from the same hand-over (``columns``) or alone (``rows``), and each
-subpixel's double-sampled signal is compared with that settled read.
+subpixel's double-sampled signal is compared with that settled read. The second read is the
+first up to the instant the two part, so it starts there from the first read's state (whose
+deck saves the row's pixel nodes too) instead of simulating the exposure and the row's start
+again (``_continued``).
 
 ``split="none"``: each array as one deck, every row and column (the reference;
 ``tests/test_frame.py`` and ``pixelkit array --check`` compare the splits with it, and a
@@ -50,6 +53,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field, replace
+from functools import partial
 
 import numpy as np
 
@@ -173,7 +177,8 @@ def _run_one(net, backend, jobs, options, settle: bool):
 
 def _probe(task):
     """Simulate one tile (through the engine and its cache) and read its samples; with a
-    reference deck (``ref``: the same tile read with long S1 and S2), their settling errors."""
+    reference (``ref``: the same tile read with long S1 and S2, see :func:`_continued`), their
+    settling errors."""
     net, backend, jobs, options, probes, ref = task
     out = {"failures": [], "retried": [], "values": {}, "decks": 0, "settling": {}, "notes": []}
     try:
@@ -185,21 +190,40 @@ def _probe(task):
     out["retried"] += [{"deck": net.title, "message": why}] if why else []
     out["values"], out["decks"] = _read(res, probes), 1
     if ref is not None:
-        _settle(out, ref, probes, backend, jobs, options)
+        build, tm_ref, state = ref
+        _settle(out, _continued(build, net, res, None, state, tm_ref, probes), tm_ref, probes, backend, jobs, options)
     return out
 
 
-def _settle(out, ref, probes, backend, jobs, options):
-    """Run the long-S1/S2 reference ``ref`` = (deck, its timings) and put each probe's settling
-    error (double-sampled signal - the settled one) into ``out``. A reference that fails
-    leaves its cells not measured (a note), not a failed frame."""
+def _continued(build, main, res, hand, state, tm_ref, probes):
+    """The long-S1/S2 reference of the read ``main`` (its result ``res``): ``build(handoff=...)``
+    makes its deck (``tm_ref``: its timings); ``hand``: the hand-over both start from. Up to the
+    instant ``t`` the two decks part (``settling.parting``) it is ``main``, so it is simulated from
+    ``t`` on (its sources shifted by ``-t``), from ``res``'s values at ``t`` of the nodes ``state``
+    (every node that holds charge: the column's hand-over nodes and the row's pixels), given as
+    initial conditions (held through the operating point, free from then on), up to its last
+    reset-level sample. (deck, ``t``): its time 0 is ``t`` of the frame."""
+    from .settling import parting, shifted
+    t = parting(main, build(handoff=hand))
+    stop = max(tm_ref[key[0]].t_reset_level(row) + tm_ref[key[0]].edge for key, _, _, row, _ in probes)
+    net = shifted(build(handoff=None), t, stop)
+    return _saved(replace(net, ic=tuple((m, float(res.at(f"v({m})", t))) for m in state)), probes), t
+
+
+def _settle(out, ref, tm_ref, probes, backend, jobs, options):
+    """Run the long-S1/S2 reference ``ref`` = (deck, the frame's time of its time 0; see
+    :func:`_continued`; ``tm_ref``: its timings) and put each probe's settling error
+    (double-sampled signal - the settled one) into ``out``. A reference that fails leaves its
+    cells not measured (a note), not a failed frame."""
+    from ..spice.result import Result
     from .settling import settled_level
-    net, tm_ref = ref
+    net, t0 = ref
     try:
         res = _run_one(net, backend, jobs, options, True)
     except SimulationError as exc:
         out["notes"].append(f"reference read {net.title} failed, its cells not measured: {exc.message[:200]}")
         return
+    res = Result(res.time + t0, res.vectors, res.meta)
     out["decks"] += 1
     why = _retried(res)
     out["retried"] += [{"deck": net.title, "message": why}] if why else []
@@ -221,7 +245,7 @@ def _chain(task):
     left at the row's start (see the module docstring). A failed deck ends the chain: its
     later rows are listed as failed too (they have no state to start from)."""
     design, ip, is_, tile, t_exp, with_afe, seed, max_step, backend, options, rows, title, settle, comp = task
-    from .settling import reference_timings
+    from .settling import pixel_nodes, reference_timings
     tm = frame_timings(design, t_exp, rows)
     kind = tile.kinds[0]
     tm_ref = reference_timings(tm, kind) if settle else None
@@ -235,8 +259,9 @@ def _chain(task):
         t = replace(tile, rows=(r,))
         probes = _probes(design, t, tm, with_afe)
         hand_r = hand
+        state = nodes + (pixel_nodes(kind, r, t.columns(kind, design.secondary_per_pixel)) if settle else [])
         net = _saved(array_bench(design, ip, is_, t, t_exp, with_afe, seed, max_step, title=f"{title}_r{r}",
-                                 handoff=hand, compression=comp), probes, nodes)
+                                 handoff=hand, compression=comp), probes, state)
         try:
             res = _run_one(net, backend, 1, options, settle)
             out["decks"] += 1
@@ -257,9 +282,10 @@ def _chain(task):
         if why:
             out["retried"].append({"deck": net.title, "message": why})
         if settle:
-            ref = _saved(array_bench(design, ip, is_, t, t_exp, with_afe, seed, max_step, title=f"{title}_r{r}_long_s1",
-                                     handoff=hand_r, tm=tm_ref, compression=comp), probes)
-            _settle(out, (ref, tm_ref), probes, backend, 1, options)
+            build = partial(array_bench, design, ip, is_, t, t_exp, with_afe, seed, max_step,
+                            title=f"{title}_r{r}_long_s1", tm=tm_ref, compression=comp)
+            _settle(out, _continued(build, net, res, hand_r, state, tm_ref, probes), tm_ref, probes, backend, 1,
+                    options)
     return out
 
 
@@ -313,15 +339,18 @@ def simulate_frame(design, iph_p, iph_s, with_afe: bool = False, split: str | No
             continue
         tag += f"_r{tile.rows[0]}" if len(tile.rows) == 1 else ""
         probes = _probes(design, tile, tm, with_afe)
-        net = _saved(array_bench(design, iph_p, iph_s, tile, t_exp, with_afe, mismatch_seed, max_step,
-                                 title=f"frame_{rows}x{cols}_{tag}", compression=compression), probes)
         ref = None
         if settling and split == "rows":
-            from .settling import reference_timings
-            tm_ref = reference_timings(tm, tile.kinds[0])
-            ref = (_saved(array_bench(design, iph_p, iph_s, tile, t_exp, with_afe, mismatch_seed, max_step,
-                                      title=f"frame_{rows}x{cols}_{tag}_long_s1", tm=tm_ref, compression=compression),
-                          probes), tm_ref)
+            from .settling import pixel_nodes, reference_timings
+            kind, columns = tile.kinds[0], tile.columns(tile.kinds[0], n)
+            tm_ref = reference_timings(tm, kind)
+            state = [m for j in columns for m in state_nodes(design, kind, j, with_afe, rows > 1)]
+            ref = (partial(array_bench, design, iph_p, iph_s, tile, t_exp, with_afe, mismatch_seed, max_step,
+                           title=f"frame_{rows}x{cols}_{tag}_long_s1", tm=tm_ref, compression=compression),
+                   tm_ref, state + pixel_nodes(kind, tile.rows[0], columns))
+        net = _saved(array_bench(design, iph_p, iph_s, tile, t_exp, with_afe, mismatch_seed, max_step,
+                                 title=f"frame_{rows}x{cols}_{tag}", compression=compression), probes,
+                     ref[2] if ref else ())
         tasks.append((net, backend, 1 if scheduler is not None else jobs, options, probes, ref))
     shape = {"primary": (rows, cols), "secondary": (rows, n * cols)}
     sig = {k: np.full(shape[k], np.nan) for k in KINDS}

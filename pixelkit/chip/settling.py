@@ -8,7 +8,13 @@ before the reset) instead of on the pixel: the frame's row-to-row memory.
 The reference is a different operating point of the same circuit, not the code under
 test checking itself: the same deck of the same row, started from the same column state
 (the chain's hand-over), with S1 and S2 each held closed ``LONG_S1`` row times longer (the
-phases after each move by as much). At the end of a long phase the column has long
+phases after each move by as much). Up to the instant the two reads part (:func:`parting`:
+the AFE's phase 1 opening ahead of the read's S1) the reference deck is the read's deck, so
+that part is not simulated again: the reference starts there (:func:`shifted`) from the read's
+state (every node that holds charge: the column's hand-over nodes and the row's pixels,
+:func:`pixel_nodes`, as initial conditions) and stops at its reset-level sample; at converged
+tolerances its settling errors are those of the whole reference deck within 0.008 mV (both
+reference designs, column chains and row decks). At the end of a long phase the column has long
 settled and only drifts with the storage node (parasitic light and leakage on FD, a
 straight line over microseconds). The settled level at the real sample instant is the
 reference's sample taken back along that line (to the same time after S1 closes, or after
@@ -25,6 +31,8 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
+
+from ..spice.netlist import Pulse, Pwl
 
 #: The reference read's S1 is this many row times longer (slew capacity at the reference
 #: design's 400 nA on 700 fF over 4 x 2 us: 4.6 V, three times the pixel's swing).
@@ -45,6 +53,64 @@ def long_s1(t, factor: float | None = None):
 
 def reference_timings(tm: dict, kind: str, factor: float | None = None) -> dict:
     return {k: (long_s1(t, factor) if k == kind else t) for k, t in tm.items()}
+
+
+#: A subpixel's own nodes that hold charge (``circuits.pixel5t``: PD, FD, SF output).
+PIXEL_STATE = ("pd", "fd", "sfo")
+
+
+def pixel_nodes(kind: str, row: int, columns) -> list[str]:
+    """The state nodes of row ``row``'s subpixels of ``kind`` in ``columns`` (``circuits.array``)."""
+    s = "p" if kind == "primary" else "s"
+    return [f"x{s}_{row}_{j}.{n}" for j in columns for n in PIXEL_STATE]
+
+
+def parting(a, b) -> float:
+    """The last instant (s) up to which decks ``a`` and ``b`` are the same circuit under the same
+    sources: every element, subcircuit, model, include and option equal, PWL sources equal up to
+    that breakpoint. A ValueError when they differ in anything else."""
+    same = ("subckts", "models", "includes", "options", "temperature_C")
+    ea, eb = {e.name: e for e in a.elements}, {e.name: e for e in b.elements}
+    if ea.keys() != eb.keys() or any(getattr(a, f) != getattr(b, f) for f in same):
+        raise ValueError(f"decks {a.title} and {b.title} are not the same circuit")
+    t = float("inf")
+    for name, x in ea.items():
+        y = eb[name]
+        if x == y:
+            continue
+        waves = isinstance(x.value, Pwl) and isinstance(y.value, Pwl)
+        if not (waves and replace(x, value=None) == replace(y, value=None)):
+            raise ValueError(f"element {name} differs between {a.title} and {b.title} beyond its waveform")
+        t = min(t, _apart(x.value.points, y.value.points))
+    return t
+
+
+def shifted(net, t: float, stop: float):
+    """Deck ``net`` from its instant ``t`` to ``stop`` (s), as a deck whose time 0 is ``t``: every PWL
+    source moved by ``-t`` (its value at ``t`` first; a constant if it has no later point). A
+    ValueError for any other time-dependent source."""
+    els = []
+    for e in net.elements:
+        if isinstance(e.value, Pwl):
+            pts = e.value.points
+            v0 = float(np.interp(t, *zip(*pts)))
+            later = tuple((a - t, v) for a, v in pts if a > t)
+            e = replace(e, value=Pwl(((0.0, v0), *later)) if later else v0)
+        elif isinstance(e.value, Pulse):
+            raise ValueError(f"element {e.name} of {net.title}: only PWL sources can be shifted in time")
+        els.append(e)
+    return replace(net, elements=tuple(els), analysis=replace(net.analysis, stop=stop - t))
+
+
+def _apart(p, q) -> float:
+    """The last breakpoint up to which the PWL waveforms ``p`` and ``q`` ((t, v), ...) agree."""
+    ts = np.union1d([t for t, _ in p], [t for t, _ in q])
+    va = np.interp(ts, *zip(*p))
+    vb = np.interp(ts, *zip(*q))
+    if (va == vb).all():
+        return float("inf")
+    k = int(np.argmax(va != vb))
+    return float(ts[k - 1]) if k else 0.0
 
 
 def settled_level(res, node: str, t_ref, t, row: int, limit: float = LIMIT_V, which: str = "signal"):
