@@ -103,6 +103,7 @@ def corner_couplings(cpl, geo, stack, i, spent) -> None:
         for n, r in up.items():
             covers[n] = covers[n] + r if n in covers else r.dup()
         covers_top = covers                    # ... and on B's layer
+        others = {}                            # (A's net, B's net) -> the two covers of the other nets
         apart = inner.separation_check(upper, reach, False, kdb.Region.Projection, None, None, None, True)
         over = lower.overlap_check(upper, reach, False, kdb.Region.Projection, None, None, None, True)
         for ep, flush in [(e, False) for e in apart.each()] + [(e, True) for e in over.each()]:
@@ -112,8 +113,10 @@ def corner_couplings(cpl, geo, stack, i, spent) -> None:
             d = 0.0 if flush else ep.distance() * dbu
             gap = ep.polygon(0).bbox()
             free = 1.0 if flush or gap.area() == 0 else 1 - _covered(rects, gap) / gap.area()
+            if (a_net, b_net) not in others:
+                others[(a_net, b_net)] = (_others(covers_top, a_net, b_net), _others(covers_under, a_net, b_net))
             free *= _landing_free(ep, flush, nets[a_net], up[b_net], g + cb.thickness, g + cond.thickness, dbu,
-                                  _others(covers_top, a_net, b_net), _others(covers_under, a_net, b_net))
+                                  *others[(a_net, b_net)])
             c = corner(eps, cb.thickness, g, d) * free * (ep.first.length() + ep.second.length()) / 2 * dbu
             if c <= 0:
                 continue

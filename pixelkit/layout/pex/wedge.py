@@ -69,7 +69,8 @@ def right_wedge(eps: float, t: float, r0: float, r1: float, q0: float, q1: float
         return 0.0
     cut = []
     b = np.asarray(blocks, dtype=float).reshape(-1, 4)
-    b = b[b[:, 0] ** 2 + b[:, 1] ** 2 - abs(m) < out]          # boxes some line up to ``out`` can reach
+    if len(b):
+        b = b[b[:, 0] ** 2 + b[:, 1] ** 2 - abs(m) < out]      # boxes some line up to ``out`` can reach
     if len(b):
         f = np.linspace(0.0, 1.0, 7)
         xs = (b[:, 0:1] + (b[:, 2:3] - b[:, 0:1]) * f)[:, :, None]     # 7 x 7 points of each box
@@ -117,14 +118,22 @@ def wedge_couplings(cpl, geo, stack, i, spent) -> None:
     boxes, owner = _labelled({k: nets[name] for k, name in enumerate(names)})
     owner = np.array(owner)
 
-    def blockers(u, n, w, wn, a_net, b_net):
-        """The other nets' boxes in the quarter plane beyond (u, w) (x along n from u, y along wn from w),
-        in those local coordinates (m), clipped to it: array of (x0, y0, x1, y1)."""
-        sel = (owner != a_net) & (owner != b_net)
-        bx = boxes[sel]
-        xs = np.sort(np.stack([(bx[:, 0] - u) * n, (bx[:, 2] - u) * n], axis=1), axis=1)
-        ys = np.sort(np.stack([(bx[:, 1] - w) * wn, (bx[:, 3] - w) * wn], axis=1), axis=1)
-        out = np.stack([np.maximum(xs[:, 0], 0), np.maximum(ys[:, 0], 0), xs[:, 1], ys[:, 1]], axis=1)
+    def near(u, n):
+        """The boxes (and their nets) within the reach of the plane x = u on its side n."""
+        lo_u, hi_u = sorted((u, u + n * reach))
+        sel = (boxes[:, 2] > lo_u) & (boxes[:, 0] < hi_u)
+        return boxes[sel], owner[sel]
+
+    def blockers(cand, u, n, w, wn, a_net, b_net):
+        """The other nets' boxes of ``cand`` (``near``) in the quarter plane beyond (u, w) (x along n from
+        u, y along wn from w), in those local coordinates (m), clipped to it: array of (x0, y0, x1, y1)."""
+        bx, own = cand
+        lo_w, hi_w = sorted((w, w + wn * reach))
+        bx = bx[(own != a_net) & (own != b_net) & (bx[:, 3] > lo_w) & (bx[:, 1] < hi_w)]
+        x0, x1 = (bx[:, 0] - u) * n, (bx[:, 2] - u) * n
+        y0, y1 = (bx[:, 1] - w) * wn, (bx[:, 3] - w) * wn
+        out = np.stack([np.maximum(np.minimum(x0, x1), 0), np.maximum(np.minimum(y0, y1), 0),
+                        np.maximum(x0, x1), np.maximum(y0, y1)], axis=1)
         return out[(out[:, 2] > out[:, 0]) & (out[:, 3] > out[:, 1])] * geo.dbu
 
     def add_c(a_net, b_net, c, box):
@@ -157,9 +166,10 @@ def wedge_couplings(cpl, geo, stack, i, spent) -> None:
                 r0, q0 = np.maximum(r0, 0.0), np.maximum(q0, 0.0)
                 r1, q1 = np.minimum(r1, reach), np.minimum(q1, reach)
                 ok = (h[:, 6] != net) & (r1 > r0) & (q1 > q0) & (np.maximum(r0, q0) >= 1.0)
+                cand = near(u, n)
                 for j in np.nonzero(ok)[0]:
                     c = right_wedge(stack.eps, cond.thickness, r0[j] * geo.dbu, r1[j] * geo.dbu,
-                                    q0[j] * geo.dbu, q1[j] * geo.dbu, blockers(u, n, hw[j], hn[j], net, h[j, 6]))
+                                    q0[j] * geo.dbu, q1[j] * geo.dbu, blockers(cand, u, n, hw[j], hn[j], net, h[j, 6]))
                     if c > 0:
                         _couple(cpl, spent, stack, cond, names[int(net)], names[int(h[j, 6])], c)
             # half circles: another edge of the same orientation, flush with this one (within half the
