@@ -13,8 +13,9 @@ the AFE's phase 1 opening ahead of the read's S1) the reference deck is the read
 that part is not simulated again: the reference starts there (:func:`shifted`) from the read's
 state (every node that holds charge: the column's hand-over nodes and the row's pixels,
 :func:`pixel_nodes`, as initial conditions) and stops at its reset-level sample; at converged
-tolerances its settling errors are those of the whole reference deck within 0.008 mV (both
-reference designs, column chains and row decks). At the end of a long phase the column has long
+tolerances its settling errors are those of the whole reference deck within 0.008 mV
+(``dual_pixel_revA`` and its thesis read, column chains and row decks). At the end of a long
+phase the column has long
 settled and only drifts with the storage node (parasitic light and leakage on FD, a
 straight line over microseconds). The settled level at the real sample instant is the
 reference's sample taken back along that line (to the same time after S1 closes, or after
