@@ -108,10 +108,51 @@ def test_technology_without_stack_refuses_post_layout():
         assert "[stack]" in err and "c35_thesis" in err and "post-layout" in err
 
 
+def _frame_replica(d) -> list:
+    """Post-layout minus schematic double-sampled signal (mV) of each secondary of the dual-pixel bench
+    (one dual pixel, its ``dualpix`` couplings, one row) read as the report's 2 x 2 frame reads dual
+    pixel 0 in row 0: through the frame's S1 / S2 samplers into its AFEs, the frame's timing (EC
+    holds the PDs in reset from the end of the transfer), the frame's photocurrents."""
+    from dataclasses import replace
+    from pixelkit.circuits.array import frame_timings
+    from pixelkit.circuits.testbench import dual_pixel_bench
+    from pixelkit.measure.pixel import double_sampled
+    from pixelkit.report.sections.array import COLS, ROWS, default_map, photocurrents
+    from pixelkit.spice import simulate_many
+    sch = replace(d, post_layout=None)
+    nets, tms, n = [], [], d.secondary_per_pixel
+    for v in (sch, post_layout_view(sch)):
+        m, unit = default_map(ROWS, n * COLS, "gradient")
+        ph = photocurrents(v, ROWS, COLS, m, unit)
+        tm = frame_timings(v, v.experiment.t_window, 1)
+        # the frame's pixels take ph's currents during the exposure (compressed after it, when EC
+        # holds the PDs in reset: only the FD's parasitic light sees the difference)
+        nets.append(dual_pixel_bench(v, float(ph.iph_p[0][0]), tuple(float(ph.iph_s[0][k]) for k in range(n)),
+                                     with_afe=True, tm=tm, title=f"frame_replica_{len(nets)}"))
+        tms.append(tm["secondary"])
+    a, b = simulate_many(nets)
+    return [1e3 * (double_sampled(b, f"col_s{k}", tms[1]) - double_sampled(a, f"col_s{k}", tms[0])) for k in range(n)]
+
+
 def test_report_section_post_layout_vs_schematic(tmp_path):
     """The report's post-layout section on the GF180 design (quick profile): both views in one table,
     the post-layout FD larger than the schematic's by the extracted wiring; unavailable, saying why,
-    for a technology without a stack."""
+    for a technology without a stack.
+
+    The 2 x 2 frame's shift post-layout vs schematic (dual pixel 0's three secondaries, row 0) is
+    held to the same shift of the dual-pixel bench read the way the frame reads (``_frame_replica``:
+    the frame's S1 / S2 samplers and AFEs on its columns, its timing with EC holding the PDs in
+    reset from the end of the transfer, its row-0 photocurrents), within 3 mV (measured 1.8 - 1.9
+    mV apart). Not against the report's pedestal bench (no AFE, EC off through the read; its
+    secondary's pedestal moves by -87.1 mV, the frame's dim secondaries by -78.8 / -77.1): the two
+    read differently, measured on the bench (docs/post-layout.md, the 2 x 2 frame): EC's rise kicks
+    FD post-layout only, through C(fd, ec) x 3.3 V and C(fd, pd) x the PD's step to vpdr, +5.0 mV
+    before the signal sample (-3.7 mV on the column); the AFE samplers +8.8 mV (the AFE's p1 opens
+    20 ns before S1 and kicks the column at the signal sample, +8.1 mV on the schematic and +2.4
+    post-layout in the frame, where the AFE's wiring differs); the photocurrents +1.2 mV. Row 1 is
+    not held to the replica (one row): it differs from row 0 by the column's history, 1.7 - 3.4 mV.
+    The check fails when the frame's column lines miss the couplings the bench's ``dualpix`` gives
+    them (``column.row_share``; without it 4.1 mV apart)."""
     from pixelkit.report.sections import Context
     from pixelkit.report.sections import post_layout as section
     d = load_design(GF)
@@ -128,12 +169,13 @@ def test_report_section_post_layout_vs_schematic(tmp_path):
         assert t_post / t_sch == pytest.approx(c_post / c_sch, rel=0.01, abs=0), w
     assert all(isinstance(rows[f"AFE settling error at f_read = {k} kHz, {w} (mV)"][2], float)
                for k, w in (("500", "primary"), ("1000", "secondary")))
-    # the 2 x 2 frame (array deck) moves the dim secondaries by the dual-pixel bench's pedestal shift
-    ped = rows["pedestal, secondary (row lines into FD) (mV)"]
+    # the 2 x 2 frame (array deck) moves dual pixel 0's secondaries in row 0 by the shift of the
+    # dual-pixel bench read as the frame reads them (docstring)
     frame = next(t for t in s.tables if t.name == "post_layout_frame").rows
     assert len(frame) == 2 * 2 + 2 * 2 * d.secondary_per_pixel
-    for r in frame:
-        if r[0] == "secondary" and r[2] == 0:
-            assert r[6] == pytest.approx(ped[2] - ped[1], abs=10.0), r
+    rep = _frame_replica(d)
+    sec = {r[2]: r[6] for r in frame if r[0] == "secondary" and r[1] == 0 and r[2] < d.secondary_per_pixel}
+    for k in range(d.secondary_per_pixel):
+        assert sec[k] == pytest.approx(rep[k], abs=3.0), (k, sec[k], rep[k])
     ref = section.build(Context(load_design(ROOT / "designs" / "dual_pixel_revA.toml"), tmp_path, quick=True))
     assert not ref.available and "[stack]" in ref.needs and "no process stack" in ref.why

@@ -227,7 +227,25 @@ def array_bench(design, iph_p, iph_s, tile: Tile | None = None, t_exp: float | N
                 dev = design.pixel.devices
                 rs = mosfet(f"rsoff_{col}", f"sfo_off_{col}", "0", col, "0", dev.rs_w, dev.rs_l, design.tech)
                 el.append(replace(rs, params=(*rs.params, ("m", absent))))
-            el += [*column.bias(design, f"nbias_{col}"), *column.load(design, col, f"nbias_{col}")]
+            # post-layout: each simulated row's share of the line's couplings to its row lines, the
+            # global lines, the supplies and ground (``column.row_share``: what the dual-pixel bench's
+            # ``dualpix`` holds); the lumped rest of the line (the other rows') then counts one row fewer
+            # for every simulated row past the first
+            line = "col_p" if kind == "primary" else f"col_s{j % n}"
+            extra = (len(sim_rows) - 1) * column.row_share_total(design, line)
+            ld = column.load(design, col, f"nbias_{col}")
+            if extra:
+                if ld[1].value - extra <= 0:
+                    raise ValueError(f"{col}: the simulated rows' share of the line exceeds its lumped capacitance")
+                ld = (ld[0], replace(ld[1], value=ld[1].value - extra))
+            el += [*column.bias(design, f"nbias_{col}"), *ld]
+            for r in sim_rows:
+                nets = {"vdd": "vdd", "vpdr": "vpdr", "vrst": "vrst"}
+                for kk in tile.kinds:
+                    q = PREFIX[kk]
+                    nets.update({f"ec_{q}": f"ec_{q}", f"tg_{q}": f"tg_{q}", f"rst_{q}": f"rst_{q}_{r}",
+                                 f"rs_{q}": f"rs_{q}_{r}"})
+                el += column.row_share(design, {line: col}, nets, str(r))
             if tm[kind].precharged:
                 el += column.precharge(design, col, f"pre_{s}")
             if with_afe:

@@ -94,6 +94,45 @@ def line_couplings(design, lines: dict, whole: bool = False) -> tuple:
                  for a, b, c in pl.column_pairs if a in lines and b in lines)
 
 
+def row_share(design, lines: dict, nets: dict, tag: str) -> tuple:
+    """Post-layout, for a bench whose pixels are ``pix5t`` instances (the array bench): one row's
+    share of the couplings ``dualpix`` carries on the dual pixel's column lines, other than those
+    between the column lines (``line_couplings(whole=True)`` holds every row's share of these):
+    to the row's own RS / RST lines, the global EC / TG lines, the supplies and ground. The
+    dual-pixel bench has them in its ``dualpix`` instance; without them an array deck's column
+    lines missed the kicks of the read row's RS / RST edges (and one row's share of the line).
+    ``lines`` maps the dual pixel's column lines to the bench's nodes, ``nets`` its other lines
+    (``rs_s``, ``ec_p``, ``vdd`` ...) to the bench's nodes (the row's ``rs_s_<r>`` ...); a line the
+    bench does not hold (the other array's, in a deck of one array) is taken to ground.
+    ``tag``: the row, for unique element names."""
+    out = []
+    for k, (col, other, c) in enumerate(_row_share(design)):
+        if col in lines:
+            node = "0" if other == "0" else nets.get(other, "0")
+            out.append(Element(f"Crw{tag}_{k}_{lines[col]}", (lines[col], node), c))
+    return tuple(out)
+
+
+def row_share_total(design, line: str) -> float:
+    """The sum of ``row_share``'s couplings on dual-pixel column line ``line`` (``col_p``,
+    ``col_s0`` ...): one row's share of the line outside the column-to-column couplings (F)."""
+    return sum(c for col, _, c in _row_share(design) if col == line)
+
+
+def _row_share(design) -> list:
+    """(column line, other line, F) of ``dualpix``'s couplings between a column line and a line that
+    is not one (empty on the schematic)."""
+    pl = design.post_layout
+    if pl is None:
+        return []
+    cols = {"col_p", *(f"col_s{k}" for k in range(design.secondary_per_pixel))}
+    out = []
+    for a, b, c in pl.cells.get("dualpix", ()):
+        if (a in cols) != (b in cols):
+            out.append((a, b, c) if a in cols else (b, a, c))
+    return out
+
+
 def precharge(design, col: str, ctl: str) -> tuple:
     """The column precharge: an NMOS switch (the samplers' size) from ``col`` to ground, gate
     ``ctl``: inside S1 it empties the line and C11, so the source follower then charges them
