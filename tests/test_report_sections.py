@@ -117,7 +117,8 @@ def test_gap_without_measured_data_says_how_to_get_it(report):
     assert "Give --measured: M.csv" in (out / "index.html").read_text()
 
 
-def test_gap_section_names_the_true_effect_of_a_silicon_case(ref_design, tmp_path):
+def test_gap_section_names_the_true_effect_of_a_silicon_case(thesis_read_design, tmp_path):
+    """A committed virtual-silicon case, diagnosed against the chip it was made from (the thesis's read)."""
     from pixelkit.report.sections import Context, load_section
     cases = ROOT / "pixelkit" / "gap" / "silicon_cases"
     truth = json.loads((cases / "truth.json").read_text())["c1000"]
@@ -128,7 +129,7 @@ def test_gap_section_names_the_true_effect_of_a_silicon_case(ref_design, tmp_pat
         w = csv.DictWriter(fh, [k for k in rows[0] if k != "case"])
         w.writeheader()
         w.writerows({k: v for k, v in r.items() if k != "case"} for r in rows)
-    s = load_section("gap").build(Context(ref_design, tmp_path, measured=meas))
+    s = load_section("gap").build(Context(thesis_read_design, tmp_path, measured=meas))
     assert s.available and s.data["best"] == truth["effect"]
     assert {t.name for t in s.tables} >= {"gap_ranking", "gap_where"} and all(t.rows for t in s.tables)
     assert s.figures and all((tmp_path / f.file).exists() for f in s.figures)
