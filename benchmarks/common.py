@@ -1,5 +1,5 @@
 """Shared set-up of the benchmark scripts: import path, a fresh cache, the reference design and the
-thesis read (the chip the gap module's virtual silicon is of)."""
+thesis read of [Thesis2019] (the chip the gap module's virtual silicon is of)."""
 from __future__ import annotations
 
 import os

@@ -45,7 +45,7 @@ def spice_emva(ref_design, exported):
     the bump where pixels reach the column's clip one after another, so its fit runs to 70 % of
     the clip level (the largest signal of the sweep). The two differ by how much the column
     compresses below its clip: 5.6 % on the secondary at the reference design's 1 uA load,
-    4.3 % at the thesis's 400 nA, so each reader is held to its own definition."""
+    4.3 % at the 400 nA of [Thesis2019], so each reader is held to its own definition."""
     from pixelkit.experiments.thesis import _i_max
     d = ref_design
     t_w = d.experiment.t_window

@@ -125,7 +125,7 @@ def test_array_command_with_a_scene(cli, tmp_path):
 def test_array_check_reports_the_split_against_the_undivided_decks(cli, tmp_path):
     """``--check`` reruns the split and each array's undivided deck at converged tolerances:
     a 3 x 1 frame with the AFE (column chains, hand-overs at rows 1 and 2) within 0.1 mV; the reference
-    design's read settles, so the frame's verdict is ok (the thesis's read does not, test_settling)."""
+    design's read settles, so the frame's verdict is ok (the read of [Thesis2019] does not, test_settling)."""
     code, out, err = cli("array", "designs/dual_pixel_revA.toml", "--rows", "3", "--cols", "1", "--afe",
                          "--check", "--out", tmp_path / "o", "--json")
     assert code == 0, err

@@ -49,7 +49,7 @@ def test_design_axes_and_bad_axes(ref_design):
         parse_axis("iph_p")
     with pytest.raises(ConfigError, match=">= 0"):
         parse_axis("iph_p=-1n")
-    assert si_value(ref_design, "pixel.sf_bias") == (pytest.approx(400e-9), "A")   # the design file's 400 nA
+    assert si_value(ref_design, "pixel.sf_bias") == (pytest.approx(1e-6), "A")   # the design file's "1 uA"
     assert si_value(ref_design, "corner") is None
     s = run_sweep(ref_design, [parse_axis("corner=ss,ff")], jobs=2)
     rst = s.dataset["reset_primary_V"]

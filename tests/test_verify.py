@@ -60,7 +60,7 @@ def _at(design, corner, temp_c=27.0, supply=0.0):
 def test_settling_slower_at_ss_than_ff(thesis_read_design, ref_design):
     """Slow devices (ss) leave a larger settling error at the same clocks than fast ones (ff); the
     same corner twice gives the same number (the inequality is not the noise of the solver).
-    On the thesis's read (400 nA load, the default phases: it does not settle, issue
+    On the read of [Thesis2019] (400 nA load, the default phases: it does not settle, issue
     27): both arrays read worse at ss. The reference design's settled read (designs/dual_pixel_revA.toml)
     settles at both corners."""
     old = thesis_read_design

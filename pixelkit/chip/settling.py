@@ -14,7 +14,7 @@ that part is not simulated again: the reference starts there (:func:`shifted`) f
 state (every node that holds charge: the column's hand-over nodes and the row's pixels,
 :func:`pixel_nodes`, as initial conditions) and stops at its reset-level sample; at converged
 tolerances its settling errors are those of the whole reference deck within 0.008 mV
-(``dual_pixel_revA`` and its thesis read, column chains and row decks). At the end of a long
+(``dual_pixel_revA`` and its [Thesis2019] read, column chains and row decks). At the end of a long
 phase the column has long
 settled and only drifts with the storage node (parasitic light and leakage on FD, a
 straight line over microseconds). The settled level at the real sample instant is the

@@ -9,7 +9,7 @@ import numpy as np
 from .common import design_arg, emit, json_opt, load, main, out_opt, output_path, spice_opts, post_layout_opt
 from .types import FiniteRange
 
-#: The chip the gap module's virtual silicon and committed cases are of: the thesis's read (docs/gap-diagnosis.md).
+#: The chip the gap module's virtual silicon and committed cases are of: the read of [Thesis2019] (docs/gap-diagnosis.md).
 THESIS_READ = "designs/dual_pixel_revA_thesis_read.toml"
 
 
