@@ -108,8 +108,7 @@ def row_share(design, lines: dict, nets: dict, tag: str) -> tuple:
     out = []
     for k, (col, other, c) in enumerate(_row_share(design)):
         if col in lines:
-            node = "0" if other == "0" else nets.get(other, "0")
-            out.append(Element(f"Crw{tag}_{k}_{lines[col]}", (lines[col], node), c))
+            out.append(Element(f"Crw{tag}_{k}_{lines[col]}", (lines[col], nets.get(other, "0")), c))
     return tuple(out)
 
 
