@@ -166,8 +166,12 @@ class Canvas:
         space += extra
         near = []
         cut = layer == "contact" or layer.startswith("via")
+        x0, y0, x1, y1 = b.x0 - space, b.y0 - space, b.x1 + space, b.y1 + space
         for s in self._seen.get(layer, ()):
-            g = s.box.gap(b)
+            o = s.box
+            if o.x0 >= x1 or o.x1 <= x0 or o.y0 >= y1 or o.y1 <= y0:
+                continue   # a space or more apart along x or y: no need for the distance
+            g = o.gap(b)
             if g >= space:
                 continue
             if s.net != net or not net or (cut and s.box != b):

@@ -54,6 +54,7 @@ from collections import defaultdict
 from .cornerfield import corner_couplings
 from .fringe import fringe, landing
 from .nets import GROUND
+from .plane import Plane
 from .topface import covered_top
 from .wedge import wedge_couplings
 
@@ -92,36 +93,14 @@ class Couplings:
 
 
 def _below(geo, stack, i):
-    """Conductors under layer ``i``, nearest first: [(gap top, {net: Region}, union)]."""
-    import klayout.db as kdb
-    out = []
-    for c in reversed(stack.conductors[:i]):
-        nets = geo.wires.get(c.name, {})
-        if nets:
-            u = kdb.Region()
-            for r in nets.values():
-                u += r
-            out.append((c.top, nets, u.merged()))
-    if geo.surface:
-        u = kdb.Region()
-        for r in geo.surface.values():
-            u += r
-        out.append((0.0, geo.surface, u.merged()))
-    return out
+    """Conductors under layer ``i``, nearest first: [Plane] at their tops, the surface (diffusions, wells) last."""
+    out = [Plane(c.top, geo.wires[c.name]) for c in reversed(stack.conductors[:i]) if geo.wires.get(c.name)]
+    return out + ([Plane(0.0, geo.surface)] if geo.surface else [])
 
 
 def _above(geo, stack, i):
-    """Conductors over layer ``i``, nearest first: [(their bottom, {net: Region}, union)]."""
-    import klayout.db as kdb
-    out = []
-    for c in stack.conductors[i + 1:]:
-        nets = geo.wires.get(c.name, {})
-        if nets:
-            u = kdb.Region()
-            for r in nets.values():
-                u += r
-            out.append((c.z, nets, u.merged()))
-    return out
+    """Conductors over layer ``i``, nearest first: [Plane] at their bottoms."""
+    return [Plane(c.z, geo.wires[c.name]) for c in stack.conductors[i + 1:] if geo.wires.get(c.name)]
 
 
 def _under(region, below, z, device=False):
@@ -135,41 +114,61 @@ def _under(region, below, z, device=False):
 def _under_parts(region, below, z, device=False):
     """(net, Region, gap h) of each part of ``region``, as ``_under``."""
     rest = region
-    for k, (top, nets, union) in enumerate(below):
+    for k, plane in enumerate(below):
+        union = plane.near(rest)
         hit = rest & union
         if hit.is_empty():
             continue
         if device and k == 0:
             rest = rest - union
             continue
-        for m, reg in nets.items():
+        for m, reg in plane.nets_near(hit):
             part = hit & reg
             if not part.is_empty():
-                yield m, part, z - top
+                yield m, part, z - plane.z
         rest = rest - union
     if not rest.is_empty():
         yield GROUND, rest, z
 
 
-def _down(cpl, net, band, below, eps, t, z, per_area, weight, device=False, strips=None):
-    """The downward fringe of ``band`` (``per_area``: edge length per band area) to what lies under it.
-    ``strips`` ([(Region, x0, x1)]: the band by distance from the edge, ``_strips``): each part's share is
-    the flux an edge over a plane at the part's gap sends to the part's distance (``fringe.landing``)
+def _down(cpl, net, pieces, eps, t, per_area, weight, strips=None, areas=None):
+    """The downward fringe of a part of a band (``per_area``: edge length per band area) to what lies under
+    it, ``pieces`` (``_under_parts`` of that part). ``strips`` ([(Region, x0, x1)]: the band by distance from
+    the edge, ``_strips``) with ``areas`` ({(piece, strip): area}, ``_areas_by_strip``): each piece's share
+    is the flux an edge over a plane at the piece's gap sends to the piece's distance (``fringe.landing``)
     times its length along the edge; without, its area over its gap (a / h, as the plate term: the
     field goes to the nearer conductor; shared by area alone, C11's metal5 strap 6.1 um up gave most of
     its edge field to the substrate rather than to the bottom plate 0.9 um under it: +57 % against
     FastCap2, +14 % by a / h)."""
-    pieces = list(_under_parts(band, below, z, device))
-    if strips is None or len(pieces) < 2:      # one part takes it all: no need to weigh it
+    if areas is None:
         parts = [(m, a, h, a / h) for m, part, h in pieces for a in (part.area(),)]
     else:
         parts = [(m, a, h, a / (x1 - x0) * landing(h, x0, x1))
-                 for m, part, h in pieces
-                 for strip, x0, x1 in strips for a in ((part & strip).area(),) if a]
+                 for i, (m, _part, h) in enumerate(pieces)
+                 for k, (_strip, x0, x1) in enumerate(strips) for a in (areas.get((i, k), 0),) if a]
     total = sum(p[1] for p in parts)
     conductance = sum(p[3] for p in parts)
     for m, a, h, w in parts:
         cpl.add(net, m, fringe(eps, t, h) * per_area * total * w / conductance * weight(h))
+
+
+def _areas_by_strip(groups, strips) -> list:
+    """[{(piece index, strip index): area (dbu2)}] of each group's pieces (``_under_parts``) in each strip:
+    every piece of every group in one region labelled by its index, one boolean per strip (a strip's
+    edges are the costly operand: a boolean per piece and strip took ~5 x the CPU)."""
+    import klayout.db as kdb
+    lab, where = kdb.Region(), []
+    for g, pieces in enumerate(groups):
+        for i, (_m, part, _h) in enumerate(pieces):
+            for p in part.each():
+                lab.insert(kdb.PolygonWithProperties(p, {0: len(where)}))
+            where.append((g, i))
+    out = [defaultdict(int) for _ in groups]
+    for k, (strip, _x0, _x1) in enumerate(strips):
+        for p in lab.and_(strip, kdb.Region.NoPropertyConstraint).each():
+            g, i = where[p.properties()[0]]
+            out[g][(i, k)] += p.area()
+    return out
 
 
 def _fringe_band(cpl, net, band, below, above, eps, t, z, edge_len, band_area, device=False, strips=None):
@@ -182,21 +181,28 @@ def _fringe_band(cpl, net, band, below, above, eps, t, z, edge_len, band_area, d
     per_area = edge_len / band_area
     rest = band
     top_z = z + t
-    for bottom, nets, union in above:
+    jobs = []                  # (part of the band, weight of its downward fringe by h_d)
+    for plane in above:
+        union = plane.near(rest)
         hit = rest & union
         if hit.is_empty():
             continue
-        hu = bottom - top_z
-        for m, reg in nets.items():
+        hu = plane.z - top_z
+        for m, reg in plane.nets_near(hit):
             part = hit & reg
             a = part.area()
             if not a:
                 continue
             h_d = z   # the substrate (the nearest plane below decides each part's h_d in _down)
             cpl.add(net, m, fringe(eps, t, hu) * per_area * a * h_d / (hu + h_d))
-            _down(cpl, net, part, below, eps, t, z, per_area, lambda hd, hu=hu: hu / (hu + hd), device, strips)
+            jobs.append((part, lambda hd, hu=hu: hu / (hu + hd)))
         rest = rest - union
-    _down(cpl, net, rest, below, eps, t, z, per_area, lambda hd: 1.0, device, strips)
+    jobs.append((rest, lambda hd: 1.0))
+    pieces = [list(_under_parts(part, below, z, device)) for part, _w in jobs]
+    weighed = [k for k, ps in enumerate(pieces) if strips and len(ps) > 1]   # one piece takes it all
+    areas = dict(zip(weighed, _areas_by_strip([pieces[k] for k in weighed], strips) if weighed else ()))
+    for k, (_part, weight) in enumerate(jobs):
+        _down(cpl, net, pieces[k], eps, t, per_area, weight, strips, areas.get(k))
 
 
 def capacitances(geo, stack) -> Couplings:
@@ -307,13 +313,13 @@ def _plane_gap(poly, below, above, z, t) -> float:
     import klayout.db as kdb
     gap = kdb.Region(poly)
     h = z
-    for top, _nets, union in below:
-        if not (union & gap).is_empty():
-            h = z - top
+    for plane in below:
+        if not (plane.near(gap) & gap).is_empty():
+            h = z - plane.z
             break
-    for bottom, _nets, union in above:
-        if not (union & gap).is_empty():
-            h = min(h, bottom - (z + t))
+    for plane in above:
+        if not (plane.near(gap) & gap).is_empty():
+            h = min(h, plane.z - (z + t))
             break
     return h
 

@@ -65,12 +65,13 @@ def covered_top(net, reg, above, z, t, dbu):
         if strip.is_empty():
             continue
         rest = strip
-        for bottom, nets, union in above:
+        for plane in above:
+            union = plane.near(rest)
             hit = rest & union
             if hit.is_empty():
                 continue
-            g = bottom - (z + t)
-            for m, cover in nets.items():
+            g = plane.z - (z + t)
+            for m, cover in plane.nets_near(hit):
                 if m == net:
                     continue
                 area = (hit & cover).area()
