@@ -205,6 +205,45 @@ def test_corner_field_landing_under_a_third_conductor_within_15_percent_of_fastc
     assert capacitances(geo, gf.tech.stack).pair("a", "b") > 1.15 * truth
 
 
+def test_corner_field_landing_by_boxes_equals_klayout_booleans(gf, dualpix, monkeypatch):
+    """The corner field's landing strips are measured by box arithmetic on layers whose boxes are exact
+    (``cornerfield._Layer``: Manhattan, no two nets overlapping) and by KLayout's booleans otherwise: the
+    two give the same couplings and fringe taken on the dual pixel and on a metal1 block with a metal3
+    line beside it, covered by other nets' metal2 and metal3 shapes overlapping each other over the
+    block (inclusion-exclusion of the cover layers) and with a metal2 line under the metal3 line. A shape
+    off the axes or two nets overlapping on a layer make its boxes inexact."""
+    from collections import defaultdict
+
+    import klayout.db as kdb
+
+    import pixelkit.layout.pex.cornerfield as cf
+    from pixelkit.layout.pex.capacitance import Couplings
+    stack = gf.tech.stack
+    case = _boxes({"metal1": {"a": [(0, 0, 3, 0.6)]},
+                   "metal2": {"c": [(0.5, 0.1, 2.5, 0.4)], "e": [(1, 0.9, 2, 1.1)]},
+                   "metal3": {"b": [(-0.5, 0.83, 3.5, 1.21)], "d": [(1, 0.2, 2, 0.5), (1.8, -0.5, 2.2, 0.5)]}},
+                  (-2, -1.5, 5, 2.7))
+
+    def corner(geo):
+        cpl, spent = Couplings(), defaultdict(float)
+        for i in range(len(stack.conductors)):
+            cf.corner_couplings(cpl, geo, stack, i, spent)
+        return cpl.c, spent
+    by_boxes = [corner(geo) for geo in (dualpix, case)]
+    of = cf._Layer.of
+    monkeypatch.setattr(cf._Layer, "of", lambda nets, merged: of(nets, merged)._replace(exact=False))
+    by_booleans = [corner(geo) for geo in (dualpix, case)]
+    for boxes, booleans in zip(by_boxes, by_booleans):
+        for x, y in zip(boxes, booleans):
+            assert x and x.keys() == y.keys()
+            assert all(x[k] == pytest.approx(y[k], rel=1e-12, abs=0) for k in x)
+    assert by_boxes[1][0][("a", "b")] > 0
+    tilted = {"x": kdb.Region(kdb.Polygon([kdb.Point(0, 0), kdb.Point(100, 0), kdb.Point(0, 100)]))}
+    overlapping = {"x": kdb.Region(kdb.Box(0, 0, 100, 100)), "y": kdb.Region(kdb.Box(50, 0, 150, 100))}
+    assert not any(of(nets, cf._merged(nets)).exact for nets in (tilted, overlapping))
+    assert of(case.wires["metal3"], cf._merged(case.wires["metal3"])).exact
+
+
 def test_the_fastcap_check_catches_a_wrong_extraction(gf, dualpix):
     """The same comparison fails when the kit's stack is wrong (the dielectric taken as 2.0, the
     air-gap figure, while FastCap keeps 4.0): the check can fail for the right reason."""

@@ -44,7 +44,9 @@ and a third net's metal3 line over its top face ending 0.045 um short of that ed
 between the block and the line beside it, the kit 47.2 (59.4 without this, +25 %;
 ``tests/test_extraction.py``). The drawn case: the secondary's FD foot under TG's metal3 line with
 RST's metal3 line 0.23 um beside it (RST to FD +19 -> +13 %), the primary's FD foot half under
-VPDR's metal2 with TG's metal2 line 0.98 um beside it (TG to FD +18 -> +10 %).
+VPDR's metal2 with TG's metal2 line 0.98 um beside it (TG to FD +18 -> +10 %). The strips' parts are
+measured on the layers' boxes, all pairs of a layer pair at once (``_free_share``: exact where the
+layers are Manhattan and their nets do not overlap, KLayout's booleans otherwise).
 
 Charge: each of these fields was counted by the 2.5D terms as fringe of the edges bounding it (going
 mostly to the substrate), so a coupling c takes half its length-equivalent from each edge's fringe:
@@ -53,6 +55,7 @@ mostly to the substrate), so a coupling c takes half its length-equivalent from 
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 from .fringe import fringe
 
@@ -67,8 +70,11 @@ def corner(eps: float, t_b: float, g: float, d: float) -> float:
 
 def corner_couplings(cpl, geo, stack, i, spent) -> None:
     """Add the corner field of layer ``i``'s edges to every higher layer's conductors of other nets to
-    ``cpl``, and the fringe length (m) it takes from each edge to ``spent[(layer, net)]``."""
+    ``cpl``, and the fringe length (m) it takes from each edge to ``spent[(layer, net)]``. The edge pairs
+    with one upper layer are taken together: their nets, the covered parts of their gaps and their
+    landing strips as arrays over the pairs."""
     import klayout.db as kdb
+    import numpy as np
     cond = stack.conductors[i]
     nets = geo.wires.get(cond.name, {})
     if not nets:
@@ -76,95 +82,198 @@ def corner_couplings(cpl, geo, stack, i, spent) -> None:
     dbu, eps = geo.dbu, stack.eps
     top = cond.top
     reach = int(round(cond.z / dbu))
-    lower = kdb.Region()
-    for r in nets.values():
-        lower += r
-    lower.merge()
+    lower = _merged(nets)
     inner = lower.sized(-1)            # flush edges (d = 0) are then 1 dbu apart: the separation check finds them
-    own = _labelled(nets)
+    own = _Layer.of(nets, lower)
     blocking = [(top, lower)]          # (height, conductors) between A's top and the upper layer
-    covers = {}                        # net -> Region: the conductors of the layers above A so far
+    covers = []                        # the layers above A so far (``_Layer``)
+    per_a = fringe(eps, cond.thickness, cond.z)
     for cb in stack.conductors[i + 1:]:
         up = geo.wires.get(cb.name, {})
         if not up:
             continue
-        upper = kdb.Region()
-        for r in up.values():
-            upper += r
-        upper.merge()
+        upper = _merged(up)
         g = cb.z - top
         block = kdb.Region()
         for zk, rk in blocking:
             grow = int(round((zk - top) / 2 / dbu))
             block += rk.sized(grow) if grow > 0 else rk
-        rects = _rects(block)
-        theirs = _labelled(up)
-        covers_under = dict(covers)            # other conductors between A's top and B's bottom, by net
-        for n, r in up.items():
-            covers[n] = covers[n] + r if n in covers else r.dup()
-        covers_top = covers                    # ... and on B's layer
-        others = {}                            # (A's net, B's net) -> the two covers of the other nets
+        blocking.append((cb.z, upper))
+        theirs = _Layer.of(up, upper)
+        covers_under = list(covers)            # the layers between A's top and B's bottom
+        covers.append(theirs)                  # ... and B's: over A's top face
         apart = inner.separation_check(upper, reach, False, kdb.Region.Projection, None, None, None, True)
         over = lower.overlap_check(upper, reach, False, kdb.Region.Projection, None, None, None, True)
-        for ep, flush in [(e, False) for e in apart.each()] + [(e, True) for e in over.each()]:
-            a_net, b_net = _net_at(own, ep.first), _net_at(theirs, ep.second)
-            if a_net is None or b_net is None or a_net == b_net:
-                continue
-            d = 0.0 if flush else ep.distance() * dbu
-            gap = ep.polygon(0).bbox()
-            free = 1.0 if flush or gap.area() == 0 else 1 - _covered(rects, gap) / gap.area()
-            if (a_net, b_net) not in others:
-                others[(a_net, b_net)] = (_others(covers_top, a_net, b_net), _others(covers_under, a_net, b_net))
-            free *= _landing_free(ep, flush, nets[a_net], up[b_net], g + cb.thickness, g + cond.thickness, dbu,
-                                  *others[(a_net, b_net)])
-            c = corner(eps, cb.thickness, g, d) * free * (ep.first.length() + ep.second.length()) / 2 * dbu
+        pairs = [(e, False) for e in apart.each()] + [(e, True) for e in over.each()]
+        if not pairs:
+            continue
+        ends = np.array([(e.first.x1, e.first.y1, e.first.x2, e.first.y2, e.second.x1, e.second.y1, e.second.x2,
+                          e.second.y2) for e, _ in pairs], dtype=np.int64).reshape(-1, 8)
+        a_nets, b_nets = _nets_at(own, ends[:, :4]), _nets_at(theirs, ends[:, 4:])
+        keep = [k for k, (a, b) in enumerate(zip(a_nets, b_nets)) if a is not None and b is not None and a != b]
+        if not keep:
+            continue
+        pairs, ends = [pairs[k] for k in keep], ends[keep]
+        a_nets, b_nets = [a_nets[k] for k in keep], [b_nets[k] for k in keep]
+        flush = np.array([f for _, f in pairs], dtype=bool)
+        xs, ys = ends[:, 0::2], ends[:, 1::2]           # the gap: the box the two edges span
+        gaps = np.stack([xs.min(axis=1), ys.min(axis=1), xs.max(axis=1), ys.max(axis=1)], axis=1)
+        area = (gaps[:, 2] - gaps[:, 0]) * (gaps[:, 3] - gaps[:, 1])
+        gap = ~flush & (area > 0)
+        free = np.ones(len(pairs))
+        free[gap] = 1 - _covered_each(_rects(block), gaps[gap]) / area[gap]
+        free = free * _landing_free(_strips(ends, flush, g + cb.thickness, g + cond.thickness, dbu),
+                                    np.array(a_nets), np.array(b_nets), own, theirs, covers, covers_under)
+        per_b = fringe(eps, cb.thickness, cb.z)
+        for (ep, fl), a_net, b_net, f in zip(pairs, a_nets, b_nets, free.tolist()):
+            d = 0.0 if fl else ep.distance() * dbu
+            c = corner(eps, cb.thickness, g, d) * f * (ep.first.length() + ep.second.length()) / 2 * dbu
             if c <= 0:
                 continue
             cpl.add(a_net, b_net, c)
-            spent[(cond.name, a_net)] += c / 2 / fringe(eps, cond.thickness, cond.z)
-            spent[(cb.name, b_net)] += c / 2 / fringe(eps, cb.thickness, cb.z)
-        blocking.append((cb.z, upper))
+            spent[(cond.name, a_net)] += c / 2 / per_a
+            spent[(cb.name, b_net)] += c / 2 / per_b
 
 
-def _others(by_net, a_net, b_net):
-    """The conductors of ``by_net`` ({net: Region}) of nets other than the two."""
+def _merged(nets):
+    """The union of the regions of ``nets`` ({net: Region}), merged."""
     import klayout.db as kdb
     out = kdb.Region()
-    for n, r in by_net.items():
-        if n not in (a_net, b_net):
-            out += r
+    for r in nets.values():
+        out += r
+    out.merge()
     return out
 
 
-def _landing_free(ep, flush, a_reg, b_reg, w_top, w_under, dbu, cov_top, cov_under) -> float:
-    """The share of the corner field whose lines land free: the mean of B's sidewall field's landing strip on
-    A's top face (within ``w_top`` = g + T_B of B's edge, on its outer side, on A) and A's sidewall field's on
-    B's underside (within g + T_A of A's edge, on B), each less the part another net's conductor covers
-    (over A's face, up to B's layer: ``cov_top``; under B's, between the layers: ``cov_under``)."""
-    import klayout.db as kdb
-    a, b = ep.first, ep.second
-    horizontal = a.dy() == 0
-    ca = a.p1.y if horizontal else a.p1.x
-    cb = b.p1.y if horizontal else b.p1.x
-    if ca == cb:
-        return 1.0
-    lo = max(min(a.p1.x, a.p2.x), min(b.p1.x, b.p2.x)) if horizontal else max(min(a.p1.y, a.p2.y), min(b.p1.y, b.p2.y))
-    hi = min(max(a.p1.x, a.p2.x), max(b.p1.x, b.p2.x)) if horizontal else min(max(a.p1.y, a.p2.y), max(b.p1.y, b.p2.y))
-    if hi <= lo:
-        return 1.0
-    towards_a = 1 if ca > cb else -1
-    n_b = -towards_a if flush else towards_a      # B's outer side
-    n_a = towards_a if flush else -towards_a      # A's outer side
+class _Layer(NamedTuple):
+    """A layer's conductors: its regions by net, their boxes (``_labelled``) with each box's net as a list
+    and as an array, and whether the boxes are ``exact``: each net's boxes tile its shapes and no two nets
+    overlap, so the boxes of any set of nets are disjoint and tile its union. Checked as: the union is
+    Manhattan (KLayout's ``non_rectilinear`` finds none of its polygons: its area is exact) and the boxes'
+    areas add up to its area (they add up to more where a box overshoots its net's shape or two nets
+    overlap)."""
+    nets: dict
+    boxes: object
+    names: list
+    labels: object
+    exact: bool
+
+    @classmethod
+    def of(cls, nets, merged):
+        """The layer of ``nets`` ({net: Region}), ``merged`` their union (``_merged``)."""
+        import numpy as np
+        boxes, names = _labelled(nets)
+        exact = (merged.non_rectilinear().is_empty()
+                 and np.sum((boxes[:, 2] - boxes[:, 0]) * (boxes[:, 3] - boxes[:, 1])) == merged.area())
+        return cls(nets, boxes, names, np.array(names), bool(exact))
+
+
+def _nets_at(layer, edges):
+    """The net whose shape carries each of ``edges`` (rows x1, y1, x2, y2): that of the first box of
+    ``layer`` (``_Layer``) within 2 dbu of the edge's midpoint, None where there is none."""
+    boxes = layer.boxes
+    x, y = (edges[:, 0:1] + edges[:, 2:3]) / 2, (edges[:, 1:2] + edges[:, 3:4]) / 2
+    hit = (boxes[:, 0] - 2 <= x) & (x <= boxes[:, 2] + 2) & (boxes[:, 1] - 2 <= y) & (y <= boxes[:, 3] + 2)
+    return [layer.names[j] if h else None for j, h in zip(hit.argmax(axis=1).tolist(), hit.any(axis=1).tolist())]
+
+
+def _strips(ends, flush, w_top, w_under, dbu):
+    """The landing strips of the edge pairs (rows: A's edge's x1, y1, x2, y2, then B's; ``flush``: B's edge
+    over A): on A's top face within ``w_top`` (m) of B's edge on its outer side, on B's underside within
+    ``w_under`` of A's edge on its outer side, both over the edges' common span. Boxes (left, bottom,
+    right, top; dbu) of each, and whether the pair has strips (its edges not in line, with a common span)."""
+    import numpy as np
+    vertical = ends[:, 1] != ends[:, 3]
+    q = np.where(vertical[:, None], ends[:, [1, 0, 3, 2, 5, 4, 7, 6]], ends)     # x along the edges
+    ca, cb = q[:, 1], q[:, 5]
+    lo = np.maximum(np.minimum(q[:, 0], q[:, 2]), np.minimum(q[:, 4], q[:, 6]))
+    hi = np.minimum(np.maximum(q[:, 0], q[:, 2]), np.maximum(q[:, 4], q[:, 6]))
+    towards_a = np.where(ca > cb, 1, -1)
+    n_b = np.where(flush, -towards_a, towards_a)      # B's outer side (A's is the other)
 
     def strip(c0, n, w):
         c1 = c0 + n * int(round(w / dbu))
-        c0, c1 = min(c0, c1), max(c0, c1)
-        return kdb.Region(kdb.Box(lo, c0, hi, c1) if horizontal else kdb.Box(c0, lo, c1, hi))
+        box = np.stack([lo, np.minimum(c0, c1), hi, np.maximum(c0, c1)], axis=1)
+        return np.where(vertical[:, None], box[:, [1, 0, 3, 2]], box)
+    return strip(cb, n_b, w_top), strip(ca, -n_b, w_under), (ca != cb) & (hi > lo)
 
-    def free(face, cov):
-        area = face.area()
-        return 1.0 if area == 0 else 1 - (face & cov).area() / area
-    return (free(strip(cb, n_b, w_top) & a_reg, cov_top) + free(strip(ca, n_a, w_under) & b_reg, cov_under)) / 2
+
+def _landing_free(strips, a_nets, b_nets, own, theirs, cov_top, cov_under):
+    """The share of each pair's corner field whose lines land free: the mean of B's sidewall field's landing
+    strip on A's top face and A's sidewall field's on B's underside (``_strips``), each less the part
+    another net's conductor covers (over A's face, up to B's layer: the layers ``cov_top``; under B's,
+    between the layers: ``cov_under``); 1 for a pair without strips. ``own``, ``theirs``: A's and B's
+    layers (``_Layer``), ``a_nets``, ``b_nets``: the pairs' nets (arrays)."""
+    import numpy as np
+    top, under, has = strips
+    out = np.ones(len(has))
+    k = np.nonzero(has)[0]
+    if len(k):
+        pair = a_nets[k], b_nets[k]
+        out[k] = (_free_share(top[k], a_nets[k], own, cov_top, *pair)
+                  + _free_share(under[k], b_nets[k], theirs, cov_under, *pair)) / 2
+    return out
+
+
+def _free_share(strips, owners, layer, covers, a_nets, b_nets):
+    """Of each strip's part on its owner's conductors (``owners``: a net of ``layer``), the share the
+    conductors of ``covers`` (layers) of nets other than the pair's (``a_nets``, ``b_nets``) leave
+    uncovered; 1 where the strip holds none of the owner. On exact layers (``_Layer``) by box arithmetic:
+    the owner's boxes are disjoint, and so are one layer's boxes of any set of nets, so the overlap of
+    a strip with one box of each is a box and the areas of these add up; over several cover layers by
+    inclusion-exclusion, area(F & (U | L)) = area(F & U) + area(F & L) - area(F & U & L). The areas are
+    integers (dbu2), exact in floating point: the result is the booleans'. Otherwise KLayout's booleans."""
+    import numpy as np
+    n = len(strips)
+    if not (layer.exact and all(c.exact for c in covers)):
+        import klayout.db as kdb
+        out = np.ones(n)
+        for k, (box, owner, a, b) in enumerate(zip(strips.tolist(), owners, a_nets, b_nets)):
+            face = kdb.Region(kdb.Box(*box)) & layer.nets[owner]
+            area = face.area()
+            if area:
+                out[k] = 1 - (face & _others(covers, a, b)).area() / area
+        return out
+
+    def areas(pieces):
+        p, of = pieces
+        return np.bincount(of, weights=(p[:, 2] - p[:, 0]) * (p[:, 3] - p[:, 1]), minlength=n)
+    p, of, m = _pieces(strips, np.arange(n), layer.boxes)
+    keep = layer.labels[m] == owners[of]
+    face = p[keep], of[keep]
+    terms = []                         # (pieces, sign): the face's part under the cover layers so far
+    for c in covers:
+        cut = []
+        for (p, of), s in [(face, 1)] + [(t, -s) for t, s in terms]:
+            p, of, m = _pieces(p, of, c.boxes)
+            keep = (c.labels[m] != a_nets[of]) & (c.labels[m] != b_nets[of])
+            if keep.any():
+                cut.append(((p[keep], of[keep]), s))
+        terms += cut
+    area = areas(face)
+    covered = sum((s * areas(t) for t, s in terms), np.zeros(n))
+    return 1 - np.divide(covered, area, out=np.zeros(n), where=area > 0)
+
+
+def _pieces(boxes, of, cut):
+    """The overlaps of ``boxes`` (rows left, bottom, right, top) with the boxes ``cut``: (overlap boxes,
+    the ``of`` of the box each is part of, the index of its box of ``cut``)."""
+    import numpy as np
+    j, m = np.nonzero((boxes[:, None, 0] < cut[:, 2]) & (cut[:, 0] < boxes[:, None, 2])
+                      & (boxes[:, None, 1] < cut[:, 3]) & (cut[:, 1] < boxes[:, None, 3]))
+    pieces = np.concatenate([np.maximum(boxes[j, :2], cut[m, :2]), np.minimum(boxes[j, 2:], cut[m, 2:])], axis=1)
+    return pieces, of[j], m
+
+
+def _others(layers, a_net, b_net):
+    """The conductors of ``layers`` (``_Layer``) of nets other than the two."""
+    import klayout.db as kdb
+    out = kdb.Region()
+    for layer in layers:
+        for n, r in layer.nets.items():
+            if n not in (a_net, b_net):
+                out += r
+    return out
 
 
 def _rects(region):
@@ -185,18 +294,17 @@ def _covered(rects, box) -> float:
     return float(np.sum(w * h))
 
 
+def _covered_each(rects, boxes):
+    """Area (dbu2) of each of ``boxes`` (rows left, bottom, right, top) that ``rects`` (``_rects``) cover."""
+    import numpy as np
+    w = np.clip(np.minimum(rects[:, 2], boxes[:, 2:3]) - np.maximum(rects[:, 0], boxes[:, 0:1]), 0, None)
+    h = np.clip(np.minimum(rects[:, 3], boxes[:, 3:4]) - np.maximum(rects[:, 1], boxes[:, 1:2]), 0, None)
+    return np.sum(w * h, axis=1)
+
+
 def _labelled(nets):
     """Every net's shapes as boxes (``_rects``) and the net of each box: (boxes, [net])."""
     import numpy as np
     parts = [(_rects(reg), net) for net, reg in nets.items()]
     boxes = np.concatenate([b for b, _ in parts]) if parts else np.zeros((0, 4))
     return boxes, [net for b, net in parts for _ in range(len(b))]
-
-
-def _net_at(labelled, edge):
-    """The net whose shape carries ``edge`` (a box of it within 2 dbu of the edge's midpoint)."""
-    import numpy as np
-    boxes, names = labelled
-    x, y = (edge.p1.x + edge.p2.x) / 2, (edge.p1.y + edge.p2.y) / 2
-    hit = np.nonzero((boxes[:, 0] - 2 <= x) & (x <= boxes[:, 2] + 2) & (boxes[:, 1] - 2 <= y) & (y <= boxes[:, 3] + 2))[0]
-    return names[hit[0]] if len(hit) else None
