@@ -42,14 +42,16 @@ from __future__ import annotations
 
 import math
 
-from .cornerfield import _covered, _labelled, _rects
+from .cornerfield import _labelled, _rects
 from .fringe import fringe
 
 
-def wedge(eps: float, t: float, angle: float, r_in: float, r_out: float) -> float:
+def wedge(eps: float, t: float, angle: float, r_in, r_out):
     """Coupling (F) of two sidewalls t high at ``angle`` (rad) to each other whose faces span r_in ..
-    r_out from the line their circular field lines centre on: ``eps ln(r_out / r_in) / angle`` per height."""
-    return eps * math.log(r_out / r_in) / angle * t
+    r_out from the line their circular field lines centre on: ``eps ln(r_out / r_in) / angle`` per height
+    (r_in, r_out may be arrays)."""
+    import numpy as np
+    return eps * np.log(r_out / r_in) / angle * t
 
 
 def right_wedge(eps: float, t: float, r0: float, r1: float, q0: float, q1: float, blocks=()) -> float:
@@ -63,28 +65,41 @@ def right_wedge(eps: float, t: float, r0: float, r1: float, q0: float, q1: float
     that meets another conductor (``blocks``: boxes (x0, y0, x1, y1) in the quarter plane, x along the
     first face, y along the second) ends there: the radii |z^2 - m| its box spans are taken off."""
     import numpy as np
-    m, g = (r0 * r0 - q0 * q0) / 2, (r0 * r0 + q0 * q0) / 2
-    out = min(r1 * r1 - m, q1 * q1 + m)
-    if g <= 0 or out <= g:
-        return 0.0
-    cut = []
     b = np.asarray(blocks, dtype=float).reshape(-1, 4)
-    if len(b):
-        b = b[b[:, 0] ** 2 + b[:, 1] ** 2 - abs(m) < out]      # boxes some line up to ``out`` can reach
-    if len(b):
-        f = np.linspace(0.0, 1.0, 7)
-        xs = (b[:, 0:1] + (b[:, 2:3] - b[:, 0:1]) * f)[:, :, None]     # 7 x 7 points of each box
-        ys = (b[:, 1:2] + (b[:, 3:4] - b[:, 1:2]) * f)[:, None, :]
-        rho = np.abs(xs * xs - ys * ys - m + 2j * xs * ys).reshape(len(b), -1)
-        lo, hi = np.maximum(rho.min(axis=1), g), np.minimum(rho.max(axis=1), out)
-        cut = sorted(zip(lo[hi > lo].tolist(), hi[hi > lo].tolist()))
-    free, reach = 0.0, g
-    for lo, hi in cut:
-        if lo > reach:
-            free += math.log(lo / reach)
-        reach = max(reach, hi)
-    free += math.log(out / reach) if out > reach else 0.0
+    one = [np.array([v], dtype=float) for v in (r0, r1, q0, q1)]
+    return float(_right_wedges(eps, t, *one, np.zeros(len(b), dtype=int), b)[0])
+
+
+def _right_wedges(eps, t, r0, r1, q0, q1, pair, blocks):
+    """``right_wedge`` of many pairs of faces at once: arrays r0 .. q1 (m), a pair each, and the boxes
+    ``blocks`` (rows (x0, y0, x1, y1), m), row i in the quarter plane of pair ``pair[i]``; array of F, each
+    as ``right_wedge`` gives it but for the order of its sum."""
+    import numpy as np
+    m, g = (r0 * r0 - q0 * q0) / 2, (r0 * r0 + q0 * q0) / 2
+    out = np.minimum(r1 * r1 - m, q1 * q1 + m)
+    live = (g > 0) & (out > g)
+    g, out = np.where(live, g, 1.0), np.where(live, out, 1.0)      # a pair that sees nothing: no radii
+    b, p = blocks, pair
+    keep = live[p] & (b[:, 0] ** 2 + b[:, 1] ** 2 - np.abs(m[p]) < out[p])  # boxes some line up to ``out`` can reach
+    b, p = b[keep], p[keep]
+    f = np.linspace(0.0, 1.0, 7)
+    xs = (b[:, 0:1] + (b[:, 2:3] - b[:, 0:1]) * f)[:, :, None]     # 7 x 7 points of each box
+    ys = (b[:, 1:2] + (b[:, 3:4] - b[:, 1:2]) * f)[:, None, :]
+    rho = np.abs(xs * xs - ys * ys - m[p, None, None] + 2j * xs * ys).reshape(len(b), 49)
+    lo, hi = np.maximum(rho.min(axis=1), g[p]), np.minimum(rho.max(axis=1), out[p])
+    cut = hi > lo
+    # each pair's spans [lo, hi] in a row (zeros after), in order of lo; the radii g .. out none covers
+    order = np.lexsort((lo[cut], p[cut]))
+    lo, hi, p = lo[cut][order], hi[cut][order], p[cut][order]
+    col = np.arange(len(p)) - np.searchsorted(p, p)
+    los, his = np.zeros((2, len(g), col.max() + 1 if len(p) else 0))
+    los[p, col], his[p, col] = lo, hi
+    reach = np.maximum.accumulate(np.concatenate([g[:, None], his], axis=1), axis=1)  # covered out to, before each
+    free = np.log(np.maximum(np.concatenate([los, out[:, None]], axis=1) / reach, 1.0)).sum(axis=1)
     return eps * free / math.pi * t
+
+
+_right_wedge = right_wedge        # as written here: ``wedge_couplings`` takes it for many pairs at once
 
 
 def wedge_couplings(cpl, geo, stack, i, spent) -> None:
@@ -113,38 +128,11 @@ def wedge_couplings(cpl, geo, stack, i, spent) -> None:
     if not rows:
         return
     a = np.array(rows, dtype=float)
-    reach = cond.z / geo.dbu
+    reach, dbu = cond.z / geo.dbu, geo.dbu
     rects = _rects(layer)
     boxes, owner = _labelled({k: nets[name] for k, name in enumerate(names)})
     owner = np.array(owner)
-
-    def near(u, n):
-        """The boxes (and their nets) within the reach of the plane x = u on its side n."""
-        lo_u, hi_u = sorted((u, u + n * reach))
-        sel = (boxes[:, 2] > lo_u) & (boxes[:, 0] < hi_u)
-        return boxes[sel], owner[sel]
-
-    def blockers(cand, u, n, w, wn, a_net, b_net):
-        """The other nets' boxes of ``cand`` (``near``) in the quarter plane beyond (u, w) (x along n from
-        u, y along wn from w), in those local coordinates (m), clipped to it: array of (x0, y0, x1, y1)."""
-        bx, own = cand
-        lo_w, hi_w = sorted((w, w + wn * reach))
-        bx = bx[(own != a_net) & (own != b_net) & (bx[:, 3] > lo_w) & (bx[:, 1] < hi_w)]
-        x0, x1 = (bx[:, 0] - u) * n, (bx[:, 2] - u) * n
-        y0, y1 = (bx[:, 1] - w) * wn, (bx[:, 3] - w) * wn
-        out = np.stack([np.maximum(np.minimum(x0, x1), 0), np.maximum(np.minimum(y0, y1), 0),
-                        np.maximum(x0, x1), np.maximum(y0, y1)], axis=1)
-        return out[(out[:, 2] > out[:, 0]) & (out[:, 3] > out[:, 1])] * geo.dbu
-
-    def add_c(a_net, b_net, c, box):
-        if box.area() == 0:
-            return
-        c *= 1 - _covered(rects, box) / box.area()
-        if c > 0:
-            _couple(cpl, spent, stack, cond, names[int(a_net)], names[int(b_net)], c)
-
-    def add(a_net, b_net, angle, lo, hi, box):
-        add_c(a_net, b_net, wedge(stack.eps, cond.thickness, angle, lo * geo.dbu, hi * geo.dbu), box)
+    found = []                     # (net index, net index, coupling) arrays
 
     for axis in (0, 1):            # 0: vertical edges against horizontal ones; 1: the same turned by 90 degrees
         v = a[a[:, 4] != 0] if axis == 0 else a[a[:, 5] != 0]
@@ -154,38 +142,63 @@ def wedge_couplings(cpl, geo, stack, i, spent) -> None:
             else (v[:, 1], np.minimum(v[:, 0], v[:, 2]), np.maximum(v[:, 0], v[:, 2]), v[:, 5])
         hw, hu0, hu1, hn = (h[:, 1], np.minimum(h[:, 0], h[:, 2]), np.maximum(h[:, 0], h[:, 2]), h[:, 5]) if axis == 0 \
             else (h[:, 0], np.minimum(h[:, 1], h[:, 3]), np.maximum(h[:, 1], h[:, 3]), h[:, 4])
-        for k in range(len(v)):
-            u, w0, w1, n, net = vu[k], vw0[k], vw1[k], vn[k], v[k, 6]
-            if axis == 0:
-                # quarter circles: h beyond v's plane on v's outward side, v's part on h's outward side
-                r0 = np.where(n > 0, hu0 - u, u - hu1)
-                r1 = np.where(n > 0, hu1 - u, u - hu0)
-                q0 = np.where(hn > 0, w0 - hw, hw - w1)
-                q1 = np.where(hn > 0, w1 - hw, hw - w0)
-                # each face's part beyond the other's plane (r along h's face, q along v's), out to the reach
-                r0, q0 = np.maximum(r0, 0.0), np.maximum(q0, 0.0)
-                r1, q1 = np.minimum(r1, reach), np.minimum(q1, reach)
-                ok = (h[:, 6] != net) & (r1 > r0) & (q1 > q0) & (np.maximum(r0, q0) >= 1.0)
-                cand = near(u, n)
-                for j in np.nonzero(ok)[0]:
-                    c = right_wedge(stack.eps, cond.thickness, r0[j] * geo.dbu, r1[j] * geo.dbu,
-                                    q0[j] * geo.dbu, q1[j] * geo.dbu, blockers(cand, u, n, hw[j], hn[j], net, h[j, 6]))
-                    if c > 0:
-                        _couple(cpl, spent, stack, cond, names[int(net)], names[int(h[j, 6])], c)
-            # half circles: another edge of the same orientation, flush with this one (within half the
-            # gap), end to end across a gap along them
-            same = v[:, 6] != net
-            gap = np.maximum(vw0 - w1, w0 - vw1)
-            flush = same & (vn == n) & (gap > 0) & (np.abs(vu - u) <= gap / 2) & (gap < 2 * reach)
-            for j in np.nonzero(flush & (np.arange(len(v)) > k))[0]:
-                s = gap[j]
-                lo, hi = s / 2, min(s / 2 + min(w1 - w0, vw1[j] - vw0[j]), reach)
-                mid = (min(w1, vw1[j]) + max(w0, vw0[j])) / 2
-                plane = max(u, vu[j]) if n > 0 else min(u, vu[j])
-                box = kdb.Box(int(plane), int(mid - hi), int(plane + n * hi), int(mid + hi)) if axis == 0 \
-                    else kdb.Box(int(mid - hi), int(plane), int(mid + hi), int(plane + n * hi))
-                if hi > lo:
-                    add(net, v[j, 6], math.pi, lo, hi, box)
+        if axis == 0:
+            # quarter circles, every edge k of v (rows) against every edge j of h (columns): h beyond v's
+            # plane on v's outward side, v's part on h's outward side; each face's part beyond the other's
+            # plane (r along h's face, q along v's), out to the reach
+            u, n, w0, w1 = vu[:, None], vn[:, None], vw0[:, None], vw1[:, None]
+            r0 = np.maximum(np.where(n > 0, hu0 - u, u - hu1), 0.0)
+            r1 = np.minimum(np.where(n > 0, hu1 - u, u - hu0), reach)
+            q0 = np.maximum(np.where(hn > 0, w0 - hw, hw - w1), 0.0)
+            q1 = np.minimum(np.where(hn > 0, w1 - hw, hw - w0), reach)
+            kk, jj = np.nonzero((h[:, 6] != v[:, 6:7]) & (r1 > r0) & (q1 > q0) & (np.maximum(r0, q0) >= 1.0))
+            # the other nets' boxes within the reach of each pair's quarter plane beyond (u, w), in its
+            # coordinates (x along n from u, y along h's normal wn from w), clipped to it (pair, box)
+            u, n, w, wn = vu[kk, None], vn[kk, None], hw[jj, None], hn[jj, None]
+            u_far, w_far = u + n * reach, w + wn * reach
+            pair, bi = np.nonzero((owner != v[kk, 6:7]) & (owner != h[jj, 6:7])
+                                  & (boxes[:, 2] > np.minimum(u, u_far)) & (boxes[:, 0] < np.maximum(u, u_far))
+                                  & (boxes[:, 3] > np.minimum(w, w_far)) & (boxes[:, 1] < np.maximum(w, w_far)))
+            u, n, w, wn, bx = u[pair, 0], n[pair, 0], w[pair, 0], wn[pair, 0], boxes[bi]
+            x0, x1 = (bx[:, 0] - u) * n, (bx[:, 2] - u) * n
+            y0, y1 = (bx[:, 1] - w) * wn, (bx[:, 3] - w) * wn
+            blocks = np.stack([np.maximum(np.minimum(x0, x1), 0), np.maximum(np.minimum(y0, y1), 0),
+                               np.maximum(x0, x1), np.maximum(y0, y1)], axis=1)
+            inside = (blocks[:, 2] > blocks[:, 0]) & (blocks[:, 3] > blocks[:, 1])
+            args = (stack.eps, cond.thickness, *(x[kk, jj] * dbu for x in (r0, r1, q0, q1)))
+            pair, blocks = pair[inside], blocks[inside] * dbu
+            if right_wedge is _right_wedge:
+                c = _right_wedges(*args, pair, blocks)
+            else:                  # a term put in its place (the tests take it back to quarter circles): pair by pair
+                groups = np.split(blocks, np.searchsorted(pair, np.arange(1, len(kk))))
+                c = np.array([right_wedge(*args[:2], *x, b) for *x, b in zip(*args[2:], groups)])
+            found.append((v[kk, 6], h[jj, 6], c))
+        # half circles: edge k against another edge j > k of the same orientation, flush with it (within
+        # half the gap), end to end across a gap s along them
+        gap = np.maximum(vw0 - vw1[:, None], vw0[:, None] - vw1)
+        kk, jj = np.nonzero(np.triu((v[:, 6] != v[:, 6:7]) & (vn == vn[:, None]) & (gap > 0)
+                                    & (np.abs(vu - vu[:, None]) <= gap / 2) & (gap < 2 * reach), 1))
+        s, n = gap[kk, jj], vn[kk]
+        lo, hi = s / 2, np.minimum(s / 2 + np.minimum(vw1[kk] - vw0[kk], vw1[jj] - vw0[jj]), reach)
+        mid = (np.minimum(vw1[kk], vw1[jj]) + np.maximum(vw0[kk], vw0[jj])) / 2
+        plane = np.where(n > 0, np.maximum(vu[kk], vu[jj]), np.minimum(vu[kk], vu[jj]))
+        # the field's square beside the gap (dbu, truncated to integers); the part other shapes cover is taken off
+        u0, u1, w0, w1 = (np.trunc(x) for x in (plane, plane + n * hi, mid - hi, mid + hi))
+        x0, y0, x1, y1 = (u0, w0, u1, w1) if axis == 0 else (w0, u0, w1, u1)
+        x0, x1, y0, y1 = np.minimum(x0, x1), np.maximum(x0, x1), np.minimum(y0, y1), np.maximum(y0, y1)
+        area = (x1 - x0) * (y1 - y0)
+        keep = (hi > lo) & (area > 0)
+        x0, y0, x1, y1, area = x0[keep, None], y0[keep, None], x1[keep, None], y1[keep, None], area[keep]
+        covered = (np.clip(np.minimum(rects[:, 2], x1) - np.maximum(rects[:, 0], x0), 0, None)
+                   * np.clip(np.minimum(rects[:, 3], y1) - np.maximum(rects[:, 1], y0), 0, None)).sum(axis=1)
+        c = wedge(stack.eps, cond.thickness, math.pi, lo[keep] * dbu, hi[keep] * dbu) * (1 - covered / area)
+        found.append((v[kk[keep], 6], v[jj[keep], 6], c))
+
+    a_net, b_net, c = (np.concatenate(x) for x in zip(*found))
+    pairs = len(names) * a_net.astype(int) + b_net.astype(int)
+    total = np.bincount(pairs[c > 0], weights=c[c > 0], minlength=len(names) ** 2)
+    for key in np.nonzero(total)[0]:
+        _couple(cpl, spent, stack, cond, names[key // len(names)], names[key % len(names)], total[key])
 
 
 def _couple(cpl, spent, stack, cond, a_net, b_net, c):
