@@ -230,8 +230,9 @@ def capacitances(geo, stack) -> Couplings:
                 labels.append(k + 1)
         shielded = defaultdict(float)    # (net, edge key) -> length in dbu lost to a neighbour, weighted
         if len(nets) > 1:
+            here = Plane(z, nets)
             for ep in _facing(polys, labels, halo):
-                (a_net, wa), (b_net, wb) = _net_of(nets, ep.first, dbu), _net_of(nets, ep.second, dbu)
+                (a_net, wa), (b_net, wb) = _net_of(here, ep.first, dbu), _net_of(here, ep.second, dbu)
                 if a_net is None or b_net is None or a_net == b_net:
                     continue
                 s = ep.distance() * dbu
@@ -324,13 +325,13 @@ def _plane_gap(poly, below, above, z, t) -> float:
     return h
 
 
-def _net_of(nets, edge, dbu):
-    """(net, width m) of the shape carrying ``edge`` (found by the edge's midpoint); the width is
-    2 area / perimeter of that shape (a line's width), at most 2 um."""
+def _net_of(layer, edge, dbu):
+    """(net, width m) of the shape carrying ``edge`` (found by the edge's midpoint) on ``layer`` (a
+    ``Plane``); the width is 2 area / perimeter of that shape (a line's width), at most 2 um."""
     import klayout.db as kdb
     c = edge.p1 + (edge.p2 - edge.p1) * 0.5
     probe = kdb.Region(kdb.Box(c.x - 1, c.y - 1, c.x + 1, c.y + 1))
-    for net, reg in nets.items():
+    for net, reg in layer.nets_near(kdb.Region(kdb.Box(c.x - 2, c.y - 2, c.x + 2, c.y + 2))):   # touching counts
         hit = reg.interacting(probe)
         if not hit.is_empty():
             poly = next(hit.each())

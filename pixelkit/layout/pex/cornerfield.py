@@ -286,14 +286,6 @@ def _rects(region):
     return np.array(boxes, dtype=float).reshape(-1, 4)
 
 
-def _covered(rects, box) -> float:
-    """Area (dbu2) of ``box`` that ``rects`` (``_rects``) cover."""
-    import numpy as np
-    w = np.clip(np.minimum(rects[:, 2], box.right) - np.maximum(rects[:, 0], box.left), 0, None)
-    h = np.clip(np.minimum(rects[:, 3], box.top) - np.maximum(rects[:, 1], box.bottom), 0, None)
-    return float(np.sum(w * h))
-
-
 def _covered_each(rects, boxes):
     """Area (dbu2) of each of ``boxes`` (rows left, bottom, right, top) that ``rects`` (``_rects``) cover."""
     import numpy as np

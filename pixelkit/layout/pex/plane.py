@@ -31,10 +31,8 @@ class Plane:
         """The union's polygons whose boxes overlap ``region``'s (a Region: ``region & near`` is
         ``region & union``)."""
         import klayout.db as kdb
-        out = kdb.Region()
-        for k in _overlapping(self._boxes, region):
-            out.insert(self._polys[k])
-        return out
+        idx = _overlapping(self._boxes, region)
+        return self.union if len(idx) == len(self._polys) else kdb.Region([self._polys[k] for k in idx])
 
     def nets_near(self, region):
         """[(net, Region)] of the nets whose boxes overlap ``region``'s, in ``nets``' order."""

@@ -2,7 +2,7 @@
 projection (so no lateral term in ``capacitance.py``): an end face beside another net's side face, a
 corner beside a corner, a side face running on past another's end, two flush faces end to end.
 
-**Perpendicular faces** (``right_wedge``; no constant). Two perpendicular sidewalls T high, of
+**Perpendicular faces** (``right_wedges``; no constant). Two perpendicular sidewalls T high, of
 different nets, meet (extended) at a corner line; the part of each beyond the other's plane spans
 r0 .. r1 and q0 .. q1 from that line (a face that runs on past the other's plane counts from the
 line: r0 = 0). The field between them fills the quarter plane they bound. ``w = z^2`` opens it to a
@@ -54,8 +54,8 @@ def wedge(eps: float, t: float, angle: float, r_in, r_out):
     return eps * np.log(r_out / r_in) / angle * t
 
 
-def right_wedge(eps: float, t: float, r0: float, r1: float, q0: float, q1: float, blocks=()) -> float:
-    """Coupling (F) of two perpendicular sidewalls t high spanning r0 .. r1 and q0 .. q1 from their common
+def right_wedges(eps, t, r0, r1, q0, q1, pair, blocks):
+    """Couplings (F) of pairs of perpendicular sidewalls t high spanning r0 .. r1 and q0 .. q1 from their common
     corner line, the field in the quarter plane between them. ``w = z^2`` opens the quarter plane to a half
     plane: the faces become coplanar strips [r0^2, r1^2] and [-q1^2, -q0^2] of its edge, a gap 2 g = r0^2 +
     q0^2 apart about m = (r0^2 - q0^2) / 2; half circles about m (the field of ``wedge`` at angle pi) join
@@ -63,17 +63,10 @@ def right_wedge(eps: float, t: float, r0: float, r1: float, q0: float, q1: float
     spans from the corner (r0 = q0) give the quarter circles' ``eps (2/pi) ln(min(r1, q1) / r0)``; faces
     that span no common distance from the corner (two corners facing diagonally) are joined too. A line
     that meets another conductor (``blocks``: boxes (x0, y0, x1, y1) in the quarter plane, x along the
-    first face, y along the second) ends there: the radii |z^2 - m| its box spans are taken off."""
-    import numpy as np
-    b = np.asarray(blocks, dtype=float).reshape(-1, 4)
-    one = [np.array([v], dtype=float) for v in (r0, r1, q0, q1)]
-    return float(_right_wedges(eps, t, *one, np.zeros(len(b), dtype=int), b)[0])
+    first face, y along the second) ends there: the radii |z^2 - m| its box spans are taken off.
 
-
-def _right_wedges(eps, t, r0, r1, q0, q1, pair, blocks):
-    """``right_wedge`` of many pairs of faces at once: arrays r0 .. q1 (m), a pair each, and the boxes
-    ``blocks`` (rows (x0, y0, x1, y1), m), row i in the quarter plane of pair ``pair[i]``; array of F, each
-    as ``right_wedge`` gives it but for the order of its sum."""
+    Arrays: r0 .. q1 (m) a pair of faces each; ``blocks`` rows (x0, y0, x1, y1) (m), row i in the quarter
+    plane of pair ``pair[i]``."""
     import numpy as np
     m, g = (r0 * r0 - q0 * q0) / 2, (r0 * r0 + q0 * q0) / 2
     out = np.minimum(r1 * r1 - m, q1 * q1 + m)
@@ -97,9 +90,6 @@ def _right_wedges(eps, t, r0, r1, q0, q1, pair, blocks):
     reach = np.maximum.accumulate(np.concatenate([g[:, None], his], axis=1), axis=1)  # covered out to, before each
     free = np.log(np.maximum(np.concatenate([los, out[:, None]], axis=1) / reach, 1.0)).sum(axis=1)
     return eps * free / math.pi * t
-
-
-_right_wedge = right_wedge        # as written here: ``wedge_couplings`` takes it for many pairs at once
 
 
 def wedge_couplings(cpl, geo, stack, i, spent) -> None:
@@ -167,11 +157,7 @@ def wedge_couplings(cpl, geo, stack, i, spent) -> None:
             inside = (blocks[:, 2] > blocks[:, 0]) & (blocks[:, 3] > blocks[:, 1])
             args = (stack.eps, cond.thickness, *(x[kk, jj] * dbu for x in (r0, r1, q0, q1)))
             pair, blocks = pair[inside], blocks[inside] * dbu
-            if right_wedge is _right_wedge:
-                c = _right_wedges(*args, pair, blocks)
-            else:                  # a term put in its place (the tests take it back to quarter circles): pair by pair
-                groups = np.split(blocks, np.searchsorted(pair, np.arange(1, len(kk))))
-                c = np.array([right_wedge(*args[:2], *x, b) for *x, b in zip(*args[2:], groups)])
+            c = right_wedges(*args, pair, blocks)
             found.append((v[kk, 6], h[jj, 6], c))
         # half circles: edge k against another edge j > k of the same orientation, flush with it (within
         # half the gap), end to end across a gap s along them
