@@ -249,6 +249,36 @@ def test_corner_field_landing_by_boxes_equals_klayout_booleans(gf, dualpix, monk
     assert of(case.wires["metal3"], cf._merged(case.wires["metal3"])).exact
 
 
+def test_plane_index_answers_as_klayouts_booleans(dualpix):
+    """``plane.Plane`` (the box index of the 2.5D terms' booleans): on every layer of the dual pixel and for
+    random boxes and one slanted polygon, ``near`` gives the same intersection as the whole union,
+    ``nets_near`` keeps every net the box shares area with, and ``covers`` (box arithmetic on a Manhattan
+    layer) says what ``union & polygon`` says; a slanted layer is answered by the boolean."""
+    import random
+
+    import klayout.db as kdb
+
+    from pixelkit.layout.pex.plane import Plane
+    rng = random.Random(7)
+    layers = [*dualpix.wires.values(), dualpix.surface,
+              {"x": kdb.Region(kdb.Polygon([kdb.Point(0, 0), kdb.Point(4000, 0), kdb.Point(0, 4000)]))}]
+    for nets in layers:
+        plane = Plane(0.0, nets)
+        b = plane.union.bbox()
+        probes = [kdb.Polygon(kdb.Box(x, y, x + rng.randint(1, 3000), y + rng.randint(1, 3000)))
+                  for x, y in ((rng.randint(b.left - 2000, b.right), rng.randint(b.bottom - 2000, b.top))
+                               for _ in range(300))]
+        probes.append(kdb.Polygon([kdb.Point(b.left, b.bottom), kdb.Point(b.right, b.bottom), kdb.Point(b.left, b.top)]))
+        truth = [not (plane.union & kdb.Region(p)).is_empty() for p in probes]
+        assert 0 < sum(truth) < len(truth)
+        assert plane.covers(probes).tolist() == truth
+        for p in probes[::10]:
+            r = kdb.Region(p)
+            assert (r & plane.near(r)).area() == (r & plane.union).area()
+            kept = {n for n, _reg in plane.nets_near(r)}
+            assert {n for n, reg in nets.items() if not (reg & r).is_empty()} <= kept
+
+
 def test_the_fastcap_check_catches_a_wrong_extraction(gf, dualpix):
     """The same comparison fails when the kit's stack is wrong (the dielectric taken as 2.0, the
     air-gap figure, while FastCap keeps 4.0): the check can fail for the right reason."""

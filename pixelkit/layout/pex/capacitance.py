@@ -230,16 +230,16 @@ def capacitances(geo, stack) -> Couplings:
                 labels.append(k + 1)
         shielded = defaultdict(float)    # (net, edge key) -> length in dbu lost to a neighbour, weighted
         if len(nets) > 1:
-            here = Plane(z, nets)
-            for ep in _facing(polys, labels, halo):
-                (a_net, wa), (b_net, wb) = _net_of(here, ep.first, dbu), _net_of(here, ep.second, dbu)
+            pairs = _facing(polys, labels, halo)
+            owners = _nets_of(nets, [e for ep in pairs for e in (ep.first, ep.second)], dbu)
+            gaps = _plane_gaps([ep.polygon(0) for ep in pairs], below, above, z, t)
+            for ep, (a_net, wa), (b_net, wb), h in zip(pairs, owners[0::2], owners[1::2], gaps):
                 if a_net is None or b_net is None or a_net == b_net:
                     continue
                 s = ep.distance() * dbu
                 la, lb = ep.first.length() * dbu, ep.second.length() * dbu
                 if s <= 0 or min(la, lb) <= 0:
                     continue
-                h = _plane_gap(ep.polygon(0), below, above, z, t)
                 cpl.add(a_net, b_net, lateral(eps, t, h, min(wa, wb), s) * (la + lb) / 2)
                 keep = s / (s + SHIELD_K * z)
                 shielded[a_net] += (1 - keep) * la
@@ -308,32 +308,40 @@ def _canon(e):
     return (a, b) if a <= b else (b, a)
 
 
-def _plane_gap(poly, below, above, z, t) -> float:
-    """H of the lateral formula: the gap from the pair to the nearest conductor under or over the
-    space between them (the substrate when there is none below)."""
-    import klayout.db as kdb
-    gap = kdb.Region(poly)
-    h = z
+def _plane_gaps(polys, below, above, z, t) -> list:
+    """H of the lateral formula for each pair (``polys``: the space between its edges): the gap from the
+    pair to the nearest conductor under or over that space (the substrate when there is none below)."""
+    import numpy as np
+    h = np.full(len(polys), z)
+    open_ = np.ones(len(polys), dtype=bool)
     for plane in below:
-        if not (plane.near(gap) & gap).is_empty():
-            h = z - plane.z
-            break
+        hit = open_ & plane.covers(polys)
+        h[hit] = z - plane.z
+        open_ &= ~hit
+    open_[:] = True
     for plane in above:
-        if not (plane.near(gap) & gap).is_empty():
-            h = min(h, plane.z - (z + t))
-            break
-    return h
+        hit = open_ & plane.covers(polys)
+        h[hit] = np.minimum(h[hit], plane.z - (z + t))
+        open_ &= ~hit
+    return h.tolist()
 
 
-def _net_of(layer, edge, dbu):
-    """(net, width m) of the shape carrying ``edge`` (found by the edge's midpoint) on ``layer`` (a
-    ``Plane``); the width is 2 area / perimeter of that shape (a line's width), at most 2 um."""
+def _nets_of(nets, edges, dbu) -> list:
+    """[(net, width m)] of the shape carrying each of ``edges`` (the one touching a 2 x 2 dbu probe at the
+    edge's midpoint; nets in ``nets``' order, (None, 0) when none does); the width is 2 area / perimeter
+    of that shape (a line's width), at most 2 um."""
     import klayout.db as kdb
-    c = edge.p1 + (edge.p2 - edge.p1) * 0.5
-    probe = kdb.Region(kdb.Box(c.x - 1, c.y - 1, c.x + 1, c.y + 1))
-    for net, reg in layer.nets_near(kdb.Region(kdb.Box(c.x - 2, c.y - 2, c.x + 2, c.y + 2))):   # touching counts
-        hit = reg.interacting(probe)
-        if not hit.is_empty():
-            poly = next(hit.each())
-            return net, min(2.0 * poly.area() / poly.perimeter(), 2000.0) * dbu
-    return None, 0.0
+    import numpy as np
+    shapes = [(net, p) for net, reg in nets.items() for p in reg.each()]
+    bb = np.array([(b.left, b.bottom, b.right, b.top) for _n, p in shapes for b in (p.bbox(),)]).reshape(-1, 4)
+    mids = [e.p1 + (e.p2 - e.p1) * 0.5 for e in edges]
+    c = np.array([(m.x, m.y) for m in mids]).reshape(-1, 2)
+    near = ((bb[None, :, 0] <= c[:, None, 0] + 1) & (bb[None, :, 2] >= c[:, None, 0] - 1)
+            & (bb[None, :, 1] <= c[:, None, 1] + 1) & (bb[None, :, 3] >= c[:, None, 1] - 1))
+    out = []
+    for m, cand in zip(mids, near):
+        probe = kdb.Box(m.x - 1, m.y - 1, m.x + 1, m.y + 1)
+        hit = next((shapes[k] for k in np.flatnonzero(cand) if shapes[k][1].touches(probe)), None)
+        out.append((None, 0.0) if hit is None else
+                   (hit[0], min(2.0 * hit[1].area() / hit[1].perimeter(), 2000.0) * dbu))
+    return out
