@@ -39,12 +39,15 @@ def _within_column_sigma(levels: np.ndarray) -> float:
 
 
 def run_monte_carlo(design, rows: int, cols: int, seed: int, with_afe: bool = False, backend: str = "batch",
-                    jobs=None, scheduler=None) -> dict:
+                    jobs=None, scheduler=None, options=None, max_step: float | None = None) -> dict:
+    """The figures above for one chip (``seed``) of ``rows`` x ``cols`` dual pixels. ``options`` (ngspice
+    options, e.g. ``{"reltol": 1e-6}``) and ``max_step`` go to both frames' decks (default: the frame's)."""
     n = design.secondary_per_pixel
     dark = np.zeros((rows, cols)), np.zeros((rows, n * cols))
     m, unit = default_map(rows, n * cols, "uniform")
     ph = photocurrents(design, rows, cols, m, unit)
-    kw = dict(with_afe=with_afe, mismatch_seed=seed, split="none", backend=backend, jobs=jobs, scheduler=scheduler)
+    kw = dict(with_afe=with_afe, mismatch_seed=seed, split="none", backend=backend, jobs=jobs, scheduler=scheduler,
+              options=options, max_step=max_step)
     fd = simulate_frame(design, *dark, **kw)
     fl = simulate_frame(design, ph.iph_p, ph.iph_s, **kw)
     out = {"seed": seed, "rows": rows, "cols": cols, "with_afe": with_afe, "corner": design.corner_name,
