@@ -58,6 +58,7 @@ import math
 from typing import NamedTuple
 
 from .fringe import fringe
+from .plane import covered_area, rects
 
 KAPPA = 1.6    # the two sidewall-to-face regions (2 by the construction), set on a metal1 / metal2 pair
 
@@ -121,7 +122,7 @@ def corner_couplings(cpl, geo, stack, i, spent) -> None:
         area = (gaps[:, 2] - gaps[:, 0]) * (gaps[:, 3] - gaps[:, 1])
         gap = ~flush & (area > 0)
         free = np.ones(len(pairs))
-        free[gap] = 1 - _covered_each(_rects(block), gaps[gap]) / area[gap]
+        free[gap] = 1 - covered_area(rects(block), gaps[gap]) / area[gap]
         free = free * _landing_free(_strips(ends, flush, g + cb.thickness, g + cond.thickness, dbu),
                                     np.array(a_nets), np.array(b_nets), own, theirs, covers, covers_under)
         per_b = fringe(eps, cb.thickness, cb.z)
@@ -276,27 +277,9 @@ def _others(layers, a_net, b_net):
     return out
 
 
-def _rects(region):
-    """The merged ``region`` as non-overlapping boxes (its trapezoids' boxes: exact on a Manhattan layer),
-    an array of (left, bottom, right, top)."""
-    import klayout.db as kdb
-    import numpy as np
-    boxes = [(b.left, b.bottom, b.right, b.top) for p in region.merged().each()
-             for b in (t.bbox() for t in p.decompose_trapezoids(kdb.Polygon.TD_htrapezoids))]
-    return np.array(boxes, dtype=float).reshape(-1, 4)
-
-
-def _covered_each(rects, boxes):
-    """Area (dbu2) of each of ``boxes`` (rows left, bottom, right, top) that ``rects`` (``_rects``) cover."""
-    import numpy as np
-    w = np.clip(np.minimum(rects[:, 2], boxes[:, 2:3]) - np.maximum(rects[:, 0], boxes[:, 0:1]), 0, None)
-    h = np.clip(np.minimum(rects[:, 3], boxes[:, 3:4]) - np.maximum(rects[:, 1], boxes[:, 1:2]), 0, None)
-    return np.sum(w * h, axis=1)
-
-
 def _labelled(nets):
-    """Every net's shapes as boxes (``_rects``) and the net of each box: (boxes, [net])."""
+    """Every net's shapes as boxes (``plane.rects``) and the net of each box: (boxes, [net])."""
     import numpy as np
-    parts = [(_rects(reg), net) for net, reg in nets.items()]
+    parts = [(rects(reg), net) for net, reg in nets.items()]
     boxes = np.concatenate([b for b, _ in parts]) if parts else np.zeros((0, 4))
     return boxes, [net for b, net in parts for _ in range(len(b))]

@@ -7,7 +7,8 @@ union's polygons whose boxes overlap the operand's box, ``nets_near`` only the n
 a polygon whose box misses the operand's box shares no area with it, so every area is the one the
 whole layer gives. ``covers`` answers for many boxes at once whether the layer shares area with each
 (the lateral term's gap to the nearest plane), from the union's non-overlapping boxes on a Manhattan
-layer. The capacitance tables of the kit's cells are the ones computed without the index to ~1e-15
+layer; ``rects`` and ``covered_area`` are that box arithmetic, shared with the corner field and the
+wedges. The capacitance tables of the kit's cells are the ones computed without the index to ~1e-15
 (the order of the sums).
 """
 from __future__ import annotations
@@ -43,7 +44,7 @@ class Plane:
         import klayout.db as kdb
         import numpy as np
         if self._rects is None:
-            self._rects = _decomposed(self._polys)
+            self._rects = rects(self.union) if self.union.non_rectilinear().is_empty() else False
         out = np.zeros(len(polys), dtype=bool)
         boxed = np.array([p.is_box() for p in polys], dtype=bool) & (self._rects is not False)
         if boxed.any():
@@ -66,14 +67,22 @@ def _boxes(boxes):
     return np.array([_ltrb(b) for b in boxes], dtype=np.int64).reshape(-1, 4)
 
 
-def _decomposed(polys):
-    """``polys`` (disjoint) as non-overlapping boxes, an array of rows (left, bottom, right, top); False when
-    one is not Manhattan (its trapezoids are not boxes)."""
+def rects(region):
+    """The merged ``region`` as non-overlapping boxes (its trapezoids' boxes: exact on a Manhattan layer),
+    an array of (left, bottom, right, top)."""
     import klayout.db as kdb
-    traps = [t for p in polys for t in p.decompose_trapezoids(kdb.Polygon.TD_htrapezoids)]
-    if not all(t.is_box() for t in traps):
-        return False
-    return _boxes([t.bbox() for t in traps])
+    import numpy as np
+    boxes = [_ltrb(t.bbox()) for p in region.merged().each() for t in p.decompose_trapezoids(kdb.Polygon.TD_htrapezoids)]
+    return np.array(boxes, dtype=float).reshape(-1, 4)
+
+
+def covered_area(rects, boxes):
+    """Area (dbu2) of each of ``boxes`` (rows left, bottom, right, top) that ``rects`` (non-overlapping boxes, as ``rects()``
+    gives them) cover."""
+    import numpy as np
+    w = np.clip(np.minimum(rects[:, 2], boxes[:, 2:3]) - np.maximum(rects[:, 0], boxes[:, 0:1]), 0, None)
+    h = np.clip(np.minimum(rects[:, 3], boxes[:, 3:4]) - np.maximum(rects[:, 1], boxes[:, 1:2]), 0, None)
+    return np.sum(w * h, axis=1)
 
 
 def _ltrb(b) -> tuple:

@@ -42,8 +42,9 @@ from __future__ import annotations
 
 import math
 
-from .cornerfield import _labelled, _rects
+from .cornerfield import _labelled
 from .fringe import fringe
+from .plane import covered_area, rects
 
 
 def wedge(eps: float, t: float, angle: float, r_in, r_out):
@@ -119,7 +120,7 @@ def wedge_couplings(cpl, geo, stack, i, spent) -> None:
         return
     a = np.array(rows, dtype=float)
     reach, dbu = cond.z / geo.dbu, geo.dbu
-    rects = _rects(layer)
+    boxes_of_layer = rects(layer)
     boxes, owner = _labelled({k: nets[name] for k, name in enumerate(names)})
     owner = np.array(owner)
     found = []                     # (net index, net index, coupling) arrays
@@ -174,9 +175,8 @@ def wedge_couplings(cpl, geo, stack, i, spent) -> None:
         x0, x1, y0, y1 = np.minimum(x0, x1), np.maximum(x0, x1), np.minimum(y0, y1), np.maximum(y0, y1)
         area = (x1 - x0) * (y1 - y0)
         keep = (hi > lo) & (area > 0)
-        x0, y0, x1, y1, area = x0[keep, None], y0[keep, None], x1[keep, None], y1[keep, None], area[keep]
-        covered = (np.clip(np.minimum(rects[:, 2], x1) - np.maximum(rects[:, 0], x0), 0, None)
-                   * np.clip(np.minimum(rects[:, 3], y1) - np.maximum(rects[:, 1], y0), 0, None)).sum(axis=1)
+        covered = covered_area(boxes_of_layer, np.stack([x0[keep], y0[keep], x1[keep], y1[keep]], axis=1))
+        area = area[keep]
         c = wedge(stack.eps, cond.thickness, math.pi, lo[keep] * dbu, hi[keep] * dbu) * (1 - covered / area)
         found.append((v[kk[keep], 6], v[jj[keep], 6], c))
 
