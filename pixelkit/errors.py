@@ -10,12 +10,35 @@ with the class's ``exit_status``:
       :class:`ConfigError`, :class:`InfeasibleError`, click usage errors)
 3     internal fault of the kit (any other exception: a bug, please report it)
 4     a simulation failed (:class:`SimulationError`: ngspice did not converge)
+5     nothing failed, but something asked was not measured: a spec not run at any condition or
+      not measured at some of its conditions, a check skipped (:func:`verdict_exit`)
 130   interrupted (Ctrl-C)
 ====  ==========================================================
 """
 from __future__ import annotations
 
 EXIT_OK, EXIT_REGRESSION, EXIT_USER, EXIT_INTERNAL, EXIT_SIMULATION, EXIT_INTERRUPTED = 0, 1, 2, 3, 4, 130
+EXIT_NOT_MEASURED = 5
+
+#: the one status of a sign-off item that is a pass; "fail" fails; every other status ("not run",
+#: "not measured", "skipped", or one this rule has never heard of) means it was not measured
+PASS, FAIL = "pass", "fail"
+
+
+def verdict_exit(statuses, simulation_failed: bool = False) -> int:
+    """The exit status of a verdict over items with these statuses (the team rule, issue 44):
+    1 when any item fails (it takes precedence), else 4 when a simulation failed, else 5 when any
+    item was not measured (not run anywhere, not at some of its conditions, skipped), else 0.
+    Zero items is not a pass: nothing asked was measured (5). ``verify``, ``report``, ``close``,
+    ``lightmap`` and the layout sign-off all decide their status here."""
+    statuses = [str(s).lower() for s in statuses]
+    if FAIL in statuses:
+        return EXIT_REGRESSION
+    if simulation_failed:
+        return EXIT_SIMULATION
+    if not statuses or any(s != PASS for s in statuses):
+        return EXIT_NOT_MEASURED
+    return EXIT_OK
 
 
 class PixelkitError(Exception):

@@ -53,6 +53,37 @@ def test_impossible_spec_fails_naming_itself_and_its_corners(tmp_path):
     assert json.loads((tmp_path / "v" / "signoff.json").read_text())["failed"] == ["afe_impossible"]
 
 
+def test_a_spec_not_run_anywhere_is_never_exit_0(tmp_path):
+    """Issue 44: a spec restricted to a temperature the grid does not run is NOT RUN: exit 5 (the
+    team's "nothing failed but something asked was not measured"), said on stderr; a failing spec
+    beside it takes precedence (exit 1). One AFE condition (~1 s)."""
+    hot = {"figure": "afe_gain_error", "max": "1 %", "temperatures": ["85 degC"]}
+    args = ("--corners", "tt", "--temperatures", "27degC", "--supplies", "0%", "--json")
+    f = _design(tmp_path, {"afe_gain_error": {"max": "1 %"}, "afe_hot": hot}, {"mc": 0})
+    code, out, err = run_cli("verify", f, *args, "--out", tmp_path / "v", timeout=300)
+    assert code == 5, err
+    assert "not measured (exit 5): afe_hot: none of its conditions" in err
+    r = json.loads(out)
+    assert r["unmeasured"] == ["afe_hot"] and not r["failed"]
+    f = _design(tmp_path, {"afe_impossible": {"figure": "afe_gain_error", "max": "0.01 %"}, "afe_hot": hot}, {"mc": 0})
+    code, out, err = run_cli("verify", f, *args, "--out", tmp_path / "w", timeout=300)
+    assert code == 1 and "afe_impossible at tt 27degC +0%" in err, err
+
+
+def test_verdict_exit_rule():
+    """The one rule verify, report and close decide their status with: 1 > 4 > 5 > 0; a status the
+    rule does not know, or no item at all, is never a pass."""
+    from pixelkit.errors import verdict_exit
+    assert verdict_exit(["pass", "pass"]) == 0
+    assert verdict_exit(["pass", "not run"]) == 5
+    assert verdict_exit(["pass", "not measured"]) == 5
+    assert verdict_exit(["pass", "skipped"]) == 5 and verdict_exit(["pass", "weird"]) == 5
+    assert verdict_exit([]) == 5
+    assert verdict_exit(["pass", "not run"], simulation_failed=True) == 4
+    assert verdict_exit(["fail", "not run"], simulation_failed=True) == 1
+    assert verdict_exit(["PASS", "FAIL"]) == 1
+
+
 def _at(design, corner, temp_c=27.0, supply=0.0):
     return conditions.at(design, conditions.Condition(corner, temp_c + 273.15, supply))
 

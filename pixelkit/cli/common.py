@@ -17,7 +17,8 @@ The convention every command follows (docs/cli-conventions.md):
   and ``--waveforms FILE`` (``waveforms_opt``; ``.csv``, or ngspice raw when the
   name ends in ``.raw``) on those that can hand back a waveform;
 - exit statuses (``pixelkit.errors``): 0 ok, 1 regression / difference found,
-  2 user error, 3 internal fault, 4 simulation failed, 130 interrupted. Raise
+  2 user error, 3 internal fault, 4 simulation failed, 5 nothing failed but something
+  asked was not measured (``errors.verdict_exit`` decides a verdict's status), 130 interrupted. Raise
   :class:`~pixelkit.errors.RegressionFound` (or call ``sys.exit(1)`` after
   emitting) for a difference, ``ConfigError``/``PixelkitError`` for bad input;
   never ``sys.exit(2)`` by hand;
@@ -179,7 +180,7 @@ def main():
     """pixelkit: circuit-level CMOS image-sensor pixel and readout design kit.
 
     Exit status: 0 ok, 1 difference found, 2 user error, 3 internal fault,
-    4 simulation failed, 130 interrupted. Outputs: --out, else reports/<design>/.
+    4 simulation failed, 5 not everything asked was measured, 130 interrupted. Outputs: --out, else reports/<design>/.
     """
 
 

@@ -45,15 +45,16 @@ def _list(kind: str):
 @spice_opts
 @json_opt
 def verify_cmd(design, corners, temperatures, supplies, mc, seed, scheduler, out, backend, jobs, as_json):
-    """Sign-off: every [spec] at every corner x temperature x supply, Monte Carlo yield; exit 1 on a failing spec."""
+    """Sign-off: every [spec] at every corner x temperature x supply, Monte Carlo yield; exit 1 on a failing spec,
+    5 when none fails but one was not measured everywhere (4: a simulation failed)."""
     import csv
     import io
     import json
 
-    from ..errors import EXIT_REGRESSION, EXIT_SIMULATION
+    from ..errors import EXIT_NOT_MEASURED
     from ..fileio import json_default, write_atomic
     from ..verify.run import verify
-    from ..verify.signoff import COLUMNS, csv_rows, text, where
+    from ..verify.signoff import COLUMNS, csv_rows, exit_status, not_measured, text, where
     from ..errors import ConfigError
     from ..family import family_of
     if family_of(design) == "ratio":   # its own figures (docs/verify.md); a WDR design is refused by load
@@ -76,9 +77,12 @@ def verify_cmd(design, corners, temperatures, supplies, mc, seed, scheduler, out
     r = {**r, "csv": str(folder / "signoff.csv"), "json": str(folder / "signoff.json")}
     summary = {k: v for k, v in r.items() if k not in ("raw", "conditions", "mc_values")}
     emit(summary, as_json, lambda x: text(x) + f"\ntable: {x['csv']}\ndetails: {x['json']}")
+    status = exit_status(r)   # the team's rule (pixelkit.errors.verdict_exit): 1 > 4 > 5 > 0
     if r["failed"]:
         names = "; ".join(f"{row['spec']} {where(row)}" for row in r["rows"] if row["status"] == "fail")
         click.echo(f"pixelkit: verify: {len(r['failed'])} spec(s) fail: {names}", err=True)
-        raise SystemExit(EXIT_REGRESSION)
-    if r["unmeasured"] or r["errors"]:
-        raise SystemExit(EXIT_SIMULATION)
+    elif status == EXIT_NOT_MEASURED:
+        click.echo(f"pixelkit: verify: nothing failed, but not measured (exit {status}): "
+                   + "; ".join(not_measured(r)), err=True)
+    if status:
+        raise SystemExit(status)

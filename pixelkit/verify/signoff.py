@@ -110,6 +110,21 @@ def csv_rows(rows) -> list[list]:
     return out
 
 
+def exit_status(result: dict) -> int:
+    """The exit status of a sign-off result (``verify.run.verify``'s, or any dict with its
+    ``rows`` and ``errors``): :func:`pixelkit.errors.verdict_exit` over the rows' statuses - 1 a spec
+    fails, 4 a simulation failed, 5 a spec was not run or not measured somewhere, 0 every spec
+    measured everywhere and passing. ``verify``, ``report`` and ``close`` call this one rule."""
+    from ..errors import verdict_exit
+    return verdict_exit([r["status"] for r in result["rows"]], simulation_failed=bool(result.get("errors")))
+
+
+def not_measured(result: dict) -> list[str]:
+    """Each spec that was not measured everywhere, with where (one line each, for stderr)."""
+    return [f"{r['spec']}: " + (", ".join(r.get("not_measured_at", [])) or r.get("why", "not measured"))
+            for r in result["rows"] if r["status"] not in ("pass", "fail")]
+
+
 def where(row) -> str:
     """Where a spec fails, short: every condition up to four, else a count and the worst."""
     at = row.get("failing_at", [])
