@@ -12,7 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-from .errors import ConfigError
+from .errors import MISSING, ConfigError
 from .physics.conversion import photoactive_area, rectangle
 from .readout_timing import Timing
 from .schema import as_written, ident, integer, load, named, num, qty, read_toml, table, text
@@ -102,6 +102,14 @@ class Pixel:
     v_pd_reset: float = qty("V", 2.0, gt=0, plausible=(0.1, 40.0),
                             doc="EC drain: PD reset level (hard reset below VDD - Vth)")
     v_fd_reset: float = qty("V", 2.0, gt=0, plausible=(0.1, 40.0), doc="RST drain: FD reset level")
+    gate_drive: str = text("supply", choices=("supply", "boosted"),
+                           doc="the circuit that drives the EC, TG and RST gates high: supply = the row drivers "
+                               "run from the supply (the gates follow it, -10 % included: a 2.0 V reset turns soft "
+                               "at slow corners); boosted = they run from a regulated rail at pixel.v_gate, the same "
+                               "at every supply condition (docs/pixel-model.md)")
+    v_gate: float | None = qty("V", None, gt=0, plausible=(0.5, 40.0),
+                               doc="the boosted rail (gate_drive = \"boosted\"): the EC, TG and RST gate-high level; "
+                                   "at most the devices' rated gate voltage (technology mos.v_gate_max)")
     gse: float = num(1000.0, ge=1, le=1e9, plausible=(10.0, 1e7), doc="FD shielding: the storage node collects 1/gse of the PD's "
                      "photocurrent (charge ratio eta_pd / eta_FD)")
     devices: Devices = table(Devices, default=Devices, doc="transistor sizes of the pixel and its column")
@@ -127,6 +135,16 @@ class Afe:
     supply_current: float = qty("A", 10e-6, ge=0, plausible=(0.0, 1e-2),
                                 doc="quiescent supply current of the macromodel op-amp (power only: the macromodel "
                                     "draws nothing itself; the OTA draws its own)")
+    ota_bias: float = qty("A", 10e-6, gt=0, plausible=(1e-8, 1e-3),
+                          doc="the transistor OTA's reference current (afe.opamp = \"ota\"): its mirrors give the "
+                              "input pair's tail 2x and the output stage 4x, so the OTA draws 7x this from the "
+                              "supply; the column's AFE power and the OTA's gm (GBW, settling) follow it")
+    ota_cc: float = qty("F", 1e-12, gt=0, plausible=(1e-15, 1e-10),
+                        doc="the OTA's Miller compensation capacitor: its GBW is the input pair's gm over it, "
+                            "its slew rate the tail current (2 x ota_bias) over it")
+    ota_rz: float = qty("Ohm", 5e3, ge=0, plausible=(0.0, 1e7),
+                        doc="the OTA's nulling resistor in series with ota_cc (about 1 / gm of the output "
+                            "stage moves the right-half-plane zero out)")
     nonoverlap: float = qty("s", 20e-9, gt=0, plausible=(1e-11, 1e-3), doc="non-overlap of the two clock phases")
     f_clk: float = qty("Hz", 500e3, gt=0, plausible=(1.0, 1e9),
                        doc="double-sampling rate (one signal + one reset per period)")
@@ -260,6 +278,19 @@ def load_design(path: str | Path) -> Design:
         if getattr(design.pixel, f) > tech.supply:
             raise ConfigError(src, f"pixel.{f}", as_written(raw, f"pixel.{f}", getattr(design.pixel, f)),
                               f"a level no higher than the supply ({tech.supply:g} V)")
+    if design.pixel.gate_drive == "boosted":
+        gmax = tech.mos.v_gate_max or 1.1 * tech.supply
+        if design.pixel.v_gate is None:
+            raise ConfigError(src, "pixel.v_gate", MISSING, "a gate level with gate_drive = \"boosted\" (the "
+                              f"boosted rail, at most {gmax:.4g} V: the devices' rated gate voltage)")
+        if design.pixel.v_gate > gmax:
+            raise ConfigError(src, "pixel.v_gate", as_written(raw, "pixel.v_gate", design.pixel.v_gate),
+                              f"a gate level no higher than the devices' rated {gmax:.4g} V (technology "
+                              f"{tech.name} mos.v_gate_max{'' if tech.mos.v_gate_max else ': the supply + 10 %'})")
+    elif design.pixel.v_gate is not None:
+        raise ConfigError(src, "pixel.v_gate", as_written(raw, "pixel.v_gate", design.pixel.v_gate),
+                          "no value with gate_drive = \"supply\" (the gates follow the supply): set "
+                          "pixel.gate_drive = \"boosted\" or leave v_gate out")
     if design.afe.vref > tech.supply:
         raise ConfigError(src, "afe.vref", as_written(raw, "afe.vref", design.afe.vref),
                           f"a reference no higher than the supply ({tech.supply:g} V)")

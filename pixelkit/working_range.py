@@ -3,7 +3,8 @@
 These are warnings, not errors (a designer may explore there on purpose); each
 says the field, the value, the limit and why.
 
-- soft reset: the EC and RST switches are NMOS driven to the supply. A drain
+- soft reset: the EC and RST switches are NMOS driven to the supply (or to the boosted
+  rail ``pixel.v_gate`` with ``pixel.gate_drive = "boosted"``). A drain
   (reset) level above ``supply - Vth`` cannot be passed through: the source
   stops ``Vth`` (more, with body effect) below the gate and the reset ends in
   subthreshold. The reset level then depends on the reset time and on the
@@ -21,7 +22,8 @@ def check(design) -> list[str]:
     """Warnings for ``design`` (empty when it is inside the working range)."""
     out = []
     px, tech = design.pixel, design.tech
-    gate, vth = tech.supply, tech.mos.vth_n
+    from .circuits.devices import gate_high
+    gate, vth = gate_high(design), tech.mos.vth_n
     limit = gate - vth
     for field, switch in (("v_pd_reset", "EC"), ("v_fd_reset", "RST")):
         v = getattr(px, field)

@@ -5,6 +5,13 @@ from ..spice.netlist import Element, Model
 from .geometry import diffusion
 
 
+def gate_high(design) -> float:
+    """The EC / TG / RST gate-high level: the supply (``pixel.gate_drive = "supply"``: at the condition's
+    supply) or the boosted rail ``pixel.v_gate`` (regulated: the same at every condition)."""
+    px = design.pixel
+    return px.v_gate if px.gate_drive == "boosted" else design.tech.supply
+
+
 def mosfet(name: str, d: str, g: str, s: str, b: str, w: float, l: float, tech, kind: str = "n") -> Element:
     """A MOSFET of the technology, with its source/drain junction geometry."""
     mos = tech.mos

@@ -22,7 +22,9 @@ elements ngspice's ``.noise`` (and nothing else) sees, in series with ``inp``:
 
 OTA (``opamp_ota``): NMOS differential pair with PMOS mirror load, PMOS common-
 source second stage, Miller capacitor with a nulling resistor, biased by one
-reference current. Sizes are set for Vref ~ 2 V input common mode at 3.3 V.
+reference current ``afe.ota_bias`` (the mirrors: tail 2x, output stage 4x, so the OTA draws
+7x it). Sizes are set for Vref ~ 2 V input common mode at 3.3 V; they do not follow the bias,
+so the layout (which brings the reference in on the pin ``nb``) is the same at any bias.
 """
 from __future__ import annotations
 
@@ -66,7 +68,11 @@ def opamp_macro(gain: float, gbw: float, r_noise: float = 0.0, f_corner: float =
     ), (("vos", 0.0),), models)
 
 
-def opamp_ota(tech, i_bias: float = 10e-6) -> Subckt:
+#: Supply current of the OTA per unit of reference current (reference 1, tail 2, output stage 4).
+OTA_MIRROR_SUM = 7.0
+
+
+def opamp_ota(tech, i_bias: float = 10e-6, cc: float = 1e-12, rz: float = 5e3) -> Subckt:
     u = 1e-6
     return Subckt("opamp_ota", PORTS, (
         Element("Ib", ("vdd", "nb"), i_bias),
@@ -78,8 +84,8 @@ def opamp_ota(tech, i_bias: float = 10e-6) -> Subckt:
         mosfet("5", "tail", "nb", "0", "0", 8 * u, 1 * u, tech),
         mosfet("6", "out", "n2", "vdd", "vdd", 32 * u, 0.5 * u, tech, "p"),
         mosfet("7", "out", "nb", "0", "0", 16 * u, 1 * u, tech),
-        Element("Rz", ("n2", "nz"), 5e3),
-        Element("Cc", ("nz", "out"), 1e-12),
+        Element("Rz", ("n2", "nz"), rz),
+        Element("Cc", ("nz", "out"), cc),
     ))
 
 
@@ -89,6 +95,12 @@ def macro(design) -> Subckt:
     return opamp_macro(a.gain, a.gbw, a.noise_r, a.noise_corner, design.temperature)
 
 
+def ota(design) -> Subckt:
+    """The design's transistor OTA: its reference current and compensation."""
+    a = design.afe
+    return opamp_ota(design.tech, a.ota_bias, a.ota_cc, a.ota_rz)
+
+
 def opamp(design) -> Subckt:
     """The op-amp the design chose."""
-    return macro(design) if design.afe.opamp == "macro" else opamp_ota(design.tech)
+    return macro(design) if design.afe.opamp == "macro" else ota(design)

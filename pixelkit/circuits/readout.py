@@ -14,7 +14,7 @@ from __future__ import annotations
 from ..spice.netlist import Element, Subckt
 from .afe import PORTS as AFE_PORTS, sc_afe
 from .column import CELL_PORTS, column_cell, pre_clock
-from .opamp import PORTS as OPAMP_PORTS, opamp_ota
+from .opamp import PORTS as OPAMP_PORTS, ota
 
 BIAS = "nb"
 KINDS = ("primary", "secondary")
@@ -34,7 +34,7 @@ def exposed_bias(sc: Subckt, name: str, pin: str = BIAS) -> Subckt:
 
 def opamp_cell(design) -> Subckt:
     """``opamp_ota`` with its bias pin (``inp inn out vdd nb``)."""
-    return exposed_bias(opamp_ota(design.tech), "opamp_ota_cell")
+    return exposed_bias(ota(design), "opamp_ota_cell")
 
 
 def afe_cell(design, kind: str = "secondary") -> Subckt:

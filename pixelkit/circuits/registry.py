@@ -17,7 +17,7 @@ from .afe import sc_afe
 from .array import array_bench, pixel_array
 from .devices import photodiode_model
 from .dual_pixel import dual_pixel
-from .opamp import macro, opamp_ota
+from .opamp import macro, ota
 from .pixel5t import pixel5t
 from .testbench import afe_bench, dual_pixel_bench, pd_pair_bench
 
@@ -37,7 +37,7 @@ GENERATORS = {
     "pixel5t_secondary": lambda d: _cells(d, "pixel5t_secondary", [pixel5t(d, "secondary")]),
     "dual_pixel": lambda d: _cells(d, "dual_pixel", dual_pixel(d)),
     "opamp_macro": lambda d: _cells(d, "opamp_macro", [macro(d)]),
-    "opamp_ota": lambda d: _cells(d, "opamp_ota", [opamp_ota(d.tech)]),
+    "opamp_ota": lambda d: _cells(d, "opamp_ota", [ota(d)]),
     "sc_afe": lambda d: _cells(d, "sc_afe", [sc_afe(d)]),
     "array_2x2": lambda d: _cells(d, "array_2x2", [*dual_pixel(d), pixel_array(d, 2, 2)]),
     "bench_dual_pixel": lambda d: dual_pixel_bench(d, 1.4e-9, 52e-12),

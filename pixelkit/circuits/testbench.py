@@ -12,7 +12,7 @@ from dataclasses import replace
 from ..spice.netlist import Element, Netlist, Op, Pwl, Tran
 from . import column
 from .afe import sc_afe
-from .devices import mosfet, photodiode, photodiode_model
+from .devices import gate_high, mosfet, photodiode, photodiode_model
 from .dual_pixel import dual_pixel
 from .opamp import opamp
 from .timing import GsTiming, timings  # noqa: F401 (timings: callers import it from here)
@@ -75,17 +75,18 @@ def supplies(design) -> tuple:
 
 def controls(design, tm: dict, rows, row_lines: bool, kinds=("primary", "secondary")) -> list:
     """Control sources of the arrays ``kinds``. ``rows``: a count or the row indices to drive;
-    ``row_lines``: per-row RS/RST names (arrays)."""
-    vdd, out = design.tech.supply, []
+    ``row_lines``: per-row RS/RST names (arrays). EC, TG and RST go up to ``gate_high`` (the supply, or
+    the boosted rail of ``pixel.gate_drive = "boosted"``); RS to the supply."""
+    vdd, gate, out = design.tech.supply, gate_high(design), []
     for arr, s in (("primary", "p"), ("secondary", "s")):
         if arr not in kinds:
             continue
         t = tm[arr]
-        out.append(Element(f"Vec_{s}", (f"ec_{s}", "0"), waveform(t.ec(), vdd, t.edge)))
-        out.append(Element(f"Vtg_{s}", (f"tg_{s}", "0"), waveform(t.tg(), vdd, t.edge)))
+        out.append(Element(f"Vec_{s}", (f"ec_{s}", "0"), waveform(t.ec(), gate, t.edge)))
+        out.append(Element(f"Vtg_{s}", (f"tg_{s}", "0"), waveform(t.tg(), gate, t.edge)))
         for r in t.row_list(rows):
             sfx = f"_{r}" if row_lines else ""
-            out.append(Element(f"Vrst_{s}{sfx}", (f"rst_{s}{sfx}", "0"), waveform(t.rst(r), vdd, t.edge)))
+            out.append(Element(f"Vrst_{s}{sfx}", (f"rst_{s}{sfx}", "0"), waveform(t.rst(r), gate, t.edge)))
             out.append(Element(f"Vrs_{s}{sfx}", (f"rs_{s}{sfx}", "0"), waveform(t.rs(r), vdd, t.edge)))
     return out
 
@@ -210,7 +211,8 @@ def dark_bench(design, which: str, t_int: float, title: str = "dark_bench") -> N
     sub, dev, t, px = getattr(design, which), design.pixel.devices, design.tech, design.pixel
     t_reset, edge = sub.timing.t_reset, sub.timing.edge
     el = (Element("Vpdr", ("vpdr", "0"), px.v_pd_reset), Element("Vfd", ("fd", "0"), px.v_fd_reset),
-          Element("Vec", ("ec", "0"), waveform([(0.0, t_reset)], t.supply, edge)), Element("Vtg", ("tg", "0"), 0.0),
+          Element("Vec", ("ec", "0"), waveform([(0.0, t_reset)], gate_high(design), edge)),
+          Element("Vtg", ("tg", "0"), 0.0),
           photodiode("pd", "pd", sub.area, sub.perimeter, t),
           mosfet("ec", "vpdr", "ec", "pd", "0", dev.ec_w, dev.ec_l, t),
           mosfet("tg", "fd", "tg", "pd", "0", dev.tg_w, dev.tg_l, t))

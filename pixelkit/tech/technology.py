@@ -76,6 +76,9 @@ class Mos:
     cgso: float = qty("F/m", ge=0, plausible=(0.0, 1e-8), doc="gate-source/drain overlap capacitance per width")
     cox: float = qty("F/m2", gt=0, plausible=(1e-4, 1.0), doc="gate oxide capacitance per area")
     vth_n: float = qty("V", gt=0, plausible=(0.05, 5.0), doc="nominal NMOS threshold (estimates only)")
+    v_gate_max: float | None = qty("V", None, gt=0, plausible=(0.5, 40.0),
+                                   doc="highest gate voltage the devices are rated for (a boosted gate rail, "
+                                       "pixel.v_gate, may not exceed it); absent: the supply + 10 %")
     cgsl: float = qty("F/m", 0.0, ge=0, plausible=(0.0, 1e-8),
                       doc="bias-dependent (LDD) overlap per width (BSIM4 cgsl/cgdl, capmod 2)")
     ckappa: float = qty("V", 0.6, gt=0, plausible=(0.01, 10.0), doc="BSIM4 ckappas: LDD overlap voltage scale")

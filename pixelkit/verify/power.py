@@ -20,7 +20,7 @@ P = V I_static + (rows (E_events + E_read)) / T_frame; the chip is the columns o
 
 Independent path (``estimate``): bias currents x supply: each column's load carries
 ``pixel.sf_bias`` while a row is read (rows t_row of every frame), its bias reference
-``sf_bias`` always, its op-amp ``afe.supply_current`` always (the OTA: its mirror ratios);
+``sf_bias`` always, its op-amp ``afe.supply_current`` always (the OTA: 7 x ``afe.ota_bias``, its mirror ratios);
 the column line (``physics.noise.column_capacitance``) is charged to the reset level (FD
 reset minus the SF's ~1.1 V) once per read, and with a column precharge (``timing.pre_on``)
 the line and C11 once more, from ground (a lower bound there: the follower also drives the
@@ -33,6 +33,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from ..circuits.opamp import OTA_MIRROR_SUM
 from ..spice.netlist import Element
 
 BLOCKS = ("reset", "read", "bias", "afe")
@@ -142,7 +143,8 @@ def estimate(design) -> dict:
     from ..physics.subpixel import pd_node
     vdd, px, a = design.tech.supply, design.pixel, design.afe
     t_frame = frame_period(design)
-    i_afe = a.supply_current if a.opamp == "macro" else 70e-6  # the OTA: 10 uA reference, 20 uA tail, 40 uA out
+    # the OTA: its reference, the tail (2x) and the output stage (4x)
+    i_afe = a.supply_current if a.opamp == "macro" else OTA_MIRROR_SUM * a.ota_bias
     chip = {b: 0.0 for b in ("reset", "read", "bias", "afe")}
     for kind in ("primary", "secondary"):
         sub = getattr(design, kind)
