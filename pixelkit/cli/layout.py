@@ -34,7 +34,29 @@ def _render(x: dict) -> str:
         lines.append(f"LVS ({v['top']}, kit extraction, {v['seconds']:g} s): "
                      + ("match" if v["match"] else f"{len(v['mismatches'])} mismatch(es)"))
         lines += [f"  {m}" for m in v["mismatches"]]
+    lines += foundry_lines(x)
     return "\n".join(lines)
+
+
+def foundry_lines(x: dict) -> list:
+    """The foundry LVS / density / antenna results of a sign-off result, as text lines."""
+    lines = []
+    for key, what in (("foundry_lvs", "foundry LVS"), ("density", "density"), ("antenna", "antenna")):
+        v = x.get(key)
+        if v is None:
+            continue
+        if not v.get("run", True):
+            lines.append(f"{what}: NOT RUN - {v['reason']}")
+        elif key == "foundry_lvs":
+            lines.append(f"{what} (fd_pv deck, deep, {v['top']}, {v['seconds']:g} s): "
+                         + ("Netlists match" if v["match"] else "Netlists don't match"))
+            lines += [f"  {m}" for m in v["mismatches"]]
+        else:
+            lines.append(f"{what} (fd_pv deck, {v['top']}, {v['seconds']:g} s): "
+                         + ("clean" if v["clean"] else f"{v['total']} violation(s)"))
+            lines += [f"  {r['rule']} x{r['count']} in {r['cell']}: {r['description'].splitlines()[0]}"
+                      for r in v["violations"]]
+    return lines
 
 
 @main.command()
@@ -46,6 +68,12 @@ def _render(x: dict) -> str:
               "with its columns; exit 1 when it finds a violation")
 @click.option("--lvs", is_flag=True, help="compare the layout's extracted netlist with the kit's netlist "
               "(KLayout Python API); exit 1 on a mismatch")
+@click.option("--foundry-lvs", is_flag=True, help="also run the foundry's LVS deck (fd_pv, deep mode; fetched by "
+              "setup.sh where github.com is reachable): exit 1 on a mismatch, 5 when the deck is not installed")
+@click.option("--density", is_flag=True, help="the foundry's density deck on the chip (fd_pv): exit 1 on a "
+              "violation, 5 when the deck is not installed")
+@click.option("--antenna", is_flag=True, help="the foundry's antenna deck on the chip (fd_pv): exit 1 on a "
+              "violation, 5 when the deck is not installed")
 @click.option("--afe", is_flag=True, help="draw every column's AFE (switched capacitors, MIM capacitors, "
               "op-amp) under its column circuit")
 @click.option("--shield", type=click.Choice(["full", "pixels", "none"]), default="full", show_default=True,
@@ -54,12 +82,12 @@ def _render(x: dict) -> str:
 @click.option("--pictures/--no-pictures", default=True, show_default=True, help="2D and 3D pictures")
 @click.option("--golden", is_flag=True, help="(re)write layouts/golden/<design>.gds, the geometry baseline")
 @json_opt
-def layout(design, out, rows, cols, drc, lvs, afe, shield, pictures, golden, as_json):
+def layout(design, out, rows, cols, drc, lvs, foundry_lvs, density, antenna, afe, shield, pictures, golden, as_json):
     """Write the GDS (an R x C array with its column circuits, --afe its AFEs, the light shield) and
     each cell's SPICE netlist, extract PD area / perimeter / photoactive area and the junction
     the shield leaves open per block, draw 2D and 3D views; --drc / --lvs sign the array off."""
     from ..layout.fit import as_config_error
-    from ..layout.flow import layout_design, write_gds
+    from ..layout.flow import layout_design, verdict, write_gds
     from ..layout.library import build_library
     from ..layout.rules import RuleError
     d = load(design, drawable=False)
@@ -73,9 +101,10 @@ def layout(design, out, rows, cols, drc, lvs, afe, shield, pictures, golden, as_
             emit({"gds": str(path)}, as_json, lambda x: f"wrote {x['gds']}")
             return
         r = layout_design(d, output_path(out, d, "layout"), rows, cols, pictures=pictures, drc=drc, lvs=lvs,
-                          afe=afe, shield=shield)
+                          afe=afe, shield=shield, foundry_lvs=foundry_lvs, density=density, antenna=antenna)
     except RuleError as exc:
         raise as_config_error(d, exc) from None
     emit(r, as_json, _render)
-    if (drc and not r["drc"]["clean"]) or (lvs and not r["lvs"]["match"]):
-        sys.exit(1)
+    status = verdict(r)
+    if status:
+        sys.exit(status)

@@ -46,7 +46,8 @@ def write_netlists(design, cells, folder: Path, top: str = SIGNOFF_TOP) -> dict:
 
 def layout_design(design, out_dir: Path = Path("layouts"), rows: int = 2, cols: int = 2,
                   pictures: bool = True, drc: bool = False, lvs: bool = False, afe: bool = False,
-                  shield: str = "full") -> dict:
+                  shield: str = "full", foundry_lvs: bool = False, density: bool = False,
+                  antenna: bool = False) -> dict:
     """Every cell of an R x C chip (its readout with ``afe``; ``shield`` full / pixels / none) in
     one GDS, the netlists beside it, extraction, the shield's exposure per block, pictures and,
     on request, the sign-off of the chip cell."""
@@ -97,7 +98,35 @@ def layout_design(design, out_dir: Path = Path("layouts"), rows: int = 2, cols: 
             result["lvs"] = run_lvs_deck(gds, top, design, out_dir / "lvs", Path(spice[top])).as_dict()
         else:
             result["lvs"] = run_lvs(gds, top, design, out_dir / "lvs").as_dict()
+    result.update(foundry_checks(gds, top, design.tech, out_dir, Path(spice[top]), foundry_lvs, density, antenna))
     return result
+
+
+def foundry_checks(gds: Path, top: str, tech, out_dir: Path, spice: Path | None, lvs: bool, density: bool,
+                   antenna: bool) -> dict:
+    """The foundry's own LVS (against ``spice``), density and antenna decks on ``top``, as asked:
+    {"foundry_lvs" / "density" / "antenna": the result's dict, ``{"run": False, ...}`` where the
+    decks are not installed}."""
+    from .signoff.foundry import run_chip_drc, run_lvs as run_foundry_lvs
+    out = {}
+    if lvs:
+        out["foundry_lvs"] = run_foundry_lvs(gds, top, spice, tech, Path(out_dir) / "lvs").as_dict()
+    for which, asked in (("density", density), ("antenna", antenna)):
+        if asked:
+            r = run_chip_drc(gds, top, tech, Path(out_dir) / "drc", which)
+            out[which] = {"run": True, **r.as_dict()}
+    return out
+
+
+def verdict(result: dict) -> int:
+    """The exit status of a sign-off result: 1 when a check that ran failed (DRC violations, an LVS
+    mismatch, density / antenna violations), else 5 when a check asked could not run, else 0."""
+    failed = any(k in result and result[k].get("run", True) and not result[k].get(ok, True)
+                 for k, ok in (("drc", "clean"), ("lvs", "match"), ("foundry_lvs", "match"), ("density", "clean"),
+                               ("antenna", "clean")))
+    if failed:
+        return 1
+    return 5 if any(isinstance(v, dict) and v.get("run") is False for v in result.values()) else 0
 
 
 def _opening(sub) -> float:

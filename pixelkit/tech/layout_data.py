@@ -64,6 +64,10 @@ class Signoff:
     lvs_deck: str = ""
     lvs_options: tuple = ()
     base: str = ""          # folder of the technology file (relative deck paths)
+    #: the foundry's physical-verification decks the kit fetches (LVS, density, antenna: signoff/foundry.py)
+    pv_decks: str = ""
+    pv_options: tuple = ()  # the foundry LVS deck's switches
+    lvs_models: tuple = ()  # ((kit's device name, foundry's), ...) for the netlist the foundry LVS reads
 
 
 @dataclass(frozen=True)
@@ -160,7 +164,8 @@ def _switches(raw, where, source) -> tuple:
 def parse_signoff(raw, source: str, base: str) -> Signoff:
     if raw is None:
         return Signoff(base=base)
-    allowed = {"drc_deck", "drc_sha256", "drc_options", "lvs_deck", "lvs_options"}
+    allowed = {"drc_deck", "drc_sha256", "drc_options", "lvs_deck", "lvs_options", "pv_decks", "pv_options",
+               "lvs_models"}
     if not isinstance(raw, dict) or set(raw) - allowed:
         bad = sorted(set(raw) - allowed)[0] if isinstance(raw, dict) else "signoff"
         raise ConfigError(source, f"signoff.{bad}", raw.get(bad) if isinstance(raw, dict) else raw,
@@ -171,5 +176,15 @@ def parse_signoff(raw, source: str, base: str) -> Signoff:
     sha = raw.get("drc_sha256", "")
     if sha and not re.fullmatch(r"[0-9a-f]{64}", sha):
         raise ConfigError(source, "signoff.drc_sha256", sha, "64 lower-case hex digits")
+    pv = raw.get("pv_decks", "")
+    if pv not in PV_DECKS:
+        raise ConfigError(source, "signoff.pv_decks", pv, f"one of {', '.join(repr(x) for x in PV_DECKS)} (decks the "
+                          "kit fetches and pins; empty: none)")
     return Signoff(raw.get("drc_deck", ""), sha, _switches(raw.get("drc_options"), "signoff.drc_options", source),
-                   raw.get("lvs_deck", ""), _switches(raw.get("lvs_options"), "signoff.lvs_options", source), base)
+                   raw.get("lvs_deck", ""), _switches(raw.get("lvs_options"), "signoff.lvs_options", source), base,
+                   pv, _switches(raw.get("pv_options"), "signoff.pv_options", source),
+                   _switches(raw.get("lvs_models"), "signoff.lvs_models", source))
+
+
+#: foundry physical-verification deck sets the kit knows how to fetch and pin (signoff/fdpv.py)
+PV_DECKS = ("", "gf180mcu_fd_pv")

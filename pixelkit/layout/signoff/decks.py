@@ -23,7 +23,7 @@ import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
-from ...errors import PixelkitError
+from .deckcache import DeckError, deck_dir, sha256
 
 
 @dataclass(frozen=True)
@@ -43,25 +43,6 @@ KNOWN = {
                           "GlobalFoundries GF180MCU KLayout DRC deck (Apache-2.0), from the glayout 0.2.0 wheel"),
 }
 FETCH_HINT = "run ./setup.sh, or: python3 -m pixelkit.layout.signoff.decks --fetch"
-
-
-class DeckError(PixelkitError):
-    """A deck is missing, altered or cannot be fetched."""
-
-
-def deck_dir() -> Path:
-    env = os.environ.get("PIXELKIT_DECKS")
-    if env:
-        return Path(env)
-    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "pixelkit" / "decks"
-
-
-def sha256(path: Path) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for chunk in iter(lambda: f.read(1 << 20), b""):
-            h.update(chunk)
-    return h.hexdigest()
 
 
 def _checked(path: Path, expected: str, what: str, hint: str) -> Path:
@@ -123,9 +104,12 @@ def fetch(name: str, python: str = sys.executable) -> Path:
 
 def main(argv=None) -> int:
     import argparse
+    from . import fdpv
     ap = argparse.ArgumentParser(prog="python -m pixelkit.layout.signoff.decks",
                                  description="Fetch and verify the foundry decks the kit runs.")
     ap.add_argument("--fetch", action="store_true", help="download every known deck into the cache")
+    ap.add_argument("--fd-pv-from", metavar="DIR", help=f"install the {fdpv.NAME} decks from a checkout of "
+                    f"{fdpv.REPOSITORY} at {fdpv.COMMIT[:7]} (every file checked against its pinned sha256)")
     args = ap.parse_args(argv)
     for name, known in KNOWN.items():
         try:
@@ -134,6 +118,23 @@ def main(argv=None) -> int:
             print(f"pixelkit: {exc}", file=sys.stderr)
             return 2
         print(f"{name}: {path} (sha256 verified)")
+    try:   # the fd_pv decks: set-up goes on without them (the kit's own LVS needs no deck)
+        if args.fd_pv_from:
+            path = fdpv.install_from(Path(args.fd_pv_from))
+        elif args.fetch:
+            path = fdpv.fetch()
+        else:
+            path = fdpv.deck().parent.parent.parent
+            print(f"{fdpv.NAME}: {path} (every file's sha256 verified)")
+            return 0
+        print(f"{fdpv.NAME}: {path} (every file's sha256 verified; patched: "
+              + ", ".join(p.name for p in fdpv.patches()) + ")")
+    except DeckError as exc:
+        if args.fd_pv_from:
+            print(f"pixelkit: {exc}", file=sys.stderr)
+            return 2
+        print(f"pixelkit: {fdpv.NAME} not installed: {exc}. The kit's own LVS runs without it; the foundry "
+              "LVS, density and antenna checks report that they did not run (exit 5).", file=sys.stderr)
     return 0
 
 

@@ -194,7 +194,7 @@ def _named(d) -> set:
     for t in d.device_class().terminal_definitions():
         n = d.net_for_terminal(t.id())
         if n is not None and n.name:
-            out.add((t.name if t.name in ("G", "B") else "SD", n.name))
+            out.add((t.name if t.name in ("G", "B") else "SD", n.name.lower()))   # SPICE readers upper-case
     return out
 
 
@@ -227,7 +227,7 @@ def _describe(xref) -> list[str]:
             elif da:
                 extra.append(da)
         for db in list(missing):   # the same device, drawn with other sizes: name the parameter
-            twin = next((da for da in extra if da.device_class().name == db.device_class().name
+            twin = next((da for da in extra if da.device_class().name.lower() == db.device_class().name.lower()
                          and _named(da) <= _named(db) and _params(da, db)), None)
             if twin is not None:
                 out.insert(0, f"{cname}: device {db.expanded_name()} ({db.device_class().name}): "
