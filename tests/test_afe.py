@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from pixelkit.circuits.testbench import afe_bench
-from pixelkit.circuits.timing import GsTiming
+from pixelkit.physics.timing import GsTiming
 from pixelkit.measure.afe import afe_output, eps, finite_gain_output, ideal_output
 from pixelkit.spice import simulate_many
 

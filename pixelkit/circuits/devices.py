@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from ..spice.netlist import Element, Model
-from .geometry import diffusion
+from ..physics.geometry import diffusion
 
 
 def gate_high(design) -> float:

@@ -15,7 +15,7 @@ from .afe import sc_afe
 from .devices import gate_high, mosfet, photodiode, photodiode_model
 from .dual_pixel import dual_pixel
 from .opamp import opamp
-from .timing import GsTiming, timings  # noqa: F401 (timings: callers import it from here)
+from ..physics.timing import GsTiming, timings  # noqa: F401 (timings: callers import it from here)
 
 
 def waveform(intervals, high: float, edge: float, invert: bool = False) -> Pwl:

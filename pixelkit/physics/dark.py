@@ -69,7 +69,7 @@ def bandgap(t: float) -> float:
 
 def diffusion_leakage(w: float, tech, temperature_K: float) -> float:
     """Reverse current (A) of one MOS source/drain diffusion of width ``w``: BSIM4's law (module docstring)."""
-    from ..circuits.geometry import diffusion
+    from .geometry import diffusion
     mos = tech.mos
     a, p = diffusion(w, mos.diff_ext)
     t0, t = mos.t_nom, temperature_K

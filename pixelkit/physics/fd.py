@@ -36,7 +36,7 @@ Storage: FD leaks through its diffusions by the device models' junction law
 """
 from __future__ import annotations
 
-from ..circuits.geometry import diffusion
+from .geometry import diffusion
 import numpy as np
 
 from ..constants import Q

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..circuits.geometry import diffusion
+from .geometry import diffusion
 from .junction import Junction, Node
 
 

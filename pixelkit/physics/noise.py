@@ -89,7 +89,7 @@ def sf_flicker(design, a_sf: float, dt: float, c_col: float, sf_models: dict, po
 
 def ncds_interval(design, which: str) -> float:
     """Time from the signal sample to the (new reset's) reset-level sample of the first row."""
-    from ..circuits.timing import timings
+    from .timing import timings
     tm = timings(design, design.experiment.t_window)[which]
     return tm.t_reset_level(0) - tm.t_signal(0)
 
@@ -98,7 +98,7 @@ def column_capacitance(design, which: str = "primary") -> float:
     """Column line: its parasitic C plus the RS source and load drain junctions at zero bias
     (post-layout: the extracted line of ``which`` array, every row's share and the column circuit's)."""
     from .nodes import line_cap
-    from ..circuits.geometry import diffusion
+    from .geometry import diffusion
     mos, dev = design.tech.mos, design.pixel.devices
     col = "col_p" if which == "primary" else "col_s0"
     c = line_cap(design, col)

@@ -205,7 +205,7 @@ def dark(design, draw=None, backend="batch") -> dict:
 
 def afe(design, draw=None, backend="batch") -> dict:
     from ..circuits.testbench import afe_bench
-    from ..circuits.timing import GsTiming
+    from ..physics.timing import GsTiming
     from ..measure.afe import afe_output
     a = design.afe
     v_rst, dv = 1.9, np.array([0.1, 0.35, 0.6])

@@ -36,7 +36,7 @@ from __future__ import annotations
 
 import math
 
-from ...circuits.geometry import diffusion
+from ...physics.geometry import diffusion
 from ...constants import K_B
 from ...physics.junction import Junction, capacitance, charge
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...circuits.testbench import afe_bench
-from ...circuits.timing import GsTiming
+from ...physics.timing import GsTiming
 from ...measure.afe import afe_output, eps, finite_gain_output, ideal_output
 from ...spice import simulate_many
 from ..figures import axes, save
