@@ -112,7 +112,7 @@ def models(design) -> dict:
     """The analytic model table: C_jdep, conversion gain, full well, C_A, C_C."""
     from .camera.spicenoise import sf_gain
     from .physics.subpixel import model_table
-    from .tech.ekv import models_for
+    from .techfit.ekv import models_for
     return model_table(design, sf_gain(design), models_for(design))
 
 

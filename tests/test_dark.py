@@ -72,7 +72,7 @@ def test_mos_diffusions_follow_bsim4(name):
 def test_foundry_card_with_a_tunnelling_current_is_flagged():
     """GF180's diode_nw2ps_03v3 as shipped: its reverse current falls from 25 to 65 degC and exceeds its own
     thermal terms 10^4-fold; the kit flags it and writes its own card (thermal terms only)."""
-    from pixelkit.tech.pdcard import check
+    from pixelkit.techfit.pdcard import check
     tech = load_technology("gf180mcu_3v3")
     c = check(tech)
     assert c["falls_with_temperature"] and c["card_over_thermal_25C"] > 1e3 and not c["thermal"]

@@ -100,7 +100,7 @@ def test_target_currents_against_the_charge_chain_derivation(ref_design, experim
     the primary's remainder is the SF gain taken as constant over half the swing."""
     from pixelkit.camera.spicenoise import sf_gain
     from pixelkit.physics import fd
-    from pixelkit.tech.ekv import models_for
+    from pixelkit.techfit.ekv import models_for
     d, q = ref_design, 1.602176634e-19
     a, models = sf_gain(d), models_for(d)
     for which, key, frac, step, rel in (("primary", "i_mid_A", d.experiment.mid_fraction, 200.0, 0.05),

@@ -14,7 +14,7 @@ from pixelkit.circuits.noisebench import flicker_deck, read_deck
 from pixelkit.constants import K_B
 from pixelkit.physics import fd
 from pixelkit.physics.noise import chain, column_flicker_psd, ktc_voltage
-from pixelkit.tech.ekv import models_for
+from pixelkit.techfit.ekv import models_for
 
 
 @pytest.fixture(scope="module")

@@ -17,7 +17,7 @@ from pixelkit.layout.pex import cell_geometry
 from pixelkit.layout.pex.capacitance import capacitances
 from pixelkit.layout.pex.overlay import place, post_layout_view
 from pixelkit.physics import fd
-from pixelkit.tech.ekv import models_for
+from pixelkit.techfit.ekv import models_for
 
 GF = ROOT / "designs" / "dual_pixel_gf180.toml"
 

@@ -1,6 +1,6 @@
 """The pixel's source follower in moderate inversion: EKV gain and noise against ngspice.
 
-Independent paths: the EKV parameters are fitted (``tech.ekv``) to the DC source voltages of
+Independent paths: the EKV parameters are fitted (``techfit.ekv``) to the DC source voltages of
 ideal-current followers; the checks are ngspice's own small-signal figures of the kit's full
 read chain (the SF, the row switch, the mirrored column load): the two-point gain
 (``mc.pelgrom.sf_gain``) at biases and levels the fit did not see as derivatives, and the
@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from pixelkit.physics import sf
-from pixelkit.tech.ekv import fit, models_for
+from pixelkit.techfit.ekv import fit, models_for
 
 
 def test_ekv_fits_the_model_librarys_follower(ref_design):

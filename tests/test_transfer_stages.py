@@ -17,7 +17,7 @@ from pixelkit.design import load_design
 from pixelkit.layout.pex.overlay import post_layout_view
 from pixelkit.physics import fd
 from pixelkit.spice import simulate_many
-from pixelkit.tech.ekv import models_for
+from pixelkit.techfit.ekv import models_for
 
 GF = ROOT / "designs" / "dual_pixel_gf180.toml"
 N_E = {"primary": 20000, "secondary": 5000}

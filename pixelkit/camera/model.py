@@ -33,7 +33,7 @@ from ..physics.dark import dark_current
 from ..physics.junction import Node
 from ..physics.noise import chain
 from ..physics.subpixel import pd_node
-from ..tech.ekv import models_for
+from ..techfit.ekv import models_for
 
 ARRAYS = ("primary", "secondary")
 

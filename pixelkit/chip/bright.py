@@ -102,7 +102,7 @@ def figures(design, factors=FACTORS, backend="batch", jobs=None, holds=HOLDS) ->
     from ..measure.pixel import levels
     from ..physics.fd import pls_current, response
     from ..spice import simulate_many
-    from ..tech.ekv import models_for
+    from ..techfit.ekv import models_for
     plan = decks(design, factors, holds)
     res = simulate_many([net for *_, net in plan], backend=backend, jobs=jobs, failed="keep")
     a_sf = sf_gain(design)

@@ -62,7 +62,7 @@ def _read_noise_e(design, temperature_K: float) -> float:
     the SF's operating point."""
     from ..camera.spicenoise import sf_gain
     from ..physics.noise import chain
-    from ..tech.ekv import models_for
+    from ..techfit.ekv import models_for
     d = replace(design, temperature=temperature_K)
     return chain(d, "secondary", sf_gain(d), models_for(d))["pixel_e"]
 

@@ -18,7 +18,7 @@ junctions, and each follows the law of the card SPICE uses for it:
     (GF180MCU: ``diode_nw2ps_03v3``'s is, jsw, xti, eg, n; doubling every 4.2 K
     near room temperature). Its tunnelling terms (jtun, jtunsw) are left out: a
     reverse current that falls with temperature is not a thermal generation
-    current (``tech.pdcard`` measures the card and flags it).
+    current (``techfit.pdcard`` measures the card and flags it).
 
   For both laws the kit writes the PD's .model card itself
   (``circuits.devices.photodiode_model``), with its saturation currents

@@ -110,7 +110,7 @@ def transfer(design, which: str, a_sf: float, sf_models: dict, v: float | None =
        extracted wiring, and C_FD,read is taken there.
 
     ``eta`` and ``n`` are those of the pixel's NMOS at the node's voltage: the follower's EKV parameters
-    (``sf_models["sf"]``, ``tech.ekv.models_for``). The single-capacitance sharing ``q / (C_PD,node + C_FD,read)`` lacks 1 and 3
+    (``sf_models["sf"]``, ``techfit.ekv.models_for``). The single-capacitance sharing ``q / (C_PD,node + C_FD,read)`` lacks 1 and 3
     and its errors cancel at the read (docs/post-layout.md: each stage against SPICE).
     """
     dev, mos = design.pixel.devices, design.tech.mos
@@ -165,7 +165,7 @@ def response(design, which: str, a_sf: float, sf_models: dict, v_bias: float | N
 
     ``v_bias`` (default: the design's PD reset level) is the reverse bias of the PD node
     and FD at which the small-signal capacitances are taken. CG_FD follows the charge through the
-    transfer, TG's turn-off and RS's turn-on (``transfer``; ``sf_models``: ``tech.ekv.models_for``);
+    transfer, TG's turn-off and RS's turn-on (``transfer``; ``sf_models``: ``techfit.ekv.models_for``);
     ``c_total_F`` is the read-time sum C_PD,node + C_FD the noise budget uses.
     """
     c = capacitances(design, which, a_sf, v_bias)

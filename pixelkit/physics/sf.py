@@ -24,7 +24,7 @@ and the channel's thermal noise, S_id = 4 k T gamma_n gm with
 gamma_n = n (1/2 + 2 IC / 3) / (1 + IC) (1/2 n in weak, 2/3 n in strong inversion).
 
 The parameters (VT0, gamma, phi, KP; the load's lambda) are the model library's, fitted
-once per device size by ``tech.ekv`` from ngspice operating points of the same devices.
+once per device size by ``techfit.ekv`` from ngspice operating points of the same devices.
 """
 from __future__ import annotations
 

@@ -42,7 +42,7 @@ def model_table(design, a_sf: float, sf_models: dict) -> dict:
     PD reset level (``fd.response``). ``a_sf``: the SF gain; ``pixelkit.api.models`` takes
     it from a SPICE operating point of the SF and its column load (``camera.spicenoise.sf_gain``):
     the models stay importable and testable without the simulator above them; ``sf_models`` the
-    follower's EKV parameters (``tech.ekv.models_for``), for the switches' body factor (``fd.transfer``).
+    follower's EKV parameters (``techfit.ekv.models_for``), for the switches' body factor (``fd.transfer``).
     """
     p, s = figures(design, "primary"), figures(design, "secondary")
     p["at_reset"], s["at_reset"] = (response(design, w, a_sf, sf_models) for w in SUBPIXELS)

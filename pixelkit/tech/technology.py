@@ -49,7 +49,7 @@ class Photodiode:
     dark_eg: float = qty("V", 1.11, gt=0, plausible=(0.5, 2.0), doc="activation energy in eV (card law)")
     dark_n: float = num(1.0, gt=0, plausible=(0.5, 3.0), doc="emission coefficient (card law)")
     foundry_card: str = text("", doc="the foundry's diode card of this junction, measured and flagged by the kit "
-                                     "when its reverse current is not a thermal one (tech/pdcard.py)")
+                                     "when its reverse current is not a thermal one (techfit/pdcard.py)")
     qe_wavelength_nm: tuple = field(default=(), metadata=dict(kind="skip"))
     qe_value: tuple = field(default=(), metadata=dict(kind="skip"))
 

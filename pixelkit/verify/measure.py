@@ -179,7 +179,7 @@ def lag(design, draw=None, backend="batch") -> dict:
 def noise(design, draw=None, backend="batch") -> dict:
     from ..circuits.testbench import sf_bench
     from ..physics.noise import chain
-    from ..tech.ekv import models_for
+    from ..techfit.ekv import models_for
     v, dv = design.pixel.v_fd_reset, 0.05
     lo, hi = _run([sf_bench(design, v - dv, title="vfy_sf_lo"), sf_bench(design, v + dv, title="vfy_sf_hi")],
                   design, draw, backend)

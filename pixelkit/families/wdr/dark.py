@@ -4,7 +4,7 @@ The node (C_int + PD + switches, integration switches closed) is held at each
 voltage by a source and the current it sinks is read after 15 us: the PD
 junction's and the switch diffusions' reverse currents at that bias (the
 decoder models I_dark(V) rather than one dark rate; with GF180's foundry
-card the tunnelling term made it fall with the bias, ``tech.pdcard``).
+card the tunnelling term made it fall with the bias, ``techfit.pdcard``).
 """
 from __future__ import annotations
 

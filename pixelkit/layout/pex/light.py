@@ -157,7 +157,7 @@ def read_noise_at_afe(design) -> dict:
     through the AFE's gain C11 / C13."""
     from ...camera.spicenoise import sf_gain
     from ...physics.noise import chain
-    from ...tech.ekv import models_for
+    from ...techfit.ekv import models_for
     a = sf_gain(design)
     g = design.afe.c11 / design.afe.c13
     m = models_for(design)

@@ -9,7 +9,7 @@ from ...camera.plots import noise_breakdown
 from ...camera.spicenoise import output_cg, pixel_noise, sf_gain
 from ...physics import fd
 from ...physics.noise import chain
-from ...tech.ekv import models_for
+from ...techfit.ekv import models_for
 from .. import names as N
 from ..html import fmt
 from .. import plausibility

@@ -20,7 +20,7 @@ def _figures(d, backend, jobs, quick) -> dict:
     from ...camera.spicenoise import output_cg, sf_gain
     from ...physics import fd
     from ...physics.noise import chain
-    from ...tech.ekv import models_for
+    from ...techfit.ekv import models_for
     from ...physics.subpixel import model_table
     a = sf_gain(d)
     cg_sp = output_cg(d, backend=backend)

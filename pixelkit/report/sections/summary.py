@@ -33,7 +33,7 @@ def spice_output_cg(sweep_A, signal_V, dark_V: float, swing_V: float, t_window: 
 
 def build(ctx) -> Section:
     d = ctx.design
-    from ...tech.ekv import models_for
+    from ...techfit.ekv import models_for
     mt = model_table(d, sf_gain(d), models_for(d))
     exp = ctx.experiment()
     kit, out_cg, spice_cg = {}, {}, {}
