@@ -11,7 +11,7 @@ from mismatch_estimate import effective_dof, estimate, sample_band
 
 from conftest import REF
 from pixelkit.mc.montecarlo import run_monte_carlo
-from pixelkit.mc.pelgrom import cap_sigma_rel, coefficients, sigma_vth
+from pixelkit.physics.pelgrom import cap_sigma_rel, coefficients, sigma_vth
 
 ROWS, COLS = 6, 4
 

@@ -6,7 +6,7 @@ A simple model (the Monte Carlo of the scale issue replaces it):
   reads both samples), but the TG's channel charge, which half lands on FD when TG
   opens, differs from pixel to pixel through the TG threshold: sigma_off =
   1/2 Cox W L sigma_VT / C_FD at FD, times A_sf, with sigma_VT the model library's
-  own Pelgrom coefficient for the TG's W and L (``mc.pelgrom.sigma_vth``).
+  own Pelgrom coefficient for the TG's W and L (``physics.pelgrom.sigma_vth``).
 - **Gain (PRNU).** The photoactive area's edge is placed to within the layout grid
   (``rules.grid``): a masked opening of side a varies by 2 sigma_edge / a in
   relative area, an unmasked PD by the same over its own side; the PD junction's
@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..mc.pelgrom import sigma_vth
+from ..physics.pelgrom import sigma_vth
 from ..physics import fd
 
 A_C = 0.01e-6        # relative C mismatch x sqrt(area): 1 % um [A]

@@ -42,11 +42,14 @@ def ktc_capacitor(design, r: float, c: float) -> float:
     return run_noise(capacitor_deck(design, r, c))["total_V"]
 
 
-def sf_gain(design, v_fd: float | None = None, dv: float = 0.01) -> float:
-    """Small-signal gain of the SF + column load at FD = ``v_fd`` (default the PD reset level):
-    ``mc.pelgrom.sf_gain``, two operating points of the SF bench."""
-    from ..mc.pelgrom import sf_gain as op_gain
-    return op_gain(design, design.pixel.v_pd_reset if v_fd is None else v_fd, dv)
+def sf_gain(design, v_fd: float | None = None, dv: float = 0.01, backend: str = "batch") -> float:
+    """Small-signal gain dV_col/dV_FD of the SF + column load (RS on) at FD = ``v_fd`` (default the PD
+    reset level): two operating points of the SF bench, ``v_fd`` -+ ``dv``."""
+    from ..circuits.testbench import sf_bench
+    v = design.pixel.v_pd_reset if v_fd is None else v_fd
+    lo, hi = simulate_many([sf_bench(design, v - dv, title="sf_lo"), sf_bench(design, v + dv, title="sf_hi")],
+                           backend=backend)
+    return float((hi["v(col)"][0] - lo["v(col)"][0]) / (2 * dv))
 
 
 def ncds_read(design, which: str, a_sf: float) -> float:

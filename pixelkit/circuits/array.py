@@ -163,7 +163,7 @@ def afe_caps(design, seed: int | None, kind: str, j: int) -> tuple:
     nominal = (a.c11, a.c12, a.c13)
     if seed is None:
         return nominal
-    from ..mc.pelgrom import cap_sigma_rel
+    from ..physics.pelgrom import cap_sigma_rel
     rng = np.random.default_rng([seed, KINDS.index(kind), j])
     return tuple(float(c * (1 + cap_sigma_rel(design, c) * rng.standard_normal())) for c in nominal)
 

@@ -216,10 +216,10 @@ def _columns(design, g, effect, p):
 
 
 def _mc_column(design, g) -> dict:
-    """One column's Monte Carlo draw, Pelgrom with the model library's own coefficients (``mc.pelgrom``):
+    """One column's Monte Carlo draw, Pelgrom with the model library's own coefficients (``physics.pelgrom``):
     the load's threshold and current factor, C11 / C12 / C13 (the technology's capacitor matching) and
     the op-amp's input offset (drawn as the difference of an 8 / 1 um input pair's thresholds)."""
-    from ..mc.pelgrom import cap_sigma_rel, sigma_beta, sigma_vth
+    from ..physics.pelgrom import cap_sigma_rel, sigma_beta, sigma_vth
     dev, a = design.pixel.devices, design.afe
     return {"dvt": float(g.normal(0, sigma_vth(design, dev.load_w, dev.load_l))),
             "dbeta": float(g.normal(0, sigma_beta(design, dev.load_w, dev.load_l))),

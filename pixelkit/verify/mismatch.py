@@ -12,10 +12,10 @@ kit's Pelgrom draw per device where the library has none.
   series with the gate (a threshold shift is a gate-voltage offset). Subcircuits get one
   parameter per device they hold, so every instance carries its own draw. The current
   factor is not drawn (the library path draws it: for the SF offset it adds < 1 %,
-  ``mc.pelgrom``).
+  ``physics.pelgrom``).
 
 Both draw every AFE capacitor from the technology's capacitor matching
-(``mc.pelgrom.cap_sigma_rel``), seeded by (run seed, sample, instance).
+(``physics.pelgrom.cap_sigma_rel``), seeded by (run seed, sample, instance).
 
 A library without statistics and a technology without ``mos_avt_*`` leave nothing to
 draw: that is refused before anything runs (a Monte Carlo of identical devices would
@@ -50,7 +50,7 @@ class Draw:
 
 def library_has_statistics(design) -> bool:
     """Whether the model library carries per-instance MOSFET mismatch (GF180MCU ``fets_mm``)."""
-    from ..mc.pelgrom import coefficients
+    from ..physics.pelgrom import coefficients
     try:
         coefficients(design, "n")
         coefficients(design, "p")
@@ -98,7 +98,7 @@ def apply(net, design, draw: Draw | None):
 
 
 def _afe_caps(net, design, draw):
-    from ..mc.pelgrom import cap_sigma_rel
+    from ..physics.pelgrom import cap_sigma_rel
     a = design.afe
     out = []
     for e in net.elements:
