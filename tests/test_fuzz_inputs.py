@@ -135,11 +135,11 @@ def _run(argv, monkeypatch, capfd):
     import pixelkit.chip.frame
     import pixelkit.layout.library
     import pixelkit.mc.montecarlo
-    import pixelkit.sweep.executors
+    import pixelkit.spice.executors
     import pixelkit.sweep.run
     from pixelkit.cli import common, entry
     monkeypatch.setattr(pixelkit.sweep.run, "run_tasks", _stub)          # after the axes are validated
-    monkeypatch.setattr(pixelkit.sweep.executors, "run_tasks", _stub)    # verify: after specs and grid
+    monkeypatch.setattr(pixelkit.spice.executors, "run_tasks", _stub)    # verify: after specs and grid
     monkeypatch.setattr(pixelkit.mc.montecarlo, "simulate_frame", _stub)  # after the corner is applied
     monkeypatch.setattr(pixelkit.chip.frame, "simulate_frame", _stub)
     monkeypatch.setattr(pixelkit.layout.library, "build_chip_cells", _stub)  # after the layout's options
@@ -188,7 +188,7 @@ def test_fuzz_every_input(tmp_path, monkeypatch, capfd):
 def test_scheduler_addresses_are_checked_before_connecting(address, ok):
     """The address form Dask documents ([protocol://]host:port); nothing connects in this test."""
     from pixelkit.errors import ConfigError
-    from pixelkit.sweep.executors import check_address
+    from pixelkit.spice.executors import check_address
     if ok:
         assert check_address(address) == address
     else:

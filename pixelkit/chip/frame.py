@@ -60,7 +60,7 @@ import numpy as np
 from ..circuits.array import (KINDS, PREFIX, Handoff, Tile, array_bench, frame_shape, frame_timings,
                               state_nodes)
 from ..errors import ConfigError, SimulationError
-from ..sweep.executors import run_tasks
+from ..spice.executors import run_tasks
 
 SPLITS = ("columns", "rows", "none")
 #: Dual-pixel columns per deck of a column chain: 3 primary, or 1 (3 secondary columns).

@@ -126,7 +126,7 @@ def scheduler_address(ctx, param, value):
     """Callback of every ``--scheduler`` option: the address checked before anything runs."""
     if value is None:
         return None
-    from ..sweep.executors import check_address
+    from ..spice.executors import check_address
     return check_address(value)
 
 

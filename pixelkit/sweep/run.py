@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import SimulationError
-from .executors import run_tasks
+from ..spice.executors import run_tasks
 from .space import Axis, design_with, si_value
 
 FIGURES = ("signal_primary_V", "signal_secondary_V", "reset_primary_V", "reset_secondary_V")

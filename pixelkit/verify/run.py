@@ -1,7 +1,7 @@
 """``verify``: every spec at every condition of the grid, the Monte Carlo yield, the table.
 
 Work is cut into tasks (one condition or one Monte Carlo sample x one measurement group)
-that run through ``sweep.executors.run_tasks``: local worker threads by default (each
+that run through ``spice.executors.run_tasks``: local worker threads by default (each
 drives one ngspice at a time), a Dask cluster with ``scheduler``. Every deck goes through
 the engine's content-hash cache as soon as it finishes, so an interrupted run resumes
 where it stopped and a re-run with nothing changed simulates nothing. A task whose
@@ -57,7 +57,7 @@ def plan(design, grid: list, mc: int) -> tuple[list, list]:
 
 def verify(design, corners=None, temperatures=None, supplies=None, mc: int | None = None, seed: int | None = None,
            backend: str = "batch", jobs=None, scheduler=None, post_layout: bool = False) -> dict:
-    from ..sweep.executors import run_tasks
+    from ..spice.executors import run_tasks
     from .signoff import table
     if post_layout:
         design = post_layout_view(design)

@@ -35,7 +35,7 @@ def _task(task):
 
 def verify(design, corners=None, temperatures=None, supplies=None, mc=None, seed=None, backend: str = "batch",
            jobs=None, scheduler=None) -> dict:
-    from ...sweep.executors import run_tasks
+    from ...spice.executors import run_tasks
     from ...verify.run import _clean, _power
     from ...verify.signoff import table
     if not design.spec:

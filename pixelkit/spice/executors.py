@@ -28,7 +28,7 @@ def run_tasks(fn, tasks, jobs: int | None = None, scheduler=None, desc: str = "s
     if scheduler is not None:
         yield from _dask(fn, tasks, scheduler, desc)
         return
-    from ..spice.engine import default_jobs
+    from .engine import default_jobs
     jobs = max(1, int(jobs or default_jobs()))
     with command_bar(desc, total=len(tasks), unit="tasks") as bar:
         if jobs == 1:
