@@ -52,7 +52,7 @@ def load_design(path, warn=None, drawable: bool = True):
 
 def benches() -> list[str]:
     """Names accepted by :func:`bench` (the registry's testbenches and circuits)."""
-    from .circuits.registry import GENERATORS
+    from .registry import GENERATORS
     return list(GENERATORS)
 
 
@@ -61,7 +61,7 @@ def bench(design, name: str = "bench_dual_pixel", **kw):
 
     ``bench_dual_pixel`` accepts ``i_primary`` / ``i_secondary`` (A) and ``with_afe``.
     """
-    from .circuits.registry import bench_netlist
+    from .registry import bench_netlist
     return bench_netlist(design, name, **kw)
 
 
@@ -99,10 +99,10 @@ def export_deck(design, name: str, path, models: str = "absolute", **kw) -> Path
     """Write a deck that runs as it is in ``ngspice -b`` (options, models, stimulus).
 
     ``models``: ``absolute`` model paths, or ``link`` (``models/<file>`` and a
-    ``models`` link written beside the deck). ``name``: one of ``circuits.registry.BENCHES``
+    ``models`` link written beside the deck). ``name``: one of ``registry.BENCHES``
     (a cell library alone is refused: ngspice has nothing to simulate in it).
     """
-    from .circuits.registry import require_bench
+    from .registry import require_bench
     from .spice.export import export_deck as _export
     require_bench(name)
     return _export(bench(design, name, **kw), Path(path), models=models)

@@ -17,7 +17,7 @@ import pytest
 
 import pixelkit as pk
 from conftest import REF, ROOT
-from pixelkit.circuits.registry import BENCHES
+from pixelkit.registry import BENCHES
 from pixelkit.spice.raw import read_raw
 from pixelkit.spice.result import Result, vector_key
 
@@ -139,7 +139,7 @@ def test_every_bench_runs_in_ngspice_as_printed(tmp_path, cli, name):
 def test_only_benches_stand_alone():
     """The registry's split, from the netlists themselves: a bench has top-level elements and a
     transient; a cell library only .subckt definitions (nothing for ngspice to simulate)."""
-    from pixelkit.circuits.registry import GENERATORS
+    from pixelkit.registry import GENERATORS
     from pixelkit.design import load_design
     d = load_design(REF)
     for name, make in GENERATORS.items():

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from pixelkit.circuits.array import array_bench
-from pixelkit.circuits.registry import bench_netlist
+from pixelkit.registry import bench_netlist
 from pixelkit.spice import flatlib, scratch
 from pixelkit.spice.batch import run_batch
 from pixelkit.tech.modellib import Include

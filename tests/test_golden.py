@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from conftest import ROOT
-from pixelkit.circuits.registry import GENERATORS, golden_text
+from pixelkit.registry import GENERATORS, golden_text
 from pixelkit.spice import simulate
 
 

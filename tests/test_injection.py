@@ -113,7 +113,7 @@ def test_every_design_and_technology_string(tmp_path, sep):
     """Each string field of a design or technology carries the payload: refused at load, or
     (free text that never reaches a deck) the design's deck runs on both backends without
     the marker appearing."""
-    from pixelkit.circuits.registry import GENERATORS
+    from pixelkit.registry import GENERATORS
     from pixelkit.design import load_design
     marker = tmp_path / "pwned"
     ran = []

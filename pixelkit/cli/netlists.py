@@ -38,7 +38,7 @@ def netlist(design, bench_name, out, models_mode, as_json):
 @json_opt
 def netlists(design, write, out, as_json):
     """List the generators, or regenerate their golden netlists (DESIGN: the reference design)."""
-    from ..circuits.registry import BENCHES, GENERATORS, write_all
+    from ..registry import BENCHES, GENERATORS, write_all
     if write:
         paths = [str(p) for p in write_all(load(design), Path(out or "netlists"))]
         emit({"written": paths}, as_json, lambda x: "\n".join(f"wrote {p}" for p in x["written"]))

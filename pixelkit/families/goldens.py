@@ -1,6 +1,6 @@
 """Golden netlists of the other families, at their reference designs (``designs/*.toml``).
 
-Registered in ``circuits/registry.py`` beside the dual pixel's; each generator
+Registered in ``pixelkit/registry.py`` beside the dual pixel's; each generator
 takes (and ignores) the dual-pixel reference design the registry passes.
 """
 from __future__ import annotations

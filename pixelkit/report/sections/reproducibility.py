@@ -33,7 +33,7 @@ def _git() -> str:
 
 
 def build(ctx) -> Section:
-    from ...circuits.registry import GENERATORS, golden_text
+    from ...registry import GENERATORS, golden_text
     from ...spice.batch import ngspice_version
     from ...spice.options import DEFAULTS, RETRIES
     from ...tech.modellib import files_fingerprint

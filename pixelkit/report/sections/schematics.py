@@ -1,6 +1,6 @@
 """Schematics of the generated circuits, drawn from the generated netlists (schemdraw).
 
-Nothing here is hand-drawn: each subcircuit the generators of ``circuits/registry.py``
+Nothing here is hand-drawn: each subcircuit the generators of ``pixelkit/registry.py``
 emit is walked element by element (the ``Netlist`` data objects, the same ones the
 decks are written from) and every element is placed on a grid in netlist order with its
 symbol (SPICE letter; ``X`` of a MOS model is drawn as a FET), its name, its model or
@@ -128,7 +128,7 @@ def draw_subckt(sub, ports_of: dict, path: Path) -> int:
 
 def subcircuits(design) -> list:
     """(generator, Subckt) for every subcircuit of the drawn generators, each once."""
-    from ...circuits.registry import GENERATORS
+    from ...registry import GENERATORS
     seen, out = set(), []
     for gen in DRAWN:
         for sub in GENERATORS[gen](design).subckts:
@@ -139,7 +139,7 @@ def subcircuits(design) -> list:
 
 
 def _netlist_files(ctx) -> tuple[list, list]:
-    from ...circuits.registry import GENERATORS, golden_text
+    from ...registry import GENERATORS, golden_text
     files, rows = [], []
     for name in GENERATORS:
         text = golden_text(name, ctx.design)

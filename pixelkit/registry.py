@@ -1,5 +1,8 @@
 """One registry of generators; each emits its netlist text at the reference design's values.
 
+The dual pixel's circuits (``circuits/``) and the other families' (``families/goldens.py``):
+the registry sits above both (docs/module-layers.md).
+
 ``netlists/<name>.cir`` holds the golden copy of each; ``pixelkit netlists --write``
 regenerates them and ``tests/test_golden.py`` compares every generator with its
 file. Golden decks run as they are (``ngspice -b netlists/bench_dual_pixel.cir``):
@@ -11,15 +14,15 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..families.goldens import GENERATORS as FAMILY_GENERATORS
-from ..spice.netlist import Netlist, Op
-from .afe import sc_afe
-from .array import array_bench, pixel_array
-from .devices import photodiode_model
-from .dual_pixel import dual_pixel
-from .opamp import macro, ota
-from .pixel5t import pixel5t
-from .testbench import afe_bench, dual_pixel_bench, pd_pair_bench
+from .circuits.afe import sc_afe
+from .circuits.array import array_bench, pixel_array
+from .circuits.devices import photodiode_model
+from .circuits.dual_pixel import dual_pixel
+from .circuits.opamp import macro, ota
+from .circuits.pixel5t import pixel5t
+from .circuits.testbench import afe_bench, dual_pixel_bench, pd_pair_bench
+from .families.goldens import GENERATORS as FAMILY_GENERATORS
+from .spice.netlist import Netlist, Op
 
 
 def _cells(design, title, subckts) -> Netlist:
@@ -59,7 +62,7 @@ BENCHES = ("bench_dual_pixel", "bench_dual_pixel_afe", "bench_array_2x2", "bench
 
 def require_bench(name: str) -> None:
     """Refuse a name that is not a deck running alone, listing those that are."""
-    from ..errors import ConfigError
+    from .errors import ConfigError
     if name not in BENCHES:
         what = " (a cell library: .subckt definitions only, netlists/" + name + ".cir)" if name in GENERATORS else ""
         raise ConfigError("", "bench", name, f"a deck that runs alone in ngspice -b{what}: one of {', '.join(BENCHES)}")
@@ -68,7 +71,7 @@ def require_bench(name: str) -> None:
 def bench_netlist(design, name: str, i_primary: float | None = None, i_secondary: float | None = None,
                   with_afe: bool | None = None) -> Netlist:
     """The registry's netlist ``name``; the dual-pixel benches take other photocurrents (A)."""
-    from ..errors import ConfigError
+    from .errors import ConfigError
     if name not in GENERATORS:
         raise ConfigError("", "bench", name, f"one of {', '.join(GENERATORS)}")
     if (i_primary, i_secondary, with_afe) == (None, None, None):
@@ -82,13 +85,13 @@ def bench_netlist(design, name: str, i_primary: float | None = None, i_secondary
 
 def golden_text(name: str, design) -> str:
     """The golden deck: runnable as it is (the kit's options, ``models/`` link, a ``.print`` line)."""
-    from ..spice.export import deck_text
+    from .spice.export import deck_text
     return deck_text(GENERATORS[name](design), models="link")
 
 
 def write_all(design, folder: Path) -> list[Path]:
-    from ..fileio import write_atomic
-    from ..spice.export import make_link
+    from .fileio import write_atomic
+    from .spice.export import make_link
     Path(folder).mkdir(parents=True, exist_ok=True)
     for link, target in GENERATORS["bench_dual_pixel"](design).model_links().items():
         make_link(Path(folder) / link, Path(target))
