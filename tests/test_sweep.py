@@ -13,7 +13,8 @@ from pixelkit.circuits.testbench import dual_pixel_bench, timings
 from pixelkit.errors import ConfigError
 from pixelkit.measure.pixel import double_sampled
 from pixelkit.spice import simulate
-from pixelkit.sweep.run import default_stimulus, run_sweep
+from pixelkit.chip.scene import default_stimulus
+from pixelkit.sweep.run import run_sweep
 from pixelkit.sweep.space import parse_axis, si_value
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -171,3 +171,10 @@ def photocurrents(design, rows: int, cols: int, m: np.ndarray, unit: str,
         clipped[kind] = int(np.count_nonzero(sat[kind]))
         out[kind] = i
     return Photocurrents(out["primary"], out["secondary"], comp, clipped, sat)
+
+
+def default_stimulus(design, t_exp: float) -> dict:
+    """Half of the primary's swing and 5 % of the secondary's over ``t_exp`` (PD model)."""
+    v_end = design.pixel.v_pd_reset - design.pixel.swing
+    return {"iph_p": 0.5 * i_floor(design, "primary", t_exp, v_end),
+            "iph_s": 0.05 * i_floor(design, "secondary", t_exp, v_end), "t_exp": t_exp}

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import SimulationError
+from ..chip.scene import default_stimulus
 from ..spice.executors import run_tasks
 from .space import Axis, design_with, si_value
 
@@ -56,14 +57,6 @@ def _cell(v) -> str:
         return "" if v != v else f"{v:.9g}"
     s = str(v)
     return '"' + s.replace('"', '""') + '"' if any(ch in s for ch in ',"\n') else s
-
-
-def default_stimulus(design, t_exp: float) -> dict:
-    """Half of the primary's swing and 5 % of the secondary's over ``t_exp`` (PD model)."""
-    from ..chip.scene import i_floor
-    v_end = design.pixel.v_pd_reset - design.pixel.swing
-    return {"iph_p": 0.5 * i_floor(design, "primary", t_exp, v_end),
-            "iph_s": 0.05 * i_floor(design, "secondary", t_exp, v_end), "t_exp": t_exp}
 
 
 def _point(task):

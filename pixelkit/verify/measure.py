@@ -151,7 +151,7 @@ def gse(design, draw=None, backend="batch") -> dict:
     (each kind at its mid-scale current from the PD model, so the storage signal is mV, far above
     the solver's noise). GSE = exposure signal over storage signal per window."""
     from ..circuits.testbench import timings
-    from ..sweep.run import default_stimulus
+    from ..chip.scene import default_stimulus
     b = _Bench(design)
     st = default_stimulus(design, b.tw)
     i = (st["iph_p"], 10 * st["iph_s"])   # both at ~half of their PD range
@@ -223,7 +223,7 @@ def settling(design, draw=None, backend="batch") -> dict:
     S2 from the same column state (``chip.settling``). Nominal devices: a Monte Carlo draw
     does not enter (the figure's ``mc`` is false)."""
     from ..chip.frame import simulate_frame
-    from ..sweep.run import default_stimulus
+    from ..chip.scene import default_stimulus
     n = design.secondary_per_pixel
     stim = default_stimulus(design, design.experiment.t_window)
     ip, is_ = np.full((2, 1), stim["iph_p"]), np.full((2, n), stim["iph_s"])

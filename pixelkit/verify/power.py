@@ -82,7 +82,7 @@ def _sources(design, net) -> dict:
 
 def _bench(design, kind: str, draw=None):
     from ..circuits.array import Tile, array_bench
-    from ..sweep.run import default_stimulus
+    from ..chip.scene import default_stimulus
     from . import mismatch
     n = design.secondary_per_pixel
     stim = default_stimulus(design, design.experiment.t_window)
