@@ -93,3 +93,20 @@ def pytest_terminal_summary(terminalreporter):
     if _FD_PV_DESELECTED:
         why, n = _FD_PV_DESELECTED
         terminalreporter.write_line(f"fd_pv: {n} test(s) deselected (marker fd_pv): {why}", yellow=True)
+
+
+def pd_reverse_currents(design, geometries, temperatures_K) -> dict:
+    """ngspice's reverse current (A) of the technology's PD diode card at its reset bias:
+    {(area, perimeter, T): I} for every geometry (area m2, perimeter m) and temperature, each deck
+    with the card the kit writes for its temperature; gmin 1e-21 S (the default 1e-15 S would
+    carry ~4x the c35 primary's dark current at 2.5 V)."""
+    from pixelkit.circuits.devices import photodiode, photodiode_model
+    from pixelkit.spice import simulate_many
+    from pixelkit.spice.netlist import Element, Netlist, Op
+    tech = design.tech
+    keys = [(a, p, t) for a, p in geometries for t in temperatures_K]
+    nets = [Netlist(title=f"pd_reverse_{k}", analysis=Op(), models=photodiode_model(tech, t),
+                    elements=(Element("Vr", ("n", "0"), tech.photodiode.reset_bias), photodiode("p", "n", a, p, tech)),
+                    temperature_C=t - 273.15, options=(("gmin", 1e-21),))
+            for k, (a, p, t) in enumerate(keys)]
+    return {key: abs(float(r["i(vr)"][0])) for key, r in zip(keys, simulate_many(nets))}

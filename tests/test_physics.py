@@ -64,12 +64,23 @@ def test_photocurrent_of_a_line_is_r_e_a(ref_design):
     assert i == pytest.approx(photo.responsivity(850e-9, qe(850e-9)) * 100.0 * 1e-10)
 
 
-def test_dark_current_doubles_per_doubling_step(ref_design):
-    pd = ref_design.tech.photodiode
-    i1 = dark_current(25e-12, 20e-6, pd.t_ref, pd)
-    i2 = dark_current(25e-12, 20e-6, pd.t_ref + pd.dark_doubling, pd)
-    assert i1 == pytest.approx(pd.dark_area * 25e-12 + pd.dark_perimeter * 20e-6)
-    assert i2 == pytest.approx(2 * i1)
+def test_dark_current_law_against_spice_and_two_geometries(ref_design):
+    """Independent path: ngspice's reverse current of the PD card at 2.5 V for both PD geometries
+    (204.6 um2 / 57.3 um and 25 um2 / 20 um). As the source's method has it (fit J_A and J_P from the
+    two geometries, I = (J_A A + J_P P) 2^((T - T_ref) / T_d)): the 2 x 2 solve of the SPICE currents
+    gives the technology's area and perimeter densities (0.1 %), SPICE's current at T_ref + T_d is
+    twice that at T_ref, and ``dark_current`` equals SPICE's at every geometry and temperature."""
+    from conftest import pd_reverse_currents
+    pd, p, s = ref_design.tech.photodiode, ref_design.primary, ref_design.secondary
+    geo = [(p.area, p.perimeter), (s.area, s.perimeter)]
+    temps = (pd.t_ref, pd.t_ref + pd.dark_doubling)
+    i = pd_reverse_currents(ref_design, geo, temps)
+    j_a, j_p = np.linalg.solve(np.array(geo), [i[(*g, pd.t_ref)] for g in geo])
+    assert j_a == pytest.approx(pd.dark_area, rel=1e-3) and j_p == pytest.approx(pd.dark_perimeter, rel=1e-3)
+    for g in geo:
+        assert i[(*g, temps[1])] / i[(*g, temps[0])] == pytest.approx(2.0, rel=1e-3)
+        for t in temps:
+            assert dark_current(*g, t, pd) == pytest.approx(i[(*g, t)], rel=1e-3)
 
 
 def test_ktc_noise():

@@ -13,10 +13,15 @@ from pixelkit.sensor import lowgse as lg
 
 
 def test_rule_of_thumb_against_eq_2_18():
+    """Eq. 2.17 is the balance integral_0^tau1 eta dt ~ integral_tau1^tau2 eta dt: at t_int = the rule for
+    row 500, the time-stepped image of constant light (``sensor.exposure``, each row read at its own
+    time) holds as much charge from the row's wait as from the exposure (S(500) / S(0) = 2; row 0
+    waits nothing). Eq. 2.18's example, its own numbers 500 x 1650 / 22 MHz / 310 = 0.121 ms, against
+    the printed "0.2 ms ~": the same order (1.65x)."""
     cam = lg.Camera()                         # MT9M021: 1650 clocks per row, 22 MHz, GSE 310
     t = lg.rule_of_thumb(cam, 500)
-    assert t == pytest.approx(500 * 1650 / 22e6 / 310, rel=1e-12)
-    # the thesis set 0.2 ms and wrote "~": same order of magnitude (0.12 ms -> 1.65x)
+    assert lg.row_profile(cam, t)[500] == pytest.approx(2.0, rel=1e-3)
+    assert t == pytest.approx(500 * 1650 / 22e6 / 310, rel=1e-9)
     assert 0.5 < 0.2e-3 / t < 2.0
 
 
@@ -45,9 +50,16 @@ def test_speed_from_the_emulated_trace(ratio):
 
 
 def test_cli_lowgse(capsys):
-    code, out, err = run_inprocess(capsys, "sensor", "lowgse", "--json")
+    """The command at a row and GSE of its own: the rule and the wait from eq. 2.14 / 2.17 with the
+    command's numbers (row 300, 1650 clocks per row, 22 MHz, GSE 100), the image's balance peak near
+    the rule (eq. 2.16: equal weight) and the trace's speed against the scene's truth (eq. 2.15)."""
+    code, out, err = run_inprocess(capsys, "sensor", "lowgse", "--row", "300", "--gse", "100", "--json")
     assert code == 0, err
     r = json.loads(out)
-    assert r["t_rule_s"] == pytest.approx(1.2097e-4, rel=1e-3)
+    t_wait = 300 * 1650 / 22e6
+    assert r["t_wait_s"] == pytest.approx(t_wait, rel=1e-9)
+    assert r["t_rule_s"] == pytest.approx(t_wait / 100, rel=1e-9)
+    assert 0.5 <= r["best_ratio_image"] <= 2.0
+    assert r["trace_speed"]["speed_px_s"] == pytest.approx(lg.StreetScene().speed_px_s, rel=0.01)
     code, out, err = run_inprocess(capsys, "sensor", "lowgse", "--gse", "0.5")
     assert code == 2 and "--gse" in err

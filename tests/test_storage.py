@@ -43,12 +43,15 @@ def test_dark_signal_vs_temperature_at_the_real_secondary_time(ref_design, temp_
 
 
 def test_dark_law_spans_the_thesis_temperature_range(ref_design):
-    """The law's own figure: 2^((85 - 27) / 7) = 311x, the analytic model's, now also SPICE's
-    (the diode card's IS at the deck temperature, TNOM = T: no XTI/EG rescaling, which gave 1772x)."""
-    from pixelkit.circuits.devices import photodiode_model
-    pd = ref_design.tech.photodiode
-    lo, hi = (dict(photodiode_model(ref_design.tech, t)[0].params)["is"] for t in (300.15, 358.15))
-    assert hi / lo == pytest.approx(2 ** (58 / 7), rel=1e-9)
+    """The law's own figure, I(85 degC) / I(27 degC) = 2^((85 - 27) / 7) = 311x (the source equation
+    I = I_ref 2^((T - T_ref) / T_d) with the stand-in's 7 K), against ngspice's reverse current of the
+    secondary PD's card at both temperatures (0.1 %): the card carries the law (its IS at the deck's
+    temperature with TNOM = T), not ngspice's own XTI / EG rescaling, which gave 1772x."""
+    from conftest import pd_reverse_currents
+    s = ref_design.secondary
+    assert ref_design.tech.photodiode.t_ref == pytest.approx(300.15) and ref_design.tech.photodiode.dark_doubling == 7.0
+    i = pd_reverse_currents(ref_design, [(s.area, s.perimeter)], (300.15, 358.15))
+    assert i[(s.area, s.perimeter, 358.15)] / i[(s.area, s.perimeter, 300.15)] == pytest.approx(2 ** (58 / 7), rel=1e-3)
 
 
 def _fd_level(design, which, n_e):
