@@ -28,7 +28,8 @@ CITE = re.compile(r"(?<![\w`\[])\[([A-Za-z][A-Za-z0-9.-]*[A-Za-z0-9])\](?![(:\[\
 AUTHOR_YEAR = re.compile(r"[A-Z][A-Za-z]*(?:19|20)\d\d[a-z]?")
 PAGE = r"docs/([A-Za-z0-9_-]+\.md)(#[A-Za-z0-9_-]+)?"
 PAGE_SPAN = re.compile(r"`" + PAGE + r"`")
-PAGE_BARE = re.compile(r"(?<![\w/(\[`.-])" + PAGE + r"(?![\w/])")
+#: a bare mention: also in parentheses, "(docs/verify.md)", but not a Markdown link's target "](docs/..."
+PAGE_BARE = re.compile(r"(?<![\w/\[`.-])(?<!\]\()" + PAGE + r"(?![\w/])")
 FENCE = re.compile(r"^\s*(```|~~~)")
 SPANS = re.compile(r"(`+)(.+?)\1")
 BIB_HEADING = re.compile(r"^#+\s*\[([A-Za-z][A-Za-z0-9.-]*[A-Za-z0-9])\]\s*$", re.M)

@@ -39,6 +39,7 @@ LIMITS = {
     "json": 64 * MiB,             # a golden / regression JSON file
     "sim-cache": 2048 * MiB,      # a simulation-cache entry (a whole-chip frame: a few MB)
     "report-cache": 512 * MiB,    # a report-section cache entry (its figures)
+    "raw": 2048 * MiB,            # an ngspice raw file (pixelkit waves; a whole-chip frame: tens of MB)
 }
 
 

@@ -9,6 +9,9 @@ ROOT = Path(__file__).resolve().parents[1]
 REF = ROOT / "designs" / "dual_pixel_revA.toml"
 #: The same chip with the thesis's own read (~400 nA, does not settle with the AFE): the gap module's silicon.
 THESIS_READ = ROOT / "designs" / "dual_pixel_revA_thesis_read.toml"
+#: ``pixelkit report REF --quick`` exits 1: the reference fails two specs at its nominal condition
+#: (pd_conversion_gain_secondary, full_well_primary: docs/verify.md), and a report exits as verify does.
+REF_QUICK_EXIT = 1
 
 
 @pytest.fixture(scope="session")
@@ -110,3 +113,21 @@ def pd_reverse_currents(design, geometries, temperatures_K) -> dict:
                     temperature_C=t - 273.15, options=(("gmin", 1e-21),))
             for k, (a, p, t) in enumerate(keys)]
     return {key: abs(float(r["i(vr)"][0])) for key, r in zip(keys, simulate_many(nets))}
+
+
+@pytest.fixture(scope="session")
+def quick_report(tmp_path_factory):
+    """The quick report (nominal only) of the reference design, built once per session by the command
+    (umask 022, so the files' modes are checkable): (folder, exit code, stdout, stderr, the
+    ``designs/*_sized.toml`` files before and after). The reference fails two specs at nominal
+    (docs/verify.md), so the command exits 1; the tests that read the report share it."""
+    out = tmp_path_factory.mktemp("quick") / "revA"
+    sized = sorted((ROOT / "designs").glob("*_sized.toml"))
+    old = os.umask(0o022)
+    try:
+        code, stdout, err = run_cli("report", REF, "--quick", "--out", out)
+    finally:
+        os.umask(old)
+    assert code == REF_QUICK_EXIT and (out / "summary.json").is_file(), err[-3000:] + stdout
+    return {"out": out, "code": code, "stdout": stdout, "stderr": err, "sized": (sized, sorted(
+        (ROOT / "designs").glob("*_sized.toml")))}

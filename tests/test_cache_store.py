@@ -15,7 +15,7 @@ import threading
 
 import pytest
 
-from conftest import REF, ROOT, wait_for
+from conftest import REF_QUICK_EXIT, REF, ROOT, wait_for
 from pixelkit.spice import simulate
 from pixelkit.spice import cache as cache_mod
 from pixelkit.spice import engine
@@ -112,7 +112,7 @@ def report_env(tmp_path_factory):
     ref = root / "ref"   # built with an empty report cache, so it read no entry: the independent reference
     p = subprocess.run([sys.executable, "-m", "pixelkit", "report", REF, "--quick", "--out", ref],
                        capture_output=True, text=True, env=env, cwd=root, timeout=1200)
-    assert p.returncode == 0, p.stderr[-2000:]
+    assert p.returncode == REF_QUICK_EXIT, p.stderr[-2000:]
     assert json.loads((ref / "summary.json").read_text())["sections_from_cache"] == 0
     return root, env, ref
 
@@ -152,7 +152,7 @@ def test_report_cache_tampering_is_found(report_env):
     data = open(png, "rb").read()
     open(png, "wb").write(data[:data.index(b"\x89PNG") + 200])
     p = _report(root, env, root / "again")
-    assert p.returncode == 0, p.stderr[-2000:]
+    assert p.returncode == REF_QUICK_EXIT, p.stderr[-2000:]
     assert p.stderr.count("rebuilding the section") == 2, p.stderr
     assert "fails its checksum" in p.stderr and "truncated" in p.stderr
     assert _checked(root / "again") == _checked(ref)
@@ -165,7 +165,7 @@ def test_a_pipe_in_the_report_cache_does_not_block(report_env):
     os.unlink(e)
     os.mkfifo(e)
     p = _report(root, env, root / "piped")
-    assert p.returncode == 0 and "named pipe" in p.stderr, p.stderr[-2000:]
+    assert p.returncode == REF_QUICK_EXIT and "named pipe" in p.stderr, p.stderr[-2000:]
     assert _checked(root / "piped") == _checked(ref)
     assert os.path.isfile(e) and not os.path.islink(e)
 
@@ -175,7 +175,7 @@ def test_kill_9_of_report_leaves_no_pile(report_env):
     and the next complete run removes every staging folder the killed runs left."""
     root, env, ref = report_env
     out = root / "killed"
-    assert _report(root, env, out).returncode == 0
+    assert _report(root, env, out).returncode == REF_QUICK_EXIT
     before = _checked(out)
     for _ in range(3):
         p = subprocess.Popen([sys.executable, "-m", "pixelkit", "report", REF, "--quick", "--out", str(out)],
@@ -188,7 +188,7 @@ def test_kill_9_of_report_leaves_no_pile(report_env):
     stale = [n for n in os.listdir(root) if n.startswith(".killed.")]
     assert stale, "the kill came too late to leave debris: the test proves nothing"
     q = _report(root, env, out)
-    assert q.returncode == 0, q.stderr[-2000:]
+    assert q.returncode == REF_QUICK_EXIT, q.stderr[-2000:]
     assert [n for n in os.listdir(root) if n.startswith(".killed.")] == []
     assert _checked(out) == _checked(ref)
 

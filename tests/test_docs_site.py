@@ -156,3 +156,26 @@ def test_technology_reference_is_the_generated_one_and_names_every_key_of_the_bu
         assert missing(tomllib.loads(f.read_text())) == [], f.name
     assert missing({"photodiode": {"no_such_key": 1}, "no_such_table": {}}) == ["photodiode.no_such_key",
                                                                                "no_such_table"]
+
+
+def _prose(html: str) -> str:
+    """The page's text outside code, preformatted blocks, links and the search index's scripts."""
+    for tag in ("pre", "code", "a", "script", "style", "title"):
+        html = re.sub(rf"<{tag}\b.*?</{tag}>", " ", html, flags=re.S)
+    return re.sub(r"<[^>]+>", " ", html)
+
+
+def test_every_page_mention_on_the_site_is_a_link(site):
+    """Issue 42: a reader clicks a cross-reference. Read from the built pages (not from the hook
+    that makes the links): no docs/x.md left as plain text anywhere in a page's prose, the index's
+    "Where to start" included; a planted mention in parentheses is linked by the hook."""
+    left = {}
+    for page in sorted(site.rglob("index.html")):
+        found = re.findall(r"docs/[A-Za-z0-9_-]+\.md", _prose(page.read_text()))
+        if found:
+            left[str(page.relative_to(site))] = found
+    assert not left, left
+    start = (site / "index.html").read_text()
+    assert re.search(r'<a href="setup/(?:index\.html)?">', start)
+    out = link_markdown("Set-up (docs/setup.md); a link [x](docs/setup.md).", set(), titles={"setup.md": "Set-up"})
+    assert out == "Set-up ([Set-up](setup.md)); a link [x](docs/setup.md)."

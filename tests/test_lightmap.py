@@ -5,6 +5,8 @@ less every metal, no netlist involved) against the kit's per-net map; the output
 by ngspice through the real readout (column samplers and the SC AFE), against the analytic read
 noise there. The drawn shield (over the subpixels, the readout open) is [Thesis2019]'s chip.
 """
+import json
+
 import pytest
 
 from conftest import ROOT, run_cli
@@ -80,8 +82,10 @@ def test_open_readout_fails_as_the_thesis_chip_and_a_full_shield_cures_it(gf, ge
 def test_lightmap_command_and_a_technology_without_stack():
     code, out, err = run_cli("lightmap", GF, "--shield", "full", "--json", "--quiet", timeout=300)
     assert code == 0, err
+    v = json.loads(out)["verdict"]   # a full shield keeps the light out of the readout: PASS at 1x the read noise
+    assert v["verdict"] == "PASS" and v["limit"] == "1x" and not v["failed"]
     code, out, err = run_cli("lightmap", ROOT / "designs" / "dual_pixel_revA.toml", timeout=120)
-    assert code == 2 and "[stack]" in err
+    assert code == 2 and "[stack]" in err and "docs/technology-file.md" in err   # what it lacks, how to add it
 
 
 def test_report_section(gf, tmp_path):

@@ -61,12 +61,9 @@ def chromium(*args, timeout=120):
 
 
 @pytest.fixture(scope="module")
-def quick_report(tmp_path_factory):
-    """The quick report of the reference design, built once for this module."""
-    out = tmp_path_factory.mktemp("report") / "revA"
-    code, stdout, err = run_cli("report", REF, "--quick", "--out", out)
-    assert code == 0, err + stdout
-    return out, stdout
+def quick_report(quick_report):
+    """The session's quick report of the reference design (conftest.py): (folder, stdout)."""
+    return quick_report["out"], quick_report["stdout"]
 
 
 class _Srcs(html.parser.HTMLParser):
@@ -179,7 +176,9 @@ def test_intentional_change_moves_figures_and_passes_on_specs_ranked(quick_repor
     assert text != REF.read_text()
     changed.write_text(text)
     code, stdout, err = run_cli("report", changed, "--quick", "--out", tmp_path / "revB", "--baseline", base)
-    assert code == 0, err + stdout
+    # exit 1 all the same: revA's own two specs fail at nominal, as they did in the baseline
+    assert code == 1, err + stdout
+    assert _failing(tmp_path / "revB") == _failing(base) and _failing(base)
     diff = json.loads((tmp_path / "revB" / "diff.json").read_text())
     assert [c["field"] for c in diff["design_changes"]] == ["pixel.devices.sf_l"]
     assert any("pedestal" in name for name in diff["moved"]), diff["moved"]
@@ -193,12 +192,19 @@ def test_intentional_change_moves_figures_and_passes_on_specs_ranked(quick_repor
     assert "newly fails" in " ".join(help_text.split())
 
 
-def test_unchanged_revision_exits_0_and_json_gives_the_diff_without_html(quick_report, tmp_path):
+def _failing(folder) -> list[str]:
+    return [x["spec"] for x in json.loads((folder / "summary.json").read_text())["verdict"]["failing"]]
+
+
+def test_unchanged_revision_diff_passes_and_json_gives_it_without_html(quick_report, tmp_path):
+    """The diff of an unchanged revision passes; the command exits 1 all the same, on revA's own
+    failing specs (the verdict is the design's, the diff's is said beside it)."""
     base, _ = quick_report
     out = tmp_path / "again"
     code, stdout, err = run_cli("report", REF, "--quick", "--out", out, "--baseline", base, "--json")
-    assert code == 0, err + stdout
+    assert code == 1, err + stdout
     r = json.loads(stdout)
+    assert r["verdict"]["verdict"] == "FAIL" and not r["verdict"]["diff_failed"]
     assert r["html"] is None and not (out / "index.html").exists()
     assert r["diff"]["passed"] and r["diff"]["moved"] == [] and r["diff"]["design_changes"] == []
     assert all(c["status"] == "same" for c in r["diff"]["checked"])

@@ -23,13 +23,10 @@ MINE = ("sizing", "afe", "array", "layout")
 
 
 @pytest.fixture(scope="module")
-def report(tmp_path_factory):
-    out = tmp_path_factory.mktemp("sections") / "revA"
-    sized_in_designs = sorted((ROOT / "designs").glob("*_sized.toml"))
-    code, stdout, err = run_cli("report", REF, "--quick", "--out", out)
-    assert code == 0, err + stdout
-    assert sorted((ROOT / "designs").glob("*_sized.toml")) == sized_in_designs   # nothing written there
-    return out, json.loads((out / "summary.json").read_text())
+def report(quick_report):
+    q = quick_report
+    assert q["sized"][0] == q["sized"][1]   # the report wrote nothing in designs/
+    return q["out"], json.loads((q["out"] / "summary.json").read_text())
 
 
 def _csv(out: Path, name: str) -> list[dict]:
@@ -61,8 +58,8 @@ def test_section_is_available_with_tables_and_figures(report, key, tables, figur
 
 def test_sizing_verifies_on_the_criterion_and_names_binding_constraints(report, ref_design, experiment):
     out, summary = report
-    assert _value(summary, "sizing.verify.primary_frac") == pytest.approx(0.5, abs=0.02)
-    assert _value(summary, "sizing.verify.secondary_frac") == pytest.approx(0.05, abs=0.005)
+    assert _value(summary, "sizing.verify.primary_pct") == pytest.approx(50, abs=2)
+    assert _value(summary, "sizing.verify.secondary_pct") == pytest.approx(5, abs=0.5)
     # C_M = 12 (A_s / A_p)(i_mid / i_5pct): the derivation of test_sizing.py, on the report's experiment
     d = ref_design
     a_s_over_a_p = (d.secondary.pd_width * d.secondary.pd_height) / (d.primary.pd_width * d.primary.pd_height)
@@ -78,7 +75,7 @@ def test_afe_gain_error_is_the_finite_gain_closed_form(report, ref_design):
     _, summary = report
     a = ref_design.afe
     eps = (a.c11 + a.c13) / (a.gain * a.c13)
-    assert _value(summary, "afe.gain_error_frac") == pytest.approx(-eps / (1 + eps), rel=0.05)
+    assert _value(summary, "afe.gain_error_pct") == pytest.approx(-100 * eps / (1 + eps), rel=0.05)
 
 
 def test_array_signals_follow_the_gradient_and_the_split_decks(report):

@@ -22,6 +22,8 @@ from ..spice.counter import SpiceCounter
 from . import cache
 from .diff import diff_reports, load_report
 from .html import render
+from .portable import portable_section
+from .verdict import verdict
 from .sections import REGISTRY, Context, Section, load_section
 
 #: Sections whose output depends on the --measured file.
@@ -51,6 +53,7 @@ def build_section(key: str, title: str, owner: str, ctx: Context, options: dict,
         kind = "" if isinstance(exc, PixelkitError) else f"{type(exc).__name__}: "
         return Section(getattr(mod, "TITLE", title), available=False, failed=True, why=f"failed: {kind}{exc}"), "failed"
     s.key = key
+    portable_section(s, ctx.out_dir)   # before the cache keeps it: no path of this run's staging folder
     if use_cache:
         cache.save(k, s, ctx.out_dir)
     return s, "built"
@@ -62,6 +65,16 @@ def _csv(table) -> str:
     w.writerow(table.columns)
     w.writerows(table.rows)
     return buf.getvalue()
+
+
+def as_percent(c):
+    """A checked fraction (unit "1", name ``*_frac``) as people read it everywhere else in the report:
+    ``*_pct`` in %, its absolute tolerance scaled alike (one unit per figure: the tables and the
+    terminal show %; ``diff.RENAMED_PCT`` compares a baseline's fraction with it)."""
+    from dataclasses import replace
+    if c.unit == "1" and c.name.endswith("_frac"):
+        return replace(c, name=c.name[:-5] + "_pct", value=100.0 * c.value, unit="%", tol_abs=100.0 * c.tol_abs)
+    return c
 
 
 def _checked(sections) -> dict:
@@ -134,7 +147,7 @@ def _clear_debris(out: Path) -> None:
 
 def build_report(design, out: Path, *, quick: bool = False, backend: str = "batch", jobs: int | None = None,
                  measured: Path | None = None, baseline: Path | None = None, use_cache: bool = True,
-                 html: bool = True) -> dict:
+                 html: bool = True, waves: tuple = ()) -> dict:
     """Build the report of ``design`` into ``out``; returns the summary (with the diff when asked)."""
     from ..progress import command_bar
     t0 = time.perf_counter()
@@ -153,7 +166,8 @@ def build_report(design, out: Path, *, quick: bool = False, backend: str = "batc
             def tell(stage_name, done=None, total=None):
                 bar.set_description(f"report: {stage_name}" + (f" {done}/{total}" if total else ""))
 
-            ctx = Context(design, stage, quick, backend, jobs, Path(measured) if measured else None, tell)
+            ctx = Context(design, stage, quick, backend, jobs, Path(measured) if measured else None, tell,
+                          waves=tuple(waves))
             measured_hash = cache.file_hash(measured) if measured else None
             with counter:
                 for key, title, owner in REGISTRY:
@@ -161,8 +175,11 @@ def build_report(design, out: Path, *, quick: bool = False, backend: str = "batc
                     options = {"quick": quick, "backend": backend}
                     if key in MEASURED_SECTIONS:
                         options["measured"] = measured_hash
+                    if key == "signoff" and waves:
+                        options["waves"] = sorted(waves)
                     s, how[key] = build_section(key, title, owner, ctx, options, use_cache)
                     s.key = key
+                    s.checked = [as_percent(c) for c in s.checked]
                     sections.append(s)
                     bar.update(1)
             bar.set_description("report")
@@ -175,6 +192,8 @@ def build_report(design, out: Path, *, quick: bool = False, backend: str = "batc
         if base is not None:
             result["diff"] = diff_reports(base, stage)
             (stage / "diff.json").write_text(json.dumps(result["diff"], indent=1) + "\n")
+        signoff = next((s.data for s in sections if s.key == "signoff" and s.available), None)
+        summary["verdict"] = verdict(summary, signoff, result.get("diff"))
         summary["wall_s"] = round(time.perf_counter() - t0, 2)
         (stage / "summary.json").write_text(json.dumps(summary, indent=1) + "\n")
         if html:

@@ -80,9 +80,17 @@ RENAMED = {**{f"summary.{w}.{a}": f"summary.{w}.{b}" for w in ("primary", "secon
 RETIRED = ("families.", "frame.dv_kmh", "frame.lowgse_best_ratio")
 
 
+def _in_percent(name: str, c: dict) -> tuple[str, dict]:
+    """A baseline's checked fraction (``*_frac``, unit "1": reports before one unit per figure) as
+    today's ``*_pct`` in % (``build.as_percent``)."""
+    if c.get("unit") == "1" and name.endswith("_frac"):
+        return name[:-5] + "_pct", {**c, "value": 100.0 * c["value"], "unit": "%", "tol_abs": 100.0 * c["tol_abs"]}
+    return name, c
+
+
 def _checked(old: dict, new: dict) -> list[dict]:
     rows = []
-    old = {RENAMED.get(k, k): v for k, v in old.items()}
+    old = dict(_in_percent(RENAMED.get(k, k), v) for k, v in old.items())
     for name in sorted(set(old) | set(new)):
         o, n = old.get(name), new.get(name)
         if o is None:

@@ -47,8 +47,23 @@ def _template_for(key: str) -> str:
 def render(folder: Path, design, sections, summary: dict, diff: dict | None) -> Path:
     css = (Path(__file__).parent / "templates" / "report.css").read_text()
     blocks = [(s, _template_for(s.key)) for s in sections]
+    so = next((s for s in sections if s.key == "signoff" and s.available), None)
+    waves = set((so.data.get("waves") or {}) if so else ())
+    plotly = ""
+    if waves:   # plotly.js once per page, every waveform a <div> and its data
+        from ..plots.interactive import plotly_js
+        plotly = plotly_js()
     html = _ENV.get_template("report.html.j2").render(design=design, blocks=blocks, summary=summary, diff=diff,
-                                                      css=css, f=fmt, u=unit, tol=tol)
+                                                      css=css, f=fmt, u=unit, tol=tol, waves=waves, plotly=plotly,
+                                                      wave_div=wave_div)
     path = Path(folder) / "index.html"
     path.write_text(html)
     return path
+
+
+def wave_div(w: dict) -> str:
+    """A spec's waveform view (``verify.waves.spec_waves``) as an interactive figure's ``<div>``."""
+    from ..plots.interactive import figure, figure_div
+    what = w["spec"] if w["figure"] == w["spec"] else f"{w['spec']} ({w['figure']})"
+    title = f"{what}: {w['worst']}" + ("" if w["worst"] == w["nominal"] else f" vs {w['nominal']}")
+    return figure_div(figure(w["traces"], w["marks"], title), f"plot-{w['spec']}")

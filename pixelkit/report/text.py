@@ -109,23 +109,22 @@ def report_text(r: dict) -> str:
     """Where the report is, its headline figures, which sections wait, and the diff's verdict."""
     c = r["checked"]
     where = r["html"] or r["out"]
-    lines = [f"report: {where}",
-             f"  {r['design']} rev {r['revision']} ({r['profile']} profile): {r['spice_runs']} SPICE runs, "
+    from .verdict import PROFILES, line
+    lines = [f"report: {where}"]
+    if r.get("verdict"):
+        lines.append(f"  {line(r['verdict'])}")
+    lines += [f"  {r['design']} rev {r['revision']} ({r['profile']} profile: {PROFILES.get(r['profile'], '')}): "
+             f"{r['spice_runs']} SPICE runs, "
              f"{r['spice_cached']} from cache, {r['sections_from_cache']} sections from cache, {r['wall_s']} s"]
     from .html import fmt, unit
     for name, label in (("summary.primary.cg_jdep_uV_per_e", "primary CG_jdep(2.5 V)"),
                         ("summary.secondary.cg_jdep_uV_per_e", "secondary CG_jdep(2.5 V)"),
                         ("model_vs_spice.primary.i_mid_A", "primary i_mid"),
                         ("model_vs_spice.secondary.i_5pct_A", "secondary i_5pct"),
-                        ("model_vs_spice.model_vs_spice.max_err_frac", "model vs SPICE worst"),
-                        ("sizing.c_m", "C_M (sized)"), ("afe.gain_error_frac", "AFE gain error")):
+                        ("model_vs_spice.model_vs_spice.max_err_pct", "model vs SPICE worst"),
+                        ("sizing.c_m", "C_M (sized)"), ("afe.gain_error_pct", "AFE gain error")):
         if name in c:
             lines.append(f"  {label:<24} {fmt(c[name]['value'])} {unit(c[name]['unit'])}".rstrip())
-    so = r.get("signoff")
-    if so:
-        lines.append(f"  sign-off: {so['specs'] - len(so['failed'])} of {so['specs']} specs pass"
-                     + (f"; FAIL: {', '.join(so['failed'])}" if so["failed"] else "")
-                     + (f"; not measured: {', '.join(so['not_measured'])}" if so["not_measured"] else ""))
     for key, n in r.get("needs", {}).items():
         lines.append(f"  {key}: give {n['input']} ({n['why']})")
     failed = [k for k, v in r["sections"].items() if v in ("failed", "not yet available")]

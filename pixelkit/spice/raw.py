@@ -30,6 +30,11 @@ def read_raw(path: str | Path) -> list[dict]:
         blob = Path(path).read_bytes()
     except OSError as exc:
         raise RawError(path, exc.strerror or str(exc)) from None
+    return parse_raw(blob, path)
+
+
+def parse_raw(blob: bytes, path) -> list[dict]:
+    """The plots of a raw file's bytes ``blob`` (``path`` names it in an error)."""
     try:
         plots = _plots(blob)
     except (ValueError, IndexError) as exc:

@@ -116,5 +116,7 @@ def require_stack(tech, what: str = "--post-layout") -> Stack:
         raise ConfigError(tech.source, "stack", MISSING,
                           f"a [stack] table in technology {tech.name} (the conductors' heights, thicknesses, sheet "
                           f"resistances and the dielectric) for {what}: extraction needs it; without it there is "
-                          "no post-layout view (the schematic is not run in its place)")
+                          "no post-layout view (the schematic is not run in its place). Add one as the technology "
+                          "file reference says (docs/technology-file.md, section [stack]; the gf180mcu technology "
+                          "has one), or use a design on a technology that has it (designs/dual_pixel_gf180.toml)")
     return st

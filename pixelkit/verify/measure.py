@@ -23,6 +23,8 @@ A *group* is a set of decks run together; ``run_group`` returns its raw measurem
 """
 from __future__ import annotations
 
+import contextlib
+import contextvars
 from dataclasses import replace
 
 import numpy as np
@@ -38,9 +40,37 @@ BRACKET = (0.98, 1.12)
 STORE = 4
 
 
+#: While ``recording()`` is active: the results of every deck the measurements run, by deck title,
+#: and every reading they take (the waveform view of a spec, ``verify.waves``).
+_RECORD: contextvars.ContextVar = contextvars.ContextVar("pixelkit_verify_record", default=None)
+
+
+@contextlib.contextmanager
+def recording():
+    """Collect ``{"results": {title: Result}, "marks": [{deck, node, t, v, what}]}`` of the
+    measurements run inside (same decks, same readings: the sim cache serves them again)."""
+    rec = {"results": {}, "marks": []}
+    token = _RECORD.set(rec)
+    try:
+        yield rec
+    finally:
+        _RECORD.reset(token)
+
+
+def _mark(r, node: str, t: float, what: str) -> None:
+    rec = _RECORD.get()
+    if rec is not None:
+        rec["marks"].append({"deck": r.meta.get("title"), "node": node, "t": float(t),
+                             "v": float(r.at(node, t)), "what": what})
+
+
 def _run(nets, design, draw, backend):
     from ..spice import simulate_many
-    return simulate_many([mismatch.apply(n, design, draw) for n in nets], backend=backend, jobs=1)
+    out = simulate_many([mismatch.apply(n, design, draw) for n in nets], backend=backend, jobs=1)
+    rec = _RECORD.get()
+    if rec is not None:
+        rec["results"].update({r.meta.get("title"): r for r in out})
+    return out
 
 
 def _i_max(design, kind):
@@ -56,6 +86,8 @@ def _ratio(design) -> float:
 
 def _pd_drop(r, node, t):
     t0, t1 = t.t_start + t.edge + 50e-9, t.t_tx - t.t_tg
+    _mark(r, node, t0, "PD after reset")
+    _mark(r, node, t1, "PD before transfer")
     return float(r.at(node, t0) - r.at(node, t1)), t1 - t0
 
 
@@ -99,6 +131,10 @@ class _Bench:
         """(primary, mean of the secondaries) double-sampled column signals."""
         from ..measure.pixel import double_sampled
         tm = tm or self.tm
+        if _RECORD.get() is not None:
+            for col, kind in (("col_p", "primary"), *((f"col_s{k}", "secondary") for k in range(self.n))):
+                _mark(r, col, tm[kind].t_reset_level(0), "reset level")
+                _mark(r, col, tm[kind].t_signal(0), "signal level")
         return (double_sampled(r, "col_p", tm["primary"]),
                 float(np.mean([double_sampled(r, f"col_s{k}", tm["secondary"]) for k in range(self.n)])))
 
@@ -199,6 +235,8 @@ def dark(design, draw=None, backend="batch") -> dict:
     out = {}
     for k, r in zip(("primary", "secondary"), _run(nets, design, draw, backend)):
         t0 = getattr(design, k).timing.t_reset + 50e-9  # dark_bench: EC resets for t_reset
+        _mark(r, "pd", t0, "after reset")
+        _mark(r, "pd", r.time[-1], "after t_int")
         out[k] = float(r.at("pd", t0) - r["v(pd)"][-1])
     return out
 
@@ -213,6 +251,8 @@ def afe(design, draw=None, backend="batch") -> dict:
     (r,) = _run([net], design, draw, backend)
     t = GsTiming(t_exp=0.0, t_row=1 / a.f_clk, rows=len(dv), t_reset=0.0, t_tg=0.0, t_gap=0.0, t_pre=0.0)
     out = np.array([afe_output(r, t, k) for k in range(len(dv))])
+    for k in range(len(dv)):
+        _mark(r, "out", t.t_reset_level(k), f"output, step {k + 1}")
     slope = float(np.polyfit(dv, out, 1)[0])
     return {"gain": -slope, "ideal": a.c11 / a.c13}
 

@@ -159,6 +159,7 @@ class Context:
     jobs: int | None = None
     measured: Path | None = None
     progress: Callable[..., None] = lambda stage, done=None, total=None: None
+    waves: tuple = ()         # specs whose waveform the sign-off shows besides the failing ones ("all": every one)
     _memo: dict = field(default_factory=dict)
 
     def figure(self, name: str) -> Path:

@@ -59,7 +59,8 @@ def build(ctx) -> Section:
             drc_rows.append([v["rule"], v["count"], v["cell"], v["where"], pic])
         if not drc_rows:
             drc_rows = [["(none)", 0, "", "", ""]]
-        checked.append(Checked("layout_signoff.drc_violations", drc["total"], "1", note=drc["deck"]))
+        checked.append(Checked("layout_signoff.drc_violations", drc["total"], "1",
+                               note=f"{d.tech.signoff.drc_deck} deck {drc['deck'].rsplit('/', 1)[-1]}"))
         files.append(rel(drc["report"]))
     tables.append(Table("layout_signoff_drc", "DRC: violations per rule (count, the first location, its picture)",
                         ["rule", "count", "cell", "first location (cell coordinates, um)", "picture"], drc_rows))
@@ -97,7 +98,8 @@ def build(ctx) -> Section:
                                     "no metal covers in red (the pixels' openings)"))
     return Section(TITLE, text=text, tables=tables, figures=figures, checked=checked, files=files,
                    data={"top": r["top"], "shield": sh, "blocks_m2": r["blocks"], "lvs": lvs,
-                         "drc": None if drc is None else {k: drc[k] for k in ("clean", "total", "by_rule", "deck")}})
+                         "drc": None if drc is None else {**{k: drc[k] for k in ("clean", "total", "by_rule")},
+                                                       "deck": f"{d.tech.signoff.drc_deck}: {drc['deck'].rsplit('/', 1)[-1]}"}})
 
 
 def _rules_run(report: str) -> int:

@@ -80,9 +80,14 @@ def build(ctx) -> Section:
             "not say whether its chip's AFE was clocked through the exposure (its pixel can integrate while reading; "
             "every control came from an FPGA): the headline figure is the idle readout, the kit's bench; a readout "
             "clocked every row would show the second figure."]
+    from ...verify.light import DEFAULT, judge
+    verdicts = {s: judge(m["columns"], DEFAULT) for s, m in maps.items()}
+    text.insert(0, "Verdict (pixelkit lightmap's, each column's AFE output error against the read noise there): "
+                + "; ".join(f"shield '{s}' {v['verdict']}" for s, v in verdicts.items()) + ".")
+    data = {**maps, "verdict": {s: {k: v[k] for k in ("verdict", "limit", "failed")} for s, v in verdicts.items()}}
     return Section(TITLE, text=text, tables=tables,
                    figures=[Figure(fig.name, "Exposed junctions of DUALPIX_COL under the shield as drawn")],
                    checked=[Checked("light_map.worst_error_over_noise_pixels", bad["worst_error_over_noise"], "1",
                                     tol_rel=0.05),
                             Checked("light_map.readout_area_pixels_m2", bad["readout_area_m2"], "m2", tol_rel=0.01)],
-                   data=maps)
+                   data=data)

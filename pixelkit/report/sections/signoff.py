@@ -41,17 +41,42 @@ def build(ctx) -> Section:
     text.append(("FAIL: " + "; ".join(fails)) if fails else "Every spec passes at every condition.")
     text += [f"Simulation failed at {e['condition']} ({e['group']}): {e['error']}" for e in r["errors"][:5]]
     tables = [Table("signoff", "Sign-off table", list(COLUMNS), csv_rows(r["rows"]))]
-    power = next((v.get("power") for v in r["raw"].values() if v.get("power")), None)
+    power = r.get("power")   # verify's power measurement: at the nominal condition
     if power:
         pc = power["per_column_W"]
-        tables.append(Table("signoff_power", "Power per block at the first condition of the grid (W): per column of "
-                            f"each array and the chip, over a {power['frame_period_s'] * 1e3:.4g} ms frame; the "
-                            "estimate is bias currents x supply x duty",
-                            ["block", "primary column", "secondary column", "chip", "chip, estimate"],
+        tables.append(Table("signoff_power", f"Power per block at the nominal condition ({power['condition']}, W): "
+                            "per column of each array and the chip, over a "
+                            f"{power['frame_period_s'] * 1e3:.4g} ms frame; the estimate is bias currents x supply "
+                            "x duty", ["block", "primary column", "secondary column", "chip", "chip, estimate"],
                             [[b, pc["primary"][b], pc["secondary"][b], power["chip_blocks_W"][b],
                               power["estimate"]["chip_blocks_W"][b]] for b in power["chip_blocks_W"]]))
     checked = [Checked(f"signoff.{x['spec']}", x["value"], x["unit"], tol_rel=0.01,
                        note=f"worst at {x.get('worst')}; limit {x['limit']}") for x in r["rows"] if x.get("value") is not None]
-    data = {"rows": r["rows"], "grid": g, "mc": mc, "errors": r["errors"], "conditions": r["conditions"],
-            "mc_values": r["mc_values"]}
-    return Section(TITLE, text=text, tables=tables, checked=checked, data=data)
+    waves, why = _waves(ctx, r["rows"])
+    if waves or why:
+        text.append("Waveforms: each failing spec" + (" and each spec asked with --waves" if ctx.waves else "")
+                    + " at its worst condition against nominal, the measurement's own readings marked (sample "
+                    "instants, levels read), the decks' raw files linked (pixelkit waves FILE.raw opens them)."
+                    + "".join(f" {w}" for w in why))
+    data = {"waves": waves, "rows": r["rows"], "grid": g, "mc": mc, "errors": r["errors"], "conditions": r["conditions"],
+            "mc_values": r["mc_values"], "view": r["view"], "profile": "quick" if ctx.quick else "full",
+            "power": None if not power else {k: power[k] for k in ("condition", "chip_W", "pixel_W", "column_W")}}
+    return Section(TITLE, text=text, tables=tables, checked=checked, data=data,
+                   files=[f for w in waves.values() for f in w["files"]])
+
+
+def _waves(ctx, rows) -> tuple[dict, list]:
+    """({spec: its waveform view}, [why a spec asked for has none]) for every failing spec and every
+    spec of ``ctx.waves``."""
+    from ...verify.waves import spec_waves
+    want = [x for x in rows if x["status"] == "fail" or x["spec"] in ctx.waves]
+    out, why = {}, []
+    for x in want:
+        ctx.progress(f"sign-off: waveform of {x['spec']}")
+        w = spec_waves(ctx.design, x, ctx.figure("waves/x").parent, "waves", backend=ctx.backend)
+        if w is None:
+            why.append(f"{x['spec']} has no waveform view ({x['figure']}: its measurement has no transient of "
+                       "its own, or it was not measured).")
+        else:
+            out[x["spec"]] = w
+    return out, why
