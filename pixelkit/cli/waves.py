@@ -26,8 +26,8 @@ def waves_cmd(raw, out, vectors, as_json):
     from ..spice.raw import parse_raw
     path = Path(raw)
     if path.suffix.lower() != ".raw":
-        raise ConfigError("", "FILE", str(path), "an ngspice raw file whose name ends in .raw")
-    plots = parse_raw(read_bytes(path, "FILE", "raw"), path)
+        raise ConfigError("", "RAW", str(path), "an ngspice raw file whose name ends in .raw")
+    plots = parse_raw(read_bytes(path, "RAW", "raw"), path)
     names = {n for p in plots for n in p["names"][1:]}
     chosen = None
     if vectors is not None:

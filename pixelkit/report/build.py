@@ -19,7 +19,7 @@ from .. import owner as owners
 from ..errors import ConfigError, PixelkitError
 from ..fileio import honour_umask_tree, json_default, path_kind, staging_dir
 from ..spice.counter import SpiceCounter
-from . import cache
+from . import cache, datasheet
 from .diff import diff_reports, load_report
 from .html import render
 from .portable import portable_section
@@ -198,6 +198,10 @@ def build_report(design, out: Path, *, quick: bool = False, backend: str = "batc
         (stage / "summary.json").write_text(json.dumps(summary, indent=1) + "\n")
         if html:
             render(stage, design, sections, summary, result.get("diff"))
+            sheet = datasheet.render(stage, design, sections, summary)
+            pdf, why = datasheet.print_pdf(sheet)
+            summary["datasheet"] = {"html": sheet.name, "pdf": pdf.name if pdf else None, "why": why}
+            (stage / "summary.json").write_text(json.dumps(summary, indent=1) + "\n")
         honour_umask_tree(stage)   # cached section files keep the cache's modes otherwise
         _swap_into_place(stage, out)
     except BaseException:

@@ -1,0 +1,138 @@
+"""Numbers the manual quotes from the kit, checked against the kit's current output.
+
+A page marks each number it quotes from the kit with an HTML comment right after it (invisible
+on the site, where the hook removes it, and on a repository host):
+
+    read noise 408.9<!--fig quick:noise_budget::read noise at the column (e-)::primary--> e-
+
+``quick:`` is the quick report of the reference design (``pixelkit report
+designs/dual_pixel_revA.toml --quick``): ``TABLE::ROW::COLUMN`` a cell of its ``tables.json``
+(the row by its first cell, the column by its heading), or ``checked::NAME`` a checked figure of
+its ``summary.json``. A key may end with ``*SCALE`` (``*1e3``: V quoted in mV). The quoted
+number must be the current value as printed to the same digits (401.9 stands for 401.85 -
+401.95); ``~2%`` after the key allows a band instead (a figure that scatters).
+
+    python -m docsite.figures REPORT_DIR            # list every quoted figure that moved (exit 1)
+    python -m docsite.figures REPORT_DIR --update   # rewrite them from the report, same digits
+
+``tests/test_docs_figures.py`` runs the check on the session's quick report, so a figure that
+moves fails the suite and names the page, the line and the command that rewrites it. New sources
+(another design's report, a command's ``--json``) are one entry of ``SOURCES``.
+"""
+from __future__ import annotations
+
+import json
+import math
+import re
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
+MARK = re.compile(r"(?P<num>" + NUMBER + r")<!--fig (?P<src>[a-z_]+):(?P<key>.+?)(?:\s+~(?P<tol>[0-9.]+)%)?-->")
+#: a marker alone (the hook removes them from the site's pages)
+ANY_MARK = re.compile(r"<!--fig [^>]*-->")
+
+
+def pages() -> list[Path]:
+    return sorted((ROOT / "docs").glob("*.md")) + [ROOT / "README.md"]
+
+
+def quick_source(report: Path):
+    """The value of a ``quick:`` key in the report folder ``report``."""
+    tables = json.loads((Path(report) / "tables.json").read_text())
+    checked = json.loads((Path(report) / "summary.json").read_text())["checked"]
+
+    def value(key: str) -> float:
+        parts = key.split("::")
+        if parts[0] == "checked":
+            return float(checked[parts[1]]["value"])
+        table, row, col = parts
+        t = tables[table]
+        r = next(r for r in t["rows"] if str(r[0]) == row)
+        return float(r[t["columns"].index(col)])
+    return value
+
+
+SOURCES = {"quick": quick_source}
+
+
+def _digits(text: str) -> float:
+    """Half a unit of the last digit ``text`` is printed to (the rounding it stands for)."""
+    mant, _, exp = text.lower().lstrip("+-").partition("e")
+    decimals = len(mant.split(".")[1]) if "." in mant else 0
+    return 0.5 * 10.0 ** (-decimals + (int(exp) if exp else 0))
+
+
+def _printed(value: float, like: str) -> str:
+    """``value`` printed the way ``like`` is (same decimals or exponent form)."""
+    mant, _, exp = like.lower().lstrip("+-").partition("e")
+    decimals = len(mant.split(".")[1]) if "." in mant else 0
+    if exp:
+        e = int(exp)
+        s = f"{value / 10 ** e:.{decimals}f}e{exp}"
+    else:
+        s = f"{value:.{decimals}f}"
+    return ("+" if like.startswith("+") and value >= 0 else "") + s
+
+
+def check(report: Path, files=None) -> tuple[list[dict], int]:
+    """([every quoted figure that does not match the report], how many were checked)."""
+    getters = {name: make(report) for name, make in SOURCES.items()}
+    bad, n = [], 0
+    for page in files or pages():
+        for lineno, line in enumerate(page.read_text().splitlines(), 1):
+            for m in MARK.finditer(line):
+                n += 1
+                key, src, quoted = m["key"], m["src"], m["num"]
+                base, _, scale = key.partition("*")
+                try:
+                    value = getters[src](base) * (float(scale) if scale else 1.0)
+                except (KeyError, StopIteration, ValueError, IndexError) as exc:
+                    bad.append({"page": page.name, "line": lineno, "key": f"{src}:{key}", "quoted": quoted,
+                                "value": None, "why": f"no such figure ({type(exc).__name__})"})
+                    continue
+                tol = abs(value) * float(m["tol"]) / 100 if m["tol"] else _digits(quoted) * (1 + 1e-9)
+                if not math.isfinite(value) or abs(float(quoted) - value) > tol:
+                    bad.append({"page": page.name, "line": lineno, "key": f"{src}:{key}", "quoted": quoted,
+                                "value": value, "now": _printed(value, quoted) if math.isfinite(value) else None})
+        unmarked = len(ANY_MARK.findall(page.read_text())) - len(MARK.findall(page.read_text()))
+        if unmarked:
+            bad.append({"page": page.name, "line": 0, "key": "-", "quoted": "-", "value": None,
+                        "why": f"{unmarked} marker(s) not right after a number or not of the form "
+                               "NUMBER<!--fig SOURCE:KEY-->"})
+    return bad, n
+
+
+def update(report: Path, files=None) -> int:
+    """Rewrite every quoted figure from ``report`` (same digits); how many changed."""
+    getters = {name: make(report) for name, make in SOURCES.items()}
+    changed = 0
+    for page in files or pages():
+        text = page.read_text()
+
+        def fix(m):
+            nonlocal changed
+            base, _, scale = m["key"].partition("*")
+            value = getters[m["src"]](base) * (float(scale) if scale else 1.0)
+            tol = abs(value) * float(m["tol"]) / 100 if m["tol"] else _digits(m["num"]) * (1 + 1e-9)
+            if abs(float(m["num"]) - value) <= tol:
+                return m.group(0)
+            changed += 1
+            return _printed(value, m["num"]) + m.group(0)[len(m["num"]):]
+        new = MARK.sub(fix, text)
+        if new != text:
+            page.write_text(new)
+    return changed
+
+
+if __name__ == "__main__":
+    rep = Path(sys.argv[1])
+    if "--update" in sys.argv[2:]:
+        print(f"{update(rep)} quoted figure(s) rewritten")
+    else:
+        found, count = check(rep)
+        for b in found:
+            print(f"{b['page']}:{b['line']}: {b['key']}: quoted {b['quoted']}, now {b.get('now') or b.get('why')}")
+        print(f"{count} quoted figure(s), {len(found)} stale")
+        sys.exit(1 if found else 0)
