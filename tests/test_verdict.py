@@ -18,25 +18,23 @@ import pytest
 from conftest import REF, ROOT, run_cli
 
 
-@pytest.mark.parametrize("failed, unmeasured, code", [
-    ([], [], 0), (["a"], [], 1), ([], ["b"], 5), (["a"], ["b"], 1), (0, 3, 5), (True, False, 1)])
-def test_one_exit_rule(failed, unmeasured, code):
-    from pixelkit.errors import verdict_exit
-    assert verdict_exit(failed, unmeasured) == code
+def test_report_verdict_follows_the_team_rule():
+    """The report's verdict from sign-off rows, sections and diff (the rule itself: robust's tests in
+    test_verify.py): a failing spec or diff 1, a failed section or unmeasured spec 5, a failed
+    simulation 4 when nothing fails, no specs and nothing else 0."""
+    from pixelkit.report.verdict import verdict
+    ok = {"sections": {"a": "available"}, "profile": "full"}
 
-
-def test_verify_exits_5_when_a_spec_is_not_run(tmp_path):
-    """A spec specified at 85 degC only, a grid at 27 degC: nothing fails, nothing was measured:
-    exit 5, never 0 (no simulation runs: the spec has no condition in the grid)."""
-    text = REF.read_text()
-    head = text[:text.index("[spec.")]
-    block = re.search(r"^\[spec\.pd_dark_drop_secondary\]\n(?:[^\[\n].*\n|\n)*", text, re.M).group(0)
-    design = tmp_path / "one_spec.toml"
-    design.write_text(head + block)
-    code, out, err = run_cli("verify", design, "--corners", "tt", "--temperatures", "27degC", "--supplies", "0%",
-                             "--mc", "0", "--out", tmp_path / "v")
-    assert code == 5, err + out
-    assert "NOT RUN pd_dark_drop_secondary" in out
+    def row(st):
+        return {"spec": st, "status": st}
+    assert verdict(ok, {"rows": [row("pass")]})["exit"] == 0
+    assert verdict(ok, {"rows": [row("pass"), row("not run")]})["exit"] == 5
+    assert verdict(ok, {"rows": [row("fail"), row("not run")]})["verdict"] == "FAIL"
+    assert verdict(ok, {"rows": [row("pass")], "errors": [{}]})["exit"] == 4
+    assert verdict(ok, {"rows": [row("pass")]}, {"passed": False})["exit"] == 1
+    assert verdict({"sections": {"a": "failed"}, "profile": "quick"}, None)["exit"] == 5
+    v = verdict(ok, None)
+    assert (v["verdict"], v["exit"]) == ("NO SPECS", 0)
 
 
 def _signoff_csv(out: Path) -> list[dict]:
@@ -135,8 +133,8 @@ def test_a_baseline_fraction_compares_with_todays_percent():
 
 
 def test_the_readme_and_conventions_say_report_exits_as_verify():
-    conv = (ROOT / "docs" / "cli-conventions.md").read_text()
-    assert "| 5 |" in conv and "verdict_exit" in conv
+    conv = " ".join((ROOT / "docs" / "cli-conventions.md").read_text().split())
+    assert "| 5 |" in conv and "`pixelkit report` exits as `pixelkit verify` does" in conv
     readme = " ".join((ROOT / "README.md").read_text().split())
     assert "5 nothing failed but something asked was not measured" in readme
     assert "exit 1 when a spec fails, as `verify`" in readme
