@@ -34,6 +34,15 @@ MARK = re.compile(r"(?P<num>" + NUMBER + r")<!--fig (?P<src>[a-z_]+):(?P<key>.+?
 ANY_MARK = re.compile(r"<!--fig [^>]*-->")
 
 
+SPAN = re.compile(r"`[^`\n]*`")
+
+
+def _outside_code(line: str):
+    """The marks of ``line`` outside inline code spans (a page may show the syntax itself)."""
+    spans = [m.span() for m in SPAN.finditer(line)]
+    return [m for m in MARK.finditer(line) if not any(a <= m.start() < b for a, b in spans)]
+
+
 def pages() -> list[Path]:
     return sorted((ROOT / "docs").glob("*.md")) + [ROOT / "README.md"]
 
@@ -82,7 +91,7 @@ def check(report: Path, files=None) -> tuple[list[dict], int]:
     bad, n = [], 0
     for page in files or pages():
         for lineno, line in enumerate(page.read_text().splitlines(), 1):
-            for m in MARK.finditer(line):
+            for m in _outside_code(line):
                 n += 1
                 key, src, quoted = m["key"], m["src"], m["num"]
                 base, _, scale = key.partition("*")
@@ -96,12 +105,21 @@ def check(report: Path, files=None) -> tuple[list[dict], int]:
                 if not math.isfinite(value) or abs(float(quoted) - value) > tol:
                     bad.append({"page": page.name, "line": lineno, "key": f"{src}:{key}", "quoted": quoted,
                                 "value": value, "now": _printed(value, quoted) if math.isfinite(value) else None})
-        unmarked = len(ANY_MARK.findall(page.read_text())) - len(MARK.findall(page.read_text()))
+        text = SPAN.sub("", page.read_text())
+        unmarked = len(ANY_MARK.findall(text)) - len(MARK.findall(text))
         if unmarked:
             bad.append({"page": page.name, "line": 0, "key": "-", "quoted": "-", "value": None,
                         "why": f"{unmarked} marker(s) not right after a number or not of the form "
                                "NUMBER<!--fig SOURCE:KEY-->"})
     return bad, n
+
+
+def _sub_outside_code(line: str, fix) -> str:
+    out, last = [], 0
+    for m in _outside_code(line):
+        out += [line[last:m.start()], fix(m)]
+        last = m.end()
+    return "".join(out) + line[last:]
 
 
 def update(report: Path, files=None) -> int:
@@ -120,7 +138,7 @@ def update(report: Path, files=None) -> int:
                 return m.group(0)
             changed += 1
             return _printed(value, m["num"]) + m.group(0)[len(m["num"]):]
-        new = MARK.sub(fix, text)
+        new = "\n".join(_sub_outside_code(line, fix) for line in text.split("\n"))
         if new != text:
             page.write_text(new)
     return changed

@@ -87,7 +87,7 @@ def test_the_docs_screenshots_come_from_this_code(quick_report, tmp_path):
     assert [p.name for p in pics] == ["report_banner.png", "report_signoff.png", "report_waveform.png",
                                       "datasheet.png"]
     with Image.open(pics[0]) as im:   # the banner's picture is the banner: mostly its red
-        red = sum(1 for px in im.convert("RGB").getdata() if px == (179, 38, 30))
+        red = sum(1 for px in im.convert("RGB").get_flattened_data() if px == (179, 38, 30))
         assert red > 0.5 * im.width * im.height
     for p in pics:
         assert (ROOT / "docs" / p.name).is_file(), f"docs/{p.name} missing: python -m docsite.screenshots REPORT docs"
