@@ -17,6 +17,7 @@ from .physics.conversion import photoactive_area, rectangle
 from .readout_timing import Timing
 from .schema import as_written, ident, integer, load, named, num, qty, read_toml, table, text
 from .tech import Technology, load_technology
+from .close.table import CloseSettings, check as check_close
 from .verify.spec import Spec, VerifySettings, check_conditions
 
 
@@ -236,6 +237,8 @@ class Design:
     verify: VerifySettings = table(VerifySettings, default=VerifySettings,
                                    doc="the sign-off grid of pixelkit verify: corners, temperatures, supplies, Monte Carlo")
     spec: tuple = named(Spec, doc="specifications: one [spec.<name>] table each (docs/verify.md)")
+    close: CloseSettings | None = table(CloseSettings, None, doc="the knobs pixelkit close may move, their bounds "
+                                        "and the objective (docs/close.md)")
     tech: Technology = field(default=None, metadata=dict(kind="skip"))
     source: str = field(default="", metadata=dict(kind="skip"))
     raw: dict = field(default=None, metadata=dict(kind="skip"), repr=False, compare=False)
@@ -251,6 +254,8 @@ class Design:
             raise ConfigError(source, "secondary.pitch", as_written(raw, "secondary.pitch", self.secondary.pitch),
                               f"primary.pitch / secondary_per_pixel = {self.primary.pitch / n * 1e6:g} um "
                               "(subpixels are integrated side by side)")
+        if self.close is not None:   # the knobs against this design's keys (bounds in SI)
+            object.__setattr__(self, "close", check_close(self.close, self, source, raw))
         for kind in ("primary", "secondary"):
             sub, table_raw = getattr(self, kind), raw.get(kind, {})
             sub.timing.check(1.0 / sub.f_read, self.afe.nonoverlap, kind, source, table_raw)

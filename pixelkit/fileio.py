@@ -138,6 +138,15 @@ def commit(path: Path, tmp: Path) -> Path:
     return path
 
 
+def moved_path(value: str, old_dir: Path, new_dir: Path) -> str:
+    """A path relative to a file in ``old_dir``, rewritten to mean the same file from ``new_dir``
+    (absolute paths unchanged): a design written to another folder keeps its technology and GDS."""
+    p = Path(value)
+    if p.is_absolute():
+        return value
+    return os.path.relpath((Path(old_dir) / p).resolve(), Path(new_dir).resolve())
+
+
 def reports_root() -> Path:
     """Where outputs go when no ``--out`` is given: ``$PIXELKIT_REPORTS``, default ``./reports``."""
     return Path(os.environ.get("PIXELKIT_REPORTS", "reports"))

@@ -25,6 +25,8 @@ from .errors import MISSING, ConfigError
 from .units import quantity, si_text
 
 IDENT = re.compile(r"^[A-Za-z_][A-Za-z0-9_]{0,63}$")
+#: A dotted key of a file (``pixel.devices.rst_w``): names joined by dots, at most 8 parts.
+DOTTED = re.compile(r"^[A-Za-z_][A-Za-z0-9_]{0,63}(\.[A-Za-z_][A-Za-z0-9_]{0,63}){0,7}$")
 _NODEFAULT = dataclasses.MISSING
 
 
@@ -73,16 +75,21 @@ def items(inner, default=_NODEFAULT, *, min_len=1, max_len=64, doc=""):
     return _field("list", default, doc, item=dict(inner.metadata), min_len=min_len, max_len=max_len)
 
 
-def limit(default=None, doc=""):
-    """A quantity whose dimension another field decides (a spec limit, in its figure's unit):
-    a string with a unit, or a plain number; the table's ``validate`` converts it."""
-    return _field("limit", default, doc)
+def limit(default=None, doc="", of: str = "figure"):
+    """A quantity whose dimension another field decides (a spec limit, in its figure's unit; ``of``:
+    what decides it, for the reference): a string with a unit, or a plain number; the table's
+    ``validate`` (or its checker) converts it."""
+    return _field("limit", default, doc, of=of)
 
 
-def named(cls, doc=""):
+def named(cls, doc="", keys: str = "ident", pair: tuple | None = None):
     """A table of named tables (``[spec.<name>]``), each loaded into ``cls``, whose ``name``
-    field receives the table's name; loaded as a tuple in file order (empty when absent)."""
-    return dataclasses.field(default=(), metadata=dict(kind="map", cls=cls, doc=doc))
+    field receives the table's name; loaded as a tuple in file order (empty when absent).
+
+    ``keys="dotted"``: the names are dotted keys (``"pixel.sf_bias"``, each part a name);
+    ``pair=("min", "max")``: an entry may also be a two-item list, read as those two fields
+    (``"pixel.sf_bias" = ["600 nA", "1.5 uA"]``)."""
+    return dataclasses.field(default=(), metadata=dict(kind="map", cls=cls, doc=doc, keys=keys, pair=pair))
 
 
 def table(cls, default=_NODEFAULT, doc=""):
@@ -92,7 +99,7 @@ def table(cls, default=_NODEFAULT, doc=""):
     return _field("table", default, doc, cls=cls)
 
 
-def _check_range(x, meta, path, source, shown):
+def check_range(x, meta, path, source, shown):
     """``x`` (SI) within the field's bounds and plausibility range; errors echo ``shown``."""
     dim = meta.get("dim", "1")
     bounds = [("gt", lambda a, b: a > b, ">"), ("ge", lambda a, b: a >= b, ">="),
@@ -115,11 +122,11 @@ def _convert(value, meta, path, source):
             raise ConfigError(source, path, value, "a value with its unit, like '60 dB' or '1000 V/V' "
                               "(a bare number is ambiguous: a ratio or decibels?)")
         x = quantity(value, meta["dim"], path, source)
-        return _check_range(x, meta, path, source, value)
+        return check_range(x, meta, path, source, value)
     if kind == "int":
         if isinstance(value, bool) or not isinstance(value, int):
             raise ConfigError(source, path, value, "a whole number")
-        return _check_range(value, meta, path, source, value)
+        return check_range(value, meta, path, source, value)
     if kind == "str":
         if not isinstance(value, str):
             raise ConfigError(source, path, value, "a string")
@@ -173,13 +180,37 @@ def _convert_map(value, meta, path, source) -> tuple:
     if len(value) > MAX_NAMED:
         raise ConfigError(source, path, f"{len(value)} entries", f"at most {MAX_NAMED} entries")
     out = []
+    dotted, pair = meta.get("keys") == "dotted", meta.get("pair")
+    if dotted:
+        value = _flat(value, {f.name for f in dataclasses.fields(meta["cls"])})
     for key, sub in value.items():
-        if not IDENT.match(key):
+        if not (DOTTED if dotted else IDENT).match(key):
             raise ConfigError(source, f"{path}.{key}", key,
+                              "a dotted key of names (letters, digits and '_', each starting with a letter), "
+                              "like \"pixel.sf_bias\"" if dotted else
                               "a name of letters, digits and '_' (starting with a letter, at most 64)")
+        if pair and isinstance(sub, list):
+            if len(sub) != 2:
+                raise ConfigError(source, f"{path}.{key}", sub, f"a list of two values [{pair[0]}, {pair[1]}] "
+                                  f"or a table with {pair[0]} and {pair[1]}")
+            sub = dict(zip(pair, sub))
         obj = load(meta["cls"], sub, f"{path}.{key}", source)
         out.append(dataclasses.replace(obj, name=key))
     return tuple(out)
+
+
+def _flat(value: dict, fields: set, prefix: str = "") -> dict:
+    """Entries of a table keyed by dotted keys, also when written unquoted (TOML nests
+    ``pixel.sf_bias = [...]`` as ``{"pixel": {"sf_bias": [...]}}``): a table none of whose keys
+    is a field of the entry is a level of the key."""
+    out = {}
+    for key, sub in value.items():
+        name = f"{prefix}{key}"
+        if isinstance(sub, dict) and sub and not set(sub) & fields and prefix.count(".") < 8:
+            out.update(_flat(sub, fields, name + "."))
+        else:
+            out[name] = sub
+    return out
 
 
 def load(cls, mapping, path: str = "", source: str = ""):

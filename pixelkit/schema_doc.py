@@ -16,7 +16,7 @@ import sys
 from pathlib import Path
 
 _KNOWN = {"kind", "doc", "dim", "gt", "ge", "le", "lt", "choices", "cls", "plausible", "unit_required",
-          "item", "min_len", "max_len"}
+          "item", "min_len", "max_len", "keys", "pair", "of"}
 _PREFIX = [(1e9, "G"), (1e6, "M"), (1e3, "k"), (1.0, ""), (1e-3, "m"), (1e-6, "u"), (1e-9, "n"),
            (1e-12, "p"), (1e-15, "f"), (1e-18, "a")]
 _PREFIXABLE = {"m", "s", "Hz", "V", "A", "F"}
@@ -70,7 +70,9 @@ def _kind(meta) -> str:
     if kind == "list":
         return f"list of {_kind(meta['item'])}"
     if kind == "limit":
-        return "quantity in the figure's unit, e.g. `\"3.5 uV/e-\"`"
+        if meta.get("of", "figure") == "figure":
+            return "quantity in the figure's unit, e.g. `\"3.5 uV/e-\"`"
+        return f"quantity in the {meta['of']}'s unit, e.g. `\"1.6 V\"`"
     if kind == "qty":
         if dim == "1":
             return "number"
@@ -105,12 +107,19 @@ def _table(cls, path: str, out: list, family: str = "") -> None:
     subs = [f for f in fields if f.metadata["kind"] in ("table", "map")]
     if subs:
         out += ["", "Tables:", ""] + [
-            f"- `[{path + '.' if path else ''}{f.name}{'.<name>' if f.metadata['kind'] == 'map' else ''}]` "
+            f"- `[{path + '.' if path else ''}{f.name}{_entry(f.metadata)}]` "
             f"({'required' if _default(f) == '**required**' else 'optional'})"
             + (f": {f.metadata['doc']}" if f.metadata.get("doc") else "") for f in subs]
     for f in subs:
         sub = f"{path}.{f.name}" if path else f.name
-        _table(f.metadata["cls"], sub + (".<name>" if f.metadata["kind"] == "map" else ""), out, family)
+        _table(f.metadata["cls"], sub + _entry(f.metadata), out, family)
+
+
+def _entry(meta) -> str:
+    """How a table of named tables shows its entries' names: ``.<name>``, ``.<design key>``."""
+    if meta["kind"] != "map":
+        return ""
+    return ".<design key>" if meta.get("keys") == "dotted" else ".<name>"
 
 
 def undocumented(*classes) -> list[str]:

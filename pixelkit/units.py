@@ -173,15 +173,17 @@ _SI_PREFIX = [(1e9, "G"), (1e6, "M"), (1e3, "k"), (1.0, ""), (1e-3, "m"), (1e-6,
 _PREFIXED = {"m": "m", "s": "s", "Hz": "Hz", "V": "V", "A": "A", "F": "F", "m2": "m2", "Ohm": "Ohm", "W": "W"}
 
 
-def si_text(x: float, dimension: str) -> str:
-    """``x`` (SI, of ``dimension``) as a user would write it: ``"50 mV"``, ``"10 nF"``, ``"-60 degC"``."""
+def si_text(x: float, dimension: str, digits: int = 6) -> str:
+    """``x`` (SI, of ``dimension``) as a user would write it: ``"50 mV"``, ``"10 nF"``, ``"-60 degC"``
+    (``digits`` significant digits)."""
+    g = f".{digits}g"
     if dimension == "K":  # below 150 K only differences occur (a doubling step): no offset
-        return f"{x - 273.15:g} degC" if x >= 150 else f"{x:g} K"
+        return f"{x - 273.15:{g}} degC" if x >= 150 else f"{x:{g}} K"
     if dimension == "m2" and x != 0:
-        return f"{x * 1e12:g} um2"
+        return f"{x * 1e12:{g}} um2"
     if dimension in _PREFIXED and x != 0:
         for scale, p in _SI_PREFIX:
             if abs(x) >= scale * 0.9999999:
-                return f"{x / scale:g} {p}{_PREFIXED[dimension]}"
-        return f"{x / 1e-18:g} a{_PREFIXED[dimension]}"
-    return f"{x:g}" if dimension in ("1", "") else f"{x:g} {dimension}"
+                return f"{x / scale:{g}} {p}{_PREFIXED[dimension]}"
+        return f"{x / 1e-18:{g}} a{_PREFIXED[dimension]}"
+    return f"{x:{g}}" if dimension in ("1", "") else f"{x:{g}} {dimension}"

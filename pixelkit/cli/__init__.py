@@ -8,7 +8,8 @@ from __future__ import annotations
 
 import importlib
 
-COMMAND_MODULES = ("simulate", "netlists", "array", "size", "layout", "gap", "report", "sensor", "camera", "sweep", "mc", "verify", "lightmap", "waves")
+COMMAND_MODULES = ("simulate", "netlists", "array", "size", "layout", "gap", "report", "sensor", "camera", "sweep", "mc", "verify",
+                   "close", "lightmap", "waves")
 
 
 def register_all() -> None:

@@ -1,14 +1,13 @@
 """The ``pixelkit size`` flow: both levels, SPICE verification, sized design file, sensitivity."""
 from __future__ import annotations
 
-import os
 from dataclasses import replace
 from pathlib import Path
 
 from ..circuits.testbench import dual_pixel_bench, timings
 from ..experiments.thesis import run_experiment
 from ..errors import PixelkitError
-from ..fileio import check_output, path_kind, write_atomic
+from ..fileio import check_output, moved_path, path_kind, write_atomic
 from ..measure.pixel import double_sampled
 from ..schema import to_toml
 from ..spice import simulate
@@ -50,14 +49,6 @@ def sized_name(name: str) -> str:
     return base[: 64 - len("_sized")] + "_sized"
 
 
-def _moved(value: str, old_dir: Path, new_dir: Path) -> str:
-    """A relative path of the design file, rewritten to mean the same file from ``new_dir``."""
-    p = Path(value)
-    if p.is_absolute():
-        return value
-    return os.path.relpath((old_dir / p).resolve(), new_dir.resolve())
-
-
 def sized_design_text(design, sized: dict, out: Path | None = None) -> str:
     """The design file with the sized values; loads again from ``out`` (strings escaped by
     ``to_toml``, a valid name, relative technology / layout paths rewritten for ``out``'s folder)."""
@@ -70,9 +61,9 @@ def sized_design_text(design, sized: dict, out: Path | None = None) -> str:
     if out is not None:
         old_dir, new_dir = Path(design.source).parent, Path(out).parent
         if raw["technology"] not in builtin_names():
-            raw["technology"] = _moved(raw["technology"], old_dir, new_dir)
+            raw["technology"] = moved_path(raw["technology"], old_dir, new_dir)
         if isinstance(raw.get("layout"), dict) and "gds" in raw["layout"]:
-            raw["layout"]["gds"] = _moved(raw["layout"]["gds"], old_dir, new_dir)
+            raw["layout"]["gds"] = moved_path(raw["layout"]["gds"], old_dir, new_dir)
     source = "".join(c if c.isprintable() else "?" for c in str(design.source))
     head = (f"# Sized by pixelkit size from {source} ({sized['level']} level):\n"
             f"# C_M = {sized['c_m']:.2f}, opening {sized['mask_open_m2'] * 1e12:.4f} um2\n")

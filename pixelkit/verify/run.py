@@ -33,6 +33,24 @@ def _task(task):
     return out
 
 
+def measure_at(items, backend: str = "batch", jobs=None, scheduler=None, desc: str = "measuring") -> list[dict]:
+    """The figures of each ``(design, condition, groups)`` item, as ``verify`` measures them (same
+    tasks, same decks, the same cache): per item ``{"figures": {name: SI value or None},
+    "errors": [message, ...]}``. For callers that need some groups at some conditions of several
+    designs (``pixelkit close``: its sensitivities and candidates) rather than a whole grid."""
+    from ..sweep.executors import run_tasks
+    tasks = [(d, c, tuple(gs), None, backend) for d, c, gs in items]
+    outs = [None] * len(tasks)
+    for i, out in run_tasks(_task, tasks, jobs=jobs, scheduler=scheduler, desc=desc):
+        outs[i] = out
+    result = []
+    for (_d, c, _gs, _draw, _b), outcome in zip(tasks, outs):
+        raw = {g: o["raw"] for g, o in outcome.items() if o["ok"]}
+        result.append({"figures": _finite(measure.figures(raw)),
+                       "errors": [f"{c.label} ({g}): {o['error']}" for g, o in outcome.items() if not o["ok"]]})
+    return result
+
+
 def post_layout_view(design):
     """The design whose decks carry the parasitics extracted from its own layout
     (``layout.pex.overlay``: every generator adds them; a technology without a process stack

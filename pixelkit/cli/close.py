@@ -1,0 +1,49 @@
+"""``pixelkit close``: move the [close] knobs until every spec passes at every condition (docs/close.md)."""
+from __future__ import annotations
+
+import click
+
+from .common import design_arg, emit, finishing, json_opt, load, main, out_opt, output_path, scheduler_address, spice_opts
+
+#: Exit status when every spec passed where measured but some spec was not measured somewhere.
+EXIT_NOT_MEASURED = 5
+
+
+@main.command("close")
+@design_arg
+@out_opt("the closed revision's design file (default reports/<design>/close/<design>_closed.toml); "
+         "the path goes beside it as <name>.close.json")
+@click.option("--scheduler", default=None, callback=scheduler_address,
+              help="Dask scheduler address (default: local workers)")
+@spice_opts
+@json_opt
+def close_cmd(design, out, scheduler, backend, jobs, as_json):
+    """Find the revision that passes every [spec] at every condition of the [verify] grid (with its
+    Monte Carlo yield) by moving the [close] knobs; exit 1 naming the specs that conflict when none does."""
+    from ..close.output import text
+    from ..close.run import close_design
+    from ..errors import EXIT_REGRESSION
+    from ..progress import enabled
+    from ..spice.counter import spice_progress
+    d = load(design)
+    path = output_path(out, d, f"close/{d.name}_closed.toml")
+    show = enabled() and not as_json
+
+    def say(line: str) -> None:
+        if show:
+            from tqdm import tqdm
+            tqdm.write(line, file=click.get_text_stream("stderr"))
+
+    with spice_progress("close") as bar:
+        def tell(stage: str) -> None:
+            bar.set_description_str(f"close: {stage}", refresh=True)
+        r = close_design(d, path, backend=backend, jobs=jobs, scheduler=scheduler, tell=tell, say=say)
+    finishing()
+    r = {k: v for k, v in r.items() if k not in ("design_obj",)}
+    emit(r, as_json, text)
+    if r["status"] == "not measured":
+        raise SystemExit(EXIT_NOT_MEASURED)
+    if not r["passes"]:
+        reason = r.get("conflict", {}).get("text") or r["status"]
+        click.echo(f"pixelkit: close: {r['status']}: {reason}", err=True)
+        raise SystemExit(EXIT_REGRESSION)

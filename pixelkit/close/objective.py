@@ -1,0 +1,59 @@
+"""What ``pixelkit close`` optimises once every spec passes: ``[close] objective``.
+
+- ``power``: the chip's power (the figure ``power_chip``, SPICE supply currents) at the nominal
+  condition (the design's corner and temperature, nominal supply);
+- a figure a spec can name (``max full_well_primary``, ``min read_noise_secondary``): its value
+  at the nominal condition;
+- ``area``: the gate area W x L of the five transistors (EC, TG, RST, SF, RS) of every subpixel
+  of one dual pixel (1 + ``secondary_per_pixel`` subpixels): the silicon the devices take from
+  the photodiodes. A closed form, no simulation;
+- a knob (``max pixel.v_fd_reset``): its own value.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ..verify.figures import FIGURES
+from .table import value_of
+
+_PIXEL_DEVICES = ("ec", "tg", "rst", "sf", "rs")
+
+
+def gate_area(design) -> float:
+    """m2 of gate per dual pixel (see the module docstring)."""
+    d = design.pixel.devices
+    per_subpixel = sum(getattr(d, f"{n}_w") * getattr(d, f"{n}_l") for n in _PIXEL_DEVICES)
+    return per_subpixel * (1 + design.secondary_per_pixel)
+
+
+@dataclass(frozen=True)
+class Objective:
+    sense: str        # "min" | "max"
+    what: str         # a figure name, "area" or a knob key
+
+    @property
+    def figure(self) -> str | None:
+        """The figure measured at the nominal condition, or None for a closed form."""
+        return self.what if self.what in FIGURES else None
+
+    @property
+    def unit(self) -> str:
+        if self.figure:
+            return FIGURES[self.figure].unit
+        return "um2" if self.what == "area" else ""
+
+    def value(self, design, nominal_figures: dict | None) -> float | None:
+        """The objective's value (SI) of ``design``; a figure from ``nominal_figures``."""
+        if self.figure:
+            return (nominal_figures or {}).get(self.figure)
+        if self.what == "area":
+            return gate_area(design)
+        return float(value_of(design, self.what))
+
+    def label(self) -> str:
+        return f"{self.sense} {self.what}"
+
+
+def of(design) -> Objective:
+    sense, what = design.close.goal
+    return Objective(sense, what)

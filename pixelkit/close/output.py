@@ -1,0 +1,222 @@
+"""What ``pixelkit close`` prints and writes: the iteration lines, the conflict, the summary,
+``close.json`` and the revision's design file."""
+from __future__ import annotations
+
+import hashlib
+import math
+import re
+from pathlib import Path
+
+#: A gradient counts as helping / hurting a spec above this (normalised margin per knob unit).
+_SIGN = 1e-6
+
+
+def _pct(x) -> str:
+    return "-" if x is None or (isinstance(x, float) and not math.isfinite(x)) else f"{x:+.3g} %"
+
+
+def _obj(value, objective) -> str:
+    if value is None:
+        return "-"
+    from ..verify.figures import FIGURES, shown
+    if objective.figure:
+        f = FIGURES[objective.figure]
+        return f"{shown(value, f.unit, f.dim):.5g} {f.unit}".strip()
+    if objective.what == "area":
+        return f"{value * 1e12:.5g} um2"
+    return f"{value:.6g}"
+
+
+def iteration_text(rec: dict, objective) -> str:
+    head = (f"close: iteration {rec['iteration']} ({rec['mode']}"
+            + ("" if rec["mode"] == "start" else ", " + ("accepted" if rec["accepted"] else "rejected"))
+            + f", verified on the {rec['verified_on']}"
+            + (f", trust region {rec['radius']:.3g}" if rec["radius"] is not None else "") + "): "
+            + ", ".join(f"{k} = {v}" for k, v in rec["knobs"].items())
+            + f"; smallest margin {_pct(rec['smallest_margin_pct'])}; {objective.label()} "
+            + _obj(rec["objective"], objective)
+            + f"; SPICE {rec['spice_runs']} runs ({rec['spice_cached']} from cache), {rec['wall_s']:.0f} s")
+    width = max((len(n) for n in rec["specs"]), default=0)
+    lines = [head]
+    for name, s in rec["specs"].items():
+        lines.append(f"  {name.ljust(width)}  {_pct(s['margin_pct']):>10}  at {s['where'] or '-'}")
+    return "\n".join(lines)
+
+
+def conflicts(closer, p, last) -> dict:
+    """The specs that conflict at the best compromise ``p``: the rows whose multipliers carry the
+    max-min step of the last model (``close.step.restore`` at the tolerance's radius), and how each
+    knob moves them."""
+    from .knobs import at_bound
+    from .step import restore
+    st, model, _radius = last
+    u0 = closer.space.to_u(p.x)
+    lo, hi = closer.space.u_bounds
+    r = restore(model, u0, lo, hi, closer.settings.tolerance, cap=0.0)
+    rows = sorted(r.multipliers.items(), key=lambda kv: -kv[1])
+    index = {k: i for i, k in enumerate(model.keys)}
+    specs = []
+    for (name, c), lam in rows:
+        m = p.margins.get((name, c))
+        specs.append({"spec": name, "condition": c.label, "weight": lam,
+                      "margin_pct": None if m is None else 100 * m})
+    knobs = []
+    for j, k in enumerate(closer.space.knobs):
+        helps = [n for (n, c), _l in rows if model.g[index[(n, c)], j] > _SIGN]
+        hurts = [n for (n, c), _l in rows if model.g[index[(n, c)], j] < -_SIGN]
+        bound = {"min": k.lo, "max": k.hi}.get(at_bound(k, p.x[j]))
+        knobs.append({"key": k.name, "raising_helps": helps, "raising_hurts": hurts,
+                      "at_bound": at_bound(k, p.x[j]),
+                      "bound": None if bound is None else closer.space.texts([bound], [k])[0]})
+    names = [f"{s['spec']} at {s['condition']}" for s in specs]
+    why = []
+    for kn in knobs:
+        if kn["raising_helps"] and kn["raising_hurts"]:
+            why.append(f"raising {kn['key']} helps {', '.join(dict.fromkeys(kn['raising_helps']))} and hurts "
+                       f"{', '.join(dict.fromkeys(kn['raising_hurts']))}")
+        elif kn["at_bound"] and (kn["raising_helps"] or kn["raising_hurts"]):
+            why.append(f"{kn['key']} is at its {kn['at_bound']} ({kn['bound']})")
+    if len(specs) > 1:
+        text = " against ".join(names)
+    elif specs:
+        text = f"{names[0]} cannot reach its limit within the knobs' bounds"
+    else:
+        text = "no spec carries the last step (the models found no direction)"
+    if why:
+        text += ": " + "; ".join(why)
+    return {"specs": specs, "knobs": knobs, "text": text}
+
+
+STATUS = {
+    "closed": "closed: the revision passes every spec at every condition",
+    "passing": "passing, stopped at max_iterations: the revision passes every spec at every condition; the "
+               "objective may improve further",
+    "infeasible": "no revision within the knobs' bounds passes: the smallest margin cannot be raised further",
+    "not closed": "no passing revision found within max_iterations",
+    "yield not met": "the revision passes every condition but its Monte Carlo yield does not reach min_yield",
+    "not measured": "not every spec was measured at every condition of the closed revision",
+}
+
+
+def text(r: dict) -> str:
+    lines = [f"close of {r['design']}: {STATUS.get(r['status'], r['status'])}",
+             f"{len(r['iterations']) - 1} candidates, {r['spice_runs']} SPICE runs ({r['spice_cached']} from cache), "
+             f"{r['wall_s']:.0f} s; objective {r['objective']['goal']}: {r['objective']['shown_start']} -> "
+             f"{r['objective']['shown']}"]
+    width = max(len(k["key"]) for k in r["knobs"])
+    for k in r["knobs"]:
+        lines.append(f"  {k['key'].ljust(width)}  {k['start']:>12} -> {k['value']:<12} [{k['min']}, {k['max']}] "
+                     f"{k['scale']}" + (f"  at its {k['at_bound']}" if k["at_bound"] else ""))
+    lines.append("worst margin of each spec" + (" (the best compromise)" if not r["passes"] else "") + ":")
+    width = max(len(n) for n in r["final"])
+    for name, s in r["final"].items():
+        lines.append(f"  {name.ljust(width)}  {_pct(s['margin_pct']):>10}  at {s['where'] or '-'}")
+    if r.get("yield"):
+        lines.append(r["yield"]["text"])
+    if r.get("conflict"):
+        lines.append("conflict: " + r["conflict"]["text"])
+    if r.get("out"):
+        lines.append(f"revision: {r['out']}")
+    if r.get("json"):
+        lines.append(f"path: {r['json']}")
+    return "\n".join(lines)
+
+
+def revision_name(out: Path, design) -> tuple[str, str]:
+    """(name, revision) of the written revision: the file's stem when it is a valid name, and the
+    next letter after a one-letter revision ("A" -> "B"), else ``<revision>-closed``."""
+    from ..schema import IDENT
+    name = out.stem if IDENT.match(out.stem) else f"{design.name}_closed"[:64]
+    rev = design.revision
+    nxt = chr(ord(rev) + 1) if len(rev) == 1 and rev.isalpha() and rev not in "Zz" else f"{rev}-closed"
+    return name, nxt
+
+
+def revision_text(design, overrides: dict, out: Path, record: dict) -> str:
+    """The design file of the closed revision: the source file's text with the knobs' values, the name
+    and the revision replaced in place (comments kept), checked to read back as intended; the
+    source's technology / layout paths rewritten for ``out``'s folder. Falls back to the file
+    re-written from its table when a key cannot be found in the text."""
+    import tomllib
+
+    from ..fileio import moved_path
+    from ..readfile import read_text
+    from ..schema import to_toml
+    from ..tech import builtin_names
+    name, rev = revision_name(out, design)
+    edits = {"name": name, "revision": rev, **overrides}
+    old_dir, new_dir = Path(design.source).parent, out.parent
+    if design.raw["technology"] not in builtin_names():
+        edits["technology"] = moved_path(design.raw["technology"], old_dir, new_dir)
+    if isinstance(design.raw.get("layout"), dict) and "gds" in design.raw["layout"]:
+        edits["layout.gds"] = moved_path(design.raw["layout"]["gds"], old_dir, new_dir)
+    want = _with(design.raw, edits)
+    source = read_text(Path(design.source), "design", "design")
+    body = _edit(source, edits)
+    if body is None or tomllib.loads(body) != want:
+        body = to_toml(want)
+    head = _header(design, record)
+    return head + body
+
+
+def _header(design, record) -> str:
+    src = "".join(c if c.isprintable() else "?" for c in str(design.source))
+    lines = [f"# Closed by pixelkit close from {src} ({record['status']}, {len(record['iterations']) - 1} candidates, "
+             f"objective {record['objective']['goal']}); the path: {Path(record['json']).name}",
+             "# Knobs moved: " + "; ".join(f"{k['key']} {k['start']} -> {k['value']}" for k in record["knobs"])]
+    return "\n".join(lines) + "\n"
+
+
+def _with(raw: dict, edits: dict) -> dict:
+    import copy
+    out = copy.deepcopy(raw)
+    for key, value in edits.items():
+        cur = out
+        *parts, last = key.split(".")
+        for part in parts:
+            cur = cur.setdefault(part, {})
+        cur[last] = value
+    return out
+
+
+_HEADER = re.compile(r"^\s*\[([^\[\]]+)\]\s*(#.*)?$")
+_ASSIGN = re.compile(r'^(\s*)([A-Za-z0-9_"\.\- ]+?)(\s*=\s*)("(?:[^"\\]|\\.)*"|[^#\s][^#]*?)(\s*(#.*)?)$')
+
+
+def _edit(source: str, edits: dict) -> str | None:
+    """``source`` with each dotted key's value replaced where the file assigns it (a table header
+    and a plain key); None when one of them is not written that way exactly once."""
+    from ..schema import _toml_string
+    lines = source.splitlines(keepends=True)
+    table, found = "", {}
+    for i, line in enumerate(lines):
+        h = _HEADER.match(line)
+        if h:
+            table = ".".join(p.strip().strip('"') for p in h.group(1).split("."))
+            continue
+        a = _ASSIGN.match(line.rstrip("\n"))
+        if not a:
+            continue
+        key = ".".join(p.strip().strip('"') for p in a.group(2).split("."))
+        full = f"{table}.{key}" if table else key
+        if full in edits:
+            if full in found:
+                return None
+            v = edits[full]
+            lit = _toml_string(v) if isinstance(v, str) else repr(v)
+            nl = "\n" if line.endswith("\n") else ""
+            lines[i] = f"{a.group(1)}{a.group(2)}{a.group(3)}{lit}{a.group(5)}{nl}"
+            found[full] = i
+    if set(found) != set(edits):
+        return None
+    return "".join(lines)
+
+
+def digest(text_: str) -> str:
+    return hashlib.sha256(text_.encode()).hexdigest()
+
+
+def json_record(r: dict) -> dict:
+    """close.json: everything but the design object; conditions as labels."""
+    out = {k: v for k, v in r.items() if k not in ("design_obj",)}
+    return out

@@ -1,0 +1,469 @@
+"""The loop of ``pixelkit close``: a trust-region method on SPICE-built linear models, every
+candidate re-verified by ``verify`` (docs/close.md).
+
+1. The start (the design's knob values, clipped into their bounds) is verified on the whole grid.
+2. The pairs (spec, condition) that bind - each spec's worst condition and the next within 5 % of
+   its limit - are modelled: each knob is moved by a fixed step (3 % of a lin knob's span or of a
+   log knob's value) and the groups those specs need are simulated there (``verify.run.measure_at``):
+   forward differences give each pair's margin gradient.
+3. casadi solves the step (``close.step``): while a margin is below its target, the step that
+   raises the smallest margin most; once every target is met on the whole grid, the step that
+   improves the objective keeping every modelled margin >= its target.
+4. The candidate is simulated at the modelled conditions; if it improves there as the model said
+   it would, it is verified on the whole grid (``verify.run.verify``). A candidate is accepted only
+   when the whole grid says so (the smallest margin rose; or, once passing, it still passes and
+   the objective improved). A rejected candidate halves the trust region and corrects the models
+   by its secant; a condition where it failed that was not modelled is modelled from then on.
+5. It ends when the trust region falls below ``[close] tolerance`` (or the model promises nothing
+   more): with a passing revision, its Monte Carlo yield is checked (``[verify] mc``; each spec's
+   yield interval's lower bound must reach ``min_yield``: if not, the spec's margin target at the
+   nominal condition is raised to its Monte Carlo spread and the loop goes on); without one, the
+   specs whose multipliers carry the last step (``close.step.restore``) are the conflict.
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import ConfigError
+from ..verify import conditions, measure
+from ..verify.run import measure_at, verify
+from . import margins as mg
+from .knobs import Space, at_bound, check_bounds
+from .objective import of as objective_of
+from .step import Model, optimise, restore
+
+#: Finite-difference step in knob coordinates (3 % of a span or of a value).
+FD_STEP = 0.03
+#: First trust region (20 % of a span or of a value) and its largest.
+RADIUS0, RADIUS_MAX = 0.2, 1.0
+#: Accept a step at the modelled conditions when it gives at least this share of what the model said.
+ETA = 0.1
+#: Restore aims this far inside every target (a share of the limit), so that the candidate the model
+#: puts on the limit is not just outside it in SPICE.
+CUSHION = 0.002
+#: A step that promises less than this (smallest margin, or objective relative to its start) is none.
+PROMISE = 1e-5
+#: Rounds of "raise the nominal targets to the Monte Carlo spread" before close gives up on yield.
+YIELD_ROUNDS = 3
+#: A knob counts as moving a figure when the figure changes by more than this (relative).
+MOVES = 1e-12
+
+
+@dataclass
+class Point:
+    """A design close simulated on the whole grid."""
+    x: np.ndarray
+    design: object
+    values: dict                  # {condition: {figure: SI}}
+    margins: dict                 # {(spec, condition): normalised margin}
+    f: float | None               # objective (SI)
+    errors: list = field(default_factory=list)
+    signoff: dict | None = None   # verify's result (without Monte Carlo)
+
+
+class _Counter:
+    """SPICE runs and cache hits of the whole close, read per iteration."""
+
+    def __init__(self):
+        from ..spice.counter import SpiceCounter
+        self.c = SpiceCounter(lambda _c: None)
+        self.mark = (0, 0)
+
+    def delta(self) -> tuple[int, int]:
+        now = (self.c.runs, self.c.cached)
+        out = (now[0] - self.mark[0], now[1] - self.mark[1])
+        self.mark = now
+        return out
+
+
+class Closer:
+    def __init__(self, design, backend="batch", jobs=None, scheduler=None, tell=None, say=None):
+        if design.close is None:
+            raise ConfigError(design.source, "close", None, "a [close] table naming the knobs close may move "
+                              "(docs/close.md)")
+        if not design.spec:
+            raise ConfigError(design.source, "spec", None, "a [spec] table with at least one spec (docs/verify.md)")
+        self.base, self.backend, self.jobs, self.scheduler = design, backend, jobs, scheduler
+        self.tell, self.say = tell or (lambda _t: None), say or (lambda _t: None)
+        self.space = Space(design.close.knobs)
+        self.objective = objective_of(design)
+        self.grid = conditions.grid(design)
+        self.nominal = conditions.nominal(design)
+        self.settings = design.close
+        self.targets: dict = {}          # (spec, condition) -> normalised margin target
+        self.spec = {s.name: s for s in design.spec}
+        self.iterations: list = []
+        self.t0 = time.perf_counter()
+        self.counter = _Counter()
+        self.yield_check = _yield_needs(design)
+        self.f_scale = None
+        self.tried: list = []            # every candidate's knob values
+
+    # --- evaluation ---------------------------------------------------------------------------
+    def target(self, key) -> float:
+        return self.targets.get(key, self.settings.margin)
+
+    def full(self, x, design=None) -> Point:
+        d = design or self.space.design(self.base, x)
+        r = verify(d, mc=0, backend=self.backend, jobs=self.jobs, scheduler=self.scheduler)
+        by_label = {c.label: c for c in self.grid}
+        values = {by_label[c["label"]]: c["figures"] for c in r["conditions"]}
+        f = self.objective_value(d, values.get(self.nominal))
+        return Point(x, d, values, mg.table(d, self.grid, values), f, r["errors"], r)
+
+    def objective_value(self, design, nominal_figs) -> float | None:
+        fig = self.objective.figure
+        if fig and (nominal_figs is None or nominal_figs.get(fig) is None):
+            (out,) = measure_at([(design, self.nominal, measure.groups_for([fig]))], backend=self.backend,
+                                jobs=self.jobs, scheduler=self.scheduler, desc="objective")
+            nominal_figs = out["figures"]
+        return self.objective.value(design, nominal_figs)
+
+    def fnorm(self, f: float | None) -> float | None:
+        """The objective as minimised: normalised by its start value, negated for max."""
+        if f is None:
+            return None
+        return (1.0 if self.objective.sense == "min" else -1.0) * f / self.f_scale
+
+    def smallest(self, margins: dict) -> float:
+        return min(((m if m is not None else -math.inf) - self.target(k) for k, m in margins.items()),
+                   default=math.inf)
+
+    # --- the models -----------------------------------------------------------------------------
+    def plan(self, pairs) -> tuple[list, dict]:
+        """(conditions, {condition: groups}) that measure ``pairs`` (and the objective at nominal)."""
+        groups: dict = {}
+        for name, c in pairs:
+            for g in measure.groups_for([self.spec[name].fig.name]):
+                groups.setdefault(c, set()).add(g)
+        if self.objective.figure:
+            groups.setdefault(self.nominal, set()).update(measure.groups_for([self.objective.figure]))
+        order = list(measure.GROUPS)
+        return sorted(groups), {c: tuple(sorted(gs, key=order.index)) for c, gs in groups.items()}
+
+    def rows(self, groups: dict) -> list:
+        """Every (spec, condition) the planned groups measure (more rows than bind, at no cost)."""
+        out = []
+        for s in self.base.spec:
+            for c in conditions.spec_conditions(s, list(groups)):
+                if set(measure.groups_for([s.fig.name])) <= set(groups[c]):
+                    out.append((s.name, c))
+        return out
+
+    def at(self, designs: list, conds: list, groups: dict, desc: str) -> list[dict]:
+        """{condition: figures} for each design (the planned groups at the planned conditions)."""
+        items = [(d, c, groups[c]) for d in designs for c in conds]
+        outs = measure_at(items, backend=self.backend, jobs=self.jobs, scheduler=self.scheduler, desc=desc)
+        per = []
+        for i in range(len(designs)):
+            per.append({c: outs[i * len(conds) + k]["figures"] for k, c in enumerate(conds)})
+        return per
+
+    def row_margins(self, rows, figs: dict) -> np.ndarray:
+        return np.array([mg.margin(self.spec[n], figs.get(c, {}).get(self.spec[n].fig.name)) if
+                         mg.margin(self.spec[n], figs.get(c, {}).get(self.spec[n].fig.name)) is not None
+                         else np.nan for n, c in rows])
+
+    def model(self, p: Point, pairs, first: bool) -> tuple[Model, list, dict]:
+        conds, groups = self.plan(pairs)
+        rows = self.rows(groups)
+        u0 = self.space.to_u(p.x)
+        lo, hi = self.space.u_bounds
+        xs, du = [], []
+        for j, k in enumerate(self.space.knobs):
+            h = FD_STEP
+            if k.grid:   # at least two grid steps
+                h = max(h, 2 * (k.grid / p.x[j] if k.log else k.grid / (k.hi - k.lo)))
+            u = u0.copy()
+            u[j] = u0[j] + h if u0[j] + h <= hi[j] else u0[j] - h
+            x = self.space.snap(self.space.to_x(u))
+            xs.append(x)
+            du.append(self.space.to_u(x)[j] - u0[j])
+        self.tell(f"sensitivities: {len(self.space.knobs)} knobs x {len(conds)} conditions")
+        designs = [p.design] + [self.space.design(self.base, x) for x in xs]
+        figs = self.at(designs, conds, groups, "sensitivities")
+        m0 = self.row_margins(rows, figs[0])
+        g = np.zeros((len(rows), self.space.n))
+        f0 = self.fnorm(self.objective_value(designs[0], figs[0].get(self.nominal)))
+        gf = np.zeros(self.space.n)
+        for j in range(self.space.n):
+            mj = self.row_margins(rows, figs[j + 1])
+            g[:, j] = np.where(np.isfinite(mj) & np.isfinite(m0), (mj - m0) / du[j], 0.0)
+            fj = self.fnorm(self.objective_value(designs[j + 1], figs[j + 1].get(self.nominal)))
+            gf[j] = (fj - f0) / du[j] if fj is not None and f0 is not None else 0.0
+        if first:
+            self._refuse_idle_knobs(rows, figs, designs)
+        keep = np.isfinite(m0)
+        rows = [r for r, ok in zip(rows, keep) if ok]
+        targets = np.array([self.target(r) for r in rows])
+        return Model(rows, m0[keep] - targets, g[keep], f0, gf), conds, groups
+
+    def _refuse_idle_knobs(self, rows, figs, designs) -> None:
+        """A knob that moves no spec's figure at any modelled condition (nor the objective) is refused."""
+        names = {self.spec[n].fig.name for n, _ in rows}
+        base = figs[0]
+        for j, k in enumerate(self.space.knobs):
+            moved = any(_moved(base.get(c, {}).get(f), figs[j + 1].get(c, {}).get(f)) for c in base for f in names)
+            if not self.objective.figure:
+                moved = moved or _moved(self.objective.value(designs[0], None),
+                                        self.objective.value(designs[j + 1], None))
+            if not moved:
+                raise ConfigError(self.base.source, f"close.knobs.{k.name}", k.name,
+                                  "a knob some spec depends on: moving it by "
+                                  f"{100 * FD_STEP:g} % changed no figure of any spec at its binding conditions "
+                                  f"({', '.join(sorted({c.label for c in base}))}) nor the objective")
+
+    # --- the loop -------------------------------------------------------------------------------
+    def run(self) -> dict:
+        with self.counter.c:
+            return self._run()
+
+    def _run(self) -> dict:
+        s = self.settings
+        check_bounds(self.space, self.base)
+        x0, notes = self.space.start(self.base)
+        for n in notes:
+            self.say(n)
+        self.tell("verifying the start on the whole grid")
+        p = self.full(x0)
+        self.f_scale = abs(p.f) if p.f else 1.0
+        self.record(p, accepted=True, mode="start", radius=None, where="grid")
+        radius, keep, first, status, last = RADIUS0, set(), True, None, None
+        yield_rounds, yield_result = 0, None
+        while status is None:
+            pairs = set(mg.binding(self.base, p.margins, keep)) | set(self.targets)
+            keep = pairs
+            model, conds, groups = self.model(p, sorted(pairs, key=lambda r: (r[0], r[1])), first)
+            first, fresh = False, True
+            u0 = self.space.to_u(p.x)
+            lo, hi = self.space.u_bounds
+            while status is None:
+                if self.candidates() >= s.max_iterations:
+                    status = "stopped"
+                    break
+                feasible = self.smallest(p.margins) >= 0
+                mode = "optimise" if feasible else "restore"
+                st = (optimise(model, u0, lo, hi, radius, CUSHION) if feasible
+                      else restore(model, u0, lo, hi, radius, CUSHION))
+                last = (st, model, radius)
+                xc = self.space.snap(self.space.to_x(u0 + st.d))
+                now = float(model.m.min()) if len(model.m) else 0.0
+                promise = (model.f - st.f) if feasible else st.t - now
+                if feasible and (np.array_equal(xc, p.x) or promise <= PROMISE
+                                 or float(np.abs(st.d).max()) < s.tolerance):
+                    status = "converged"               # the model's next move is below the tolerance
+                    break
+                if not feasible and st.t < CUSHION and float(np.abs(st.d).max()) < s.tolerance:
+                    status = "infeasible"          # the max-min point, to the tolerance, short of the targets
+                    break
+                if not feasible and (np.array_equal(xc, p.x) or promise <= PROMISE or _seen(xc, self.tried)):
+                    if fresh or radius <= s.tolerance:     # no step raises the smallest margin: a max-min point
+                        status = "infeasible"
+                    break                                  # else: fresh sensitivities at this point
+                self.tell(f"candidate {self.candidates() + 1}: {len(conds)} modelled conditions")
+                self.tried.append(xc)
+                dc = self.space.design(self.base, xc)
+                cf = self.at([dc], conds, groups, "candidate")[0]
+                m_rows = self.row_margins(model.keys, cf)
+                targets = np.array([self.target(r) for r in model.keys])
+                fc = self.fnorm(self.objective_value(dc, cf.get(self.nominal)))
+                local = _local_gain(model, m_rows - targets, feasible, fc, st)
+                _secant(model, st.d, m_rows - targets, fc)
+                fresh = False
+                if local < ETA:
+                    self.record_partial(xc, cf, model.keys, fc, mode, radius)
+                    radius /= 2
+                    if radius < s.tolerance:
+                        status = "converged" if feasible else "infeasible"
+                    continue
+                self.tell(f"candidate {self.candidates() + 1}: verifying on the whole grid")
+                pc = self.full(xc, dc)
+                ok, rho = self.accept(p, pc, feasible, st)
+                self.record(pc, accepted=ok, mode=mode, radius=radius, where="grid")
+                if ok:
+                    p = pc
+                    on_edge = float(np.abs(st.d).max()) >= 0.99 * radius
+                    radius = (min(2 * radius, RADIUS_MAX) if rho > 0.75 and on_edge else radius if rho > 0.25
+                              else radius / 2)
+                    break
+                radius /= 2
+                new = {k for k, m in pc.margins.items() if (m is None or m - self.target(k) < 0) and k not in keep}
+                if radius < s.tolerance:
+                    status = "converged" if feasible else "infeasible"
+                elif new:     # it failed where nothing was modelled: model the worst of those from now on
+                    keep |= set(sorted(new, key=lambda k: -math.inf if pc.margins[k] is None else pc.margins[k])[:3])
+                    break
+            if status == "converged" and self.yield_check:
+                yield_result = self.check_yield(p)
+                if not yield_result["ok"] and yield_rounds < YIELD_ROUNDS and yield_result.get("targets"):
+                    yield_rounds += 1
+                    self.targets.update(yield_result["targets"])
+                    status, radius = None, RADIUS0
+        return self.result(p, status, last, yield_result)
+
+    def candidates(self) -> int:
+        """Candidates simulated so far (the start is not one)."""
+        return len(self.iterations) - 1
+
+    def accept(self, p: Point, pc: Point, feasible: bool, st) -> tuple[bool, float]:
+        w, wc = self.smallest(p.margins), self.smallest(pc.margins)
+        if pc.errors:
+            return False, 0.0
+        if feasible:
+            if wc < 0 or pc.f is None:
+                return False, 0.0
+            gain, promised = self.fnorm(p.f) - self.fnorm(pc.f), self.fnorm(p.f) - st.f
+            return gain > 0, gain / promised if promised > 0 else 1.0
+        gain, promised = wc - w, st.t - w
+        return gain > 0, gain / promised if promised > 0 else 1.0
+
+    # --- yield -----------------------------------------------------------------------------------
+    def check_yield(self, p: Point) -> dict:
+        from .yields import check
+        v = self.base.verify
+        self.tell(f"Monte Carlo yield: {v.mc} samples at {self.nominal.label}")
+        r = verify(p.design, backend=self.backend, jobs=self.jobs, scheduler=self.scheduler)
+        out = check(self.base, r, self.nominal, p.margins)
+        self.say(out["text"])
+        return {**out, "signoff": r}
+
+    # --- records ---------------------------------------------------------------------------------
+    def _specs(self, margins: dict) -> dict:
+        out = {}
+        for name, (m, c) in mg.worst(self.base, margins).items():
+            out[name] = {"margin_pct": None if m is None else 100 * m, "where": None if c is None else c.label,
+                         "target_pct": 100 * max((self.target(k) for k in margins if k[0] == name), default=0.0)}
+        return out
+
+    def record(self, p: Point, accepted: bool, mode: str, radius, where: str) -> None:
+        runs, cached = self.counter.delta()
+        rec = {"iteration": len(self.iterations), "mode": mode, "accepted": accepted, "verified_on": where,
+               "knobs": self.space.overrides(p.x), "radius": radius,
+               "smallest_margin_pct": 100 * self.smallest(p.margins), "objective": p.f,
+               "specs": self._specs(p.margins), "errors": p.errors[:5], "spice_runs": runs, "spice_cached": cached,
+               "wall_s": time.perf_counter() - self.t0}
+        self.iterations.append(rec)
+        from .output import iteration_text
+        self.say(iteration_text(rec, self.objective))
+
+    def record_partial(self, x, figs: dict, keys, fc, mode: str, radius) -> None:
+        m = {k: mg.margin(self.spec[k[0]], figs.get(k[1], {}).get(self.spec[k[0]].fig.name)) for k in keys}
+        runs, cached = self.counter.delta()
+        rec = {"iteration": len(self.iterations), "mode": mode, "accepted": False,
+               "verified_on": "modelled conditions", "knobs": self.space.overrides(x), "radius": radius,
+               "smallest_margin_pct": 100 * self.smallest(m),
+               "objective": None if fc is None else fc * self.f_scale * (1 if self.objective.sense == "min" else -1),
+               "specs": self._specs(m), "errors": [], "spice_runs": runs, "spice_cached": cached,
+               "wall_s": time.perf_counter() - self.t0}
+        self.iterations.append(rec)
+        from .output import iteration_text
+        self.say(iteration_text(rec, self.objective))
+
+    def result(self, p: Point, status: str, last, yield_result) -> dict:
+        from .output import _obj, conflicts
+        signoff = (yield_result or {}).get("signoff") or p.signoff
+        unmeasured = list(signoff["unmeasured"]) if signoff else []
+        passing = self.smallest(p.margins) >= 0 and not p.errors
+        yield_ok = yield_result is None or yield_result["ok"]
+        if not passing:
+            status = "infeasible" if status == "infeasible" else "not closed"
+        elif not yield_ok:
+            status = "yield not met"
+        elif unmeasured:
+            status = "not measured"
+        else:
+            status = "closed" if status == "converged" else "passing"
+        start = self.iterations[0]
+        out = {"design": self.base.name, "source": self.base.source, "status": status,
+               "passes": status in ("closed", "passing"),
+               "objective": {"goal": self.objective.label(), "value": p.f, "start": start["objective"],
+                             "shown": _obj(p.f, self.objective), "shown_start": _obj(start["objective"], self.objective)},
+               "knobs": [{"key": k.name, "min": self.space.texts([k.lo], [k])[0],
+                          "max": self.space.texts([k.hi], [k])[0], "scale": "log" if k.log else "lin",
+                          "start": start["knobs"][k.name], "value": self.space.overrides(p.x)[k.name],
+                          "at_bound": at_bound(k, x)} for k, x in zip(self.space.knobs, p.x)],
+               "overrides": self.space.overrides(p.x), "margin_target_pct": 100 * self.settings.margin,
+               "tolerance": self.settings.tolerance,
+               "targets": [{"spec": k[0], "condition": k[1].label, "target_pct": 100 * v} for k, v in
+                           self.targets.items()],
+               "iterations": self.iterations, "final": self._specs(p.margins),
+               "smallest_margin_pct": 100 * self.smallest(p.margins),
+               "signoff": None if signoff is None else {k: signoff[k] for k in ("rows", "grid", "mc", "power", "failed",
+                                                                                "unmeasured", "errors")},
+               "yield": None if yield_result is None else {k: v for k, v in yield_result.items()
+                                                           if k not in ("signoff", "targets")},
+               "spice_runs": sum(i["spice_runs"] for i in self.iterations),
+               "spice_cached": sum(i["spice_cached"] for i in self.iterations),
+               "wall_s": time.perf_counter() - self.t0, "unmeasured": unmeasured, "design_obj": p.design}
+        if not passing and last is not None:
+            out["conflict"] = conflicts(self, p, last)
+        return out
+
+
+def _seen(x, tried) -> bool:
+    return any(np.array_equal(x, t) for t in tried)
+
+
+def _moved(a, b) -> bool:
+    if a is None or b is None:
+        return a is not b
+    return abs(a - b) > MOVES * max(abs(a), abs(b), 1e-300)
+
+
+def _secant(model: Model, d, m_actual, f_actual) -> None:
+    """Broyden's correction of the linear models by what a candidate at u0 + d really gave."""
+    dd = float(d @ d)
+    if dd <= 0:
+        return
+    ok = np.isfinite(m_actual)
+    resid = np.where(ok, m_actual - (model.m + model.g @ d), 0.0)
+    model.g += np.outer(resid, d) / dd
+    if f_actual is not None and model.f is not None:
+        model.gf += (f_actual - (model.f + model.gf @ d)) * d / dd
+
+
+def _local_gain(model: Model, got_rows, feasible: bool, fc, st) -> float:
+    """Share of the promised improvement the candidate gave at the modelled conditions (margins
+    less targets ``got_rows``); -1 when it broke a target while passing or was not measured."""
+    if not np.all(np.isfinite(got_rows)):
+        return -1.0
+    now = float(model.m.min()) if len(model.m) else 0.0
+    got = float(got_rows.min()) if len(got_rows) else 0.0
+    if feasible:
+        if got < 0 or fc is None:
+            return -1.0
+        promised = model.f - st.f
+        return (model.f - fc) / promised if promised > 0 else 0.0
+    promised = st.t - now
+    return (got - now) / promised if promised > 0 else 0.0
+
+
+def _yield_needs(design) -> bool:
+    return bool(design.verify.mc)
+
+
+def close_design(design, out, backend: str = "batch", jobs=None, scheduler=None, tell=None, say=None) -> dict:
+    """``pixelkit close``: the loop, then ``<out stem>.close.json`` (the path) beside ``out`` and, when a
+    revision passes, ``out`` (its design file). Returns the result (``passes``, ``status``, ...)."""
+    import json
+    from pathlib import Path
+
+    from ..fileio import check_output, json_default, write_atomic
+    from .output import digest, json_record, revision_text
+    from .yields import check_samples
+    out = check_output(Path(out))
+    path = check_output(out.with_name(out.stem + ".close.json"))
+    check_samples(design)
+    r = Closer(design, backend, jobs, scheduler, tell, say).run()
+    r["json"] = str(path)
+    if r["passes"]:
+        body = revision_text(design, r["overrides"], out, r)
+        r["out"], r["out_sha256"] = str(out), digest(body)
+    write_atomic(path, json.dumps(json_record(r), indent=1, default=json_default) + "\n")
+    if r["passes"]:
+        write_atomic(out, body)
+    return r
