@@ -17,7 +17,7 @@ from .physics.conversion import photoactive_area, rectangle
 from .readout_timing import Timing
 from .schema import as_written, ident, integer, load, named, num, qty, read_toml, table, text
 from .tech import Technology, load_technology
-from .close.table import CloseSettings, check as check_close
+from .verify.close_table import CloseSettings, check as check_close
 from .verify.spec import Spec, VerifySettings, check_conditions
 
 

@@ -112,7 +112,7 @@ def test_knob_values_are_written_as_the_design_file_reads_them(ref_design):
     """Every value the knob space writes loads back (through the unit parser, not the writer) to the
     value close simulates, rounded to the knob's step when it has one."""
     from pixelkit.close.knobs import Space
-    from pixelkit.close.table import Knob
+    from pixelkit.verify.close_table import Knob
     from pixelkit.units import quantity
     knobs = (Knob(name="pixel.sf_bias", lo=6e-7, hi=1.5e-6, dim="A", scale="log"),
              Knob(name="pixel.devices.rst_w", lo=0.42e-6, hi=2e-6, dim="m", grid=5e-9),

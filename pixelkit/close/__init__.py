@@ -2,7 +2,8 @@
 ``[close]`` table until every ``[spec]`` passes at every condition of the ``[verify]`` grid
 (with its Monte Carlo yield), optimising the objective; see docs/close.md.
 
-- ``table``: the ``[close]`` table (schema, checks against the design's keys);
+- the ``[close]`` table itself (schema, checks against the design's keys) is ``verify.close_table``,
+  below the design loader;
 - ``knobs``: the knob space (scaled coordinates, the values as written, designs at a point);
 - ``margins``: each spec's margin at each condition, normalised, and the binding conditions;
 - ``step``: the casadi subproblem on the linear models (trust region, conflicts);

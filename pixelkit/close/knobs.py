@@ -19,7 +19,7 @@ import numpy as np
 
 from ..errors import ConfigError
 from ..units import quantity, si_text
-from .table import value_of
+from ..verify.close_table import value_of
 
 def text(x: float, dim: str, unit_required: bool = False, digits: int = 6) -> str:
     """``x`` (SI) as a design file holds it: ``"1.23456 uA"``, ``"0.605 um"``, ``"398.2 V/V"``."""
@@ -41,7 +41,7 @@ def at_bound(k, x: float) -> str | None:
 
 @dataclass(frozen=True)
 class Space:
-    knobs: tuple          # close.table.Knob, bounds in SI
+    knobs: tuple          # verify.close_table.Knob, bounds in SI
 
     @property
     def names(self) -> list[str]:

@@ -14,7 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ..verify.figures import FIGURES
-from .table import value_of
+from ..verify.close_table import value_of
 
 _PIXEL_DEVICES = ("ec", "tg", "rst", "sf", "rs")
 

@@ -38,7 +38,7 @@ def measure_at(items, backend: str = "batch", jobs=None, scheduler=None, desc: s
     tasks, same decks, the same cache): per item ``{"figures": {name: SI value or None},
     "errors": [message, ...]}``. For callers that need some groups at some conditions of several
     designs (``pixelkit close``: its sensitivities and candidates) rather than a whole grid."""
-    from ..sweep.executors import run_tasks
+    from ..spice.executors import run_tasks
     tasks = [(d, c, tuple(gs), None, backend) for d, c, gs in items]
     outs = [None] * len(tasks)
     for i, out in run_tasks(_task, tasks, jobs=jobs, scheduler=scheduler, desc=desc):

@@ -118,7 +118,7 @@ def check(close: CloseSettings, design, source: str, raw: dict) -> CloseSettings
     """The knobs against the design: each a continuous key the design sets, bounds in its unit
     and within what the design file accepts for it; the objective something close can evaluate.
     Returns the table with the knobs' bounds in SI."""
-    from ..verify.figures import FIGURES
+    from .figures import FIGURES
     knobs = tuple(_knob(k, design, source) for k in close.knobs)
     sense, what = close.goal
     keys = {k.name for k in knobs}
