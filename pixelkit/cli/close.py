@@ -5,10 +5,6 @@ import click
 
 from .common import design_arg, emit, finishing, json_opt, load, main, out_opt, output_path, scheduler_address, spice_opts
 
-#: Exit status when every spec passed where measured but some spec was not measured somewhere.
-EXIT_NOT_MEASURED = 5
-
-
 @main.command("close")
 @design_arg
 @out_opt("the closed revision's design file (default reports/<design>/close/<design>_closed.toml); "
@@ -22,7 +18,7 @@ def close_cmd(design, out, scheduler, backend, jobs, as_json):
     Monte Carlo yield) by moving the [close] knobs; exit 1 naming the specs that conflict when none does."""
     from ..close.output import text
     from ..close.run import close_design
-    from ..errors import EXIT_REGRESSION
+    from ..errors import EXIT_REGRESSION, verdict_exit
     from ..progress import enabled
     from ..spice.counter import spice_progress
     d = load(design)
@@ -41,9 +37,11 @@ def close_cmd(design, out, scheduler, backend, jobs, as_json):
     finishing()
     r = {k: v for k, v in r.items() if k not in ("design_obj",)}
     emit(r, as_json, text)
-    if r["status"] == "not measured":
-        raise SystemExit(EXIT_NOT_MEASURED)
-    if not r["passes"]:
+    if not r["passes"] and r["status"] != "not measured":
         reason = r.get("conflict", {}).get("text") or r["status"]
         click.echo(f"pixelkit: close: {r['status']}: {reason}", err=True)
         raise SystemExit(EXIT_REGRESSION)
+    so = r["signoff"] or {"rows": [], "errors": []}   # the revision's sign-off: the team's rule (1 > 4 > 5 > 0)
+    code = verdict_exit([row["status"] for row in so["rows"]], bool(so["errors"]))
+    if code:
+        raise SystemExit(code)

@@ -367,9 +367,11 @@ class Closer:
         from .output import _obj, conflicts
         signoff = (yield_result or {}).get("signoff") or p.signoff
         unmeasured = list(signoff["unmeasured"]) if signoff else []
-        passing = self.smallest(p.margins) >= 0 and not p.errors
+        short = [k for k, m in p.margins.items() if m is not None and m - self.target(k) < 0]
+        if any(m is None for m in p.margins.values()) and not unmeasured:
+            unmeasured = sorted({k[0] for k, m in p.margins.items() if m is None})
         yield_ok = yield_result is None or yield_result["ok"]
-        if not passing:
+        if short:
             status = "infeasible" if status == "infeasible" else "not closed"
         elif not yield_ok:
             status = "yield not met"
@@ -399,7 +401,7 @@ class Closer:
                "spice_runs": sum(i["spice_runs"] for i in self.iterations),
                "spice_cached": sum(i["spice_cached"] for i in self.iterations),
                "wall_s": time.perf_counter() - self.t0, "unmeasured": unmeasured, "design_obj": p.design}
-        if not passing and last is not None:
+        if short and last is not None:
             out["conflict"] = conflicts(self, p, last)
         return out
 
