@@ -34,7 +34,8 @@ LIMITS = {
     "model": 64 * MiB,            # a SPICE model file (GF180's sm141064.ngspice: 1.3 MB)
     "image": 1 << 40,             # an EMVA 1288 image: bounded by its descriptor (gap/emva.image_limit)
     "scene": 256 * MiB,           # a scene map (.csv, .npy, image) for an array
-    "gds": 256 * MiB,             # a layout whose geometry a design uses
+    "gds": 256 * MiB,             # a layout whose geometry a design uses (or `pixelkit signoff` checks)
+    "netlist": 64 * MiB,          # a designer's SPICE netlist of a layout cell (`pixelkit signoff`)
     "report": 64 * MiB,           # a file of an earlier report (--baseline)
     "json": 64 * MiB,             # a golden / regression JSON file
     "sim-cache": 2048 * MiB,      # a simulation-cache entry (a whole-chip frame: a few MB)

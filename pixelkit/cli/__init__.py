@@ -9,7 +9,7 @@ from __future__ import annotations
 import importlib
 
 COMMAND_MODULES = ("simulate", "netlists", "array", "size", "layout", "gap", "report", "sensor", "camera", "sweep", "mc", "verify",
-                   "close", "lightmap", "waves")
+                   "close", "lightmap", "waves", "signoff")
 
 
 def register_all() -> None:

@@ -41,3 +41,60 @@ def cell_geometry(design, top: str, gds: Path | None = None):
     with tempfile.TemporaryDirectory(prefix="pixelkit-pex-") as tmp:
         path = write_gds(build_library(design), Path(tmp) / f"{design.name}.gds")
         return net_geometry(path, top, design)
+
+
+def gds_geometry(design, gds: Path, tops=("DUALPIX", "DUALPIX_COL", *AFE_CELLS), context: str | None = None) -> dict:
+    """{cell: nets.NetGeometry} of the cells ``tops`` of a GDS the designer gives (the kit's cell names,
+    matched to the kit's netlists of ``design``); a cell it lacks is named. ``context``: a cell that
+    places them (the chip): each geometry's ``cover`` is then the metal the chip draws over the cell
+    (its shield strips), in the cell's own coordinates."""
+    import klayout.db as kdb
+    from ...errors import PixelkitError
+    from ...tech.stack import require_stack
+    from .nets import net_geometry
+    require_stack(design.tech)
+    layout = kdb.Layout()
+    layout.read(str(gds))
+    missing = [t for t in tops if layout.cell(t) is None]
+    if missing:
+        raise PixelkitError(f"{gds}: no cell {', '.join(missing)} (the post-layout view and the light map of "
+                            f"design {design.name} read the kit's cells: {', '.join(tops)})")
+    out = {t: net_geometry(gds, t, design) for t in tops}
+    if context is not None and layout.cell(context) is not None:
+        for t, g in out.items():
+            g.cover = _cover(layout, context, t, design.tech)
+    return out
+
+
+def _cover(layout, context: str, cell: str, tech, depth: int = 0):
+    """Metal (every metal layer) of ``context`` flattened, over the first placement of ``cell`` in it,
+    moved into ``cell``'s coordinates and clipped to its extent. A cell the chip does not place itself
+    (``DUALPIX_COL``: the chip stacks its column circuits with the AFEs instead) gets the union of its
+    children's covers; None where none of it is placed."""
+    import klayout.db as kdb
+    top = layout.cell(context)
+    target = layout.cell(cell)
+    it = top.begin_instances_rec()
+    trans = None
+    while not it.at_end():
+        if it.inst_cell().cell_index() == target.cell_index():
+            trans = it.trans() * it.inst_trans()
+            break
+        it.next()
+    if trans is None:
+        if depth > 8:
+            return None
+        out = None
+        for inst in target.each_inst():
+            sub = _cover(layout, context, inst.cell.name, tech, depth + 1)
+            if sub is not None:
+                moved = sub.transformed(inst.cplx_trans)
+                out = moved if out is None else out + moved
+        return out.merged() if out is not None else None
+    metal = kdb.Region()
+    for m in ("metal1", "metal2", "metal3", "metal4", "metal5"):
+        lay = tech.layer(m)
+        li = layout.find_layer(lay.layer, lay.datatype)
+        if li is not None:
+            metal += kdb.Region(top.begin_shapes_rec(li))
+    return (metal.transformed(trans.inverted()) & kdb.Region(target.bbox())).merged()

@@ -51,6 +51,8 @@ def exposed(geo, shield: str = "pixels") -> list[Junction]:
     for m in METALS:
         for reg in geo.wires.get(m, {}).values():
             metal += reg
+    if getattr(geo, "cover", None) is not None:    # the chip's metal over the cell (its shield strips)
+        metal += geo.cover
     metal.merge()
     light = kdb.Region()
     for reg in geo.junctions.get("pd_n", {}).values():

@@ -34,20 +34,17 @@ class NetGeometry:
     unmatched: list = field(default_factory=list)
     junctions: dict = field(default_factory=dict)  # surface layer (nsd, psd, well, pd_n ...) -> {net: Region}
     openings: object = None                        # Region: the drawn light openings (the kit's marker)
+    cover: object = None                           # Region: metal over the cell drawn by the cells around it
 
 
-def _flat_names(design, top: str) -> tuple:
-    """The kit's flat netlist of ``top`` as KLayout sees it, and {flat SPICE name: dotted name}."""
-    from ..signoff.schematic import circuits_of, flat_view, lvs_view, to_klayout
-    view = flat_view(lvs_view(design, circuits_of(design, top)))
-    dotted = _dotted(design, top)
-    return to_klayout(view), dotted
+def _flat_names(view: list) -> tuple:
+    """A netlist view's top circuit flattened as KLayout sees it, and {flat SPICE name: dotted name}."""
+    from ..signoff.schematic import flat_view, to_klayout
+    return to_klayout(flat_view(view)), _dotted(view)
 
 
-def _dotted(design, top: str) -> dict:
-    """{SPICE-safe flat net name ("Xpix_Xp_fd"): hierarchical name ("Xpix.Xp.fd")}."""
-    from ..signoff.schematic import circuits_of, lvs_view
-    view = lvs_view(design, circuits_of(design, top))
+def _dotted(view: list) -> dict:
+    """{SPICE-safe flat net name ("Xpix_Xp_fd"): hierarchical name ("Xpix.Xp.fd")} of a view's top circuit."""
     by = {c["name"]: c for c in view}
     out = {}
 
@@ -95,10 +92,18 @@ def _flat(region):
 
 
 def net_geometry(gds, top: str, design) -> NetGeometry:
-    """Flatten ``top`` of ``gds``, extract and match its nets; their geometry by layer."""
+    """Flatten ``top`` of ``gds``, extract and match its nets with the kit's netlist of that cell; their
+    geometry by layer."""
+    from ..signoff.schematic import circuits_of, lvs_view
+    return view_geometry(gds, top, design.tech, lvs_view(design, circuits_of(design, top)))
+
+
+def view_geometry(gds, top: str, tech, view: list) -> NetGeometry:
+    """Flatten ``top`` of ``gds``, extract its nets and pair each with a net of ``view``'s top circuit
+    (``schematic.lvs_view``'s form: the kit's netlists, or a designer's read by ``signoff.netlist_in``);
+    their geometry by layer."""
     import klayout.db as kdb
     from ..signoff.lvs import extract, prepare
-    tech = design.tech
     stack = tech.stack
     layout = kdb.Layout()
     layout.read(str(gds))
@@ -113,7 +118,7 @@ def net_geometry(gds, top: str, design) -> NetGeometry:
     cell.flatten(-1, True)
     lvs = kdb.LayoutVsSchematic(kdb.RecursiveShapeIterator(layout, cell, []))
     L = extract(lvs, layout, tech)
-    ref, dotted = _flat_names(design, top)
+    ref, dotted = _flat_names(view)
     nl = prepare(lvs, ref, tech=tech)
     comparer = kdb.NetlistComparer()
     a, b = nl.circuit_by_name(top), next(ref.each_circuit_top_down())

@@ -49,6 +49,10 @@ class Parasitics:
     #: whether the AFEs were drawn and extracted (``scafe``'s wiring, ``open_readout``)
     afe: bool = True
 
+    def as_dict(self) -> dict:
+        from dataclasses import asdict
+        return asdict(self)
+
     def require_afe(self, what: str) -> None:
         """Refuse (an internal fault: the command asked for the wrong view) to serve ``what`` of the AFEs
         from a view extracted without them."""
@@ -181,13 +185,35 @@ def build(design, pix_geo, col_geo, afe_geos=()) -> Parasitics:
 _CACHE: dict = {}
 
 
+def from_gds(design, gds, afe: bool = True) -> Parasitics:
+    """The overlay extracted from the cells of ``gds`` (``DUALPIX``, ``DUALPIX_COL``, ``AFE_P``, ``AFE_S``:
+    a layout the designer edited) instead of the drawing."""
+    from . import AFE_CELLS, gds_geometry
+    g = gds_geometry(design, gds, ("DUALPIX", "DUALPIX_COL", *(AFE_CELLS if afe else ())))
+    p = build(design, g["DUALPIX"], g["DUALPIX_COL"], [g[c] for c in AFE_CELLS if afe])
+    return replace(p, source=f"extracted from {gds} (cells DUALPIX / DUALPIX_COL{' / AFE_P / AFE_S' if afe else ''}) "
+                             f"of {design.name} ({design.tech.stack.source})")
+
+
+def layout_file(design):
+    """The GDS the design names in ``[layout] gds`` (relative to the design file), or None."""
+    from pathlib import Path
+    if getattr(design, "layout", None) is None:
+        return None
+    return Path(design.source).parent / design.layout.gds
+
+
 def _key(design, afe: bool) -> str:
-    """Cache key of a design's extraction: the code that draws and extracts it, the design and whether
-    the AFEs are in it."""
+    """Cache key of a design's extraction: the code that draws and extracts it, the design, whether
+    the AFEs are in it, and the bytes of the GDS it names in ``[layout] gds`` (if any)."""
     import hashlib
     from pathlib import Path
     pkg = Path(__file__).resolve().parents[2]
     h = hashlib.sha256(repr((design, afe)).encode())
+    gds = layout_file(design)
+    if gds is not None:
+        from ...readfile import sha256_file
+        h.update(sha256_file(gds, "layout.gds", "gds").encode())
     for sub in ("layout", "tech", "circuits"):
         for p in sorted((pkg / sub).rglob("*.py")) + sorted((pkg / sub).rglob("*.toml")):
             h.update(str(p.relative_to(pkg)).encode())
@@ -215,7 +241,9 @@ def _store(key: str, p: Parasitics) -> None:
 
 
 def post_layout_view(design, afe: bool = True):
-    """``design`` with its extracted parasitics (``design.post_layout``); a clear error when its
+    """``design`` with its extracted parasitics (``design.post_layout``): from the GDS the design names in
+    ``[layout] gds`` (a layout the designer edited and signed off with ``pixelkit signoff``), else from
+    the kit's own drawing; a clear error when its
     technology has no stack or its layout does not match its netlist. ``afe=False``: without the
     AFEs' extraction (for commands that simulate no AFE; see ``Parasitics.afe``). Extractions are
     cached in ``$PIXELKIT_CACHE/pex`` (key: the design, ``afe`` and the code that draws and extracts it)."""
@@ -229,8 +257,12 @@ def post_layout_view(design, afe: bool = True):
     if key not in _CACHE:
         found = _stored(key)
         if found is None:
-            g = chip_geometry(design, ("DUALPIX", "DUALPIX_COL", *(AFE_CELLS if afe else ())))
-            found = build(design, g["DUALPIX"], g["DUALPIX_COL"], [g[c] for c in AFE_CELLS if afe])
+            gds = layout_file(design)
+            if gds is not None:          # the designer's layout ([layout] gds), not the drawing
+                found = from_gds(design, gds, afe)
+            else:
+                g = chip_geometry(design, ("DUALPIX", "DUALPIX_COL", *(AFE_CELLS if afe else ())))
+                found = build(design, g["DUALPIX"], g["DUALPIX_COL"], [g[c] for c in AFE_CELLS if afe])
             _store(key, found)
         _CACHE[key] = found
     return replace(design, post_layout=_CACHE[key])

@@ -108,8 +108,9 @@ def parse_report(path: Path) -> list[Violation]:
     return [Violation(rule, desc.get(rule, ""), cell, where, n) for (rule, cell), (where, n) in sorted(found.items())]
 
 
-def run_drc(gds: Path, top: str, tech, workdir: Path, threads: int = 2, mode: str | None = None) -> DrcResult:
-    """Run the technology's DRC deck on cell ``top`` of ``gds``; report and log in ``workdir``."""
+def drc_command(gds: Path, top: str, tech, workdir: Path, threads: int = 2, mode: str | None = None) -> tuple:
+    """(KLayout's arguments, report path, log path, deck, options) of the technology's DRC deck on cell
+    ``top`` of ``gds`` with its report and log in ``workdir``."""
     deck = drc_deck(tech)
     exe = klayout_binary()
     workdir = Path(workdir)
@@ -127,13 +128,23 @@ def run_drc(gds: Path, top: str, tech, workdir: Path, threads: int = 2, mode: st
             "-rd", f"topcell={top}", "-rd", f"thr={threads}"]
     for k, v in sorted(options.items()):
         args += ["-rd", f"{k}={v}"]
+    return args, report, log, deck, options
+
+
+def drc_result(code: int, gds, top: str, report: Path, log: Path, deck: Path, options: dict, seconds: float) -> DrcResult:
+    """The result of a finished DRC run (its exit status, report and log), or an error naming the log."""
+    if code != 0 or not report.is_file():
+        tail = log.read_text(errors="replace").strip().splitlines()[-3:]
+        raise PixelkitError(f"the DRC deck {deck.name} failed on {gds} (exit {code}): "
+                            f"{' | '.join(tail)}; log: {log}")
+    return DrcResult(str(deck), top, options, seconds, klayout_version(), parse_report(report), str(report))
+
+
+def run_drc(gds: Path, top: str, tech, workdir: Path, threads: int = 2, mode: str | None = None) -> DrcResult:
+    """Run the technology's DRC deck on cell ``top`` of ``gds``; report and log in ``workdir``."""
+    args, report, log, deck, options = drc_command(gds, top, tech, workdir, threads, mode)
     report.unlink(missing_ok=True)
     t0 = time.perf_counter()
     with open(log, "w") as f:
-        p = subprocess.run(args, stdout=f, stderr=subprocess.STDOUT, cwd=workdir)
-    seconds = time.perf_counter() - t0
-    if p.returncode != 0 or not report.is_file():
-        tail = log.read_text(errors="replace").strip().splitlines()[-3:]
-        raise PixelkitError(f"the DRC deck {deck.name} failed on {gds} (exit {p.returncode}): "
-                            f"{' | '.join(tail)}; log: {log}")
-    return DrcResult(str(deck), top, options, seconds, klayout_version(), parse_report(report), str(report))
+        p = subprocess.run(args, stdout=f, stderr=subprocess.STDOUT, cwd=Path(workdir))
+    return drc_result(p.returncode, gds, top, report, log, deck, options, time.perf_counter() - t0)

@@ -16,9 +16,7 @@ database), never from its log.
 """
 from __future__ import annotations
 
-import os
 import re
-import shutil
 import subprocess
 import tempfile
 import time
@@ -62,12 +60,48 @@ def available(tech) -> str | None:
     return mod.check()
 
 
-def _klayout(args: list, cwd: Path) -> tuple[int, str]:
-    from .drc import klayout_binary
-    log = cwd / "run.log"
-    with open(log, "w") as f:
-        p = subprocess.run([klayout_binary(), "-b", *args], stdout=f, stderr=subprocess.STDOUT, cwd=cwd)
-    return p.returncode, log.read_text(errors="replace")
+class Job:
+    """A KLayout batch run in a private temporary folder of its own, started now; ``result()`` waits for
+    it and hands (exit status, log text, folder) to ``finish``, whose return it gives back (the folder is
+    removed after). Lets the sign-off run its decks side by side with its own work."""
+
+    def __init__(self, args: list, finish, prefix: str = "pixelkit-deck-", folder: Path | None = None):
+        from .drc import klayout_binary
+        self._tmp = None
+        if folder is None:
+            self._tmp = tempfile.TemporaryDirectory(prefix=prefix)
+            folder = Path(self._tmp.name)
+        self.folder = Path(folder)
+        self.finish = finish
+        self.t0 = time.perf_counter()
+        args = args(self.folder) if callable(args) else args
+        self._log = open(self.folder / "run.log", "w")
+        self.proc = subprocess.Popen([klayout_binary(), "-b", *args], stdout=self._log, stderr=subprocess.STDOUT,
+                                     cwd=self.folder)
+        self.t_end = None
+        import threading
+        self._waiter = threading.Thread(target=self._wait, daemon=True)
+        self._waiter.start()
+
+    def _wait(self):
+        self.proc.wait()
+        self.t_end = time.perf_counter()
+
+    def result(self):
+        try:
+            code = self.proc.wait()
+            self._waiter.join()
+            self._log.close()
+            return self.finish(code, (self.folder / "run.log").read_text(errors="replace"), self.folder)
+        finally:
+            if self.proc.poll() is None:
+                self.proc.kill()
+            if self._tmp is not None:
+                self._tmp.cleanup()
+
+    def seconds(self) -> float:
+        """Wall time of the run (from its start to its end)."""
+        return (self.t_end or time.perf_counter()) - self.t0
 
 
 def _move_out(tmp: Path, names: dict, workdir: Path) -> dict:
@@ -107,25 +141,32 @@ class FoundryLvs:
 
 def run_lvs(gds: Path, top: str, spice: Path, tech, workdir: Path) -> FoundryLvs | NotRun:
     """The foundry's LVS deck, deep mode, on cell ``top`` of ``gds`` against the netlist ``spice``."""
-    import klayout.db as kdb
-    from .lvs import _describe
+    job = start_lvs(gds, top, Path(spice).read_text(), tech, workdir)
+    return job if isinstance(job, NotRun) else job.result()
+
+
+def start_lvs(gds: Path, top: str, spice_text: str, tech, workdir: Path):
+    """Start the foundry's LVS deck (a :class:`Job` whose result is a :class:`FoundryLvs`), or
+    :class:`NotRun` where the deck is not installed."""
     mod = pv_module(tech)
     why = available(tech)
     if why is not None:
         return NotRun("foundry LVS", why)
     deck = mod.deck(mod.LVS_DECK)
     so = tech.signoff
-    t0 = time.perf_counter()
-    with tempfile.TemporaryDirectory(prefix="pixelkit-lvs-") as tmp:
-        tmp = Path(tmp)
-        schematic = tmp / "schematic.spice"
-        schematic.write_text(renamed_netlist(Path(spice).read_text(), so.lvs_models))
-        args = ["-r", str(LVS_RUNNER), "-rd", f"pixelkit_deck={deck}", "-rd", f"input={Path(gds).resolve()}",
-                "-rd", f"schematic={schematic}", "-rd", f"report={tmp / 'out.lvsdb'}",
-                "-rd", f"target_netlist={tmp / 'out.cir'}", "-rd", f"topcell={top}", "-rd", "run_mode=deep"]
+
+    def args(tmp):
+        (tmp / "schematic.spice").write_text(renamed_netlist(spice_text, so.lvs_models))
+        out = ["-r", str(LVS_RUNNER), "-rd", f"pixelkit_deck={deck}", "-rd", f"input={Path(gds).resolve()}",
+               "-rd", f"schematic={tmp / 'schematic.spice'}", "-rd", f"report={tmp / 'out.lvsdb'}",
+               "-rd", f"target_netlist={tmp / 'out.cir'}", "-rd", f"topcell={top}", "-rd", "run_mode=deep"]
         for k, v in so.pv_options:
-            args += ["-rd", f"{k}={v}"]
-        code, log = _klayout(args, tmp)
+            out += ["-rd", f"{k}={v}"]
+        return out
+
+    def finish(code, log, tmp):
+        import klayout.db as kdb
+        from .lvs import _describe
         if not (tmp / "out.lvsdb").is_file():
             tail = " | ".join(log.strip().splitlines()[-2:])
             raise PixelkitError(f"the foundry LVS deck ({mod.SOURCE}) wrote no report on {gds} (exit {code}): {tail}")
@@ -142,18 +183,27 @@ def run_lvs(gds: Path, top: str, spice: Path, tech, workdir: Path) -> FoundryLvs
         mismatches = [] if ok else (_describe(xref) or ["the netlists differ (see the report)"])
         files = _move_out(tmp, {"out.lvsdb": f"{top}.fdpv.lvsdb", "out.cir": f"{top}.fdpv.ext.cir",
                                 "run.log": f"{top}.fdpv.lvs.log"}, workdir)
-    said = "Netlists match" if "Netlists match" in log else "Netlists don't match" if "don't match" in log else "?"
-    if said == "Netlists match" and not ok or said == "Netlists don't match" and ok:
-        raise PixelkitError(f"the foundry LVS log says {said!r} but its report's cross reference says "
-                            f"{'match' if ok else 'no match'} for {top}: not trusted; log {files.get(f'{top}.fdpv.lvs.log')}")
-    return FoundryLvs(top, ok, time.perf_counter() - t0, f"{mod.SOURCE}, patched: "
-                      + ", ".join(p.name for p in mod.patches()), circuits, mismatches,
-                      files.get(f"{top}.fdpv.lvsdb", ""), files.get(f"{top}.fdpv.lvs.log", ""))
+        said = "Netlists match" if "Netlists match" in log else "Netlists don't match" if "don't match" in log else "?"
+        if said == "Netlists match" and not ok or said == "Netlists don't match" and ok:
+            raise PixelkitError(f"the foundry LVS log says {said!r} but its report's cross reference says "
+                                f"{'match' if ok else 'no match'} for {top}: not trusted; log "
+                                f"{files.get(f'{top}.fdpv.lvs.log')}")
+        return FoundryLvs(top, ok, job.seconds(), f"{mod.SOURCE}, patched: " + ", ".join(p.name for p in mod.patches()),
+                          circuits, mismatches, files.get(f"{top}.fdpv.lvsdb", ""), files.get(f"{top}.fdpv.lvs.log", ""))
+    job = Job(args, finish, "pixelkit-lvs-")
+    return job
 
 
 def run_chip_drc(gds: Path, top: str, tech, workdir: Path, which: str) -> object:
     """The foundry's ``density`` or ``antenna`` DRC deck on cell ``top`` (a chip-level check); a
     ``drc.DrcResult``, or :class:`NotRun`."""
+    job = start_chip_drc(gds, top, tech, workdir, which)
+    return job if isinstance(job, NotRun) else job.result()
+
+
+def start_chip_drc(gds: Path, top: str, tech, workdir: Path, which: str):
+    """Start the foundry's ``density`` or ``antenna`` deck (a :class:`Job` whose result is a
+    ``drc.DrcResult``), or :class:`NotRun`."""
     from .drc import DrcResult, klayout_version, parse_report
     mod = pv_module(tech)
     why = available(tech)
@@ -161,21 +211,24 @@ def run_chip_drc(gds: Path, top: str, tech, workdir: Path, which: str) -> object
         return NotRun(which, why)
     deck = mod.deck({"density": mod.DENSITY_DECK, "antenna": mod.ANTENNA_DECK}[which])
     options = {k: v for k, v in tech.signoff.drc_options if k in ("metal_top", "metal_level", "mim_option")}
-    t0 = time.perf_counter()
-    with tempfile.TemporaryDirectory(prefix=f"pixelkit-{which}-") as tmp:
-        tmp = Path(tmp)
-        args = ["-r", str(DRC_RUNNER), "-rd", f"pixelkit_deck={deck}", "-rd", f"input={Path(gds).resolve()}",
-                "-rd", f"report={tmp / 'out.lyrdb'}", "-rd", f"topcell={top}", "-rd", "run_mode=deep", "-rd", "thr=2"]
+
+    def args(tmp):
+        out = ["-r", str(DRC_RUNNER), "-rd", f"pixelkit_deck={deck}", "-rd", f"input={Path(gds).resolve()}",
+               "-rd", f"report={tmp / 'out.lyrdb'}", "-rd", f"topcell={top}", "-rd", "run_mode=deep", "-rd", "thr=2"]
         for k, v in sorted(options.items()):
-            args += ["-rd", f"{k}={v}"]
-        code, log = _klayout(args, tmp)
+            out += ["-rd", f"{k}={v}"]
+        return out
+
+    def finish(code, log, tmp):
         if code != 0 or not (tmp / "out.lyrdb").is_file():
             tail = " | ".join(log.strip().splitlines()[-2:])
             raise PixelkitError(f"the foundry {which} deck failed on {gds} (exit {code}): {tail}")
         violations = parse_report(tmp / "out.lyrdb")
         files = _move_out(tmp, {"out.lyrdb": f"{top}.{which}.lyrdb", "run.log": f"{top}.{which}.log"}, workdir)
-    return DrcResult(str(deck), top, {**options, "run_mode": "deep"}, time.perf_counter() - t0, klayout_version(),
-                     violations, files.get(f"{top}.{which}.lyrdb", ""))
+        return DrcResult(str(deck), top, {**options, "run_mode": "deep"}, job.seconds(), klayout_version(),
+                         violations, files.get(f"{top}.{which}.lyrdb", ""))
+    job = Job(args, finish, f"pixelkit-{which}-")
+    return job
 
 
 __all__ = ["DeckError", "NotRun", "FoundryLvs", "available", "run_lvs", "run_chip_drc", "renamed_netlist"]

@@ -250,13 +250,14 @@ def _describe(xref) -> list[str]:
         for pp in xref.each_pin_pair(cp):
             if pp.status() in bad:
                 pa, pb = pp.first(), pp.second()
-                out.append(f"{cname}: pin {(pb or pa).name()} unmatched")
+                out.append(f"{cname}: pin {(pb or pa).name()} unmatched (its net is open, or connected otherwise, in the layout)")
     return out
 
 
 def _misnamed(xref) -> list[str]:
-    """Nets the comparer paired by topology whose names differ: a pin on the wrong net (two
-    terminals' nets swapped look alike to a graph match, not to the pins' names)."""
+    """Nets the comparer paired by topology whose names differ (SPICE names are case-insensitive): a
+    pin on the wrong net (two terminals' nets swapped look alike to a graph match, not to the pins'
+    names)."""
     out = []
     for cp in xref.each_circuit_pair():
         a, b = cp.first(), cp.second()
@@ -264,7 +265,7 @@ def _misnamed(xref) -> list[str]:
             continue
         for np_ in xref.each_net_pair(cp):
             na, nb = np_.first(), np_.second()
-            if na is not None and nb is not None and na.name and nb.name and na.name != nb.name:
+            if na is not None and nb is not None and na.name and nb.name and na.name.lower() != nb.name.lower():
                 out.append(f"{b.name}: net {nb.name} of the netlist is the layout's net {na.name} "
                            "(a terminal on the wrong net)")
     return out
@@ -275,14 +276,14 @@ def _terms(d) -> str:
                      for t in d.device_class().terminal_definitions())
 
 
-def prepare(lvs, ref, top: str = "", tech=None):
+def prepare(lvs, ref, top: str = "", tech=None, circuit_for=circuit_of):
     """Set ``ref`` as the reference of ``lvs`` and bring both netlists to the form they are compared
-    in (cells below ``top`` without a circuit of their own looked through, floating nets purged,
-    top-level pins, parallel devices combined); the extracted netlist."""
+    in (cells below ``top`` without a circuit of their own, ``circuit_for(cell)`` None, looked through,
+    floating nets purged, top-level pins, parallel devices combined); the extracted netlist."""
     lvs.reference = ref
     nl = lvs.netlist()
     if top:
-        for c in [c for c in nl.each_circuit() if c.name != top and circuit_of(c.name) is None]:
+        for c in [c for c in nl.each_circuit() if c.name != top and circuit_for(c.name) is None]:
             nl.flatten_circuit(c)    # an array of references, a readout row, a shield
     nl.purge_nets()
     nl.make_top_level_pins()
@@ -296,24 +297,36 @@ def prepare(lvs, ref, top: str = "", tech=None):
 
 def run_lvs(gds: Path, top: str, design, workdir: Path | None = None) -> LvsResult:
     """Extract cell ``top`` of ``gds`` and compare it with the kit's netlist of that cell."""
-    import klayout.db as kdb
     if circuit_of(top) is None:
         raise PixelkitError(f"no kit netlist for cell {top!r} (cells with one: {', '.join(CELL_CIRCUIT)}, "
                             "CHIP_RxC[_AFE])")
+    return compare_view(gds, top, design.tech, lvs_view(design, circuits_of(design, top)), workdir, circuit_of)
+
+
+def compare_view(gds: Path, top: str, tech, view: list, workdir: Path | None = None, circuit_for=None) -> LvsResult:
+    """Extract cell ``top`` of ``gds`` (hierarchically) and compare it with the netlist ``view``
+    (``schematic.lvs_view``'s form). ``circuit_for(cell)``: the view's circuit a layout cell draws
+    (None: looked through); by default the circuit of the same name (SPICE names are case-insensitive)."""
+    import klayout.db as kdb
     t0 = time.perf_counter()
     layout = kdb.Layout()
     layout.read(str(gds))
     cell = layout.cell(top)
     if cell is None:
         raise PixelkitError(f"{gds} has no cell {top!r}")
+    if circuit_for is None:
+        names = {c["name"].lower(): c["name"] for c in view}
+
+        def circuit_for(name):
+            return names.get(name.lower())
     lvs = kdb.LayoutVsSchematic(kdb.RecursiveShapeIterator(layout, cell, []))
-    extract(lvs, layout, design.tech)
-    tech = design.tech
-    ref = to_klayout(lvs_view(design, circuits_of(design, top)))
-    nl = prepare(lvs, ref, top, tech)
+    extract(lvs, layout, tech)
+    ref = to_klayout(view)
+    nl = prepare(lvs, ref, top, tech, circuit_for)
     comparer = kdb.NetlistComparer()
     for c in nl.each_circuit():
-        b = ref.circuit_by_name(circuit_of(c.name) or "")
+        b = ref.circuit_by_name(circuit_for(c.name) or "") if c.name != top else \
+            ref.circuit_by_name(circuit_for(c.name) or view[-1]["name"])
         if b is not None:
             comparer.same_circuits(c, b)
     ok = lvs.compare(comparer)
@@ -325,9 +338,11 @@ def run_lvs(gds: Path, top: str, design, workdir: Path | None = None) -> LvsResu
         mismatches = ["the netlists differ (see the report for the details)"]
     report = ""
     if workdir is not None:
-        Path(workdir).mkdir(parents=True, exist_ok=True)
-        report = str(Path(workdir) / f"{top}.lvsdb")
-        lvs.write(report)
+        from ...fileio import write_atomic
+        import tempfile
+        with tempfile.TemporaryDirectory(prefix="pixelkit-lvsdb-") as tmp:
+            lvs.write(str(Path(tmp) / "x.lvsdb"))
+            report = str(write_atomic(Path(workdir) / f"{top}.lvsdb", (Path(tmp) / "x.lvsdb").read_bytes()))
     top_circuit = _circuit(nl, top)
     return LvsResult(top, ok, time.perf_counter() - t0, mismatches,
                      sum(1 for _ in top_circuit.each_device()) if top_circuit else 0,
