@@ -63,7 +63,7 @@ def test_close_finds_the_derived_optimum_and_verify_passes_what_it_wrote(tmp_pat
 def test_close_reports_an_infeasible_set_naming_the_conflicting_specs(tmp_path, cli):
     p = _design(tmp_path, {"full_well_primary": {"min": "192 ke-"}, "image_lag_primary": {"max": "0.1 %"}},
                 {"corners": ["tt"], "temperatures": ["27 degC"], "supplies": ["-10 %"], "mc": 0},
-                {"objective": "min power", "knobs": {"pixel.v_pd_reset": ["1.6 V", "2.2 V"]}})
+                {"objective": "min power", "tolerance": "3 %", "knobs": {"pixel.v_pd_reset": ["1.6 V", "2.2 V"]}})
     out = tmp_path / "b.toml"
     code, stdout, err = cli("close", p, "--out", out, "--json")
     assert code == 1, err
@@ -76,3 +76,27 @@ def test_close_reports_an_infeasible_set_naming_the_conflicting_specs(tmp_path, 
     # the best compromise's margins, one of them short; no revision written, the path kept
     assert min(s["margin_pct"] for s in r["final"].values()) < 0
     assert not out.exists() and json.loads((tmp_path / "b.close.json").read_text())["status"] == "infeasible"
+
+
+def test_a_circuit_choice_closes_what_the_supply_driven_gates_cannot(tmp_path, cli):
+    """The same two specs with the gates' drive free: from the supply the set stays infeasible (as above,
+    from the cache), from a boosted rail (pixel.v_gate, absent in the reference, starts at the middle of
+    its bounds) the reset is hard at -10 % supply and both pass; close keeps that choice, writes the rail
+    into [pixel] and verify alone passes the file."""
+    p = _design(tmp_path, {"full_well_primary": {"min": "192 ke-"}, "image_lag_primary": {"max": "0.1 %"}},
+                {"corners": ["tt"], "temperatures": ["27 degC"], "supplies": ["-10 %"], "mc": 0},
+                {"objective": "min power", "tolerance": "3 %", "knobs": {"pixel.v_pd_reset": ["1.6 V", "2.2 V"],
+                                                     "pixel.gate_drive": {"choices": ["supply", "boosted"]},
+                                                     "pixel.v_gate": ["3.0 V", "3.6 V"]}})
+    out = tmp_path / "b.toml"
+    code, stdout, err = cli("close", p, "--out", out, "--json")
+    assert code == 0, err
+    r = json.loads(stdout)
+    by = {c["choice"]: c for c in r["choices"]}
+    assert by["pixel.gate_drive = boosted"]["chosen"] and by["pixel.gate_drive = boosted"]["passes"]
+    assert by["pixel.gate_drive = supply"]["status"] == "infeasible"
+    assert "image_lag_primary" in by["pixel.gate_drive = supply"]["conflict"]
+    text = out.read_text()
+    assert 'gate_drive = "boosted"' in text and "v_gate = " in text
+    code, stdout, err = cli("verify", out, "--out", tmp_path / "v", "--json")
+    assert code == 0, err

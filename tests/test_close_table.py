@@ -69,8 +69,17 @@ BAD = [  # (what, [close] table, field named, words of what is allowed)
      "close.knobs.experiment.mid_fraction", "moves the measurement, not the chip"),
     ("no spec reads it", knob("scene.distance", "3 m", "9 m"), "close.knobs.scene.distance", "no measurement of "
      "pixelkit verify reads [scene]"),
-    ("absent in the design", knob("primary.mask_opening", "1 um2", "4 um2"), "close.knobs.primary.mask_opening",
-     "a key the design sets"),
+    ("a choice the key does not have", {"objective": "min power", "knobs": {"pixel.gate_drive": {
+        "choices": ["supply", "charge_pump"]}}}, "close.knobs.pixel.gate_drive.choices[1]", "one of supply, boosted"),
+    ("choices of a numeric key", {"objective": "min power", "knobs": {"pixel.sf_bias": {"choices": ["1 uA", "2 uA"]}}},
+     "close.knobs.pixel.sf_bias.choices", "a text key with a fixed set of values"),
+    ("bounds on a choice", {"objective": "min power", "knobs": {"pixel.gate_drive": {
+        "choices": ["supply", "boosted"], "min": "1 V"}}}, "close.knobs.pixel.gate_drive.min", "no bounds on a knob "
+     "with choices"),
+    ("a free-text key as a choice", {"objective": "min power", "knobs": {"revision": {"choices": ["B", "C"]}}},
+     "close.knobs.revision.choices", "a text key with a fixed set of values"),
+    ("an objective on a choice", {"objective": "max pixel.gate_drive", "knobs": {"pixel.gate_drive": {
+        "choices": ["supply", "boosted"]}}}, "close.objective", "a figure"),
     ("no knob", {"objective": "min power", "knobs": {}}, "close.knobs", "at least one knob"),
     ("objective without a sense", {"objective": "power", "knobs": {"afe.gain": ["100 V/V", "1000 V/V"]}},
      "close.objective", "\"min X\" or \"max X\""),

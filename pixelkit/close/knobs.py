@@ -67,7 +67,12 @@ class Space:
         """The design's own knob values, each clipped into its bounds, and a note per clipped one."""
         x, notes = [], []
         for k in self.knobs:
-            v = float(value_of(design, k.name))
+            v = value_of(design, k.name)
+            if v is None:   # absent in the design: the middle of its bounds
+                v = math.sqrt(k.lo * k.hi) if k.log else (k.lo + k.hi) / 2
+                notes.append(f"{k.name} starts at {self.texts([v], [k])[0]}, the middle of its bounds (the design "
+                             "leaves it absent)")
+            v = float(v)
             c = min(max(v, k.lo), k.hi)
             if c != v:
                 notes.append(f"{k.name} starts at {self.texts([c], [k])[0]}: the design's "

@@ -27,8 +27,8 @@ def _obj(value, objective) -> str:
     return f"{value:.6g}"
 
 
-def iteration_text(rec: dict, objective) -> str:
-    head = (f"close: iteration {rec['iteration']} ({rec['mode']}"
+def iteration_text(rec: dict, objective, label: str = "") -> str:
+    head = (f"close{label}: iteration {rec['iteration']} ({rec['mode']}"
             + ("" if rec["mode"] == "start" else ", " + ("accepted" if rec["accepted"] else "rejected"))
             + f", verified on the {rec['verified_on']}"
             + (f", trust region {rec['radius']:.3g}" if rec["radius"] is not None else "") + "): "
@@ -100,11 +100,19 @@ STATUS = {
 
 def text(r: dict) -> str:
     lines = [f"close of {r['design']}: {STATUS.get(r['status'], r['status'])}",
-             f"{len(r['iterations']) - 1} candidates, {r['spice_runs']} SPICE runs ({r['spice_cached']} from cache), "
+             f"{candidates(r)} candidates, {r['spice_runs']} SPICE runs ({r['spice_cached']} from cache), "
              f"{r['wall_s']:.0f} s; objective {r['objective']['goal']}: {r['objective']['shown_start']} -> "
              f"{r['objective']['shown']}"]
+    for c in r.get("choices", []):
+        lines.append(f"  with {c['choice']}: {STATUS.get(c['status'], c['status']).split(':')[0]}, smallest margin "
+                     f"{_pct(c['smallest_margin_pct'])}, {r['objective']['goal']} {c['objective_shown']}"
+                     + ("  <- chosen" if c["chosen"] else "") + (f"; conflict: {c['conflict']}" if c["conflict"] else ""))
     width = max(len(k["key"]) for k in r["knobs"])
     for k in r["knobs"]:
+        if "min" not in k:
+            lines.append(f"  {k['key'].ljust(width)}  {k['start']:>12} -> {k['value']:<12}"
+                         + (f" of {', '.join(k['choices'])}" if k.get("choices") else ""))
+            continue
         lines.append(f"  {k['key'].ljust(width)}  {k['start']:>12} -> {k['value']:<12} [{k['min']}, {k['max']}] "
                      f"{k['scale']}" + (f"  at its {k['at_bound']}" if k["at_bound"] else ""))
     lines.append("worst margin of each spec" + (" (the best compromise)" if not r["passes"] else "") + ":")
@@ -144,7 +152,7 @@ def revision_text(design, overrides: dict, out: Path, record: dict) -> str:
     from ..schema import to_toml
     from ..tech import builtin_names
     name, rev = revision_name(out, design)
-    edits = {"name": name, "revision": rev, **overrides}
+    edits = {"name": name, "revision": rev, **{k: v for k, v in overrides.items() if _changes(design, k, v)}}
     old_dir, new_dir = Path(design.source).parent, out.parent
     if design.raw["technology"] not in builtin_names():
         edits["technology"] = moved_path(design.raw["technology"], old_dir, new_dir)
@@ -159,11 +167,26 @@ def revision_text(design, overrides: dict, out: Path, record: dict) -> str:
     return head + body
 
 
+def _changes(design, key: str, value) -> bool:
+    """Whether writing ``value`` at ``key`` changes the design (a value equal in SI keeps its text)."""
+    from ..verify.close_table import field_of, value_of
+    now = value_of(design, key)
+    if value is None or now is None or isinstance(value, str) and isinstance(now, str):
+        return value != now
+    from ..units import quantity
+    return quantity(value, field_of(type(design), key).metadata["dim"], key) != now
+
+
+def candidates(record) -> int:
+    return sum(1 for i in record["iterations"] if i["mode"] != "start")
+
+
 def _header(design, record) -> str:
     src = "".join(c if c.isprintable() else "?" for c in str(design.source))
-    lines = [f"# Closed by pixelkit close from {src} ({record['status']}, {len(record['iterations']) - 1} candidates, "
+    moved = [f"{k['key']} {k['start']} -> {k['value']}" for k in record["knobs"] if k["start"] != k["value"]]
+    lines = [f"# Closed by pixelkit close from {src} ({record['status']}, {candidates(record)} candidates, "
              f"objective {record['objective']['goal']}); the path: {Path(record['json']).name}",
-             "# Knobs moved: " + "; ".join(f"{k['key']} {k['start']} -> {k['value']}" for k in record["knobs"])]
+             "# Knobs moved: " + ("; ".join(moved) or "none (the design passed as it was)")]
     return "\n".join(lines) + "\n"
 
 
@@ -175,7 +198,10 @@ def _with(raw: dict, edits: dict) -> dict:
         *parts, last = key.split(".")
         for part in parts:
             cur = cur.setdefault(part, {})
-        cur[last] = value
+        if value is None:
+            cur.pop(last, None)
+        else:
+            cur[last] = value
     return out
 
 
@@ -184,15 +210,16 @@ _ASSIGN = re.compile(r'^(\s*)([A-Za-z0-9_"\.\- ]+?)(\s*=\s*)("(?:[^"\\]|\\.)*"|[
 
 
 def _edit(source: str, edits: dict) -> str | None:
-    """``source`` with each dotted key's value replaced where the file assigns it (a table header
-    and a plain key); None when one of them is not written that way exactly once."""
-    from ..schema import _toml_string
+    """``source`` with each dotted key's value replaced where the file assigns it (a table header and a
+    plain key), the line dropped for a value None, a key the file lacks written under its table's
+    header; None when a key is assigned more than once or its table has no header of its own."""
     lines = source.splitlines(keepends=True)
-    table, found = "", {}
+    table, found, headers = "", {}, {"": -1}
     for i, line in enumerate(lines):
         h = _HEADER.match(line)
         if h:
             table = ".".join(p.strip().strip('"') for p in h.group(1).split("."))
+            headers.setdefault(table, i)
             continue
         a = _ASSIGN.match(line.rstrip("\n"))
         if not a:
@@ -203,13 +230,24 @@ def _edit(source: str, edits: dict) -> str | None:
             if full in found:
                 return None
             v = edits[full]
-            lit = _toml_string(v) if isinstance(v, str) else repr(v)
             nl = "\n" if line.endswith("\n") else ""
-            lines[i] = f"{a.group(1)}{a.group(2)}{a.group(3)}{lit}{a.group(5)}{nl}"
+            lines[i] = "" if v is None else f"{a.group(1)}{a.group(2)}{a.group(3)}{_literal(v)}{a.group(5)}{nl}"
             found[full] = i
-    if set(found) != set(edits):
-        return None
+    for full, v in edits.items():
+        if full in found or v is None:
+            continue
+        table, _, key = full.rpartition(".")
+        if table not in headers or "." in key:
+            return None
+        at = headers[table]   # right after the header (top-level keys: at the top of the file)
+        lines[at + 1:at + 1] = [f"{key} = {_literal(v)}\n"]
+        headers = {t: (j + 1 if j > at else j) for t, j in headers.items()}
     return "".join(lines)
+
+
+def _literal(v) -> str:
+    from ..schema import _toml_string
+    return _toml_string(v) if isinstance(v, str) else repr(v)
 
 
 def digest(text_: str) -> str:

@@ -93,7 +93,8 @@ def _design_value(text: str):
 
 
 def design_with(design, overrides: dict):
-    """``design`` with dotted-key ``overrides`` applied to its file content, re-validated."""
+    """``design`` with dotted-key ``overrides`` applied to its file content (None: the key left out),
+    re-validated."""
     if not overrides:
         return design
     from ..design import load_design
@@ -114,7 +115,10 @@ def design_with(design, overrides: dict):
             if not isinstance(cur.get(p, {}), dict):
                 raise ConfigError(design.source, key, value, "a key inside a design table")
             cur = cur.setdefault(p, {})
-        cur[parts[-1]] = value
+        if value is None:    # a key left out (close: a knob a circuit choice does not have)
+            cur.pop(parts[-1], None)
+        else:
+            cur[parts[-1]] = value
     with tempfile.TemporaryDirectory(prefix="pixelkit-sweep-") as tmp:
         path = Path(tmp) / f"{design.name}.toml"
         write_atomic(path, to_toml(raw))

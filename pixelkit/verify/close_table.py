@@ -11,7 +11,11 @@ the objective; validated when the file loads, like every other table.
     "pixel.sf_bias" = { min = "600 nA", max = "1.5 uA", scale = "log" }
     "pixel.devices.rst_w" = { min = "0.42 um", max = "2 um", step = "5 nm" }
 
-A knob is any numeric (continuous) key of the design file. Refused when the file loads, each
+A knob is any numeric (continuous) key of the design file, or a circuit choice (a key that names
+one of a few circuits, ``"pixel.gate_drive" = { choices = ["supply", "boosted"] }``): close then
+solves the numeric knobs for each combination of choices and keeps the best. A numeric knob the
+design leaves absent starts at the middle of its bounds (and is left out under a choice with which
+the design file refuses it, as ``pixel.v_gate`` with ``gate_drive = "supply"``). Refused when the file loads, each
 naming the field (exit 2): a key the design file does not have, a whole number (``rows``), a
 text or a flag; a key the sign-off itself fixes (``temperature``: every condition of the grid
 sets it; ``[verify]``, ``[spec]``, ``[experiment]``: they say how the specs' figures are
@@ -30,7 +34,7 @@ import math
 from dataclasses import dataclass, field
 
 from ..errors import ConfigError
-from ..schema import check_range, integer, limit, named, num, text
+from ..schema import check_range, integer, items, limit, named, num, text
 from ..units import DIMENSIONS, quantity
 
 #: Tables whose keys are not knobs, and why (the message of the refusal).
@@ -48,6 +52,8 @@ FIXED = {
 UNREAD = ("scene", "optics", "sizing", "layout")
 #: At most this many knobs (the benchmark measures 2, 5 and 10).
 MAX_KNOBS = 32
+#: At most this many combinations of circuit choices (close solves each).
+MAX_COMBINATIONS = 8
 #: Objectives that are not a figure's name.
 OBJECTIVES = {"power": "power_chip", "area": "area"}
 
@@ -60,8 +66,12 @@ class Knob:
     scale: str = text("auto", choices=("auto", "lin", "log"),
                       doc="how close steps it: lin (in % of the span), log (in % of the value); auto: log when "
                           "min > 0 and max >= 3 x min, else lin")
-    step: object = limit(of="design key", doc="grid the written value is rounded to (\"5 nm\"): every candidate is simulated as "
-                             "rounded (absent: 6 significant digits)")
+    step: object = limit(of="design key", doc="grid the written value is rounded to (\"5 nm\"): every candidate is "
+                                              "simulated as rounded (absent: 6 significant digits)")
+    choices: tuple = items(text(), (), min_len=2, max_len=8,
+                           doc="a circuit choice instead of bounds: the values of a key that names one "
+                               "(\"pixel.gate_drive\" = { choices = [\"supply\", \"boosted\"] }): close solves the "
+                               "numeric knobs for each and keeps the best")
     name: str = field(default="", metadata=dict(kind="skip"))
     lo: float = field(default=0.0, metadata=dict(kind="skip"))
     hi: float = field(default=0.0, metadata=dict(kind="skip"))
@@ -74,10 +84,16 @@ class Knob:
         return self.scale == "log" or (self.scale == "auto" and self.lo > 0 and self.hi >= 3 * self.lo)
 
     def validate(self, path, source, raw):
+        if self.choices:
+            for key in ("min", "max", "step"):
+                if key in raw:
+                    raise ConfigError(source, f"{path}.{key}", raw[key], "no bounds on a knob with choices "
+                                      "(a circuit choice takes one of its values)")
+            return
         for bound in ("min", "max"):
             if getattr(self, bound) is None:
                 raise ConfigError(source, f"{path}.{bound}", None, "a bound with the unit of the design key "
-                                  "(both min and max)")
+                                  "(both min and max), or choices")
 
 
 @dataclass(frozen=True)
@@ -119,9 +135,15 @@ def check(close: CloseSettings, design, source: str, raw: dict) -> CloseSettings
     and within what the design file accepts for it; the objective something close can evaluate.
     Returns the table with the knobs' bounds in SI."""
     from .figures import FIGURES
-    knobs = tuple(_knob(k, design, source) for k in close.knobs)
+    knobs = tuple(_choice(k, design, source) if k.choices else _knob(k, design, source) for k in close.knobs)
+    combos = 1
+    for k in knobs:
+        combos *= len(k.choices) or 1
+    if combos > MAX_COMBINATIONS:
+        raise ConfigError(source, "close.knobs", f"{combos} combinations of choices",
+                          f"at most {MAX_COMBINATIONS} combinations (close solves the numeric knobs for each)")
     sense, what = close.goal
-    keys = {k.name for k in knobs}
+    keys = {k.name for k in knobs if not k.choices}
     if what not in FIGURES and what != "area" and what not in keys:
         raise ConfigError(source, "close.objective", close.objective,
                           "min or max of power, area, one of the knobs (" + ", ".join(sorted(keys)) + ") or a figure: "
@@ -151,7 +173,8 @@ def value_of(design, key: str):
     return obj
 
 
-def _knob(k: Knob, design, source: str) -> Knob:
+def _field(k: Knob, design, source: str):
+    """The schema field of a knob's key, refused when the key is not one close may move."""
     path = f"close.knobs.{k.name}"
     head = k.name.split(".")[0]
     if head in FIXED:
@@ -162,9 +185,28 @@ def _knob(k: Knob, design, source: str) -> Knob:
     f = field_of(type(design), k.name)
     if f is None:
         raise ConfigError(source, path, k.name, "a numeric key of the design file, like pixel.sf_bias, "
-                          "pixel.v_fd_reset, pixel.devices.rst_w, primary.timing.s1_off, primary.t_int, afe.c13 "
-                          "(docs/design-file.md)")
-    meta = f.metadata
+                          "pixel.v_fd_reset, pixel.devices.rst_w, primary.timing.s1_off, primary.t_int, afe.c13, "
+                          "or a circuit choice with choices, like pixel.gate_drive (docs/design-file.md)")
+    return f
+
+
+def _choice(k: Knob, design, source: str) -> Knob:
+    """A circuit choice: a text key whose schema lists its values; every choice one of them."""
+    path = f"close.knobs.{k.name}"
+    meta = _field(k, design, source).metadata
+    allowed = meta.get("choices")
+    if meta.get("kind") != "str" or not allowed:
+        raise ConfigError(source, f"{path}.choices", list(k.choices), "choices of a key that names a circuit "
+                          "choice (a text key with a fixed set of values, like pixel.gate_drive)")
+    for i, c in enumerate(k.choices):
+        if c not in allowed:
+            raise ConfigError(source, f"{path}.choices[{i}]", c, f"one of {', '.join(allowed)}")
+    return dataclasses.replace(k, dim="")
+
+
+def _knob(k: Knob, design, source: str) -> Knob:
+    path = f"close.knobs.{k.name}"
+    meta = _field(k, design, source).metadata
     if meta.get("kind") == "int":
         raise ConfigError(source, path, k.name, "a continuous quantity: close does not choose whole numbers "
                           "(rows, cols, secondary_per_pixel)")
@@ -172,9 +214,6 @@ def _knob(k: Knob, design, source: str) -> Knob:
         raise ConfigError(source, path, k.name, "a numeric key (a quantity or a number), not a "
                           + {"str": "text", "ident": "name", "bool": "flag", "table": "table",
                              "list": "list", "map": "table of tables"}.get(meta.get("kind"), "value"))
-    if value_of(design, k.name) is None:
-        raise ConfigError(source, path, k.name, "a key the design sets (it is absent here: write its starting "
-                          "value in the design first)")
     dim = meta["dim"]
     lo = _bound(k.min, dim, f"{path}.min", source, meta)
     hi = _bound(k.max, dim, f"{path}.max", source, meta)
