@@ -110,3 +110,22 @@ def test_target_currents_against_the_charge_chain_derivation(ref_design, experim
             t = fd.transfer(d, which, a, models, v)
             out, v, n = out + a * t["cg_fd_V_per_e"] * step, v - t["cg_transfer_V_per_e"] * step, n + step
         assert n * q / d.experiment.t_window == pytest.approx(experiment[which][key], rel=rel), which
+
+
+def test_pedestal_is_the_fd_step_through_the_follower(ref_design, experiment):
+    """The experiment's pedestal (the double-sampled column signal at zero photocurrent) against the
+    FD node itself: FD's level at the reset sample minus at the signal sample (the dark transfer's TG
+    and RS kicks that the second reset removes) times the follower's small-signal gain from two
+    operating points of the read chain around that level (``sf_gain``, no transient): 1 %
+    (measured 1e-5)."""
+    from pixelkit.camera.spicenoise import sf_gain
+    from pixelkit.spice import simulate
+    d = ref_design
+    tm = timings(d, d.experiment.t_window)
+    r = simulate(dual_pixel_bench(d, 0.0, 0.0, title="pedestal_fd"))
+    for kind, fd_node in (("primary", "x1.xp.fd"), ("secondary", "x1.xs0.fd")):
+        t = tm[kind]
+        v_sig, v_rst = float(r.at(fd_node, t.t_signal(0))), float(r.at(fd_node, t.t_reset_level(0)))
+        assert v_rst - v_sig > 0.01, kind                      # a real step, not noise
+        want = sf_gain(d, 0.5 * (v_sig + v_rst)) * (v_rst - v_sig)
+        assert experiment[kind]["pedestal_V"] == pytest.approx(want, rel=0.01), kind

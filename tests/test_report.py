@@ -91,6 +91,16 @@ def test_report_prints_where_it_is_and_a_summary(quick_report):
         assert isinstance(c["value"], float) and c["value"] == c["value"], name
 
 
+def test_every_checked_name_has_a_registered_reference(quick_report):
+    """The concrete names of the quick report's summary.json, each covered by a test of the registry
+    (tests/figure_references.py; its walk over the code is tests/test_figure_references.py)."""
+    from figure_references import uncovered_names
+    out, _ = quick_report
+    names = json.loads((out / "summary.json").read_text())["checked"]
+    assert len(names) > 10
+    assert uncovered_names(names) == []
+
+
 def test_report_output_cg_pair_against_the_analytic_level(quick_report):
     """Independent reference: the other level. The report's SPICE output-referred CG_out(0-30 %)
     (slope of the column signal against I t_window below 30 % of swing) against the analytic

@@ -9,9 +9,9 @@ import re
 from pathlib import Path
 
 from conftest import ROOT
+from figure_references import KINDS   # one list of the kinds of reference
 
 TABLE = ROOT / "docs" / "validation.md"
-KINDS = ("derivation", "SPICE circuit level", "real data", "published table", "foundry deck")
 TEST_REF = re.compile(r"`(tests/[\w/]+\.py)::(test_\w+)`")
 
 

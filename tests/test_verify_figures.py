@@ -5,9 +5,9 @@ One run of the measurement groups (pixel, noise, dark, gse, lag, afe: ~25 decks,
 for each figure a reference the measurement did not produce:
 
 - the other level: the analytic conversion gains (``physics.fd.response``, the PD node's C(V)),
-  the analytic GSE on the signal (``physics.fd.signal_gse``), the analytic dark discharge of the PD
+  the analytic storage signal where FD stores (``physics.fd.storage_signal``), the analytic dark discharge of the PD
   node (``physics.dark`` + ``physics.discharge``), the finite-gain charge balance of the AFE;
-- another SPICE measurement: the thesis experiment's sweep (its swing and its secondary transfer at
+- another SPICE measurement: the thesis [Thesis2019] experiment's sweep (its swing and its secondary transfer at
   the equivalent current, for the swing, the full well and the 5 % criterion), ngspice ``.noise`` of
   the FD's reset sample for kT/C;
 - a derivation from the figures' parts for the composite ones (dynamic range, full well).
