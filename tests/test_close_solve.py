@@ -58,6 +58,27 @@ def test_close_finds_the_derived_optimum_and_verify_passes_what_it_wrote(tmp_pat
     assert code == 0, err
     rows = json.loads(stdout)["rows"]
     assert rows[0]["status"] == "pass" and rows[0]["margin"] >= 0
+    _report_section(tmp_path, out, path)
+
+
+def _report_section(tmp_path, out, path):
+    """The report's closure section reads the path beside the revision; it says when the file is not the
+    one close wrote, and is unavailable for a design close did not write."""
+    from pixelkit.design import load_design
+    from pixelkit.report.build import build_section
+    from pixelkit.report.sections import Context
+
+    def section(design_file):
+        (tmp_path / "rep").mkdir(exist_ok=True)
+        return build_section("closure", "t", "o", Context(load_design(design_file), tmp_path / "rep"), {}, False)[0]
+    s = section(out)
+    assert s.available and s.data["same_file"] and s.data["final"] == path["final"]
+    assert {t.name for t in s.tables} >= {"closure_knobs", "closure_path", "closure_margins"}
+    assert len(next(t for t in s.tables if t.name == "closure_path").rows) == len(path["iterations"])
+    out.write_text(out.read_text() + "# edited by hand\n")
+    s = section(out)
+    assert s.available and not s.data["same_file"] and "differs from the one close wrote" in " ".join(s.text)
+    assert not section(REF).available
 
 
 def test_close_reports_an_infeasible_set_naming_the_conflicting_specs(tmp_path, cli):

@@ -40,7 +40,8 @@ def build_section(key: str, title: str, owner: str, ctx: Context, options: dict,
     mod = load_section(key)
     if mod is None:
         return _planned(title, key, owner), "planned"
-    k = cache.section_key(key, ctx.design, options)
+    extra = getattr(mod, "inputs", None)   # files a section reads besides the design (closure: close.json)
+    k = cache.section_key(key, ctx.design, {**options, **extra(ctx)} if extra else options)
     if use_cache:
         s = cache.load(k, ctx.out_dir)
         if s is not None:

@@ -44,6 +44,8 @@ How to add a section
      reason ("read noise 402 e-: ..."): the section shows it boxed, summary.json lists it.
    - ``ctx.reference`` is True when the design is the test chip of [Thesis2019]
      (``experiments.reference``): only then set the dissertation's printed values beside the kit's.
+   - A section that reads a file besides the design exposes ``inputs(ctx) -> dict`` (e.g. that file's
+     hash): the section cache keys on it too.
    - Raise PixelkitError for user errors; any other exception is shown in the section as
      "failed: ..." and the rest of the report still builds (and the command exits non-zero).
 
@@ -70,6 +72,7 @@ from typing import Any, Callable
 #: A planned section whose module does not exist yet says "not yet available".
 REGISTRY: list[tuple[str, str, str]] = [
     ("signoff", "Sign-off: specs over corners, Monte Carlo yield, power", "report"),
+    ("closure", "Design closure (pixelkit close)", "issue 40 (close)"),
     ("summary", "Design summary", "report"),
     ("schematics", "Schematics of the generated circuits", "report"),
     ("model_vs_spice", "Analytic model vs SPICE (fig. A.1 - A.3)", "report"),
