@@ -24,7 +24,8 @@ Figures (run on a quiet machine: the wall times scale with the load, the ratios 
   the AFE (one deck per array and row), ``scaling_exponent`` k of t ~ pixels^k over them;
   one full 27-row primary column with its S1X/S2X and AFE (``column_afe_s``, limit 60 s)
   and the whole chip, 27 x 50 dual pixels with every column's load, samplers and AFE
-  (``whole_array_s``, limit 900 s; skipped by ``--quick``), both as column chains (one
+  (``whole_array_s``, limit 900 s; both skipped by ``--quick``, which also leaves out the 8 x 8
+  frame and runs each step on the fewest decks that give its figure), both as column chains (one
   deck per row and group of columns, the column state handed over), each with
   ``*_decks`` and ``*_per_deck_s`` (wall time x busy workers / decks).
 - ``analytic_points_per_s``: the analytic C(V) discharge model's evaluations per second.
@@ -137,11 +138,11 @@ def flattened_vs_lib(d, n: int = 4, repeats: int = 5) -> dict:
     return {"flattened_vs_lib": flat / lib, "flattened_deck_s": flat / n, "lib_deck_s": lib / n}
 
 
-def parallel_speedup(d) -> dict:
+def parallel_speedup(d, points: int = 16) -> dict:
     from pixelkit.spice.engine import default_jobs
     from pixelkit.sweep.run import run_sweep
     from pixelkit.sweep.space import parse_axis
-    axes = [parse_axis("iph_p=lin:100p:1.6n:16")]
+    axes = [parse_axis(f"iph_p=lin:100p:1.6n:{points}")]
     out = {}
     for jobs in (1, default_jobs()):
         _fresh_cache()
@@ -151,7 +152,7 @@ def parallel_speedup(d) -> dict:
         assert not s.failures
     j = default_jobs()
     return {"parallel_speedup": out[1] / out[j], "serial_s": out[1], "parallel_s": out[j], "workers": j,
-            "points": 16}
+            "points": points}
 
 
 def _frame(d, rows, cols, with_afe=False, kinds=("primary", "secondary")):
@@ -168,12 +169,12 @@ def _frame(d, rows, cols, with_afe=False, kinds=("primary", "secondary")):
 
 
 def array_scaling(d, quick: bool) -> dict:
-    sizes = [(2, 2), (4, 4), (8, 8)]
+    sizes = [(2, 2), (4, 4)] if quick else [(2, 2), (4, 4), (8, 8)]
     times = {f"{r}x{c}": _frame(d, r, c)[0] for r, c in sizes}
     px = np.array([r * c for r, c in sizes], float)
     k = float(np.polyfit(np.log(px), np.log(list(times.values())), 1)[0])
     out = {"frame_s": times, "scaling_exponent": k}
-    runs = {"column_afe": (27, 1, ("primary",))} | ({} if quick else {"whole_array": (27, 50, ("primary", "secondary"))})
+    runs = {} if quick else {"column_afe": (27, 1, ("primary",)), "whole_array": (27, 50, ("primary", "secondary"))}
     for name, (rows, cols, kinds) in runs.items():
         out[f"{name}_s"], out[f"{name}_decks"], out[f"{name}_per_deck_s"] = _frame(d, rows, cols, True, kinds)
     return out
@@ -192,27 +193,37 @@ def analytic_points_per_s(d) -> dict:
     return {"analytic_points_per_s": t.size * currents.size / dt}
 
 
-def sizing(d) -> dict:
+def sizing(d, repeats: int = 5) -> dict:
     import sizing as sizing_bench
-    r = sizing_bench.measure(d, repeats=5)
+    r = sizing_bench.measure(d, repeats=repeats)
     return {"sizing_solve_s": r["solve_s"], "sizing_vs_spice": r["solve_s"] / r["spice_s"]}
 
 
-def gap(d) -> dict:
+def gap(_d, rows: int = 2000) -> dict:
+    """On the thesis's read: the diagnosis needs a surrogate, and that design ships one (the
+    reference design's is built from SPICE by its first ``gap predict``, which
+    ``benchmarks/main_job.py`` times)."""
     import gap as gap_bench
-    r = gap_bench.measure(d, rows=2000)
+    from common import THESIS_READ
+    from pixelkit.design import load_design
+    r = gap_bench.measure(load_design(THESIS_READ), rows=rows)
     return {"gap_cold_cli_s": r["cold_cli_s"], "gap_diagnosis_s": r["diagnosis_s"],
             "gap_vs_spice": r["diagnosis_s"] / r["spice_s"]}
 
 
 STEPS = {"overhead": overhead_vs_raw, "flatlib": flattened_vs_lib, "parallel": parallel_speedup, "arrays": None,
          "analytic": analytic_points_per_s, "sizing": sizing, "gap": gap}
+#: The quick profile (``--quick``, what tests/test_benchmarks.py runs): every step, each on the
+#: fewest decks that still give its figure (the whole chip and the 27-row column left out).
+QUICK = {"overhead": dict(n=2, repeats=2), "flatlib": dict(n=2, repeats=2), "parallel": dict(points=4),
+         "sizing": dict(repeats=1), "gap": dict(rows=200)}
 
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--json", action="store_true")
-    ap.add_argument("--quick", action="store_true", help="skip the whole 27 x 50 array")
+    ap.add_argument("--quick", action="store_true", help="the quick profile: fewest decks per figure, no whole "
+                                                         "27 x 50 array nor 27-row column (QUICK)")
     ap.add_argument("--skip", nargs="*", default=[], choices=list(STEPS))
     a = ap.parse_args(argv)
     d = reference_design()
@@ -220,7 +231,7 @@ def main(argv=None):
     for name, fn in STEPS.items():
         if name in a.skip:
             continue
-        res.update(array_scaling(d, a.quick) if name == "arrays" else fn(d))
+        res.update(array_scaling(d, a.quick) if name == "arrays" else fn(d, **(QUICK.get(name, {}) if a.quick else {})))
     res["load_after"] = os.getloadavg()[0]
     if a.json:
         print(json.dumps(res, indent=1))

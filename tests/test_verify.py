@@ -148,18 +148,18 @@ def test_yield_at_the_nominal_median_is_half(tmp_path):
     Moved 3 sigma into the distribution, the yield interval leaves 50 % (the check can fail)."""
     d = load_design(_design(tmp_path, {"afe_gain_error": {"max": "1 %"}}, {"mc": 40, "seed": 3}))
     nominal = measure.figures({"afe": measure.afe(d)})["afe_gain_error"]
-    first = verify(d, corners=("tt",), temperatures=(300.15,), supplies=(0.0,))
+    first = verify(d, corners=("tt",), temperatures=(300.15,), supplies=(0.0,), mc_full=True)
     values = first["mc_values"]["afe_gain_error"]
     assert first["mc"]["source"] == "library" and len(values) == 40
     at_nominal = replace(d, spec=(replace(d.spec[0], hi=nominal),))
-    r = verify(at_nominal, corners=("tt",), temperatures=(300.15,), supplies=(0.0,))["rows"][0]["yield"]
+    r = verify(at_nominal, corners=("tt",), temperatures=(300.15,), supplies=(0.0,), mc_full=True)["rows"][0]["yield"]
     lo, hi = r["interval"]
     assert lo <= 0.5 <= hi, r
     assert abs(r["margin_sigma"]) < 0.5
     import numpy as np
     sd = float(np.std(values, ddof=1))
     shifted = replace(d, spec=(replace(d.spec[0], hi=nominal - 3 * sd),))
-    y = verify(shifted, corners=("tt",), temperatures=(300.15,), supplies=(0.0,))["rows"][0]["yield"]
+    y = verify(shifted, corners=("tt",), temperatures=(300.15,), supplies=(0.0,), mc_full=True)["rows"][0]["yield"]
     assert y["interval"][1] < 0.5 and y["margin_sigma"] < -2
 
 

@@ -23,13 +23,16 @@ from .common import design_arg, emit, finishing, json_opt, main, post_layout_opt
 @click.option("--waves", default=None, metavar="SPEC,SPEC,...|all",
               help="show these specs' waveforms too (worst condition against nominal); every failing spec's "
                    "is shown anyway")
+@click.option("--exhaustive", is_flag=True,
+              help="no early stop: the sign-off's Monte Carlo runs every [verify] mc sample (the default stops "
+                   "once every yield is decided against min_yield; docs/verify.md)")
 @click.option("--no-cache", is_flag=True, help="rebuild every section (SPICE runs still use the simulation cache)")
 @click.option("--backend", type=click.Choice(["batch", "shared"]), default="batch", show_default=True)
 @click.option("--jobs", type=click.IntRange(1, 64), default=None, help="parallel ngspice workers")
 @quiet_opt
 @post_layout_opt
 @json_opt
-def report(design, out, baseline, measured, quick, waves, no_cache, backend, jobs, as_json):
+def report(design, out, baseline, measured, quick, exhaustive, waves, no_cache, backend, jobs, as_json):
     """Write the design report (HTML + CSV/JSON + summary.json); with --baseline, the revision diff.
     Exit 1 when a spec fails (or the diff does), 5 when nothing fails but something was not measured."""
     from ..design import load_design
@@ -39,7 +42,8 @@ def report(design, out, baseline, measured, quick, waves, no_cache, backend, job
     out = Path(out) if out else Path("reports") / d.name
     chosen = _waves(d, waves)
     r = build_report(d, out, quick=quick, backend=backend, jobs=jobs, measured=measured, baseline=baseline,
-                     use_cache=not no_cache, html=not as_json, waves=chosen)
+                     use_cache=not no_cache, html=not as_json, waves=chosen,
+                     exhaustive=exhaustive)
     finishing()  # the report is in place: a Ctrl-C from here no longer calls the run interrupted
     data = {"out": r["out"], "html": r["html"], "failed_sections": r["failed"], **r["summary"]}
     if "diff" in r:

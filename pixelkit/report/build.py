@@ -28,6 +28,8 @@ from .sections import REGISTRY, Context, Section, load_section
 
 #: Sections whose output depends on the --measured file.
 MEASURED_SECTIONS = ("gap",)
+#: Sections that --exhaustive changes (the sign-off's Monte Carlo runs its full count).
+EXHAUSTIVE_SECTIONS = ("signoff",)
 
 
 def _planned(title: str, key: str, owner: str) -> Section:
@@ -148,7 +150,7 @@ def _clear_debris(out: Path) -> None:
 
 def build_report(design, out: Path, *, quick: bool = False, backend: str = "batch", jobs: int | None = None,
                  measured: Path | None = None, baseline: Path | None = None, use_cache: bool = True,
-                 html: bool = True, waves: tuple = ()) -> dict:
+                 html: bool = True, waves: tuple = (), exhaustive: bool = False) -> dict:
     """Build the report of ``design`` into ``out``; returns the summary (with the diff when asked)."""
     from ..progress import command_bar
     t0 = time.perf_counter()
@@ -168,12 +170,14 @@ def build_report(design, out: Path, *, quick: bool = False, backend: str = "batc
                 bar.set_description(f"report: {stage_name}" + (f" {done}/{total}" if total else ""))
 
             ctx = Context(design, stage, quick, backend, jobs, Path(measured) if measured else None, tell,
-                          waves=tuple(waves))
+                          waves=tuple(waves), exhaustive=exhaustive)
             measured_hash = cache.file_hash(measured) if measured else None
             with counter:
                 for key, title, owner in REGISTRY:
                     tell(title)
                     options = {"quick": quick, "backend": backend}
+                    if key in EXHAUSTIVE_SECTIONS and exhaustive:
+                        options["exhaustive"] = True
                     if key in MEASURED_SECTIONS:
                         options["measured"] = measured_hash
                     if key == "signoff" and waves:
@@ -184,7 +188,7 @@ def build_report(design, out: Path, *, quick: bool = False, backend: str = "batc
                     sections.append(s)
                     bar.update(1)
             bar.set_description("report")
-        meta = {"profile": "quick" if quick else "full", "backend": backend,
+        meta = {"profile": "quick" if quick else "full", "exhaustive": exhaustive, "backend": backend,
                 "spice_runs": counter.runs, "spice_cached": counter.cached,
                 "sections_from_cache": sum(v == "cache" for v in how.values()),
                 "wall_s": None}

@@ -15,38 +15,62 @@ tasks that were running.
 from __future__ import annotations
 
 import re
-from concurrent.futures import ThreadPoolExecutor, as_completed
+from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 
 from ..errors import ConfigError
 from ..progress import command_bar
 
 
-def run_tasks(fn, tasks, jobs: int | None = None, scheduler=None, desc: str = "simulating"):
+def run_tasks(fn, tasks, jobs: int | None = None, scheduler=None, desc: str = "simulating", more=None):
+    """Yield ``(index, fn(task))`` as tasks finish. ``more()``, if given, is called after each
+    outcome has been handed to the caller and returns further tasks to run (indices continue
+    after the ones given so far; an empty list adds nothing): a sequential Monte Carlo adds
+    its next stage only when the one before has not decided."""
     tasks = list(tasks)
     if not tasks:
         return
     if scheduler is not None:
-        yield from _dask(fn, tasks, scheduler, desc)
+        yield from _dask(fn, tasks, scheduler, desc, more)
         return
     from .engine import default_jobs
     jobs = max(1, int(jobs or default_jobs()))
     with command_bar(desc, total=len(tasks), unit="tasks") as bar:
         if jobs == 1:
-            for i, t in enumerate(tasks):
-                out = fn(t)
+            i = 0
+            while i < len(tasks):
+                out = fn(tasks[i])
                 bar.update(1)
                 yield i, out
+                i += 1
+                _extend(tasks, more, bar)
             return
         with ThreadPoolExecutor(max_workers=jobs) as ex:
             futs = {ex.submit(fn, t): i for i, t in enumerate(tasks)}
+            pending = set(futs)
             try:
-                for f in as_completed(futs):
-                    bar.update(1)
-                    yield futs[f], f.result()
+                while pending:
+                    done, pending = wait(pending, return_when=FIRST_COMPLETED)
+                    for f in sorted(done, key=futs.get):
+                        bar.update(1)
+                        yield futs[f], f.result()
+                        for t in _extend(tasks, more, bar):
+                            g = ex.submit(fn, t)
+                            futs[g] = len(futs)
+                            pending.add(g)
             except BaseException:
                 for f in futs:
                     f.cancel()
                 raise
+
+
+def _extend(tasks: list, more, bar) -> list:
+    """The tasks ``more()`` adds (appended to ``tasks``, the bar's total grown)."""
+    new = list(more()) if more else []
+    if new:
+        tasks += new
+        bar.total = len(tasks)
+        bar.refresh()
+    return new
 
 
 _ADDRESS = re.compile(r"^(?:(?:tcp|tls|ucx)://)?(\[[0-9A-Fa-f:.]{2,45}\]|[A-Za-z0-9][A-Za-z0-9.-]{0,252}):([0-9]{1,5})$")
@@ -78,17 +102,24 @@ def _client(scheduler):
                           f"a reachable Dask scheduler ({type(exc).__name__}: {exc})") from None
 
 
-def _dask(fn, tasks, scheduler, desc):
+def _dask(fn, tasks, scheduler, desc, more=None):
     from dask.distributed import as_completed as dask_completed
     client, own = _client(scheduler)
     try:
         futs = client.map(fn, tasks, pure=False)
         index = {f.key: i for i, f in enumerate(futs)}
         with command_bar(f"{desc} (dask)", total=len(tasks), unit="tasks") as bar:
+            done = dask_completed(futs)
             try:
-                for f in dask_completed(futs):
+                for f in done:
                     bar.update(1)
                     yield index[f.key], f.result()
+                    new = _extend(tasks, more, bar)
+                    if new:
+                        added = client.map(fn, new, pure=False)
+                        index.update({g.key: len(index) + k for k, g in enumerate(added)})
+                        futs += added
+                        done.update(added)
             except BaseException:
                 client.cancel(futs)
                 raise

@@ -15,6 +15,8 @@ import time
 
 from ..errors import ConfigError, PixelkitError, SimulationError
 from . import conditions, measure, mismatch
+from .signoff import _margin
+from .yields import decided, looks, stop_confidence
 
 
 def _task(task):
@@ -73,8 +75,73 @@ def plan(design, grid: list, mc: int) -> tuple[list, list]:
     return [(c, tuple(sorted(gs, key=order.index))) for c, gs in sorted(need.items())], mc_specs
 
 
+class _Sequential:
+    """The Monte Carlo's stages: samples ``[0, n)`` in stages ending at ``yields.looks(mc)`` (one stage
+    of ``mc`` with ``full``); after each, the stage's yields decide whether the next one runs
+    (``yields.decided``: every Monte Carlo spec's interval wholly at or above min_yield or wholly
+    below it at the stopping level). The draws of sample i depend on (seed, i) only, so a run that
+    stops at n holds the first n samples of the full run."""
+
+    def __init__(self, design, mc_specs, mc: int, full: bool, task_of):
+        self.design, self.specs, self.mc, self.full, self.task_of = design, mc_specs, mc, full, task_of
+        self.stops = ([mc] if full else looks(mc)) if mc_specs else []
+        self.stage, self.n, self.waiting, self.looked = 0, 0, 0, 0
+        self.raw: dict = {}
+        self.why = "full count" if full else None
+
+    def first(self) -> list:
+        return self._next()
+
+    def _next(self) -> list:
+        if self.stage >= len(self.stops):
+            return []
+        start, self.n = self.n, self.stops[self.stage]
+        self.stage += 1
+        self.waiting = self.n - start
+        return [self.task_of(i) for i in range(start, self.n)]
+
+    def done(self, sample: int, outcome: dict) -> None:
+        self.raw[sample] = outcome
+        self.waiting -= 1
+
+    def more(self) -> list:
+        """The next stage when the current one is complete and has not decided every yield."""
+        if self.waiting or self.looked == self.stage:
+            return []
+        self.looked = self.stage
+        if self.full:
+            return []
+        v = self.design.verify
+        samples = [_finite(measure.figures(_ok(self.raw[i]))) for i in range(self.n)]
+        verdicts = []
+        for s in self.specs:
+            vals = [x for x in (y.get(s.fig.name) for y in samples) if x is not None]
+            verdicts.append(decided(sum(_margin(x, s.lo, s.hi) >= 0 for x in vals), len(vals), v.min_yield,
+                                    v.confidence, self.mc))
+        level = (f"{100 * stop_confidence(v.confidence, self.mc):.4g} % intervals: {100 * v.confidence:g} % "
+                 f"shared over {len(self.stops)} looks")
+        if all(verdicts):
+            self.why = (f"sequential stop: every yield decided against min_yield {100 * v.min_yield:g} % ({level})"
+                        if v.min_yield else "sequential stop: min_yield 0 %, the yields decide nothing (set [verify] "
+                        "min_yield to have them decide)")
+            return []
+        if self.stage == len(self.stops):
+            self.why = (f"sequential: not every yield decided against min_yield {100 * v.min_yield:g} % before the "
+                        f"full count ({level})")
+        return self._next()
+
+
+def _ok(outcome: dict) -> dict:
+    return {g: o["raw"] for g, o in outcome.items() if o["ok"]}
+
+
 def verify(design, corners=None, temperatures=None, supplies=None, mc: int | None = None, seed: int | None = None,
-           backend: str = "batch", jobs=None, scheduler=None, post_layout: bool = False) -> dict:
+           backend: str = "batch", jobs=None, scheduler=None, post_layout: bool = False,
+           mc_full: bool = False) -> dict:
+    """The sign-off of ``design`` over its grid (or the one given) with its Monte Carlo yield.
+    The Monte Carlo stops early once every yield is decided against ``[verify] min_yield``
+    (``_Sequential``; with min_yield 0, nothing to decide, after its first stage); ``mc_full``
+    runs every one of the ``mc`` samples."""
     from ..spice.executors import run_tasks
     from .signoff import table
     if post_layout:
@@ -92,23 +159,32 @@ def verify(design, corners=None, temperatures=None, supplies=None, mc: int | Non
     if mc_specs:
         src = mismatch.source(design)
         mc_groups = sorted(measure.groups_for([s.fig.name for s in mc_specs]), key=list(measure.GROUPS).index)
-    tasks = [(design, c, gs, None, backend) for c, gs in cond_tasks]
-    tasks += [(design, nominal, tuple(mc_groups), mismatch.Draw(seed, i, src), backend) for i in range(mc)
-              if mc_specs]
-    outs = [None] * len(tasks)
-    for i, out in run_tasks(_task, tasks, jobs=jobs, scheduler=scheduler, desc="verify"):
-        outs[i] = out
+    seq = _Sequential(design, mc_specs, mc, mc_full,
+                      lambda i: (design, nominal, tuple(mc_groups), mismatch.Draw(seed, i, src), backend))
+    tasks = [*seq.first(), *((design, c, gs, None, backend) for c, gs in cond_tasks)]
     raw_cond: dict = {}
-    raw_mc: dict = {}
     errors = []
-    for (d, c, _gs, draw, _), outcome in zip(tasks, outs):
-        where = raw_cond.setdefault(c, {}) if draw is None else raw_mc.setdefault(draw.sample, {})
+
+    def take(task, outcome):
+        _d, c, _gs, draw, _b = task
+        if draw is not None:
+            seq.done(draw.sample, outcome)
+        where = raw_cond.setdefault(c, {}) if draw is None else {}
         for g, out in outcome.items():
             if out["ok"]:
                 where[g] = out["raw"]
             else:
                 errors.append({"condition": c.label, "group": g, "sample": None if draw is None else draw.sample,
                                "error": out["error"]})
+
+    def more():
+        new = seq.more()
+        tasks.extend(new)
+        return new
+
+    for i, out in run_tasks(_task, tasks, jobs=jobs, scheduler=scheduler, desc="verify", more=more):
+        take(tasks[i], out)
+    raw_mc = {i: _ok(o) for i, o in seq.raw.items()}
     values = {c: _finite(measure.figures(r)) for c, r in raw_cond.items()}
     samples = [_finite(measure.figures(raw_mc[i])) for i in sorted(raw_mc)]
     rows = table(design, grid, values, samples, mc_specs)
@@ -117,7 +193,8 @@ def verify(design, corners=None, temperatures=None, supplies=None, mc: int | Non
             "grid": {"corners": sorted({c.corner for c in grid}),
                      "temperatures_C": sorted({round(c.temperature - 273.15, 6) for c in grid}),
                      "supplies": sorted({c.supply for c in grid}), "conditions": len(grid)},
-            "mc": {"samples": len(samples) if mc_specs else 0, "seed": seed, "source": src,
+            "mc": {"samples": len(samples) if mc_specs else 0, "planned": mc if mc_specs else 0,
+                   "stop": seq.why, "seed": seed, "source": src,
                    "draws": mismatch.describe(src) if src else None, "condition": nominal.label,
                    "confidence": design.verify.confidence},
             "supply_V": design.tech.supply,

@@ -96,7 +96,7 @@ def _shown_margin(m: float, value: float, spec, unit: str) -> float:
 
 
 COLUMNS = ("spec", "limit", "worst condition", "value", "margin", "margin %", "status", "yield %",
-           "yield interval %", "margin sigma", "typ", "note")
+           "yield interval %", "yield samples", "margin sigma", "typ", "note")
 
 
 def csv_rows(rows) -> list[list]:
@@ -106,7 +106,7 @@ def csv_rows(rows) -> list[list]:
         out.append([r["spec"], r["limit"], r.get("worst", "-"), r.get("value"), r.get("margin"), r.get("margin_pct"),
                     r["status"], None if not y else 100 * y["yield"],
                     None if not y else f"{100 * y['interval'][0]:.3g} - {100 * y['interval'][1]:.3g}",
-                    None if not y else y["margin_sigma"], r.get("typ"), r.get("note", "")])
+                    None if not y else y["samples"], None if not y else y["margin_sigma"], r.get("typ"), r.get("note", "")])
     return out
 
 
@@ -125,6 +125,14 @@ def not_measured(result: dict) -> list[str]:
             for r in result["rows"] if r["status"] not in ("pass", "fail")]
 
 
+def mc_count(mc: dict) -> str:
+    """How many Monte Carlo samples ran, of how many, and why it stopped there."""
+    planned = mc.get("planned", mc["samples"])
+    if planned == mc["samples"] and (mc.get("stop") or "full count") == "full count":
+        return f"{mc['samples']} samples"
+    return f"{mc['samples']} of {planned} samples ({mc.get('stop')}; --mc-full runs all {planned})"
+
+
 def where(row) -> str:
     """Where a spec fails, short: every condition up to four, else a count and the worst."""
     at = row.get("failing_at", [])
@@ -136,11 +144,12 @@ def where(row) -> str:
 def text(result: dict) -> str:
     """The table as a terminal shows it."""
     rows = result["rows"]
-    head = ["spec", "limit", "worst condition", "value", "margin", "status", "yield [interval]", "sigma"]
+    head = ["spec", "limit", "worst condition", "value", "margin", "status", "yield [interval] of n", "sigma"]
     body = []
     for r in rows:
         y = r.get("yield")
-        ytxt = "-" if not y else f"{100 * y['yield']:.1f} % [{100 * y['interval'][0]:.1f}, {100 * y['interval'][1]:.1f}]"
+        ytxt = "-" if not y else (f"{100 * y['yield']:.1f} % [{100 * y['interval'][0]:.1f}, "
+                                  f"{100 * y['interval'][1]:.1f}] of {y['samples']}")
         sig = "-" if not y or y["margin_sigma"] is None else f"{y['margin_sigma']:.2f}"
         mtxt = "-" if r.get("margin") is None else f"{_fmt(r['margin'])} ({_fmt(r.get('margin_pct'))} %)"
         body.append([r["spec"], r["limit"], r.get("worst", "-"), f"{_fmt(r.get('value'))} {r['unit']}".strip(),
@@ -152,7 +161,7 @@ def text(result: dict) -> str:
                     f"{g['conditions']} conditions "
                     f"(corners {', '.join(g['corners'])} x {', '.join(f'{t:g}' for t in g['temperatures_C'])} degC x "
                     f"supply {', '.join(f'{100 * s:+g}%' for s in g['supplies'])} of {result['supply_V']:g} V)"
-                    + (f"; Monte Carlo {mc['samples']} samples at {mc['condition']}, seed {mc['seed']}, draws: "
+                    + (f"; Monte Carlo {mc_count(mc)} at {mc['condition']}, seed {mc['seed']}, draws: "
                        f"{mc['draws']}" if mc["samples"] else "; no Monte Carlo"))
     for r in rows:
         if r["status"] == "fail":

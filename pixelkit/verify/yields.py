@@ -29,3 +29,32 @@ def margin_sigma(values, lo: float | None, hi: float | None) -> float:
     mu, sd = float(v.mean()), float(v.std(ddof=1)) if v.size > 1 else 0.0
     m = min(x for x in ((mu - lo) if lo is not None else math.inf, (hi - mu) if hi is not None else math.inf))
     return m / sd if sd > 0 else math.copysign(math.inf, m)
+
+
+#: Samples per stage of a sequential Monte Carlo: the yields are looked at after every STAGE samples.
+STAGE = 20
+
+
+def looks(n_max: int) -> list[int]:
+    """The sample counts at which a sequential Monte Carlo of at most ``n_max`` samples looks at
+    its yields: every ``STAGE`` samples, and at ``n_max``."""
+    return sorted({*range(STAGE, n_max, STAGE), n_max}) if n_max > 0 else []
+
+
+def stop_confidence(confidence: float, n_max: int) -> float:
+    """The level of the interval that decides an early stop: ``confidence`` shared out over the
+    looks (Bonferroni), so that stopping at whichever look comes first errs no more often than
+    one interval at ``confidence`` does."""
+    return 1.0 - (1.0 - confidence) / max(1, len(looks(n_max)))
+
+
+def decided(k: int, n: int, min_yield: float, confidence: float, n_max: int) -> str | None:
+    """"above" or "below" when the yield of ``k`` passes in ``n`` samples lies wholly at or above
+    ``min_yield`` or wholly below it at the stopping level (``stop_confidence``), else None.
+    With ``min_yield`` 0 (yield reported, not checked) every yield lies at or above it."""
+    if n == 0:
+        return None
+    lo, hi = clopper_pearson(k, n, stop_confidence(confidence, n_max))
+    if lo >= min_yield:
+        return "above"
+    return "below" if hi < min_yield else None

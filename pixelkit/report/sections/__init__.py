@@ -163,6 +163,7 @@ class Context:
     measured: Path | None = None
     progress: Callable[..., None] = lambda stage, done=None, total=None: None
     waves: tuple = ()         # specs whose waveform the sign-off shows besides the failing ones ("all": every one)
+    exhaustive: bool = False   # no early stop anywhere (the sign-off's Monte Carlo runs its full count)
     _memo: dict = field(default_factory=dict)
 
     def figure(self, name: str) -> Path:

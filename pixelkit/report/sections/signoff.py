@@ -15,7 +15,7 @@ TITLE = "Sign-off: specs over corners, Monte Carlo yield, power"
 def build(ctx) -> Section:
     from ...verify import conditions
     from ...verify.run import verify
-    from ...verify.signoff import COLUMNS, csv_rows, where
+    from ...verify.signoff import COLUMNS, csv_rows, mc_count, where
     d = ctx.design
     if not d.spec:
         return Section.unavailable(TITLE, "the design has no [spec] table (docs/verify.md)")
@@ -25,7 +25,7 @@ def build(ctx) -> Section:
         r = verify(d, corners=(n.corner,), temperatures=(n.temperature,), supplies=(0.0,), mc=0,
                    backend=ctx.backend, jobs=ctx.jobs)
     else:
-        r = verify(d, backend=ctx.backend, jobs=ctx.jobs)
+        r = verify(d, backend=ctx.backend, jobs=ctx.jobs, mc_full=ctx.exhaustive)
     g, mc = r["grid"], r["mc"]
     text = [f"Every spec of the design file at {g['conditions']} condition(s): process corners "
             f"{', '.join(g['corners'])}, {', '.join(f'{t:g}' for t in g['temperatures_C'])} degC, supply "
@@ -34,7 +34,7 @@ def build(ctx) -> Section:
                "design's grid)" if ctx.quick else "") + ". A spec passes when it holds at every condition (the worst "
             "case, as a CACE datasheet decides); the margin is the distance to the nearer limit at the worst "
             "condition.",
-            (f"Monte Carlo: {mc['samples']} samples at {mc['condition']}, seed {mc['seed']}, drawn from "
+            (f"Monte Carlo: {mc_count(mc)} at {mc['condition']}, seed {mc['seed']}, drawn from "
              f"{mc['draws']}; yield with its {100 * mc['confidence']:g} % Clopper-Pearson interval and the margin "
              "of the mean in sample sigmas." if mc["samples"] else "No Monte Carlo in this profile.")]
     fails = [f"{x['spec']} {where(x)}" for x in r["rows"] if x["status"] == "fail"]
