@@ -41,6 +41,7 @@ LIMITS = {
     "sim-cache": 2048 * MiB,      # a simulation-cache entry (a whole-chip frame: a few MB)
     "report-cache": 512 * MiB,    # a report-section cache entry (its figures)
     "raw": 2048 * MiB,            # an ngspice raw file (pixelkit waves; a whole-chip frame: tens of MB)
+    "extraction-cache": 512 * MiB,   # a post-layout extraction cache entry (the parasitics)
 }
 
 
@@ -162,3 +163,38 @@ def sha256_file(path, what: str, kind: str, limit: int | None = None) -> str:
                                                                              f"{_size_text(lim)}")
             h.update(piece)
     return h.hexdigest()
+
+
+def npy_array(fh, size: int, path, what: str, *, ndim: int | None = None, max_items: int | None = None,
+              kinds: str = "biufc"):
+    """The ``.npy`` array at the position of the open binary file ``fh``, whose ``size`` bytes from
+    there hold it. Its header is checked before anything is allocated (issue 44: a header that
+    declares 100000 x 100000 made numpy ask for 74.5 GiB): a number type (no objects), ``ndim``
+    dimensions when given, at most ``max_items`` items, and no more bytes declared than there are.
+    Refused: a :class:`FileRefused` naming the file, the declared shape and what is allowed."""
+    import numpy as np
+    from numpy.lib import format as npf
+    start = fh.tell()
+    try:
+        version = npf.read_magic(fh)
+        read_header = {(1, 0): npf.read_array_header_1_0, (2, 0): npf.read_array_header_2_0}.get(version)
+        if read_header is None:
+            raise ValueError(f"format version {version[0]}.{version[1]} (1.0 and 2.0 are read)")
+        shape, _fortran, dtype = read_header(fh)
+    except (ValueError, EOFError) as exc:
+        raise FileRefused(path, what, f"a damaged .npy header ({exc})", "a .npy file numpy writes") from None
+    if dtype.hasobject or dtype.kind not in kinds:
+        raise FileRefused(path, what, f"dtype {dtype}", "an array of numbers (integer, float or complex)"
+                          + (" or text" if "U" in kinds else ""))
+    if ndim is not None and len(shape) != ndim:
+        raise FileRefused(path, what, f"shape {shape}", f"a {ndim}-D array")
+    items = 1
+    for n in shape:
+        items *= int(n)
+    left = size - (fh.tell() - start)
+    if (max_items is not None and items > max_items) or items * dtype.itemsize > left:
+        bound = f", at most {max_items} items" if max_items is not None else ""
+        raise FileRefused(path, what, f"a header that declares shape {shape} of {dtype} ({items * dtype.itemsize} "
+                                      f"bytes; {left} follow it)", f"an array the file holds whole{bound}")
+    fh.seek(start)
+    return np.lib.format.read_array(fh, allow_pickle=False)

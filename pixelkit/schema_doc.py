@@ -229,13 +229,16 @@ the foundry rule it comes from, quoted in every error that names it.
 ## `[signoff]`
 
 `drc_deck`: a deck the kit fetches (`gf180mcu`, checksummed by `setup.sh`) or a path relative to
-the technology file with its `drc_sha256`; `drc_options`: the deck's `-rd name=value` switches;
-`lvs_deck` (empty: the kit's own LVS) and `lvs_options`. `pv_decks`: the foundry's own physical-verification
-decks the kit fetches and pins (`gf180mcu_fd_pv`: LVS, density, antenna; empty: none), `pv_options` its
-LVS deck's switches (`lvs_sub` the substrate net's name ...), `lvs_models` the device names the netlist
-handed to it uses instead of the kit's (`{ pd_c35 = "diode_nw2ps_03v3" }`: a stand-in junction drawn as
-the foundry's). Read by `pixelkit layout --drc --lvs --foundry-lvs --density --antenna`, `pixelkit
-signoff` and the report's sign-off section (docs/layout-signoff.md).
+the technology file, pinned by `drc_sha256` (64 hex digits; required: a deck is code, KLayout runs
+it as a Ruby script - an unpinned or altered deck is refused, exit 2, naming the key, before
+KLayout starts); `drc_options`: the deck's `-rd name=value` switches; `lvs_deck` (empty: the
+kit's own LVS; a path is pinned by `lvs_sha256` the same way) and `lvs_options`. `pv_decks`: the
+foundry's own physical-verification decks the kit fetches and pins (`gf180mcu_fd_pv`: LVS,
+density, antenna; empty: none), `pv_options` its LVS deck's switches (`lvs_sub` the substrate
+net's name ...), `lvs_models` the device names the netlist handed to it uses instead of the
+kit's (`{ pd_c35 = "diode_nw2ps_03v3" }`: a stand-in junction drawn as the foundry's). Read by
+`pixelkit layout --drc --lvs --foundry-lvs --density --antenna`, `pixelkit signoff` and the
+report's sign-off section (docs/layout-signoff.md, docs/security.md).
 
 ## `[stack]`, `[stack.layers]`
 

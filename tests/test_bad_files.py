@@ -74,3 +74,90 @@ def test_user_technology_file_works(tmp_path, cli):
     design = _variant(tmp_path, REF, r'"c35_thesis"', f'"{tech}"')
     code, out, err = cli("models", design)
     assert code == 0, err
+
+
+# ---- issue 44: the internal errors (exit 3) found on main, each now exit 2 naming field / file ----
+
+def test_npy_scene_whose_header_declares_more_than_the_file_holds(tmp_path, cli):
+    """A ``.npy`` header declaring 100000 x 100000 made numpy allocate 74.5 GiB (MemoryError, exit 3):
+    the header is checked against the file before anything is allocated; an honest map still loads."""
+    import io
+    import json
+
+    import numpy as np
+    from numpy.lib import format as npf
+    buf = io.BytesIO()
+    npf.write_array_header_1_0(buf, {"descr": "<f8", "fortran_order": False, "shape": (100000, 100000)})
+    big = tmp_path / "big.npy"
+    big.write_bytes(buf.getvalue() + b"\0" * 64)
+    code, out, err = cli("array", REF, "--rows", "2", "--cols", "2", "--scene", big, "--out", tmp_path / "a", "--json")
+    assert code == 2, err
+    e = json.loads(out)
+    assert e["field"] == "scene" and "100000, 100000" in e["value"] and str(big) in e["error"], e
+    from pixelkit.chip.scene import load_map
+    np.save(tmp_path / "ok.npy", np.arange(12.0).reshape(3, 4))
+    assert load_map(tmp_path / "ok.npy")[0].shape == (3, 4)
+
+
+def test_a_forged_cache_entry_cannot_declare_a_huge_array(tmp_path, monkeypatch, capsys):
+    """A simulation-cache entry is checksummed, but anyone who can write the cache can compute the
+    checksum: an entry whose array header declares 10^10 values is refused (said, re-simulated),
+    never allocated."""
+    import io
+    import zipfile
+
+    from numpy.lib import format as npf
+    monkeypatch.setenv("PIXELKIT_CACHE", str(tmp_path))
+    from pixelkit.spice import cache
+    head = io.BytesIO()
+    npf.write_array_header_1_0(head, {"descr": "<f8", "fortran_order": False, "shape": (10 ** 10,)})
+    z = io.BytesIO()
+    with zipfile.ZipFile(z, "w") as zf:
+        zf.writestr("__time__.npy", head.getvalue() + b"\0" * 8)
+    cache.STORE.save("f" * 64, {cache._NPZ: z.getvalue()})
+    assert cache.load("f" * 64) is None
+    assert "declares shape (10000000000,) of float64" in capsys.readouterr().err   # refused, not tried
+
+
+@pytest.mark.parametrize("layer", ["nwell", "active", "poly", "nplus", "metal1", "metal2", "metal3", "metal4"])
+def test_a_technology_missing_a_space_rule_names_it(tmp_path, layer):
+    """``rules.metal1.space`` absent gave a TypeError in the generators (exit 3; 8 such rules here,
+    two more with --afe): every spacing a generator computes with is the technology's error
+    naming the key. In process, drawing the 1 x 1 chip with its AFE (what needs every rule)."""
+    from dataclasses import replace
+
+    from pixelkit.design import load_design
+    from pixelkit.errors import ConfigError
+    from pixelkit.layout.library import build_chip_cells
+    from pixelkit.tech import load_technology
+    raw = (ROOT / "pixelkit" / "tech" / "builtin" / "gf180mcu_3v3.toml").read_text()
+    raw = raw.replace('folder = "../models/gf180mcu"', f'folder = "{ROOT / "pixelkit/tech/models/gf180mcu"}"')
+    table = raw.index(f"[rules.{layer}]")
+    line = re.compile(r"^space = .*\n", flags=re.M).search(raw, table)
+    (tmp_path / "t.toml").write_text(raw[:line.start()] + raw[line.end():])
+    d = load_design(ROOT / "designs" / "dual_pixel_gf180.toml")
+    with pytest.raises(ConfigError) as e:
+        build_chip_cells(replace(d, tech=load_technology(tmp_path / "t.toml")), 1, 1, True, "full")
+    assert e.value.field == f"rules.{layer}.space", e.value
+
+
+@pytest.mark.parametrize("kind", ["empty", "random", "truncated", "header-only", "gzip"])
+def test_a_bad_layout_gds_is_named(tmp_path, cli, kind):
+    """An empty, random, truncated or compressed ``[layout] gds`` (OSError, exit 3 before): exit 2
+    naming ``layout.gds`` and the file, before anything runs."""
+    import gzip
+    import json
+
+    from pixelkit.design import load_design
+    from pixelkit.layout.flow import write_gds
+    from pixelkit.layout.library import build_library
+    good = write_gds(build_library(load_design(REF), 1, 1), tmp_path / "good.gds").read_bytes()
+    blob = {"empty": b"", "random": bytes(range(256)) * 8, "truncated": good[:len(good) // 2],
+            "header-only": good[:6], "gzip": gzip.compress(good)}[kind]
+    (tmp_path / "bad.gds").write_bytes(blob)
+    design = tmp_path / "d.toml"
+    design.write_text(REF.read_text() + '\n[layout]\ngds = "bad.gds"\n')
+    code, out, err = cli("models", design, "--json")
+    assert code == 2, err
+    e = json.loads(out)
+    assert e["field"] == "layout.gds" and "bad.gds" in e["error"] and "GDSII" in e["allowed"], e

@@ -85,6 +85,19 @@ def test_what_is_not_an_entry_is_refused_unread(tmp_path, monkeypatch, capfd, ma
         assert (tmp_path / "c" / "outside.entry").read_bytes() == b"pixelkit-entry 1\n"   # untouched
 
 
+def test_a_refused_extraction_entry_is_called_an_extraction_cache_file(tmp_path, monkeypatch, capfd):
+    """Issue 44: a refused extraction-cache entry was called a "report-cache file"."""
+    monkeypatch.setenv("PIXELKIT_CACHE", str(tmp_path / "cache"))
+    from pixelkit.layout.pex.overlay import store
+    s = store()
+    p = s.path("e" * 64)
+    p.parent.mkdir(parents=True)
+    p.mkdir()
+    assert s.load("e" * 64) is None
+    err = capfd.readouterr().err
+    assert f"cache entry {p}" in err and "extraction-cache file" in err and "report-cache" not in err, err
+
+
 def test_a_linked_cache_folder_leading_outside_is_not_used(tmp_path, monkeypatch, capfd):
     monkeypatch.setenv("PIXELKIT_CACHE", str(tmp_path / "cache"))
     net = _rc(2e3)

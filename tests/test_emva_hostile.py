@@ -120,7 +120,19 @@ CASES = {
                              ["photon counts must grow with exposure"]),
     "all_exposures_zero": ({"texp": [0.0] * 12}, None, ["every exposure is 0"]),
     "giant_stated_size": ({}, _edit_descriptor("n 8 16 16", "n 8 100000 100000"), ["at most"]),
+    # issue 44: a step listed twice was measured as two (K and the dark current from a copy)
+    "one_step_duplicated": ({}, lambda f: _duplicate_step(f, 3), ["repeats the step of line", "each step once"]),
+    "image_used_twice": ({}, _edit_descriptor("i img/b4_0.png", "i img/b3_0.png"), ["b3_0.png", "each image once"]),
+    "exposures_decreasing": ({"texp": list(np.linspace(12000, 1000, 12)), "mu_p": [100.0 * (k + 1) for k in range(12)]},
+                             None, ["increasing light"]),
 }
+
+
+def _duplicate_step(f, k):
+    p = f / "EMVA1288_Data.txt"
+    lines = p.read_text().splitlines()
+    i = [j for j, ln in enumerate(lines) if ln.startswith("b ")][k]
+    p.write_text("\n".join(lines[:i + 3] + lines[i:i + 3] + lines[i + 3:]) + "\n")
 
 
 IN_A_PROCESS = {"fifo_image", "dev_zero_image", "decompression_bomb", "huge_image_file", "sparse_descriptor",

@@ -33,6 +33,8 @@ MARK = "/tmp/pixelkit_fuzz_pwned"
 
 
 def _unit(meta) -> str:
+    if "unit" in meta:
+        return meta["unit"]
     example = DIMENSIONS[meta.get("dim", "1")][1]
     parts = example.split(" ", 1)
     return parts[1] if len(parts) > 1 else ""
@@ -108,10 +110,40 @@ def _cases():
     fields += [("tech", p, m) for p, m in _leaves(Technology)]
     fields += [("tech", "models.folder", {"kind": "str"}), ("tech", "models.default_corner", {"kind": "ident"}),
                ("tech", "photodiode.qe_curve", {"kind": "list"})]
+    # issue 44: the foundry rules the generators draw with (a seeded sample of the 84) and the deck keys
+    rules = _rule_fields()
+    fields += [("tech", p, m) for p, m in rng.sample(rules, RULE_SAMPLE)]
+    fields += [("tech", f"signoff.{k}", {"kind": "str"}) for k in ("drc_deck", "drc_sha256", "lvs_deck", "lvs_sha256")]
+    fields = [(w, p, _spec_unit(p, m)) for w, p, m in fields]
     for where, path, meta in fields:
         names = list(ALWAYS) + rng.sample([n for n in CORPUS if n not in ALWAYS], PER_FIELD - len(ALWAYS))
         for name in names:
             yield where, path, meta, name
+
+
+RULE_SAMPLE = 12
+
+
+def _rule_fields():
+    """(dotted path, metadata) of every per-layer rule of the technology ([rules.<layer>])."""
+    out = []
+    for layer, table in tomllib.loads(TECH.read_text())["rules"].items():
+        if not isinstance(table, dict):
+            continue
+        for kind, v in table.items():
+            dim = "m2" if kind == "area" else "m"
+            for path in ([f"rules.{layer}.{kind}.{o}" for o in v] if kind in ("enclosure", "extension", "space_to")
+                         else [f"rules.{layer}.{kind}"]):
+                out.append((path, {"kind": "rule", "dim": dim, "pair": kind in ("enclosure", "extension", "space_to")}))
+    return out
+
+
+def _spec_unit(path: str, meta: dict) -> dict:
+    """A spec limit is fuzzed in its figure's unit (the reference's first spec: a conversion gain)."""
+    if path.startswith("spec.") and meta.get("kind") == "limit":
+        from pixelkit.verify.figures import FIGURES
+        return {**meta, "unit": FIGURES[path.split(".")[1]].unit}
+    return meta
 
 
 def _write_case(tmp: Path, k: int, where, path, meta, name) -> Path:
@@ -138,6 +170,11 @@ def _must_refuse(name: str, meta: dict) -> bool:
         return True  # 1e-300 of a unit is only meaningful as "zero", where zero is allowed (1e-300 degC is 0 degC)
     if name == "injection" and meta.get("kind") in ("ident", "qty", "int", "bool"):
         return True
+    if meta.get("kind") in ("limit", "rule"):   # issue 44: a spec limit / a design rule no chip has
+        if name in ("huge", "tiny", "negative", "nan_text", "overflow", "toml_nan", "toml_inf", "db_huge", "big_int",
+                    "list", "table", "injection", "long", "wrong_unit", "control_char"):
+            return True
+        return name == "zero" and not meta.get("pair")
     return name in ("big_int", "list", "table") and meta.get("kind") in ("qty", "int", "ident", "bool")
 
 

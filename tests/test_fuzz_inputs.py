@@ -116,6 +116,11 @@ INPUTS = {
     "layout --cols": lambda tmp, v: ["layout", REF, "--cols", v, "--out", tmp / "lay"],
     "layout --shield": lambda tmp, v: ["layout", REF, "--shield", v, "--afe", "--out", tmp / "lay"],
     **{f"emva '{t}'": (lambda t: lambda tmp, v: ["gap", "emva", _emva(tmp, t, v)])(t) for t in EMVA_LINES},
+    # issue 44: output places (a name with a NUL, a control character, 5000 characters, '../..')
+    "simulate --waveforms": lambda tmp, v: ["simulate", REF, "--waveforms", f"{tmp}/{v}.csv"],
+    "verify --out": lambda tmp, v: ["verify", REF, "--out", f"{tmp}/v/{v}"],
+    "layout --drc --out": lambda tmp, v: ["layout", ROOT / "designs" / "dual_pixel_gf180.toml", "--drc",
+                                          "--out", f"{tmp}/lay/{v}"],
 }
 FAMILIES = ("ratio_pixel.toml", "wdr_pixel.toml")
 
@@ -132,6 +137,7 @@ def _cases():
 
 
 def _run(argv, monkeypatch, capfd):
+    import pixelkit.api
     import pixelkit.chip.frame
     import pixelkit.layout.library
     import pixelkit.mc.montecarlo
@@ -143,6 +149,7 @@ def _run(argv, monkeypatch, capfd):
     monkeypatch.setattr(pixelkit.mc.montecarlo, "simulate_frame", _stub)  # after the corner is applied
     monkeypatch.setattr(pixelkit.chip.frame, "simulate_frame", _stub)
     monkeypatch.setattr(pixelkit.layout.library, "build_chip_cells", _stub)  # after the layout's options
+    monkeypatch.setattr(pixelkit.api, "experiment", _stub)   # simulate: after its options (--waveforms)
     common.WARNINGS.clear()
     try:
         entry([str(a) for a in argv])

@@ -179,6 +179,7 @@ def _set(r, row, col, value):
     (lambda r: _set(r, 4, "v_std_V", "-1e-3"), ["row 4, column 'v_std_V'", "negative"]),
     (lambda r: _set(r, 5, "n_avg", "0"), ["row 5, column 'n_avg'"]),
     (lambda r: r[:2] + [r[2] + ["7"]] + r[3:], ["row 2", "extra fields"]),
+    (lambda r: r[:3] + [r[3][:-2]] + r[4:], ["row 3", "fields, the header has", "missing"]),   # issue 44: two short
     (lambda r: [r[0] + [r[0][0]]] + [x + [x[0]] for x in r[1:]], ["column 'array' appears 2 times"]),
     (lambda r: r[:1], ["header only"]),
     (lambda r: r[:6], ["too few"]),

@@ -444,18 +444,61 @@ def test_a_technology_plugs_in_its_own_decks(tmp_path, ref_design):
     from pixelkit.tech import load_technology
     raw = (ROOT / "pixelkit" / "tech" / "builtin" / "c35_thesis.toml").read_text()
     raw = raw.replace('folder = "../models/gf180mcu"', f'folder = "{ROOT / "pixelkit/tech/models/gf180mcu"}"')
-    raw = raw.replace('drc_deck = "gf180mcu"', 'drc_deck = "decks/mine.drc"\nlvs_deck = "decks/mine.lvs"')
+    import hashlib
     (tmp_path / "decks").mkdir()
     (tmp_path / "decks" / "mine.drc").write_text(
         'source($input, $topcell)\nreport("mine", $report)\n'
         'input(34, 0).width(0.30.um).output("M1W", "metal1 narrower than 0.30 um")\n')
     (tmp_path / "decks" / "mine.lvs").write_text(
         'source($input, $topcell)\nreport_lvs($report)\nschematic($schematic)\ncompare\n')
+    pin = {k: hashlib.sha256((tmp_path / "decks" / f"mine.{k}").read_bytes()).hexdigest() for k in ("drc", "lvs")}
+    raw = raw.replace('drc_deck = "gf180mcu"', f'drc_deck = "decks/mine.drc"\ndrc_sha256 = "{pin["drc"]}"\n'
+                                                f'lvs_deck = "decks/mine.lvs"\nlvs_sha256 = "{pin["lvs"]}"')
     (tmp_path / "t.toml").write_text(raw)
     d = replace(ref_design, tech=load_technology(tmp_path / "t.toml"))
     r = layout_design(d, tmp_path / "out", pictures=False, drc=True, lvs=True)
     assert r["drc"]["deck"].endswith("mine.drc") and set(r["drc"]["by_rule"]) == {"M1W"}
     assert not r["lvs"]["match"] and r["lvs"]["report"].endswith(".lvsdb")
+    assert sorted(p.name for p in (tmp_path / "out" / "lvs").iterdir()) == [   # moved out of the private stage
+        "CHIP_2X2.lvs.log", "CHIP_2X2.lvsdb"]
+
+
+@pytest.mark.parametrize("kind", ["drc", "lvs"])
+def test_an_unpinned_or_altered_deck_never_runs(tmp_path, ref_design, kind):
+    """Issue 44: a deck is code (KLayout runs its Ruby): a deck named by path without its sha256, or
+    one changed after it was pinned, is refused naming the key, before KLayout starts - the deck's
+    `system("touch ...")` never runs (its positive control: the same deck pinned does run it)."""
+    import hashlib
+    from pixelkit.errors import ConfigError
+    from pixelkit.layout.flow import layout_design
+    from pixelkit.tech import load_technology
+    marker = tmp_path / "RAN"
+    deck = tmp_path / f"evil.{kind}"
+    deck.write_text(f'system("touch {marker}")\nsource($input, $topcell)\n'
+                    + ('report("x", $report)\n' if kind == "drc" else 'report_lvs($report)\nschematic($schematic)\n'
+                                                                     'compare\n'))
+    raw = (ROOT / "pixelkit" / "tech" / "builtin" / "c35_thesis.toml").read_text()
+    raw = raw.replace('folder = "../models/gf180mcu"', f'folder = "{ROOT / "pixelkit/tech/models/gf180mcu"}"')
+
+    def tech(pin: str):
+        text = raw if kind == "lvs" else raw.replace('drc_deck = "gf180mcu"', "")
+        text = text.replace("[signoff]", f'[signoff]\n{kind}_deck = "evil.{kind}"' + (f'\n{kind}_sha256 = "{pin}"' if pin else ""))
+        (tmp_path / "t.toml").write_text(text)
+        return replace(ref_design, tech=load_technology(tmp_path / "t.toml"))
+
+    good = hashlib.sha256(deck.read_bytes()).hexdigest()
+    for pin in ("", "0" * 64):
+        with pytest.raises(ConfigError) as e:
+            layout_design(tech(pin), tmp_path / "out", pictures=False, drc=kind == "drc", lvs=kind == "lvs")
+        assert e.value.field == f"{kind}_sha256".join(("signoff.", "")) and good in e.value.allowed, e.value
+        assert "a deck is code" in e.value.allowed
+        assert not marker.exists() and not (tmp_path / "out").exists()
+    d = tech(good)   # pinned: it runs (the vector is real)
+    try:
+        layout_design(d, tmp_path / "out", 1, 1, pictures=False, drc=kind == "drc", lvs=kind == "lvs")
+    except PixelkitError:
+        pass   # a deck this small may fail to report; it ran all the same
+    assert marker.exists()
 
 
 def test_lvs_needs_the_photodiode_marker(tmp_path, ref_design, ref_cells):

@@ -49,6 +49,23 @@ BAD = [  # (what, extra tables, field named in the error, words of what is allow
     ("unknown key", {"spec": {"swing_primary": {"min": "1 V", "minimum": "1 V"}}}, "spec.swing_primary.minimum",
      "no such field"),
     ("mismatch source", {"verify": {"mismatch": "magic"}}, "verify.mismatch", "one of auto, library, pelgrom"),
+    # issue 44: limits no real figure reaches always pass (or fail) - refused per figure, in its unit
+    ("percentage 1e300", {"spec": {"afe_gain_error": {"max": "1e300 %"}}}, "spec.afe_gain_error.max",
+     "strictly between 1e-07 and 100 %"),
+    ("zero minimum", {"spec": {"full_well_primary": {"min": "0 ke-"}}}, "spec.full_well_primary.min",
+     "strictly between 1 and 1e+09 e-"),
+    ("negative minimum", {"spec": {"conversion_gain_primary": {"min": "-3 uV/e-"}}},
+     "spec.conversion_gain_primary.min", "strictly between 0.001 and 10000 uV/e-"),
+    ("conversion gain 2e4 uV/e-", {"spec": {"pd_conversion_gain_secondary": {"max": "2e4 uV/e-"}}},
+     "spec.pd_conversion_gain_secondary.max", "strictly between 0.001 and 10000 uV/e-"),
+    ("lag above 100 %", {"spec": {"image_lag_primary": {"max": "150 %"}}}, "spec.image_lag_primary.max",
+     "strictly between -100 and 100 %"),
+    ("dynamic range 0 dB", {"spec": {"dynamic_range_primary": {"min": "0 dB"}}}, "spec.dynamic_range_primary.min",
+     "strictly between 0 and 200 dB"),
+    ("power 1e-300 W", {"spec": {"power_chip": {"max": "1e-300 W", "unit": "W"}}}, "spec.power_chip.max",
+     "strictly between 1e-15 and 100 W"),
+    ("typical 1e300 V", {"spec": {"swing_primary": {"min": "0.5 V", "typ": "1e300 V"}}}, "spec.swing_primary.typ",
+     "strictly between 1e-06 and 10 V"),
 ]
 
 

@@ -67,7 +67,7 @@ def load_map(path) -> tuple[np.ndarray, str]:
     try:
         if suffix == ".npy":
             with open_file(p, "scene", "scene") as fh:
-                m, unit = np.load(fh, allow_pickle=False), "lx"
+                m, unit = _read_npy(p, fh), "lx"
         elif suffix == ".csv":
             m = _read_csv(p, read_text(p, "scene", "scene"))
             unit = "lx"
@@ -88,6 +88,22 @@ def load_map(path) -> tuple[np.ndarray, str]:
     if not np.all(np.isfinite(m)) or m.min() < 0:
         raise ConfigError(str(p), "scene", "negative or non-finite values", "finite values >= 0")
     return m, unit
+
+
+#: the most pixels a scene map may declare (a 16k x 16k sensor); what a map declares must also be in
+#: the file, whose size readfile bounds: no allocation is ever larger than the file itself
+MAX_SCENE_PIXELS = 16384 * 16384
+
+
+def _read_npy(p: Path, fh) -> np.ndarray:
+    """A ``.npy`` map, its header checked before anything is allocated (readfile.npy_array)."""
+    import os
+
+    from ..readfile import npy_array
+    m = npy_array(fh, os.fstat(fh.fileno()).st_size, p, "scene", max_items=MAX_SCENE_PIXELS)
+    if m.ndim != 2:
+        raise ConfigError(str(p), "scene", f"shape {m.shape}", "a 2-D map")
+    return m
 
 
 def _read_csv(p: Path, text: str) -> np.ndarray:

@@ -57,7 +57,8 @@ def array_cmd(design, rows, cols, scene, unit, with_afe, split, check, settling,
     from ..chip.settling import limits
     limit = limits(d, None if settling_limit is None else settling_limit * 1e-3)
     folder = output_path(out, d, f"array_{rows}x{cols}")
-    folder.mkdir(parents=True, exist_ok=True)
+    from ..fileio import out_folder
+    out_folder(folder)   # checked: a link, a file or a device there is refused (fileio)
     write_atomic(folder / "frame.csv", frame_table(f, ph))
     data = {**f.as_dict(), **ph.as_dict(), "csv": str(folder / "frame.csv"),
             "plot": str(plot_frame(f, folder / "frame.png", f"{d.name}: {rows} x {cols} frame", ph, limit))}

@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import click
 
+from .types import FilePath
+
 from .common import design_arg, emit, json_opt, load, main, out_opt, output_path, spice_opts, post_layout_opt
 
 _ROWS = (("K (DN/e-)", "k_dn_per_e", 1.0, ".4g"),
@@ -56,7 +58,7 @@ def camera_text(r: dict) -> str:
 @main.command()
 @design_arg
 @out_opt("folder for the plots (default: reports/<design>/camera)", folder=True)
-@click.option("--emva-out", type=click.Path(file_okay=False), default=None,
+@click.option("--emva-out", type=FilePath(file_okay=False), default=None,
               help="write the exposure series as EMVA 1288 datasets: DIR/primary, DIR/secondary")
 @click.option("--seed", type=click.IntRange(0, 2 ** 31 - 1), default=1, show_default=True,
               help="seed of the per-pixel mismatch and the temporal noise")

@@ -62,6 +62,8 @@ from pathlib import Path
 
 import click
 
+from .types import FilePath
+
 from ..errors import EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_USER, PixelkitError
 from ..fileio import json_default
 
@@ -94,17 +96,42 @@ def _quiet(ctx, param, value):
     return value
 
 
-design_arg = click.argument("design", type=click.Path(dir_okay=False))
+design_arg = click.argument("design", type=FilePath(dir_okay=False))
 json_opt = click.option("--json", "as_json", is_flag=True, callback=_quiet,
                         help="print one JSON object (errors too); no progress bars")
 quiet_opt = click.option("--quiet", is_flag=True, callback=_quiet, expose_value=False,
                          help="no progress on stderr (a bar on a terminal, plain lines otherwise)")
 
 
+def out_checked(folder: bool):
+    def check(ctx, param, value):
+        ctx.meta["pixelkit.out_folder"] = folder
+        if value is not None:   # a device, a file for a folder, a link to nothing: refused before any work
+            from ..fileio import check_output
+            check_output(Path(value), folder=folder)
+        return value
+    return check
+
+
 def out_opt(help_text: str, folder: bool = False):
-    """The one output option, ``--out`` (a file, or a folder with ``folder=True``)."""
-    kind = click.Path(file_okay=False) if folder else click.Path(dir_okay=False)
-    return click.option("--out", type=kind, default=None, help=help_text)
+    """The one output option, ``--out`` (a file, or a folder with ``folder=True``), checked when
+    the command line is read (:func:`pixelkit.fileio.check_output`)."""
+    kind = FilePath(file_okay=False) if folder else FilePath(dir_okay=False)
+    return click.option("--out", type=kind, default=None, help=help_text, callback=out_checked(folder))
+
+
+def _waveforms_checked(ctx, param, value):
+    """``--waveforms FILE``: a file in a folder that exists (the kit makes no folder for one file,
+    issue 44), its place free or a regular file; checked before anything is simulated."""
+    if value is None:
+        return None
+    from ..errors import ConfigError
+    from ..fileio import check_output, path_kind
+    parent = Path(value).parent
+    if path_kind(parent) != "dir":
+        raise ConfigError("command line", "--waveforms", value, f"a file in an existing folder ({parent} is not one)")
+    check_output(Path(value), folder=False)
+    return value
 
 
 def _jobs(ctx, param, value):
@@ -130,7 +157,8 @@ def scheduler_address(ctx, param, value):
     return check_address(value)
 
 
-waveforms_opt = click.option("--waveforms", type=click.Path(dir_okay=False), default=None,
+waveforms_opt = click.option("--waveforms", type=FilePath(dir_okay=False), default=None,
+                             callback=_waveforms_checked,
                              help="write the simulated waveforms: CSV (time_s, v(node)_V, ...) "
                                   "or ngspice raw when the name ends in .raw")
 
@@ -138,10 +166,12 @@ waveforms_opt = click.option("--waveforms", type=click.Path(dir_okay=False), def
 def output_path(out, design, default_name: str) -> Path:
     """``--out`` if given, else ``reports/<design name>/<default_name>``."""
     from ..fileio import check_output, reports_root
+    ctx = click.get_current_context(silent=True)
+    folder = None if ctx is None else ctx.meta.get("pixelkit.out_folder")
     if out:
-        return check_output(Path(out))
+        return check_output(Path(out), folder=folder)
     name = design if isinstance(design, str) else design.name
-    return check_output(reports_root() / name / default_name)
+    return check_output(reports_root() / name / default_name, folder=folder)
 
 
 def _post_layout(ctx, param, value):

@@ -7,7 +7,7 @@ import click
 import numpy as np
 
 from .common import design_arg, emit, json_opt, load, main, out_opt, output_path, spice_opts, post_layout_opt
-from .types import FiniteRange
+from .types import FilePath, FiniteRange
 
 #: The chip the gap module's virtual silicon and committed cases are of: the read of [Thesis2019] (docs/gap-diagnosis.md).
 THESIS_READ = "designs/dual_pixel_revA_thesis_read.toml"
@@ -20,7 +20,7 @@ def gap():
 
 @gap.command()
 @design_arg
-@click.option("--conditions", type=click.Path(dir_okay=False), required=True)
+@click.option("--conditions", type=FilePath(dir_okay=False), required=True)
 @out_opt("predicted table (default: reports/<design>/predicted.csv)")
 @spice_opts
 @post_layout_opt
@@ -75,7 +75,7 @@ def _prepare(design, measured, backend):
 
 @gap.command()
 @design_arg
-@click.option("--measured", type=click.Path(dir_okay=False), required=True)
+@click.option("--measured", type=FilePath(dir_okay=False), required=True)
 @out_opt("write an HTML section in this folder", folder=True)
 @click.option("--seed", type=int, default=0, show_default=True, help="train / held-out split")
 @setup_opts
@@ -123,7 +123,7 @@ def _calibration_text(cal):
 
 @gap.command()
 @design_arg
-@click.option("--measured", type=click.Path(dir_okay=False), required=True)
+@click.option("--measured", type=FilePath(dir_okay=False), required=True)
 @click.option("--top", type=click.IntRange(1, 50), default=5, show_default=True)
 @setup_opts
 @spice_opts
@@ -152,13 +152,13 @@ def plan(design, measured, top, gain_tol, offset_tol, gain_sd, offset_sd, backen
 
 
 @gap.command()
-@click.argument("design", type=click.Path(dir_okay=False), required=False, default=THESIS_READ)
+@click.argument("design", type=FilePath(dir_okay=False), required=False, default=THESIS_READ)
 @click.option("--per-effect", type=click.IntRange(1, 1000), default=10, show_default=True)
 @click.option("--clean", type=click.IntRange(0, 10000), default=20, show_default=True)
 @click.option("--rows", type=click.IntRange(40, 100000), default=240, show_default=True,
               help="rows per surrogate-generated case")
 @click.option("--seed", type=int, default=1, show_default=True)
-@click.option("--spice-cases", type=click.Path(file_okay=False), default=None,
+@click.option("--spice-cases", type=FilePath(file_okay=False), default=None,
               help="folder of committed SPICE cases (default: the kit's pixelkit/gap/silicon_cases)")
 @click.option("--kind", type=click.Choice(["both", "surrogate", "spice"]), default="both", show_default=True)
 @spice_opts
@@ -202,7 +202,7 @@ def _selftest_text(kind, x):
 
 
 @gap.command()
-@click.argument("design", type=click.Path(dir_okay=False), required=False, default=THESIS_READ)
+@click.argument("design", type=FilePath(dir_okay=False), required=False, default=THESIS_READ)
 @out_opt("folder for cases.csv and truth.json (default: the kit's pixelkit/gap/silicon_cases)", folder=True)
 @spice_opts
 @json_opt
@@ -223,7 +223,7 @@ def silicon(design, out, backend, jobs, as_json):
 
 
 @gap.command()
-@click.argument("design", type=click.Path(dir_okay=False), required=False, default=THESIS_READ)
+@click.argument("design", type=FilePath(dir_okay=False), required=False, default=THESIS_READ)
 @out_opt("surrogate file (default: the kit's pixelkit/gap/surrogates/<design>.json)")
 @spice_opts
 @json_opt
@@ -240,7 +240,7 @@ def surrogate(design, out, backend, jobs, as_json):
 
 
 @gap.command()
-@click.argument("dataset", type=click.Path(exists=True))
+@click.argument("dataset", type=FilePath(exists=True))
 @json_opt
 def emva(dataset, as_json):
     """EMVA 1288 figures of a dataset (any bit depth) and its camera-level gap: where, which, how far."""

@@ -31,7 +31,8 @@ def mc_cmd(design, rows, cols, seed, corners, with_afe, scheduler, out, backend,
         dc = design_with(d, {"corner": corner}) if corner != d.corner_name else d
         runs.append(run_monte_carlo(dc, rows, cols, seed, with_afe, backend, jobs, scheduler))
     folder = output_path(out, d, "mc")
-    folder.mkdir(parents=True, exist_ok=True)
+    from ..fileio import out_folder
+    out_folder(folder)   # checked: a link, a file or a device there is refused (fileio)
     write_atomic(folder / "mc.json", json.dumps(runs, indent=1))
     summary = [{"corner": r["corner"], **{f"{k}_{f}": r[k][f] for k in ("primary", "secondary")
                                           for f in ("pedestal_V", "dsnu_V", "prnu_pct", "column_fpn_V", "offset_fpn_V")},

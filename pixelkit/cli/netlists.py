@@ -6,6 +6,8 @@ from pathlib import Path
 
 import click
 
+from .types import FilePath
+
 from ..errors import EXIT_REGRESSION
 from .common import design_arg, emit, json_opt, load, main, out_opt, output_path, spice_opts, post_layout_opt
 
@@ -32,7 +34,7 @@ def netlist(design, bench_name, out, models_mode, as_json):
 
 
 @main.command()
-@click.argument("design", type=click.Path(dir_okay=False), required=False, default=REFERENCE)
+@click.argument("design", type=FilePath(dir_okay=False), required=False, default=REFERENCE)
 @click.option("--write", is_flag=True, help="regenerate the golden netlists in --out")
 @out_opt("folder of the golden netlists (default: netlists)", folder=True)
 @json_opt
@@ -50,7 +52,7 @@ def netlists(design, write, out, as_json):
 
 @main.command()
 @design_arg
-@click.option("--baseline", type=click.Path(dir_okay=False), required=True, help="baseline JSON file")
+@click.option("--baseline", type=FilePath(dir_okay=False), required=True, help="baseline JSON file")
 @click.option("--update", is_flag=True, help="measure and store the baseline instead of comparing")
 @spice_opts
 @json_opt

@@ -6,17 +6,19 @@ from pathlib import Path
 
 import click
 
-from .common import design_arg, emit, finishing, json_opt, main, post_layout_opt, quiet_opt, view
+from .types import FilePath
+
+from .common import design_arg, emit, finishing, json_opt, main, out_checked, post_layout_opt, quiet_opt, view
 
 
 @main.command("report")
 @design_arg
-@click.option("--out", type=click.Path(file_okay=False), default=None,
+@click.option("--out", type=FilePath(file_okay=False), default=None, callback=out_checked(True),
               help="report folder (default reports/<design>)")
-@click.option("--baseline", type=click.Path(file_okay=False), default=None,
+@click.option("--baseline", type=FilePath(file_okay=False), default=None,
               help="an earlier report folder: add the revision diff, ranked by the margin each spec used; exit 1 "
                    "when a spec newly fails (a design without [spec]: when a checked figure moved)")
-@click.option("--measured", type=click.Path(dir_okay=False), default=None,
+@click.option("--measured", type=FilePath(dir_okay=False), default=None,
               help="measured data (CSV, as 'pixelkit gap diagnose' reads) for the sim-to-real section")
 @click.option("--quick", is_flag=True, help="nominal only: the sign-off at the nominal condition alone (no corners, "
               "no Monte Carlo; its verdict says so), fewer sweep points, no sensitivity table")

@@ -30,7 +30,8 @@ def sweep_cmd(design, overs, with_afe, scheduler, out, backend, jobs, as_json):
     axes = [parse_axis(o) for o in overs]
     s = run_sweep(d, axes, with_afe=with_afe, backend=backend, jobs=jobs, scheduler=scheduler)
     folder = output_path(out, d, "sweep")
-    folder.mkdir(parents=True, exist_ok=True)
+    from ..fileio import out_folder
+    out_folder(folder)   # checked: a link, a file or a device there is refused (fileio)
     write_atomic(folder / "sweep.csv", s.table())
     nc = folder / "sweep.nc"
     write_atomic(nc, bytes(s.dataset.assign(message=s.dataset["message"].astype(str)).to_netcdf()))

@@ -16,3 +16,13 @@ class FiniteRange(click.FloatRange):
         if not math.isfinite(v):
             self.fail(f"{value!r} is not a finite number", param, ctx)
         return v
+
+
+class FilePath(click.Path):
+    """click's Path that refuses a NUL character as a usage error (exit 2): click stats the path,
+    and every os call raises ValueError on a NUL, which was an internal error (issue 44)."""
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, str) and "\0" in value:
+            self.fail(f"{ascii(value)} holds a NUL character, which no file name can", param, ctx)
+        return super().convert(value, param, ctx)

@@ -71,7 +71,8 @@ def verify_cmd(design, corners, temperatures, supplies, mc, seed, mc_full, sched
     folder = output_path(out, d, "verify")
     kw = {"mc_full": True} if mc_full else {}   # the ratio family's verify has no Monte Carlo
     r = verify(d, corners, temperatures, supplies, mc, seed, backend=backend, jobs=jobs, scheduler=scheduler, **kw)
-    folder.mkdir(parents=True, exist_ok=True)
+    from ..fileio import out_folder
+    out_folder(folder)   # checked: a link, a file or a device there is refused (fileio)
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(COLUMNS)

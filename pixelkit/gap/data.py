@@ -106,8 +106,11 @@ def read_table(path: str | Path, design, measured: bool) -> Table:
     for k, fields in enumerate(lines[1:], 1):
         if not fields:
             continue
-        if len(fields) > len(header):
-            problems.append(f"row {k}: {len(fields)} fields, the header has {len(header)} (extra fields)")
+        if len(fields) != len(header):   # issue 44: a short row was read with its last columns empty
+            what = "extra fields" if len(fields) > len(header) else \
+                f"missing {', '.join(repr(h) for h in header[len(fields):][:3])}{'...' if len(header) - len(fields) > 3 else ''}"
+            problems.append(f"row {k}: {len(fields)} fields, the header has {len(header)} ({what}; every row has "
+                            "exactly the header's fields, an empty value written as nothing between two commas)")
         rows.append(dict(zip(header, fields)))
     if problems:
         raise DataError(str(path), problems)

@@ -148,12 +148,45 @@ def read_descriptor(folder: str | Path) -> dict:
         if len(s_["imgs"]) < 2:
             raise EmvaError(f"{path}:{s_['line']}", "a step needs at least two images")
     temporal = [s_ for s_ in steps if len(s_["imgs"]) == 2]
+    _check_order(path, steps, temporal)
     if not any(s_["kind"] == "d" for s_ in temporal):
         raise EmvaError(str(path), "no dark steps (a 'd' line, or 'b' with 0 photons, with two images)")
     if not any(s_["kind"] == "b" for s_ in temporal):
         raise EmvaError(str(path), "no bright steps with two images")
     return {"bits": fmt["bits"], "width": fmt["width"], "height": fmt["height"], "steps": steps,
             "source": str(path), "exposure_unit": unit}
+
+
+def _check_order(path, steps, temporal) -> None:
+    """Issue 44: a step listed twice (its data counted twice, the fit weighted by a copy), an image
+    file used twice, and temporal steps out of order are refused. The descriptor lists the photon
+    transfer series in increasing light: each bright step with more photons than the one before
+    (at the same or a longer exposure), each dark step at the same or a longer exposure (the
+    irradiance method repeats one exposure)."""
+    if steps and all(s_["t"] == 0 for s_ in steps):
+        raise EmvaError(str(path), "every exposure is 0: no photons can be collected (check the 'b' and 'd' lines)")
+    seen, used = {}, {}
+    for s_ in steps:
+        key = (s_["kind"], s_["t"], s_["mu_p"])
+        if key in seen and s_["kind"] == "b":   # darks may repeat an exposure (the irradiance method)
+            raise EmvaError(f"{path}:{s_['line']}", f"this step repeats the step of line {seen[key]} (same exposure "
+                                                    "and photons): each step once")
+        seen[key] = s_["line"]
+        for img in s_["imgs"]:
+            if img in used:
+                raise EmvaError(f"{path}:{s_['line']}", f"image {img.name} is already used by the step of line "
+                                                        f"{used[img]}: each image once")
+            used[img] = s_["line"]
+    for kind in ("b", "d"):
+        series = [s_ for s_ in temporal if s_["kind"] == kind]
+        for a, b in zip(series, series[1:]):
+            if kind == "b" and not (b["mu_p"] > a["mu_p"] and b["t"] >= a["t"]):
+                raise EmvaError(f"{path}:{b['line']}", f"photons {b['mu_p']:g} at exposure {b['t_raw']:g} after "
+                                f"{a['mu_p']:g} at {a['t_raw']:g} (line {a['line']}): bright steps come in increasing "
+                                "light - photon counts must grow with exposure, step by step")
+            if kind == "d" and b["t"] < a["t"]:
+                raise EmvaError(f"{path}:{b['line']}", f"dark exposure {b['t_raw']:g} after {a['t_raw']:g} "
+                                f"(line {a['line']}): dark steps come in increasing exposure")
 
 
 #: Largest image the kit decodes (a 268-megapixel sensor); the descriptor's size must not exceed it.

@@ -160,7 +160,7 @@ class Canvas:
     def fillers(self, layer: str, b: Box, net: str, extra: int = 0):
         """None when ``b`` comes closer than the rule to another net; else the boxes that fill
         the notches it would leave to shapes of its own net (empty when there are none)."""
-        space = self.rules.space(layer)
+        space = self.rules.space(layer, optional=True)
         if space is None:
             return []
         space += extra

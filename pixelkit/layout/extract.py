@@ -40,9 +40,8 @@ def extract(gds: str | Path, tech) -> dict:
     path = Path(gds)
     if path_kind(path) != "file":
         raise ConfigError(str(path), "layout.gds", str(path), "an existing GDS file")
-    from ..readfile import check_file
-    check_file(path, "layout.gds", "gds")   # a pipe or a device would block or fill gdstk's memory
-    lib = gdstk.read_gds(str(path))
+    from .gdsfile import read_gdstk
+    lib = read_gdstk(path, "layout.gds")   # checked first: a pipe, a device, an empty / random / damaged file
     cells = {c.name: c for c in lib.cells}
     scale = lib.unit  # m per user unit
     out = {}

@@ -7,7 +7,7 @@ import filecmp
 from datetime import datetime
 from pathlib import Path
 
-from ..fileio import atomic_target, commit, write_atomic
+from ..fileio import atomic_target, check_target, commit, out_folder, write_atomic
 from .extract import extract
 from .library import build_cells, to_library
 
@@ -55,9 +55,11 @@ def layout_design(design, out_dir: Path = Path("layouts"), rows: int = 2, cols: 
     from .rules import check
     from .shield import exposed_junctions
     check(design)
-    cells, top = build_chip_cells(design, rows, cols, afe, shield)   # every rule and route checked first
-    lib = to_library(design, cells)
     out_dir = Path(out_dir)
+    places = _signoff_places(design, out_dir, drc, lvs, density or antenna, foundry_lvs)   # before any work
+    cells, top = build_chip_cells(design, rows, cols, afe, shield)   # every rule and route checked first
+    _make_places(places, top)
+    lib = to_library(design, cells)
     gds = write_gds(lib, out_dir / f"{design.name}.gds")
     spice = write_netlists(design, cells, out_dir, top)
     ex = extract(gds, design.tech)
@@ -127,6 +129,36 @@ def verdict(result: dict) -> int:
     if failed:
         return 1
     return 5 if any(isinstance(v, dict) and v.get("run") is False for v in result.values()) else 0
+
+
+def _signoff_places(design, out_dir: Path, drc: bool, lvs: bool, chip_drc: bool = False,
+                    foundry_lvs: bool = False) -> dict:
+    """Before anything is drawn or run: the decks the sign-off will run verified (pinned by sha256,
+    exit 2 naming the key otherwise) and the output folders checked (a link, a file or a device
+    where ``out``, ``drc`` or ``lvs`` should be is refused, naming it; nothing made yet). Returns
+    {folder: the names of the files the sign-off writes there}, for :func:`_make_places`."""
+    from .signoff.decks import drc_deck, lvs_deck
+    if drc:
+        drc_deck(design.tech)
+    if lvs and design.tech.signoff.lvs_deck:
+        lvs_deck(design.tech)
+    places = {out_dir: ()}
+    if drc or chip_drc:   # the foundry's density / antenna decks write there too (their own names)
+        places[out_dir / "drc"] = ("{top}.lyrdb", "{top}.drc.log") if drc else ()
+    if lvs or foundry_lvs:
+        places[out_dir / "lvs"] = (("{top}.lvsdb", "{top}.ext.cir", "{top}.lvs.log") if design.tech.signoff.lvs_deck
+                                   else ("{top}.lvsdb",)) if lvs else ()
+    for folder, names in places.items():
+        out_folder(folder, root=folder == out_dir, make=False)
+    return places
+
+
+def _make_places(places: dict, top: str) -> None:
+    """The checked folders made, the files' places checked (the top cell is known now)."""
+    for i, (folder, names) in enumerate(places.items()):
+        out_folder(folder, root=i == 0)
+        for name in names:
+            check_target(folder / name.format(top=top))
 
 
 def _opening(sub) -> float:

@@ -118,7 +118,8 @@ def plot_violation(gds, cell: str, where: str, tech, path: Path, title: str, mar
     it, cell coordinates in um), the marker outlined in red."""
     import re
     import gdstk
-    lib = gdstk.read_gds(str(gds))
+    from .gdsfile import read_gdstk
+    lib = read_gdstk(gds, "gds")
     c = next(x for x in lib.cells if x.name == cell)
     nums = [float(v) for v in re.findall(r"-?\d+(?:\.\d+)?", where)]
     xs, ys = nums[0::2], nums[1::2]

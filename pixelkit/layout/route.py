@@ -112,7 +112,7 @@ def _route(cv, lt, lines, net, pad, jog_layer, reach, label, avoid):
         first = [(lay, b) for lay, b in first if lay in ("metal1", "via1") or lay == jog_layer]
         if all(cv.free(lay, b, net) for lay, b in first):
             ok_x.append(xv)
-    h = max(lt.space(lay) or 0 for lay in METALS[:METALS.index(lines.layer) + 1]) // 2
+    h = max(lt.space(lay, optional=True) or 0 for lay in METALS[:METALS.index(lines.layer) + 1]) // 2
     inside = [x for x in ok_x if lines.x0 + h + pad_side(lt, lines.layer) // 2 <= x <= lines.x1 - h - pad_side(lt, lines.layer) // 2]
     ok_x = inside     # jogs stay half a space inside the cell: cells abut
     space2 = lt.space(jog_layer)

@@ -134,8 +134,8 @@ def exposed_junctions(gds: Path, top: str, tech, blocks: dict) -> dict:
     (COMP or n-well) of each block, and the part of it no metal (metal1 - the top metal) covers.
     ``blocks``: {name: [Box, ...]} in nm, the top cell's coordinates."""
     import klayout.db as kdb
-    ly = kdb.Layout()
-    ly.read(str(gds))
+    from .gdsfile import read_klayout
+    ly = read_klayout(gds, "gds")
     cell = ly.cell(top)
     dbu = ly.dbu
 

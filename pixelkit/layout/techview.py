@@ -1,8 +1,8 @@
 """The technology as the generators see it: rules by name in whole nm on the grid.
 
 ``LayoutTech(tech).nm("poly.extension.active")`` is the rule rounded *up* to the grid
-(a minimum stays a minimum); ``space(layer)`` is the layer's spacing rule, or None for a
-layer without one (markers, implants the generators keep apart by construction).
+(a minimum stays a minimum); ``space(layer)`` is the layer's spacing rule (``optional=True``:
+None for a layer without one - markers, implants the generators keep apart by construction).
 """
 from __future__ import annotations
 
@@ -60,9 +60,14 @@ class LayoutTech:
     def has(self, key: str) -> bool:
         return key in self.tech.layout.rules
 
-    def space(self, layer: str):
+    def space(self, layer: str, optional: bool = False):
+        """The layer's spacing rule in nm. A generator that computes with it needs it: a missing
+        rule is the technology's error naming ``rules.<layer>.space`` (exit 2); ``optional``: None
+        for a layer without one (markers, implants kept apart by construction)."""
         key = f"{layer}.space"
-        return self.nm(key) if self.has(key) else None
+        if optional and not self.has(key):
+            return None
+        return self.nm(key)
 
     def width(self, layer: str) -> int:
         return self.nm(f"{layer}.width")

@@ -17,7 +17,7 @@ from pathlib import Path
 
 from .. import owner as owners
 from ..errors import ConfigError, PixelkitError
-from ..fileio import honour_umask_tree, json_default, path_kind, staging_dir
+from ..fileio import honour_umask_tree, json_default, out_folder, path_kind, staging_dir
 from ..spice.counter import SpiceCounter
 from . import cache, datasheet
 from .diff import diff_reports, load_report
@@ -158,7 +158,12 @@ def build_report(design, out: Path, *, quick: bool = False, backend: str = "batc
     base = load_report(Path(baseline)) if baseline else None
     if measured is not None and path_kind(measured) != "file":
         raise ConfigError("", "--measured", str(measured), "an existing CSV file of measured rows")
-    out.parent.mkdir(parents=True, exist_ok=True)
+    if path_kind(out) not in (None, "dir"):
+        raise ConfigError("", "--out", str(out), "a folder (a new one, or an earlier report's)")
+    if os.path.islink(out):   # the report replaces the folder whole: a link would be replaced, not followed
+        raise ConfigError("", "--out", str(out), "a folder, not a symbolic link (the report replaces the folder it "
+                                                 "names as a whole; give the folder the link points to)")
+    out_folder(out.parent)
     _clear_debris(out)
     stage = staging_dir(out.parent, f".{out.name}.new-{owners.tag()}-")
     try:

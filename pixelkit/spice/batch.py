@@ -14,6 +14,7 @@ import threading
 import time
 from functools import lru_cache
 
+from .. import children
 from ..errors import PixelkitError
 from . import scratch
 from .raw import RawError, read_raw
@@ -59,9 +60,9 @@ def run_batch(deck_text: str, links: dict | None = None,
         scratch.set_links(tmp, links or {})
         (tmp / "deck.cir").write_text(deck_text)
         t0 = time.perf_counter()
-        p = subprocess.Popen(scratch.child_command(["ngspice", "-b", "-r", "out.raw", "deck.cir"]), cwd=tmp,
-                             stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                             text=True, errors="replace")
+        p = children.popen(["ngspice", "-b", "-r", "out.raw", "deck.cir"], cwd=tmp,   # dies with the kit
+                           stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                           text=True, errors="replace")
         with _RUNNING_LOCK:
             _RUNNING.add(p)
             if _ABORTED.is_set():
@@ -76,6 +77,7 @@ def run_batch(deck_text: str, links: dict | None = None,
         finally:
             with _RUNNING_LOCK:
                 _RUNNING.discard(p)
+            children.forget(p)
         wall = time.perf_counter() - t0
         lines = (out + "\n" + err).splitlines()
         raw = tmp / "out.raw"

@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from ..cachestore import Store
+from ..readfile import FileRefused
 from ..tech.modellib import files_fingerprint
 from .result import Result
 
@@ -55,13 +56,14 @@ def load(k: str, _depth: int = 0) -> Result | None:
     if files is None:
         return None
     try:
-        with np.load(io.BytesIO(files[_NPZ]), allow_pickle=False) as z:
-            meta = json.loads(str(z["__meta__"]))
-            names = meta["__names__"]
-            arrays = [z["__time__"], *(z[f"v{i}"] for i in range(len(names)))]
+        z = _arrays(files[_NPZ], STORE.path(k))
+        meta = json.loads(str(z["__meta__"]))
+        names = meta["__names__"]
+        arrays = [z["__time__"], *(z[f"v{i}"] for i in range(len(names)))]
     except Exception as exc:  # noqa: BLE001 - checksummed, yet not a result: written by another version
+        why = exc.value if isinstance(exc, FileRefused) else type(exc).__name__
         sys.stderr.write(f"pixelkit: warning: cache entry {STORE.path(k)} holds no result "
-                         f"({type(exc).__name__}); re-simulating\n")
+                         f"({why}); re-simulating\n")
         STORE.drop(k)
         return None
     if "__redirect__" in meta:
@@ -70,6 +72,24 @@ def load(k: str, _depth: int = 0) -> Result | None:
     meta = {m: v for m, v in meta.items() if m != "__names__"}
     meta["cached"] = True
     return Result(arrays[0], dict(zip(names, arrays[1:])), meta)
+
+
+def _arrays(blob: bytes, path) -> dict:
+    """The arrays of an entry's ``.npz`` (stored, uncompressed, as ``np.savez`` writes it), each
+    member's header checked against the member's size before it is read (readfile.npy_array):
+    a forged entry cannot make the kit allocate what it declares."""
+    import zipfile
+
+    from ..readfile import npy_array
+    out = {}
+    with zipfile.ZipFile(io.BytesIO(blob)) as zf:
+        for info in zf.infolist():
+            if not info.filename.endswith(".npy") or info.compress_type != zipfile.ZIP_STORED:
+                raise ValueError(f"member {info.filename!r} is not a stored .npy array")
+            with zf.open(info) as fh:
+                out[info.filename[:-4]] = npy_array(io.BytesIO(fh.read(info.file_size + 1)), info.file_size,
+                                                    path, "cache entry", kinds="biufcU")
+    return out
 
 
 def _write(k: str, meta: dict, time, vectors: list) -> None:

@@ -159,9 +159,3 @@ def worker_init(path: str, parent: int) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the main process handles Ctrl-C and ends us
     adopt(path)
     watch_parent(parent)
-
-
-def child_command(argv: list[str]) -> list[str]:
-    """``argv`` wrapped so the child is killed when its parent dies (``setpriv --pdeathsig``)."""
-    setpriv = shutil.which("setpriv")
-    return [setpriv, "--pdeathsig", "KILL", *argv] if setpriv else argv

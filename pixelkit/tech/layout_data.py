@@ -15,8 +15,9 @@ for a length, and the technology file answers. Three tables:
     the foundry rule it comes from, quoted in every error that names it.
 ``[signoff]``
     ``drc_deck`` (a deck the kit fetches, see ``layout.signoff.decks``, or a path
-    relative to the technology file, with ``drc_sha256``), ``drc_options`` (the
-    ``-rd name=value`` switches of the deck), ``lvs_deck`` (empty: the kit's own LVS).
+    relative to the technology file, pinned by ``drc_sha256``: a deck is code), ``drc_options``
+    (the ``-rd name=value`` switches of the deck), ``lvs_deck`` (empty: the kit's own LVS; a
+    path is pinned by ``lvs_sha256``).
 """
 from __future__ import annotations
 
@@ -68,6 +69,7 @@ class Signoff:
     pv_decks: str = ""
     pv_options: tuple = ()  # the foundry LVS deck's switches
     lvs_models: tuple = ()  # ((kit's device name, foundry's), ...) for the netlist the foundry LVS reads
+    lvs_sha256: str = ""
 
 
 @dataclass(frozen=True)
@@ -125,9 +127,13 @@ def _rule_value(value, where, source, kind) -> Rule:
         value = value["value"]
     dim = "m2" if kind == "area" else "m"
     x = quantity(value, dim, where, source)
-    hi = 1e-8 if dim == "m2" else 1e-3
-    if not 0 <= x <= hi:
-        raise ConfigError(source, where, value, f"a value from 0 to {'10000 um2' if dim == 'm2' else '1 mm'}")
+    # the range a real foundry rule has (issue 44: "0 um" or "1e-300 um" widths were drawn with):
+    # widths, spaces, sizes 1 nm - 1 mm, areas 1e-6 um2 - 10000 um2; an enclosure, extension or
+    # space to another layer may be exactly 0 (a flush edge), else at least 1 nm
+    lo, hi, text = (1e-18, 1e-8, "from 1e-06 um2 to 10000 um2") if dim == "m2" else (1e-9, 1e-3, "from 1 nm to 1 mm")
+    if not (lo <= x <= hi or (x == 0 and kind in _PAIR_KINDS)):
+        raise ConfigError(source, where, value, f"a value {text}" + (" (or 0)" if kind in _PAIR_KINDS else "")
+                          + " (the range a real design rule has)")
     return Rule(x, name)
 
 
@@ -164,26 +170,32 @@ def _switches(raw, where, source) -> tuple:
 def parse_signoff(raw, source: str, base: str) -> Signoff:
     if raw is None:
         return Signoff(base=base)
-    allowed = {"drc_deck", "drc_sha256", "drc_options", "lvs_deck", "lvs_options", "pv_decks", "pv_options",
-               "lvs_models"}
+    allowed = {"drc_deck", "drc_sha256", "drc_options", "lvs_deck", "lvs_sha256", "lvs_options", "pv_decks",
+               "pv_options", "lvs_models"}
     if not isinstance(raw, dict) or set(raw) - allowed:
         bad = sorted(set(raw) - allowed)[0] if isinstance(raw, dict) else "signoff"
         raise ConfigError(source, f"signoff.{bad}", raw.get(bad) if isinstance(raw, dict) else raw,
                           f"one of {', '.join(sorted(allowed))}")
-    for k in ("drc_deck", "drc_sha256", "lvs_deck"):
+    for k in ("drc_deck", "drc_sha256", "lvs_deck", "lvs_sha256"):
         if not isinstance(raw.get(k, ""), str):
             raise ConfigError(source, f"signoff.{k}", raw[k], "a string")
-    sha = raw.get("drc_sha256", "")
-    if sha and not re.fullmatch(r"[0-9a-f]{64}", sha):
-        raise ConfigError(source, "signoff.drc_sha256", sha, "64 lower-case hex digits")
+    for k in ("drc_sha256", "lvs_sha256"):
+        sha = raw.get(k, "")
+        if sha and not re.fullmatch(r"[0-9a-f]{64}", sha):
+            raise ConfigError(source, f"signoff.{k}", sha, "64 lower-case hex digits")
+    for k in ("drc_deck", "lvs_deck"):   # a name or a path, never a line break or a control character
+        v = raw.get(k, "")
+        if v and (not v.isprintable() or len(v) > 4096):
+            raise ConfigError(source, f"signoff.{k}", v, "a deck name or a file path of printable characters")
     pv = raw.get("pv_decks", "")
     if pv not in PV_DECKS:
         raise ConfigError(source, "signoff.pv_decks", pv, f"one of {', '.join(repr(x) for x in PV_DECKS)} (decks the "
                           "kit fetches and pins; empty: none)")
-    return Signoff(raw.get("drc_deck", ""), sha, _switches(raw.get("drc_options"), "signoff.drc_options", source),
+    return Signoff(raw.get("drc_deck", ""), raw.get("drc_sha256", ""),
+                   _switches(raw.get("drc_options"), "signoff.drc_options", source),
                    raw.get("lvs_deck", ""), _switches(raw.get("lvs_options"), "signoff.lvs_options", source), base,
                    pv, _switches(raw.get("pv_options"), "signoff.pv_options", source),
-                   _switches(raw.get("lvs_models"), "signoff.lvs_models", source))
+                   _switches(raw.get("lvs_models"), "signoff.lvs_models", source), raw.get("lvs_sha256", ""))
 
 
 #: foundry physical-verification deck sets the kit knows how to fetch and pin (signoff/fdpv.py)

@@ -191,6 +191,11 @@ def builtin_names() -> list[str]:
     return sorted(p.stem for p in BUILTIN_DIR.glob("*.toml"))
 
 
+#: wavelengths a QE table may cover (nm): deep UV to beyond silicon's band edge (~1100 nm)
+QE_NM = (100.0, 2000.0)
+QE_POINTS = 10000
+
+
 def _qe_curve(raw, source):
     curve = raw.pop("qe_curve", None)
     if curve is None:
@@ -208,6 +213,13 @@ def _qe_curve(raw, source):
         raise ConfigError(source, "photodiode.qe_curve", curve, "finite wavelengths (nm) and QE values")
     if any(b <= a for a, b in zip(wl, wl[1:])) or wl[0] <= 0:
         raise ConfigError(source, "photodiode.qe_curve", curve, "wavelengths > 0 in increasing order")
+    if len(curve) > QE_POINTS:
+        raise ConfigError(source, "photodiode.qe_curve", f"{len(curve)} points", f"at most {QE_POINTS} points")
+    for i, x in enumerate(wl):   # issue 44: wavelengths x 1e300 were accepted
+        if not QE_NM[0] <= x <= QE_NM[1]:
+            raise ConfigError(source, f"photodiode.qe_curve[{i}]", curve[i],
+                              f"a wavelength from {QE_NM[0]:g} to {QE_NM[1]:g} nm (where a silicon photodiode's "
+                              "QE is measured) and a QE from 0 to 1")
     if any(not 0 <= q <= 1 for q in qe):
         raise ConfigError(source, "photodiode.qe_curve", curve, "QE values between 0 and 1")
     return tuple(wl), tuple(qe)

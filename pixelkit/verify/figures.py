@@ -29,10 +29,28 @@ class Figure:
     what: str
     check: str
     mc: bool = True
+    #: (lo, hi) in SI, open: the values a real chip's figure can have. A spec limit outside it (or on
+    #: its edge) always passes or always fails - "1e300 %", a minimum of 0 for a positive figure - and
+    #: is refused when the design loads (issue 44).
+    plausible: tuple = (0.0, math.inf)
+
+
+_Q = 1.602176634e-19   # C per electron
+#: the range of each figure's values (SI, open interval); see Figure.plausible
+PLAUSIBLE = {"conversion_gain": (1e-3 * 1e-6 / _Q, 1e4 * 1e-6 / _Q),     # 0.001 - 10,000 uV/e-
+             "pd_conversion_gain": (1e-3 * 1e-6 / _Q, 1e4 * 1e-6 / _Q),
+             "swing": (1e-6, 10.0),                          # 1 uV - 10 V
+             "full_well": (1 * _Q, 1e9 * _Q),                 # 1 - 1e9 e-
+             "read_noise": (1e-3 * _Q, 1e6 * _Q), "ktc_noise": (1e-3 * _Q, 1e6 * _Q),   # 0.001 - 1e6 e-
+             "dynamic_range": (1.0, 1e10),                   # 0 - 200 dB
+             "pd_dark_drop": (1e-9, 10.0), "settling": (1e-9, 10.0),   # 1 nV - 10 V
+             "image_lag": (-1.0, 1.0),                        # -100 % - 100 % of the swing
+             "gse": (1e-3, 1e12), "criterion_secondary": (1e-6, 1.0), "afe_gain_error": (1e-9, 1.0),
+             "power_pixel": (1e-15, 100.0), "power_column": (1e-15, 100.0), "power_chip": (1e-15, 100.0)}   # 1 fW - 100 W
 
 
 def _per_kind(stem, dim, unit, group, what, check, mc=True):
-    return [Figure(f"{stem}_{k}", dim, unit, group, what.format(kind=k), check, mc) for k in KINDS]
+    return [Figure(f"{stem}_{k}", dim, unit, group, what.format(kind=k), check, mc, PLAUSIBLE[stem]) for k in KINDS]
 
 
 _LIST = [
@@ -100,7 +118,8 @@ _LIST = [
            "bias currents x supply x duty (verify.power.estimate)"),
 ]
 
-FIGURES: dict[str, Figure] = {f.name: f for f in _LIST}
+FIGURES: dict[str, Figure] = {f.name: (f if f.name not in PLAUSIBLE else
+                                       Figure(**{**f.__dict__, "plausible": PLAUSIBLE[f.name]})) for f in _LIST}
 
 
 def unit_scale(unit: str, dim: str) -> tuple[str, float] | None:

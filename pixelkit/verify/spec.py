@@ -24,6 +24,7 @@ that does not fit the figure, min above max, a corner the model library lacks.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 from ..errors import ConfigError
@@ -75,6 +76,13 @@ class Spec:
         if unit_scale(unit, fig.dim) is None:
             raise ConfigError(source, f"{path}.unit", self.unit, f"a unit of {fig.name} ({units_for(fig.dim)})")
         vals = {k: _si(getattr(self, k), fig, unit, f"{path}.{k}", source) for k in ("min", "max", "typ")}
+        lo, hi = fig.plausible
+        for k, v in vals.items():   # a limit no real figure reaches always passes (or fails): a typo
+            if v is not None and not lo < v < hi:
+                raise ConfigError(source, f"{path}.{k}", getattr(self, k),
+                                  f"a value strictly between {_edge(lo, unit, fig)} and {_edge(hi, unit, fig)} "
+                                  f"{unit} (the values a real {fig.name} can have; a limit at or beyond them "
+                                  "never decides anything)".replace("  ", " "))
         if vals["min"] is None and vals["max"] is None:
             raise ConfigError(source, path, raw, "a spec with a min and / or a max")
         if vals["min"] is not None and vals["max"] is not None and vals["min"] > vals["max"]:
@@ -82,6 +90,11 @@ class Spec:
         object.__setattr__(self, "lo", vals["min"])
         object.__setattr__(self, "hi", vals["max"])
         object.__setattr__(self, "typical", vals["typ"])
+
+
+def _edge(x: float, unit: str, fig) -> str:
+    from .figures import shown
+    return f"{shown(x, unit, fig.dim):.6g}"
 
 
 def _si(value, fig, unit: str, where: str, source: str) -> float | None:

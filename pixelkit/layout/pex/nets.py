@@ -105,8 +105,8 @@ def view_geometry(gds, top: str, tech, view: list) -> NetGeometry:
     import klayout.db as kdb
     from ..signoff.lvs import extract, prepare
     stack = tech.stack
-    layout = kdb.Layout()
-    layout.read(str(gds))
+    from ..gdsfile import read_klayout
+    layout = read_klayout(gds, "gds")
     cell = layout.cell(top)
     if cell is None:
         raise PixelkitError(f"{gds} has no cell {top!r}")

@@ -221,10 +221,15 @@ def _key(design, afe: bool) -> str:
     return h.hexdigest()
 
 
+def store():
+    """The checked store of extractions (its refusals name an extraction-cache file)."""
+    from ...cachestore import Store
+    return Store("pex", "extraction-cache", "extracting again")
+
+
 def _stored(key: str) -> Parasitics | None:
     import json
-    from ...cachestore import Store
-    files = Store("pex", "report-cache", "extracting again").load(key)
+    files = store().load(key)
     if not files:
         return None
     d = json.loads(files["parasitics.json"])
@@ -236,8 +241,7 @@ def _stored(key: str) -> Parasitics | None:
 def _store(key: str, p: Parasitics) -> None:
     import json
     from dataclasses import asdict
-    from ...cachestore import Store
-    Store("pex", "report-cache", "extracting again").save(key, {"parasitics.json": json.dumps(asdict(p)).encode()})
+    store().save(key, {"parasitics.json": json.dumps(asdict(p)).encode()})
 
 
 def post_layout_view(design, afe: bool = True):

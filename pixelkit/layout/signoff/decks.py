@@ -1,9 +1,12 @@
 """Foundry decks: fetched once into a cache with a pinned sha256, never shipped with the kit.
 
-A technology names its DRC deck in ``[signoff] drc_deck``: either a deck this module
-knows how to fetch (:data:`KNOWN`) or a path (relative to the technology file) with an
-optional ``drc_sha256``. Every run checks the file's sha256 first, so a missing or
-altered deck is a clear error saying how to fetch it - never a run of another deck.
+A technology names its DRC deck in ``[signoff] drc_deck`` and its LVS deck in ``lvs_deck``:
+either a deck this module knows how to fetch (:data:`KNOWN`) or a path (relative to the
+technology file) pinned by ``drc_sha256`` / ``lvs_sha256``. A deck is code (KLayout runs it as
+a Ruby script that can do anything the user can, like a model file's ``.control`` block), so an
+unpinned path is refused (exit 2, naming the key; issue 44). Every run checks the file's sha256
+first, so a missing or altered deck is a clear error saying how to fetch or pin it - never a
+run of another deck.
 
 Cache folder: ``$PIXELKIT_DECKS``, else ``$XDG_CACHE_HOME/pixelkit/decks`` (default
 ``~/.cache/pixelkit/decks``). It is not ``$PIXELKIT_CACHE``: that one holds results and
@@ -24,6 +27,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .deckcache import DeckError, deck_dir, sha256
+from ...errors import MISSING
 
 
 @dataclass(frozen=True)
@@ -56,20 +60,57 @@ def _checked(path: Path, expected: str, what: str, hint: str) -> Path:
     return path
 
 
-def drc_deck(tech) -> Path:
-    """The verified DRC deck the technology names."""
+def _pin_hint(path: Path, key: str, source) -> str:
+    try:
+        got = sha256(path)
+    except OSError:
+        got = "<its sha256>"
+    return (f"a deck is code: KLayout runs it as a Ruby script, with the user's rights, like a model file's "
+            f".control block; read it, then pin it in {source}: [signoff] {key} = \"{got}\"")
+
+
+def _deck(tech, kind: str) -> Path:
+    """The verified ``kind`` ("drc" / "lvs") deck the technology names: a deck the kit fetches
+    (:data:`KNOWN`, its sha256 pinned here) or a file pinned by the technology's
+    ``[signoff] <kind>_sha256``. An unpinned or altered file is refused (exit 2, naming the key)
+    before KLayout starts."""
+    from ...errors import ConfigError
     so = tech.signoff
-    if not so.drc_deck:
-        raise DeckError(f"technology {tech.name} names no DRC deck ([signoff] drc_deck in {tech.source})")
-    known = KNOWN.get(so.drc_deck)
+    name, pinned = getattr(so, f"{kind}_deck"), getattr(so, f"{kind}_sha256", "")
+    what = kind.upper()
+    if not name:
+        raise DeckError(f"technology {tech.name} names no {what} deck ([signoff] {kind}_deck in {tech.source})")
+    known = KNOWN.get(name)
     if known is not None:
-        return _checked(deck_dir() / known.file, known.sha256, f"the DRC deck {so.drc_deck!r} ({known.source})",
+        return _checked(deck_dir() / known.file, known.sha256, f"the {what} deck {name!r} ({known.source})",
                         FETCH_HINT)
-    path = Path(so.drc_deck)
+    path = Path(name)
     if not path.is_absolute():
         path = Path(so.base) / path
-    return _checked(path, so.drc_sha256, f"the DRC deck {so.drc_deck!r} of technology {tech.name}",
-                    f"put the deck there, or correct [signoff] drc_deck in {tech.source}")
+    key = f"signoff.{kind}_sha256"
+    if not path.is_file():
+        raise DeckError(f"the {what} deck {name!r} of technology {tech.name} is not there (looked for {path}); "
+                        f"correct [signoff] {kind}_deck in {tech.source}")
+    if not pinned:
+        raise ConfigError(str(tech.source), key, MISSING,
+                          f"the sha256 of the {what} deck {path} ([signoff] {kind}_deck = {name!r}): "
+                          + _pin_hint(path, f"{kind}_sha256", tech.source))
+    got = sha256(path)
+    if got != pinned:
+        raise ConfigError(str(tech.source), key, pinned,
+                          f"the sha256 of the {what} deck {path} as it is now ({got}): the deck changed since it "
+                          f"was pinned; " + _pin_hint(path, f"{kind}_sha256", tech.source))
+    return path
+
+
+def drc_deck(tech) -> Path:
+    """The verified DRC deck the technology names (``[signoff] drc_deck``, ``drc_sha256``)."""
+    return _deck(tech, "drc")
+
+
+def lvs_deck(tech) -> Path:
+    """The verified LVS deck the technology names (``[signoff] lvs_deck``, ``lvs_sha256``)."""
+    return _deck(tech, "lvs")
 
 
 def fetch(name: str, python: str = sys.executable) -> Path:

@@ -10,9 +10,14 @@ The deck runs through ``deck_runner.drc``, which evaluates its text unchanged wi
 difference outside the rules: the GF180MCU deck's log line asks the shell for the memory in
 use (``pmap``) 600+ times, most of a small run's time; the runner answers it from /proc. A deck
 with KLayout ``%include`` lines (resolved by KLayout's own loader only) is run directly.
+
+Only a deck pinned by its sha256 runs (``decks.py``). KLayout works in a private folder the kit
+makes inside the output folder and its report and log are renamed into place when it has
+finished (:func:`klayout_run`); it dies with the kit (:mod:`pixelkit.children`).
 """
 from __future__ import annotations
 
+import os
 import re
 import shutil
 import subprocess
@@ -83,7 +88,8 @@ def klayout_binary() -> str:
 
 
 def klayout_version() -> str:
-    p = subprocess.run([klayout_binary(), "-b", "-v"], capture_output=True, text=True, timeout=60)
+    from ... import children
+    p = children.run([klayout_binary(), "-b", "-v"], capture_output=True, text=True, timeout=60)
     return p.stdout.strip()
 
 
@@ -108,13 +114,44 @@ def parse_report(path: Path) -> list[Violation]:
     return [Violation(rule, desc.get(rule, ""), cell, where, n) for (rule, cell), (where, n) in sorted(found.items())]
 
 
+def klayout_run(args_of, workdir: Path, outputs: dict, what: str, cwd: Path | None = None) -> tuple[int, dict]:
+    """Run KLayout with the command line ``args_of(stage)`` (every path it writes inside
+    ``stage``, a private folder the kit makes in ``workdir``; it works in ``cwd``, default the
+    stage), then move each file it wrote into ``workdir`` (``outputs``: name in the stage -> name
+    in ``workdir``, ``"log"``: its stdout and stderr; a rename, its place checked first, never
+    through a link). Every place is checked before KLayout starts. KLayout dies with the kit
+    (:mod:`pixelkit.children`); a killed run's stage is swept by the next run. Returns
+    (KLayout's exit status, {name: final path} of the outputs it wrote)."""
+    from ... import children, owner
+    from ...fileio import check_target, move_into, out_folder, staging_dir
+    workdir = out_folder(workdir)
+    for name in outputs.values():
+        check_target(workdir / name)
+    owner.sweep(workdir, f".{what}.")
+    stage = Path(os.path.abspath(staging_dir(workdir, f".{what}.{owner.tag()}.")))
+    try:
+        log = stage / outputs["log"] if "log" in outputs else None
+        with open(log if log else os.devnull, "w") as f:
+            p = children.run(args_of(stage), stdin=subprocess.DEVNULL, stdout=f, stderr=subprocess.STDOUT,
+                             cwd=cwd or stage)
+        moved = {}
+        for src, name in outputs.items():
+            file = stage / (name if src == "log" else src)
+            if file.is_file() and not file.is_symlink():
+                moved[src] = move_into(file, workdir / name)
+            elif src != "log":
+                Path(workdir / name).unlink(missing_ok=True)   # no stale result beside a new log
+        return p.returncode, moved
+    finally:
+        shutil.rmtree(stage, ignore_errors=True)
+
+
 def drc_command(gds: Path, top: str, tech, workdir: Path, threads: int = 2, mode: str | None = None) -> tuple:
     """(KLayout's arguments, report path, log path, deck, options) of the technology's DRC deck on cell
     ``top`` of ``gds`` with its report and log in ``workdir``."""
     deck = drc_deck(tech)
     exe = klayout_binary()
     workdir = Path(workdir)
-    workdir.mkdir(parents=True, exist_ok=True)
     report = workdir / f"{top}.lyrdb"
     log = workdir / f"{top}.drc.log"
     options = dict(tech.signoff.drc_options)
@@ -141,10 +178,19 @@ def drc_result(code: int, gds, top: str, report: Path, log: Path, deck: Path, op
 
 
 def run_drc(gds: Path, top: str, tech, workdir: Path, threads: int = 2, mode: str | None = None) -> DrcResult:
-    """Run the technology's DRC deck on cell ``top`` of ``gds``; report and log in ``workdir``."""
-    args, report, log, deck, options = drc_command(gds, top, tech, workdir, threads, mode)
-    report.unlink(missing_ok=True)
+    """Run the technology's DRC deck on cell ``top`` of ``gds``; report and log in ``workdir``, written by
+    KLayout in a private stage there and renamed into place (:func:`klayout_run`)."""
+    drc_deck(tech)   # verified (pinned) before anything is made
+    meta = {}
+
+    def args(stage: Path) -> list[str]:
+        a, report, _log, deck, options = drc_command(gds, top, tech, stage, threads, mode)
+        meta.update(deck=deck, options=options)
+        return a
+
     t0 = time.perf_counter()
-    with open(log, "w") as f:
-        p = subprocess.run(args, stdout=f, stderr=subprocess.STDOUT, cwd=Path(workdir))
-    return drc_result(p.returncode, gds, top, report, log, deck, options, time.perf_counter() - t0)
+    code, files = klayout_run(args, workdir, {f"{top}.lyrdb": f"{top}.lyrdb", "log": f"{top}.drc.log"}, "drc")
+    workdir = Path(workdir)
+    report = files.get(f"{top}.lyrdb", workdir / f"{top}.lyrdb")
+    return drc_result(code, gds, top, Path(report), workdir / f"{top}.drc.log", meta["deck"], meta["options"],
+                      time.perf_counter() - t0)

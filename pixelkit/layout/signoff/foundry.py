@@ -23,6 +23,7 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from ... import children
 from ...errors import PixelkitError
 from . import fdpv
 from .deckcache import DeckError
@@ -76,8 +77,8 @@ class Job:
         self.t0 = time.perf_counter()
         args = args(self.folder) if callable(args) else args
         self._log = open(self.folder / "run.log", "w")
-        self.proc = subprocess.Popen([klayout_binary(), "-b", *args], stdout=self._log, stderr=subprocess.STDOUT,
-                                     cwd=self.folder)
+        self.proc = children.popen([klayout_binary(), "-b", *args], stdin=subprocess.DEVNULL,   # dies with the kit
+                                   stdout=self._log, stderr=subprocess.STDOUT, cwd=self.folder)
         self.t_end = None
         import threading
         self._waiter = threading.Thread(target=self._wait, daemon=True)
@@ -86,6 +87,7 @@ class Job:
     def _wait(self):
         self.proc.wait()
         self.t_end = time.perf_counter()
+        children.forget(self.proc)
 
     def result(self):
         try:

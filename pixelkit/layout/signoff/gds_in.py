@@ -66,7 +66,8 @@ def _expanded(path, data: bytes, limit: int) -> bytes:
     return b"".join(out)
 
 
-def _format(path, data: bytes) -> str:
+def stream_kind(path, data: bytes) -> str:
+    """"gds" or "oas" for a whole GDSII or OASIS stream (uncompressed); else a refusal naming ``path``."""
     if not data:
         raise _refuse(path, "layout", "an empty file", "a GDSII or OASIS file")
     if data.startswith(GDS_HEADER):
@@ -90,7 +91,7 @@ def read_layout(path, tech, top: str | None, folder: Path) -> CheckedLayout:
     data = read_bytes(path, "layout", "gds")
     if data[:2] == b"\x1f\x8b":
         data = _expanded(path, data, limit)
-    kind = _format(path, data)
+    kind = stream_kind(path, data)
     copy = Path(folder) / f"layout.{kind}"
     copy.write_bytes(data)
     layout = kdb.Layout()

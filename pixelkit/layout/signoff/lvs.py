@@ -309,8 +309,8 @@ def compare_view(gds: Path, top: str, tech, view: list, workdir: Path | None = N
     (None: looked through); by default the circuit of the same name (SPICE names are case-insensitive)."""
     import klayout.db as kdb
     t0 = time.perf_counter()
-    layout = kdb.Layout()
-    layout.read(str(gds))
+    from ..gdsfile import read_klayout
+    layout = read_klayout(gds, "gds")
     cell = layout.cell(top)
     if cell is None:
         raise PixelkitError(f"{gds} has no cell {top!r}")
@@ -337,12 +337,11 @@ def compare_view(gds: Path, top: str, tech, view: list, workdir: Path | None = N
     if not ok and not mismatches:
         mismatches = ["the netlists differ (see the report for the details)"]
     report = ""
-    if workdir is not None:
-        from ...fileio import write_atomic
-        import tempfile
-        with tempfile.TemporaryDirectory(prefix="pixelkit-lvsdb-") as tmp:
-            lvs.write(str(Path(tmp) / "x.lvsdb"))
-            report = str(write_atomic(Path(workdir) / f"{top}.lvsdb", (Path(tmp) / "x.lvsdb").read_bytes()))
+    if workdir is not None:   # a new temporary beside it, renamed into place
+        from ...fileio import atomic_target, commit
+        final, tmp = atomic_target(Path(workdir) / f"{top}.lvsdb")
+        lvs.write(str(tmp))
+        report = str(commit(final, tmp))
     top_circuit = _circuit(nl, top)
     return LvsResult(top, ok, time.perf_counter() - t0, mismatches,
                      sum(1 for _ in top_circuit.each_device()) if top_circuit else 0,
@@ -378,35 +377,34 @@ def _circuit(nl, name):
 
 
 def run_lvs_deck(gds: Path, top: str, design, workdir: Path, spice: Path) -> LvsResult:
-    """The technology's own LVS deck (``[signoff] lvs_deck``) on cell ``top`` against ``spice``, run
-    by KLayout in batch mode; the verdict is read from the LVS database it writes (the cross
-    reference of the top circuits), not from its log."""
-    import subprocess
+    """The technology's own LVS deck (``[signoff] lvs_deck``, pinned by ``lvs_sha256``) on cell
+    ``top`` against ``spice``, run by KLayout in batch mode (``drc.klayout_run``: a private folder,
+    outputs renamed into ``workdir``); the verdict is read from the LVS database it writes (the
+    cross reference of the top circuits), not from its log."""
     import klayout.db as kdb
-    from .drc import klayout_binary
+    from .decks import lvs_deck
+    from .drc import klayout_binary, klayout_run
     so = design.tech.signoff
-    deck = Path(so.lvs_deck)
-    if not deck.is_absolute():
-        deck = Path(so.base) / deck
-    if not deck.is_file():
-        raise PixelkitError(f"the LVS deck {so.lvs_deck!r} of technology {design.tech.name} is not there "
-                            f"(looked for {deck}); correct [signoff] lvs_deck in {design.tech.source}")
-    workdir = Path(workdir)
-    workdir.mkdir(parents=True, exist_ok=True)
-    report = workdir / f"{top}.lvsdb"
-    report.unlink(missing_ok=True)
-    args = [klayout_binary(), "-b", "-r", str(deck), "-rd", f"input={Path(gds).resolve()}",
-            "-rd", f"schematic={Path(spice).resolve()}", "-rd", f"report={report.resolve()}",
-            "-rd", f"topcell={top}", "-rd", f"target_netlist={(workdir / f'{top}.ext.cir').resolve()}"]
-    for k, v in so.lvs_options:
-        args += ["-rd", f"{k}={v}"]
+    deck = lvs_deck(design.tech)
+    exe = klayout_binary()
+
+    def args(stage: Path) -> list[str]:
+        out = [exe, "-b", "-r", str(deck), "-rd", f"input={Path(gds).resolve()}",
+               "-rd", f"schematic={Path(spice).resolve()}", "-rd", f"report={stage / f'{top}.lvsdb'}",
+               "-rd", f"topcell={top}", "-rd", f"target_netlist={stage / f'{top}.ext.cir'}"]
+        for k, v in so.lvs_options:
+            out += ["-rd", f"{k}={v}"]
+        return out
+
     t0 = time.perf_counter()
+    workdir = Path(workdir)
+    _, files = klayout_run(args, workdir, {f"{top}.lvsdb": f"{top}.lvsdb", f"{top}.ext.cir": f"{top}.ext.cir",
+                                           "log": f"{top}.lvs.log"}, "lvs", cwd=deck.parent)
     log = workdir / f"{top}.lvs.log"
-    with open(log, "w") as f:
-        subprocess.run(args, stdout=f, stderr=subprocess.STDOUT, cwd=deck.parent)
-    if not report.is_file():
-        tail = log.read_text(errors="replace").strip().splitlines()[-2:]
+    if f"{top}.lvsdb" not in files:
+        tail = log.read_text(errors="replace").strip().splitlines()[-2:] if "log" in files else []
         raise PixelkitError(f"the LVS deck {deck.name} wrote no report: {' | '.join(tail)}; log: {log}")
+    report = files[f"{top}.lvsdb"]
     db = kdb.LayoutVsSchematic()
     db.read(str(report))
     xref = db.xref()
