@@ -10,9 +10,10 @@ Links and odd files (issue 44). The folder a user names for the output (``--out`
 folder of a file output) is theirs: it may be a link they made, it is followed. Below it,
 everything is the kit's: every folder it writes into is created by the kit or must be a real
 folder, every file it writes goes to a new temporary in that folder and is renamed over the
-name (a rename never writes through a link), and a symbolic link, a device, a pipe or a file
-in the place of a folder the kit needs, or a link / device / folder in the place of a file it
-writes, is refused (:class:`~pixelkit.errors.PixelkitError`, exit 2, naming the path). The
+name (a rename never writes through a link: a link someone placed at a file's name is
+replaced, its target left as it was), and a symbolic link, a device, a pipe or a file in the
+place of a folder the kit needs, or a device, pipe or folder in the place of a file it writes,
+is refused (:class:`~pixelkit.errors.PixelkitError`, exit 2, naming the path). The
 user's folders are registered by :func:`out_folder` / :func:`check_output`; a writer checks
 every folder between the file and the nearest registered one with ``lstat``, so a link placed
 at ``<out>/drc`` is met before anything is written through it. The checks are made before the
@@ -175,10 +176,11 @@ def out_folder(path: str | os.PathLike, root: bool = False, make: bool = True) -
 
 
 def check_target(path: str | os.PathLike) -> Path:
-    """``path`` is free or a regular file (what the kit writes there replaces it); a link, a
-    device, a pipe or a folder in its place is refused, naming it."""
+    """``path`` is free, a regular file or a symbolic link: what the kit writes there replaces it
+    by a rename, which never follows a link (the link is replaced, its target left as it was). A
+    device, a pipe, a socket or a folder in its place is refused, naming it."""
     kind = _kind_no_follow(path)
-    if kind not in (None, "file"):
+    if kind not in (None, "file", "link"):
         raise _error(path, f"is {_WHAT[kind]} where the kit writes a file; remove it or choose another --out")
     return Path(path)
 
@@ -202,8 +204,8 @@ def check_output(path: str | os.PathLike, folder: bool | None = None) -> Path:
 
     Called before a long run, so an unwritable or misplaced ``--out`` is found first,
     not after the simulations. ``folder=True``: an output folder (a device, a file or a link
-    to nothing there is refused); ``folder=False``: an output file (a link, a device or a
-    folder in its place is refused); None: either. The output's folder is registered as the
+    to nothing there is refused); ``folder=False``: an output file (a device, a pipe or a
+    folder in its place is refused; a link there is replaced, never followed); None: either. The output's folder is registered as the
     user's (:func:`out_folder`).
     """
     from .errors import PixelkitError

@@ -456,7 +456,15 @@ def test_a_technology_plugs_in_its_own_decks(tmp_path, ref_design):
                                                 f'lvs_deck = "decks/mine.lvs"\nlvs_sha256 = "{pin["lvs"]}"')
     (tmp_path / "t.toml").write_text(raw)
     d = replace(ref_design, tech=load_technology(tmp_path / "t.toml"))
+    victims = {}   # issue 44: links placed where KLayout's log and report go (the old kit wrote its log through one)
+    for name in ("drc/CHIP_2X2.drc.log", "drc/CHIP_2X2.lyrdb", "lvs/CHIP_2X2.lvs.log"):
+        victims[name] = tmp_path / f"victim_{Path(name).name}"
+        victims[name].write_text("keep")
+        (tmp_path / "out" / name).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / "out" / name).symlink_to(victims[name])
     r = layout_design(d, tmp_path / "out", pictures=False, drc=True, lvs=True)
+    for name, v in victims.items():   # replaced by the real file, never written through
+        assert v.read_text() == "keep" and not (tmp_path / "out" / name).is_symlink(), name
     assert r["drc"]["deck"].endswith("mine.drc") and set(r["drc"]["by_rule"]) == {"M1W"}
     assert not r["lvs"]["match"] and r["lvs"]["report"].endswith(".lvsdb")
     assert sorted(p.name for p in (tmp_path / "out" / "lvs").iterdir()) == [   # moved out of the private stage

@@ -135,7 +135,8 @@ def _signoff_places(design, out_dir: Path, drc: bool, lvs: bool, chip_drc: bool 
                     foundry_lvs: bool = False) -> dict:
     """Before anything is drawn or run: the decks the sign-off will run verified (pinned by sha256,
     exit 2 naming the key otherwise) and the output folders checked (a link, a file or a device
-    where ``out``, ``drc`` or ``lvs`` should be is refused, naming it; nothing made yet). Returns
+    where ``drc`` or ``lvs`` should be, a device or a dangling link as ``out``, is refused, naming
+    it; nothing made yet). Returns
     {folder: the names of the files the sign-off writes there}, for :func:`_make_places`."""
     from .signoff.decks import drc_deck, lvs_deck
     if drc:
@@ -154,7 +155,8 @@ def _signoff_places(design, out_dir: Path, drc: bool, lvs: bool, chip_drc: bool 
 
 
 def _make_places(places: dict, top: str) -> None:
-    """The checked folders made, the files' places checked (the top cell is known now)."""
+    """The checked folders made, the files' places checked (the top cell is known now: a folder,
+    device or pipe where the sign-off writes a file is refused before any deck runs)."""
     for i, (folder, names) in enumerate(places.items()):
         out_folder(folder, root=i == 0)
         for name in names:
