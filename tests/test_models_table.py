@@ -108,3 +108,22 @@ def test_models_json_keys(cli):
         r = data[sub]["at_reset"]
         assert r["v_bias_V"] == pytest.approx(2.0)
         assert r["cg_out_V_per_e"] < r["cg_pd_V_per_e"] < data[sub]["cg_V_per_e"] * 1.0001
+
+
+def test_run_command_prints_the_checked_figures(ref_design, pd_discharge, experiment, cli):
+    """``pixelkit run`` (the main job: models + simulation) as a command on the reference design: its
+    model table against SPICE's charge steps (C_jdep 0.3 %, full well with C(V) 0.1 %, as above) and
+    its simulation summary equal to the experiment that test_experiment checks against SPICE runs at
+    the reported currents and the analytic charge chain."""
+    from conftest import REF
+    code, out, err = cli("run", REF, "--json")
+    assert code == 0, err
+    r = json.loads(out)
+    v0, runs = pd_discharge
+    for w, (q, v) in runs.items():
+        c = STEP_E[w] * Q / (v0 - float(np.interp(STEP_E[w] * Q, q, v)))
+        assert r["models"][w]["c_jdep_F"] == pytest.approx(c, rel=0.003), w
+        assert r["models"][w]["fwc_cv_e"] * Q == pytest.approx(float(np.interp(-(v0 - ref_design.pixel.swing), -v, q)), rel=0.001), w
+    for w, key in (("primary", "i_mid_A"), ("secondary", "i_5pct_A")):
+        assert r["simulate"][w][key] == pytest.approx(experiment[w][key], rel=1e-9), w
+        assert r["simulate"][w]["swing_V"] == pytest.approx(experiment[w]["swing_V"], rel=1e-9), w
