@@ -42,6 +42,38 @@ def test_conversion_gain_model_vs_spice_within_2_percent_post_layout(views):
         assert abs(stale / spice[w] - 1) > 0.02, w
 
 
+def test_read_start_kick_on_fd_is_the_extracted_coupling_times_the_edges(views):
+    """Where the frame's read starts (EC closes again to hold the PD in reset, RS selects the row), the
+    floating FD jumps. Derivation: post-layout, the jump is the schematic's own (the devices'
+    charge, scaled by C_FD,store schematic / post-layout) plus the extracted wiring couplings times
+    the steps on their other ends, sum C(fd, n) dV_n / C_FD,store (n: EC, RS, the PD, the column line,
+    the follower's source; dV_n measured on those nodes in the same run, C_FD,store from
+    ``physics.fd.transfer``). Measured: primary +19.8 mV against +22.3 predicted (the wiring's part
+    77 mV of it), held to 15 % of the wiring's part, both arrays; the schematic itself drops
+    (-70.6 mV on the primary), so the check sees the extraction."""
+    from pixelkit.circuits.array import frame_timings
+    from pixelkit.circuits.testbench import dual_pixel_bench
+    from pixelkit.spice import simulate_many
+    sch, post = views
+    nets = [dual_pixel_bench(v, 1e-10, (3e-11,) * sch.secondary_per_pixel, with_afe=True,
+                             tm=frame_timings(v, v.experiment.t_window, 1), title=f"read_kick_{k}")
+            for k, v in (("sch", sch), ("post", post))]
+    r_sch, r_post = simulate_many(nets)
+    for w, sub, col, ctl in (("primary", "xp", "col_p", "_p"), ("secondary", "xs0", "col_s0", "_s")):
+        t_read = frame_timings(post, post.experiment.t_window, 1)[w].t_read
+        t0, t1 = t_read - 10e-9, t_read + 300e-9
+
+        def jump(r, node):
+            return float(r.at(f"v({node})", t1) - r.at(f"v({node})", t0))
+        c = {w_: fd.transfer(v, w, sf_gain(v), models_for(v))["c_fd_store_F"] for w_, v in (("sch", sch), ("post", post))}
+        cw = {frozenset((a, b)): x for a, b, x in post.post_layout.cells[f"pix5t_{w}"]}
+        ends = {"ec": "ec" + ctl, "rs": "rs" + ctl, "pd": f"x1.{sub}.pd", "col": col, "sfo": f"x1.{sub}.sfo"}
+        wiring = sum(cw.get(frozenset(("fd", n)), 0.0) * jump(r_post, node) for n, node in ends.items()) / c["post"]
+        want = jump(r_sch, f"x1.{sub}.fd") * c["sch"] / c["post"] + wiring
+        assert abs(wiring) > 0.01, w                                  # a kick the check can see
+        assert jump(r_post, f"x1.{sub}.fd") == pytest.approx(want, abs=0.15 * abs(wiring)), w
+
+
 def test_fd_wiring_enters_the_analytic_node(views):
     sch, post = views
     a = 0.8
@@ -167,8 +199,13 @@ def test_report_section_post_layout_vs_schematic(tmp_path):
         c_sch, c_post = rows[f"C_PD,node, {w} (fF)"][1:3]
         t_sch, t_post = rows[f"sized t_int, {w} (us) (analytic level)"][1:3]
         assert t_post / t_sch == pytest.approx(c_post / c_sch, rel=0.01, abs=0), w
-    assert all(isinstance(rows[f"AFE settling error at f_read = {k} kHz, {w} (mV)"][2], float)
-               for k, w in (("500", "primary"), ("1000", "secondary")))
+    # the AFE's settling error (each row against the same read with S1 / S2 four times longer, verify's
+    # figure) by value: a sampled level lies between where the column starts and where it settles, so
+    # the error is below the column's swing (~0.8 V); this design does not settle at its row times
+    # (issue 40: primary 163.9 mV schematic, 43.2 mV post-layout, measured), which the bound allows
+    for k, w in (("500", "primary"), ("1000", "secondary")):
+        got = rows[f"AFE settling error at f_read = {k} kHz, {w} (mV)"][1:3]
+        assert all(0 <= x < 800 for x in got), (w, got)
     # the 2 x 2 frame (array deck) moves dual pixel 0's secondaries in row 0 by the shift of the
     # dual-pixel bench read as the frame reads them (docstring)
     frame = next(t for t in s.tables if t.name == "post_layout_frame").rows
