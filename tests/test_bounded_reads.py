@@ -52,7 +52,19 @@ READERS = {
     "report_baseline": ("summary.json", lambda tmp, p: ["report", REF, "--baseline", tmp, "--out", tmp / "r"]),
     "regress_baseline": ("h.json", lambda tmp, p: ["regress", REF, "--baseline", p]),
     "family_design": ("h.toml", lambda tmp, p: ["simulate", p]),
+    # issue 44: the files this round's commands read (waves, signoff) and the design's [layout] gds
+    "design_layout_gds": ("h.gds", lambda tmp, p: ["models", _design_with_layout(tmp, p)]),
+    "waves_raw": ("h.raw", lambda tmp, p: ["waves", p]),
+    "signoff_gds": ("h.gds", lambda tmp, p: ["signoff", p, "--netlist", ROOT / "netlists" / "dual_pixel.cir"]),
+    "signoff_netlist": ("h.spice", lambda tmp, p: ["signoff", ROOT / "layouts" / "golden" / "dual_pixel_revA.gds",
+                                                   "--top", "DUALPIX_COL", "--netlist", p]),
 }
+
+
+def _design_with_layout(tmp, gds):
+    d = tmp / "d.toml"
+    d.write_text(REF.read_text() + f'\n[layout]\ngds = "{gds}"\n')
+    return d
 
 
 def _fifo(p):

@@ -139,17 +139,30 @@ def _rule_fields():
 
 
 def _spec_unit(path: str, meta: dict) -> dict:
-    """A spec limit is fuzzed in its figure's unit (the reference's first spec: a conversion gain)."""
+    """A spec limit is fuzzed in its figure's unit (the reference's first spec: a conversion gain), a
+    [close] knob's bound in its key's (the base knob below: pixel.sf_bias, a current)."""
     if path.startswith("spec.") and meta.get("kind") == "limit":
         from pixelkit.verify.figures import FIGURES
         return {**meta, "unit": FIGURES[path.split(".")[1]].unit}
+    if path.startswith("close.knobs.") and meta.get("kind") == "limit":
+        return {**meta, "unit": "nA"}
     return meta
+
+
+#: issue 44, point 7: [close] (issue 40) is fuzzed on a valid table, one knob, each field mutated in turn
+CLOSE_BASE = {"objective": "min power", "knobs": {"pixel.sf_bias": {"min": "600 nA", "max": "1.5 uA"}}}
 
 
 def _write_case(tmp: Path, k: int, where, path, meta, name) -> Path:
     value = CORPUS[name](meta)
     design = tomllib.loads(REF.read_text())
-    if where == "design":
+    if where == "design" and path.startswith("close."):
+        design["close"] = json.loads(json.dumps(CLOSE_BASE))
+        if path.startswith("close.knobs."):
+            _set(design["close"]["knobs"]["pixel.sf_bias"], path.rsplit(".", 1)[1], value)
+        else:
+            _set(design, path, value)
+    elif where == "design":
         _set(design, path, value)
     else:
         tech = _tech_raw()

@@ -121,7 +121,65 @@ INPUTS = {
     "verify --out": lambda tmp, v: ["verify", REF, "--out", f"{tmp}/v/{v}"],
     "layout --drc --out": lambda tmp, v: ["layout", ROOT / "designs" / "dual_pixel_gf180.toml", "--drc",
                                           "--out", f"{tmp}/lay/{v}"],
+    # issue 44, point 7: the options this round's commands added (signoff: issue 43; waves: 42; close: 40)
+    "signoff --top": lambda tmp, v: ["signoff", GOLDEN_GDS, "--netlist", _netlist(tmp), "--tech", "c35_thesis",
+                                     "--top", v],
+    "signoff --tech": lambda tmp, v: ["signoff", GOLDEN_GDS, "--netlist", _netlist(tmp), "--top", "DUALPIX_COL",
+                                      "--tech", v],
+    "signoff --skip": lambda tmp, v: ["signoff", GOLDEN_GDS, "--netlist", _netlist(tmp), "--top", "DUALPIX_COL",
+                                      "--tech", "c35_thesis", "--skip", v],
+    "signoff --out": lambda tmp, v: ["signoff", GOLDEN_GDS, "--netlist", _netlist(tmp), "--top", "DUALPIX_COL",
+                                     "--tech", "c35_thesis", "--out", f"{tmp}/so/{v}"],
+    "signoff --netlist": lambda tmp, v: ["signoff", GOLDEN_GDS, "--top", "DUALPIX_COL", "--tech", "c35_thesis",
+                                         "--netlist", f"{tmp}/{v}.spice"],
+    "waves --vectors": lambda tmp, v: ["waves", _raw(tmp), "--vectors", v],
+    "waves --out": lambda tmp, v: ["waves", _raw(tmp), "--out", f"{tmp}/{v}.html"],
+    "waves RAW": lambda tmp, v: ["waves", f"{tmp}/{v}.raw"],
+    "close --out": lambda tmp, v: ["close", _with_close(tmp), "--out", f"{tmp}/c/{v}.toml"],
+    **{f"close [close] {k}": (lambda k: lambda tmp, v: ["close", _with_close(tmp, k, v)])(k)
+       for k in ("objective", "margin", "tolerance", "max_iterations", "knobs.min", "knobs.max", "knobs.scale",
+                 "knobs.step")},
 }
+GOLDEN_GDS = ROOT / "layouts" / "golden" / "dual_pixel_revA.gds"
+
+
+def _netlist(tmp):
+    """The kit's netlist of the golden layout's DUALPIX_COL (what `layout` writes beside its GDS)."""
+    p = tmp / "net" / "DUALPIX_COL.spice"
+    if not p.exists():
+        from pixelkit.design import load_design
+        from pixelkit.layout.flow import write_netlists
+        write_netlists(load_design(REF), ["DUALPIX_COL"], p.parent, "DUALPIX_COL")
+    return p
+
+
+def _raw(tmp):
+    """A small ngspice raw file written by the kit (two vectors)."""
+    import numpy as np
+
+    from pixelkit.spice.result import Result
+    from pixelkit.spice.waveforms import write_waveforms
+    p = tmp / "w.raw"
+    if not p.exists():
+        t = np.linspace(0, 1e-6, 11)
+        write_waveforms(Result(t, {"v(a)": t * 1e6, "i(vdd)": -t}, {}), p)
+    return p
+
+
+def _with_close(tmp, key=None, value=None):
+    """The reference design with a [close] table (one knob), ``key`` of it set to ``value``."""
+    raw = tomllib.loads(REF.read_text())
+    knob = {"min": "600 nA", "max": "1.5 uA"}
+    close = {"objective": "min power", "knobs": {"pixel.sf_bias": knob}}
+    if key is not None:
+        if key.startswith("knobs."):
+            knob[key[len("knobs."):]] = value
+        else:
+            close[key] = value
+    raw["close"] = close
+    p = tmp / f"c{abs(hash((key, repr(value)))) % 10**8}.toml"
+    p.write_text(to_toml(raw))
+    return p
 FAMILIES = ("ratio_pixel.toml", "wdr_pixel.toml")
 
 
@@ -139,7 +197,10 @@ def _cases():
 def _run(argv, monkeypatch, capfd):
     import pixelkit.api
     import pixelkit.chip.frame
+    import pixelkit.close.run
+    import pixelkit.layout.anylayout
     import pixelkit.layout.library
+    import pixelkit.plots.interactive
     import pixelkit.mc.montecarlo
     import pixelkit.spice.executors
     import pixelkit.sweep.run
@@ -150,6 +211,9 @@ def _run(argv, monkeypatch, capfd):
     monkeypatch.setattr(pixelkit.chip.frame, "simulate_frame", _stub)
     monkeypatch.setattr(pixelkit.layout.library, "build_chip_cells", _stub)  # after the layout's options
     monkeypatch.setattr(pixelkit.api, "experiment", _stub)   # simulate: after its options (--waveforms)
+    monkeypatch.setattr(pixelkit.layout.anylayout, "_start_decks", _stub)   # signoff: after its inputs
+    monkeypatch.setattr(pixelkit.plots.interactive, "raw_page", _stub)      # waves: after its options
+    monkeypatch.setattr(pixelkit.close.run, "close_design", _stub)          # close: after [close] and --out
     common.WARNINGS.clear()
     try:
         entry([str(a) for a in argv])

@@ -7,6 +7,8 @@ from pathlib import Path
 
 import click
 
+from .types import FilePath
+
 from ..errors import ConfigError
 from .common import emit, json_opt, main
 from .layout import foundry_lines
@@ -76,18 +78,18 @@ def _text(r: dict) -> str:
 
 
 @main.command("signoff")
-@click.argument("gds", type=click.Path(dir_okay=False))
-@click.option("--netlist", required=True, type=click.Path(dir_okay=False),
+@click.argument("gds", type=FilePath(dir_okay=False))
+@click.option("--netlist", required=True, type=FilePath(dir_okay=False),
               help="the SPICE netlist of the layout's top cell (a .subckt per cell LVS compares)")
 @click.option("--top", default=None, help="the cell to sign off (default: the layout's one top cell)")
 @click.option("--tech", "tech_name", default=None, help="a built-in technology name or a technology file "
               "(default: the --with-design's, else gf180mcu_3v3)")
-@click.option("--with-design", "design_path", default=None, type=click.Path(dir_okay=False),
+@click.option("--with-design", "design_path", default=None, type=FilePath(dir_okay=False),
               help="a design whose cells the GDS holds (the kit's cell names): also its post-layout view and its "
                    "light map through the readout (SPICE) from this layout")
 @click.option("--chip", is_flag=True, help="the top cell is a whole die: also the foundry's density and antenna decks")
 @click.option("--skip", multiple=True, callback=_skip, help=f"checks not to run, comma-separated ({', '.join(ALL)})")
-@click.option("--out", type=click.Path(file_okay=False), default=None,
+@click.option("--out", type=FilePath(file_okay=False), default=None,
               help="output folder (default: reports/signoff/<gds name>)")
 @json_opt
 def signoff_cmd(gds, netlist, top, tech_name, design_path, chip, skip, out, as_json):
@@ -107,7 +109,7 @@ def signoff_cmd(gds, netlist, top, tech_name, design_path, chip, skip, out, as_j
             raise ConfigError("command line", "--tech", tech_name, "no --tech with --with-design (its technology is used)")
     else:
         tech = load_technology(tech_name or "gf180mcu_3v3", relative_to=Path.cwd(), source="--tech")
-    folder = check_output(Path(out) if out else reports_root() / "signoff" / Path(gds).stem)
+    folder = check_output(Path(out) if out else reports_root() / "signoff" / Path(gds).stem, folder=True)
     r = signoff(gds, netlist, tech, folder, top, skip, chip, design)
     emit(r, as_json, _text)
     if r["exit_status"]:

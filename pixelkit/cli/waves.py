@@ -5,12 +5,14 @@ from pathlib import Path
 
 import click
 
+from .types import FilePath
+
 from .common import emit, json_opt, main
 
 
 @main.command("waves")
-@click.argument("raw", type=click.Path(dir_okay=False))
-@click.option("--out", type=click.Path(dir_okay=False), default=None,
+@click.argument("raw", type=FilePath(dir_okay=False))
+@click.option("--out", type=FilePath(dir_okay=False), default=None,
               help="the HTML file to write (default: FILE.html beside the raw file)")
 @click.option("--vectors", default=None, metavar="V,V,...",
               help="only these vectors, as the raw file names them (v(col_p),i(vdd)); default: all")

@@ -28,7 +28,7 @@ import time
 from pathlib import Path
 
 from ..errors import PixelkitError
-from ..fileio import json_default, write_atomic
+from ..fileio import json_default, out_folder, write_atomic
 
 CHECKS = ("drc", "lvs", "foundry-lvs", "pex", "lightmap")
 CHIP_CHECKS = ("density", "antenna")
@@ -54,7 +54,7 @@ def signoff(gds, netlist, tech, out: Path, top: str | None = None, skip: tuple =
                                 + ", ".join(nl.circuits))
         view = nl.top_view(top)
         _check_devices(lay, view, tech, nl)
-        out.mkdir(parents=True, exist_ok=True)
+        out_folder(out, root=True)   # a device, a file or a dangling link there: refused (fileio)
         result = {"gds": str(gds), "netlist": str(netlist), "top": top, "technology": tech.name, "checks": asked,
                   "cells": lay.cells}
         jobs = _start_decks(lay.path, top, tech, out, asked, spice_text(view, f"{Path(netlist).name}, {top}"))

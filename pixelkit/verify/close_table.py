@@ -23,7 +23,7 @@ measured, so moving them moves the measurement, not the chip); a key no spec can
 (``[scene]``, ``[optics]``, ``[sizing]``: ``pixelkit verify`` does not read them); a bound
 that is missing, not a quantity of the key's unit, infinite, outside what the design file
 accepts for that key, or a ``min`` not below its ``max``; a ``log`` scale with a bound <= 0;
-a ``step`` that is not positive or not below the span. A knob no spec depends on through the
+a ``step`` that is not below the span or below 1e-9 of it. A knob no spec depends on through the
 simulations (every spec's figure unchanged when it moves) is refused by ``pixelkit close`` at
 its first sensitivity step, with the same exit status (``close.model``).
 """
@@ -107,7 +107,7 @@ class CloseSettings:
                                            "a spec can name (at the nominal condition) or one of the knobs")
     margin: float = num(0.0, ge=0.0, le=0.5, doc="margin every spec must keep at every condition, in % of its "
                                                  "limit (\"2 %\"): a guard band against the simulator's scatter")
-    tolerance: float = num(0.01, gt=0.0, le=0.2, doc="the search ends when the trust region is below this (of "
+    tolerance: float = num(0.01, gt=0.0, le=0.2, plausible=(1e-6, 0.2), doc="the search ends when the trust region is below this (of "
                                                      "a lin knob's span, of a log knob's value)")
     max_iterations: int = integer(15, ge=1, le=200, doc="most candidates re-verified before close gives up")
 
@@ -224,8 +224,9 @@ def _knob(k: Knob, design, source: str) -> Knob:
     grid = None
     if k.step is not None:
         grid = _bound(k.step, dim, f"{path}.step", source, None)
-        if not 0 < grid < hi - lo:
-            raise ConfigError(source, f"{path}.step", k.step, "a step > 0 and below the span max - min")
+        if not (hi - lo) * 1e-9 <= grid < hi - lo:   # issue 44: "1e-300 nA" was taken (no grid at all)
+            raise ConfigError(source, f"{path}.step", k.step, "a step below the span max - min and at least "
+                              "1e-9 of it (a grid of at most a billion points)")
     return dataclasses.replace(k, lo=lo, hi=hi, grid=grid, dim=dim, unit_required=bool(meta.get("unit_required")))
 
 
