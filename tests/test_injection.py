@@ -106,6 +106,15 @@ def _design_variants(tmp_path, sep, marker):
                                                     _toml_str(f"lib sm141064.ngspice {payload(sep, marker)}"))
     yield "tech.corner name", None, tech.replace("tt = [", f"{p} = [").replace('default_corner = "tt"',
                                                                             f"default_corner = {p}")
+    # issue 44, point 7: the string keys this round added ([close] of issue 40, pixel.gate_drive, the decks)
+    knob = '"pixel.sf_bias" = ["600 nA", "1.5 uA"]'
+    yield "close.objective", ref + f"\n[close]\nobjective = {p}\n[close.knobs]\n{knob}\n", None
+    yield "close.knobs key", ref + f'\n[close]\nobjective = "min power"\n[close.knobs]\n{p} = ["1 V", "2 V"]\n', None
+    yield "close.knobs choices", ref + f'\n[close.knobs]\n"pixel.gate_drive" = {{ choices = ["supply", {p}] }}\n', None
+    yield "pixel.gate_drive", ref.replace("[pixel]\n", f"[pixel]\ngate_drive = {p}\n"), None
+    for key in ("drc_deck", "drc_sha256", "lvs_deck", "lvs_sha256", "pv_decks"):
+        signoff = re.sub(rf"^{key} = .*\n", "", tech, flags=re.M)   # the shipped value, if any, replaced
+        yield f"tech.signoff.{key}", None, signoff.replace("[signoff]\n", f"[signoff]\n{key} = {p}\n")
 
 
 @pytest.mark.parametrize("sep", SEPARATORS, ids=[f"U+{ord(s[-1]):04X}" for s in SEPARATORS])
