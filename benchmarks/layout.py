@@ -1,5 +1,8 @@
 """Layout sign-off time: the dual pixel with its column circuits through the foundry's DRC deck and
-the kit's LVS (target: DRC + LVS < 30 s on 2 cores).
+the kit's LVS (target: DRC + LVS < 30 s on 2 cores); ``pixelkit signoff`` (every check: DRC, the
+foundry's LVS where its deck is installed, the kit's LVS, extraction, light map) on the same cell
+against that (target: within 1.5 x of generation + DRC + LVS, what ``layout --drc --lvs`` does for the
+cell) and on the 2 x 2 chip with its AFEs (target: 60 s).
 
 Measured in the same run, as the baseline: the same deck on an empty cell (its fixed cost: it
 executes every one of its rules whatever the layout
@@ -55,6 +58,38 @@ def main(design_file: Path) -> None:
     print(f"  DRC + LVS                              {total:6.2f} s  (target < {TARGET_S:g} s: "
           f"{'met' if total < TARGET_S else 'NOT met'})")
     print(f"  ratio DRC / empty-cell DRC             {drc.seconds / base.seconds:6.2f}")
+    signoff_timing(d, work, gen + drc.seconds + lvs.seconds)
+
+
+def _cpu() -> float:
+    import resource
+    r = resource.getrusage(resource.RUSAGE_SELF)
+    return r.ru_utime + r.ru_stime + child_cpu_s()
+
+
+def signoff_timing(d, work: Path, baseline: float) -> None:
+    """``pixelkit signoff`` (the API the command calls) on DUALPIX_COL, against ``baseline`` (generation +
+    DRC + LVS of the same cell, measured in this run), and on the 2 x 2 chip with its AFEs."""
+    from pixelkit.layout.anylayout import signoff
+    from pixelkit.layout.flow import layout_design
+    from pixelkit.layout.signoff.foundry import available
+    r = layout_design(d, work / "drawn", 2, 2, pictures=False, afe=True)
+    gds, spice = Path(r["gds"]), {k: Path(v) for k, v in r["spice"].items()}
+    foundry = available(d.tech)
+    print(f"  signoff: the fd_pv LVS deck {'installed (run)' if foundry is None else 'NOT installed (not run)'}")
+    for top, target in ((SIGNOFF_TOP, None), (r["top"], 60.0)):
+        c0, t0 = _cpu(), time.perf_counter()
+        res = signoff(gds, spice[top], d.tech, work / f"so_{top}", top)
+        wall, cpu = time.perf_counter() - t0, _cpu() - c0
+        what = "; ".join(f"{k} {'ok' if res[k].get('clean', res[k].get('match', True)) else 'FAIL'}"
+                         if res[k].get("run", True) else f"{k} not run" for k in
+                         ("drc", "lvs", "foundry_lvs", "pex", "lightmap") if k in res)
+        print(f"  signoff {top:14s}                 {wall:6.2f} s wall, {cpu:6.2f} s CPU ({what})")
+        if target is None:
+            print(f"  ratio signoff / layout --drc --lvs on {top}: {wall / baseline:5.2f} (target <= 1.5: "
+                  f"{'met' if wall / baseline <= 1.5 else 'NOT met'})")
+        else:
+            print(f"  signoff of the chip with AFEs: target < {target:g} s: {'met' if wall < target else 'NOT met'}")
 
 
 if __name__ == "__main__":

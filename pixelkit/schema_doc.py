@@ -243,8 +243,11 @@ report's sign-off section (docs/layout-signoff.md, docs/security.md).
 ## `[stack]`, `[stack.layers]`
 
 The process cross-section the extraction computes parasitics from (`pixelkit/tech/stack.py`):
-`source` (where the numbers come from, quoted in the reports), `dielectric_k` (relative
-permittivity between the conductors), `halo` (the farthest lateral coupling counted). Each
+`source` (where the numbers come from, quoted in the reports), `dielectric_k` (one relative
+permittivity everywhere) or, as `[[stack.dielectrics]]` tables, `[stack]`: `dielectrics` (the layered
+dielectrics, bottom up: each `name`,
+`top` above the substrate and `k`, the last without `top`; the 2.5D model takes each field across the
+layers it crosses, FastCap2 solves their interfaces), `halo` (the farthest lateral coupling counted). Each
 conductor of `[stack.layers]`, by its `[layers]` name: `z` (its bottom above the substrate),
 `thickness`, `sheet` (Ohm per square), `via_below` (one cut to the conductor below), and
 `device_below = true` on a capacitor's top plate. Without `[stack]` a technology has no

@@ -279,19 +279,6 @@ def test_plane_index_answers_as_klayouts_booleans(dualpix):
             assert {n for n, reg in nets.items() if not (reg & r).is_empty()} <= kept
 
 
-def test_the_fastcap_check_catches_a_wrong_extraction(gf, dualpix):
-    """The same comparison fails when the kit's stack is wrong (the dielectric taken as 2.0, the
-    air-gap figure, while FastCap keeps 4.0): the check can fail for the right reason."""
-    geo = clip(dualpix, _window(dualpix, "s0.fd"))
-    good = gf.tech.stack
-    bad = replace(good, dielectric_k=2.0)
-    kit = capacitances(geo, bad).total("s0.fd")
-    truth = solve(geo, good, mesh=0.4e-6)
-    fc = sum(v for (a, b), v in truth.items() if a != b and "s0.fd" in (a, b)
-             and (b if a == "s0.fd" else a).split("#")[0] != "s0.fd")
-    assert abs(kit / fc - 1) > 0.15
-
-
 def test_lateral_formula_against_fastcap_on_a_pair():
     """Two metal1 lines 0.23 um wide, 0.5 um apart, 10 um long over the substrate: the coupling
     formula against FastCap2 (3D, ends included) within 10 %."""
@@ -325,7 +312,11 @@ def test_stack_from_the_technology_file(gf):
     st = require_stack(gf.tech)
     m1 = st.conductor("metal1")
     assert (m1.z, m1.thickness, m1.sheet) == pytest.approx((1.23e-6, 0.55e-6, 0.09), rel=1e-9, abs=0)
-    assert "klayout-pex" in st.source and st.dielectric_k == 4.0
+    assert "klayout-pex" in st.source and "Interconnect Specification" in st.source
+    assert [(d.name, d.k) for d in st.dielectrics] == [("sti", 4.0), ("nitride_liner", 7.0),
+                                                        ("ild_imd_oxide_passivation", 4.0), ("passivation_nitride", 7.0),
+                                                        ("air", 1.0)]
+    assert st.dielectrics[2].top == pytest.approx(8.5225e-6, rel=1e-9, abs=0) and st.dielectric_k == 4.0
     assert [c.name for c in st.conductors] == ["poly", "metal1", "metal2", "metal3", "metal4", "mim_top", "metal5"]
     assert st.conductor("mim_top").device_below and not m1.device_below
 
@@ -349,6 +340,19 @@ def test_technology_without_a_stack_is_named(ref_design):
     ({"source": "x", "dielectric_k": 4.0, "halo": "8 um",
       "layers": {"metal1": {"z": "1 um", "thickness": "1 F", "sheet": "1 Ohm", "via_below": "1 Ohm"}}},
      "stack.layers.metal1.thickness"),
+    ({"source": "x", "dielectric_k": 4.0, "halo": "8 um", "dielectrics": [{"name": "a", "k": 4.0}],
+      "layers": {"metal1": {"z": "1 um", "thickness": "1 um", "sheet": "1 Ohm", "via_below": "1 Ohm"}}},
+     "stack.dielectric_k"),
+    ({"source": "x", "halo": "8 um", "dielectrics": [{"name": "a", "top": "1 um", "k": 4.0}, {"name": "b", "top": "0.5 um",
+                                                                                          "k": 4.0}, {"name": "c", "k": 1}],
+      "layers": {"metal1": {"z": "1 um", "thickness": "1 um", "sheet": "1 Ohm", "via_below": "1 Ohm"}}},
+     "stack.dielectrics[1].top"),
+    ({"source": "x", "halo": "8 um", "dielectrics": [{"name": "a", "top": "1 um", "k": 0.5}, {"name": "c", "k": 1}],
+      "layers": {"metal1": {"z": "1 um", "thickness": "1 um", "sheet": "1 Ohm", "via_below": "1 Ohm"}}},
+     "stack.dielectrics[0].k"),
+    ({"source": "x", "halo": "8 um", "dielectrics": [{"name": "a", "top": "1 um", "k": 4.0}],
+      "layers": {"metal1": {"z": "1 um", "thickness": "1 um", "sheet": "1 Ohm", "via_below": "1 Ohm"}}},
+     "stack.dielectrics[0]"),
 ])
 def test_bad_stack_names_the_field(raw, field):
     with pytest.raises(ConfigError) as e:

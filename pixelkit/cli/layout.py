@@ -34,6 +34,10 @@ def _render(x: dict) -> str:
         lines.append(f"LVS ({v['top']}, kit extraction, {v['seconds']:g} s): "
                      + ("match" if v["match"] else f"{len(v['mismatches'])} mismatch(es)"))
         lines += [f"  {m}" for m in v["mismatches"]]
+    if "fill" in x:
+        f = x["fill"]
+        lines.append(f"fill ({f['cell']}): " + ", ".join(f"{k} {f['before'][k] * 100:.1f} -> {f['after'][k] * 100:.1f} %"
+                                                        for k in f["before"]))
     lines += foundry_lines(x)
     return "\n".join(lines)
 
@@ -74,6 +78,8 @@ def foundry_lines(x: dict) -> list:
               "violation, 5 when the deck is not installed")
 @click.option("--antenna", is_flag=True, help="the foundry's antenna deck on the chip (fd_pv): exit 1 on a "
               "violation, 5 when the deck is not installed")
+@click.option("--fill", is_flag=True, help="dummy fill on every layer under the foundry's density figure, kept "
+              "off the light path (the chip then passes --density)")
 @click.option("--afe", is_flag=True, help="draw every column's AFE (switched capacitors, MIM capacitors, "
               "op-amp) under its column circuit")
 @click.option("--shield", type=click.Choice(["full", "pixels", "none"]), default="full", show_default=True,
@@ -82,7 +88,7 @@ def foundry_lines(x: dict) -> list:
 @click.option("--pictures/--no-pictures", default=True, show_default=True, help="2D and 3D pictures")
 @click.option("--golden", is_flag=True, help="(re)write layouts/golden/<design>.gds, the geometry baseline")
 @json_opt
-def layout(design, out, rows, cols, drc, lvs, foundry_lvs, density, antenna, afe, shield, pictures, golden, as_json):
+def layout(design, out, rows, cols, drc, lvs, foundry_lvs, density, antenna, fill, afe, shield, pictures, golden, as_json):
     """Write the GDS (an R x C array with its column circuits, --afe its AFEs, the light shield) and
     each cell's SPICE netlist, extract PD area / perimeter / photoactive area and the junction
     the shield leaves open per block, draw 2D and 3D views; --drc / --lvs sign the array off."""
@@ -101,7 +107,8 @@ def layout(design, out, rows, cols, drc, lvs, foundry_lvs, density, antenna, afe
             emit({"gds": str(path)}, as_json, lambda x: f"wrote {x['gds']}")
             return
         r = layout_design(d, output_path(out, d, "layout"), rows, cols, pictures=pictures, drc=drc, lvs=lvs,
-                          afe=afe, shield=shield, foundry_lvs=foundry_lvs, density=density, antenna=antenna)
+                          afe=afe, shield=shield, foundry_lvs=foundry_lvs, density=density, antenna=antenna,
+                          fill=fill)
     except RuleError as exc:
         raise as_config_error(d, exc) from None
     emit(r, as_json, _render)

@@ -62,8 +62,9 @@ def signoff(gds, netlist, tech, out: Path, top: str | None = None, skip: tuple =
             if "lvs" in asked or "pex" in asked:
                 from .signoff.lvs import compare_view
                 lvs = compare_view(lay.path, top, tech, view, tmp)
-                result["lvs"] = {**lvs.as_dict(), "report": str(write_atomic(out / f"{top}.lvsdb",
-                                                                             Path(lvs.report).read_bytes()))}
+                result["lvs"] = lvs.as_dict()
+                if lvs.report:
+                    result["lvs"]["report"] = str(write_atomic(out / f"{top}.lvsdb", Path(lvs.report).read_bytes()))
             if "pex" in asked or "lightmap" in asked:
                 result.update(_extraction(lay.path, top, tech, view, nl, out, result.get("lvs"), asked))
             if design is not None:

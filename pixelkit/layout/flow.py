@@ -47,7 +47,7 @@ def write_netlists(design, cells, folder: Path, top: str = SIGNOFF_TOP) -> dict:
 def layout_design(design, out_dir: Path = Path("layouts"), rows: int = 2, cols: int = 2,
                   pictures: bool = True, drc: bool = False, lvs: bool = False, afe: bool = False,
                   shield: str = "full", foundry_lvs: bool = False, density: bool = False,
-                  antenna: bool = False) -> dict:
+                  antenna: bool = False, fill: bool = False) -> dict:
     """Every cell of an R x C chip (its readout with ``afe``; ``shield`` full / pixels / none) in
     one GDS, the netlists beside it, extraction, the shield's exposure per block, pictures and,
     on request, the sign-off of the chip cell."""
@@ -61,6 +61,10 @@ def layout_design(design, out_dir: Path = Path("layouts"), rows: int = 2, cols: 
     _make_places(places, top)
     lib = to_library(design, cells)
     gds = write_gds(lib, out_dir / f"{design.name}.gds")
+    filled = None
+    if fill:                                   # dummy fill for the density rules (layout/fill.py)
+        from .fill import fill as add_fill
+        filled = add_fill(gds, top, design.tech)
     spice = write_netlists(design, cells, out_dir, top)
     ex = extract(gds, design.tech)
     chip = cells[top]
@@ -68,6 +72,7 @@ def layout_design(design, out_dir: Path = Path("layouts"), rows: int = 2, cols: 
     n_pix = rows * cols
     openings = n_pix * (_opening(design.primary) + design.secondary_per_pixel * _opening(design.secondary))
     result = {"gds": str(gds), **ex, "spice": spice, "top": top, "rows": rows, "cols": cols, "afe": afe,
+              **({"fill": filled} if filled else {}),
               "c_a": ex["primary"]["pd_area_m2"] / ex["secondary"]["pd_area_m2"],
               "cells": [c.name for c in lib.cells],
               "size_um": [chip.ports["width"] / 1000, chip.ports["height"] / 1000],

@@ -4,8 +4,12 @@
 
     [stack]
     source = "..."                      # where the numbers come from (quoted in the docs and reports)
-    dielectric_k = 4.0                  # relative permittivity between the conductors
+    dielectric_k = 4.0                  # one relative permittivity everywhere, or the layered dielectrics:
     halo = "8 um"                       # farthest lateral coupling counted
+    [[stack.dielectrics]]               # bottom up: each layer's top above the substrate surface and its k;
+    name = "sti"                        # the last one has no top (it reaches up without end)
+    top = "0.32 um"
+    k = 4.0
     [stack.layers]                      # conductors above the substrate, by the layer names of [layers]
     poly = { z = "0.32 um", thickness = "0.2 um", sheet = "7.3 Ohm", via_below = "5.9 Ohm" }
     metal1 = { z = "1.23 um", thickness = "0.55 um", sheet = "0.09 Ohm", via_below = "6.3 Ohm" }
@@ -16,6 +20,11 @@ true`` marks a capacitor's top plate (the MIM's), whose coupling to the conducto
 capacitor itself (a device of the netlist), not wiring. Diffusions
 and wells are conductors at the substrate surface (z = 0). A technology without ``[stack]``
 has no post-layout view: :func:`require_stack` names what is missing.
+
+With ``[[stack.dielectrics]]`` the permittivity depends on where a field runs (``Stack.eps_gap`` for a
+field across heights z0 .. z1, the layers in series; ``eps_band`` along a band, in parallel;
+``layout.pex.topface.eps_fringe`` an edge's fringe, its top face's field line by line),
+and FastCap2 solves the same layers with their interfaces (``layout/pex/fastcap.py``).
 """
 from __future__ import annotations
 
@@ -42,15 +51,52 @@ class Conductor:
 
 
 @dataclass(frozen=True)
+class Dielectric:
+    name: str
+    top: float          # its top above the substrate surface (m); inf for the last
+    k: float
+
+
+@dataclass(frozen=True)
 class Stack:
     source: str
     dielectric_k: float
     halo: float
     conductors: tuple   # Conductor, bottom to top
+    dielectrics: tuple = ()   # Dielectric, bottom to top; () : dielectric_k everywhere
 
     @property
     def eps(self) -> float:
+        """The permittivity of a uniform stack (``dielectric_k``); a layered one's at metal level."""
         return EPS0 * self.dielectric_k
+
+    def _layers(self):
+        if not self.dielectrics:
+            return [(0.0, float("inf"), self.dielectric_k)]
+        out, z0 = [], 0.0
+        for d in self.dielectrics:
+            out.append((z0, d.top, d.k))
+            z0 = d.top
+        return out
+
+    def eps_gap(self, z0: float, z1: float) -> float:
+        """Effective permittivity of a field across heights z0 .. z1 (the layers in series)."""
+        lo, hi = min(z0, z1), max(z0, z1)
+        if hi <= lo:
+            return EPS0 * self.k_at(lo)
+        inv = sum((min(b, hi) - max(a, lo)) / k for a, b, k in self._layers() if min(b, hi) > max(a, lo))
+        return EPS0 * (hi - lo) / inv
+
+    def eps_band(self, z0: float, z1: float) -> float:
+        """Effective permittivity of a field along a band of heights z0 .. z1 (the layers in parallel)."""
+        lo, hi = min(z0, z1), max(z0, z1)
+        if hi <= lo:
+            return EPS0 * self.k_at(lo)
+        return EPS0 * sum((min(b, hi) - max(a, lo)) * k for a, b, k in self._layers()
+                          if min(b, hi) > max(a, lo)) / (hi - lo)
+
+    def k_at(self, z: float) -> float:
+        return next(k for a, b, k in self._layers() if a <= z < b or b == float("inf"))
 
     def conductor(self, name: str) -> Conductor:
         return next(c for c in self.conductors if c.name == name)
@@ -69,15 +115,19 @@ def parse_stack(raw, source: str, layer_names) -> Stack | None:
         return None
     if not isinstance(raw, dict):
         raise ConfigError(source, "stack", raw, "a table (source, dielectric_k, halo, [stack.layers])")
-    extra = set(raw) - {"source", "dielectric_k", "halo", "layers"}
+    extra = set(raw) - {"source", "dielectric_k", "dielectrics", "halo", "layers"}
     if extra:
         bad = sorted(extra)[0]
-        raise ConfigError(source, f"stack.{bad}", raw[bad], "one of source, dielectric_k, halo, layers")
+        raise ConfigError(source, f"stack.{bad}", raw[bad], "one of source, dielectric_k, dielectrics, halo, layers")
     src = raw.get("source", MISSING)
     if not isinstance(src, str) or not src.strip():
         raise ConfigError(source, "stack.source", src, "where the stack's numbers come from (a citation)")
-    k = quantity(raw.get("dielectric_k", MISSING), "1", "stack.dielectric_k", source)
-    if not 1.0 <= k <= 20.0:
+    dielectrics = _dielectrics(raw.get("dielectrics"), source)
+    if dielectrics and "dielectric_k" in raw:
+        raise ConfigError(source, "stack.dielectric_k", raw["dielectric_k"], "no dielectric_k beside [[stack.dielectrics]] "
+                          "(one permittivity everywhere, or the layers)")
+    k = 0.0 if dielectrics else quantity(raw.get("dielectric_k", MISSING), "1", "stack.dielectric_k", source)
+    if not dielectrics and not 1.0 <= k <= 20.0:
         raise ConfigError(source, "stack.dielectric_k", raw.get("dielectric_k"), "a relative permittivity 1 - 20")
     halo = quantity(raw.get("halo", MISSING), "m", "stack.halo", source)
     if not 0 < halo <= 100e-6:
@@ -106,7 +156,37 @@ def parse_stack(raw, source: str, layer_names) -> Stack | None:
         if b.z < a.top:
             raise ConfigError(source, f"stack.layers.{b.name}.z", f"{b.z * 1e6:g} um",
                               f"a height above the top of {a.name} ({a.top * 1e6:g} um): conductors do not overlap")
-    return Stack(src.strip(), k, halo, tuple(out))
+    if dielectrics:     # the permittivity at metal level stands for the stack's in code that takes one
+        k = next((d.k for d in dielectrics if d.top > out[0].top), dielectrics[-1].k)
+    return Stack(src.strip(), k, halo, tuple(out), dielectrics)
+
+
+def _dielectrics(raw, source: str) -> tuple:
+    """``[[stack.dielectrics]]``: bottom up, each { name, top, k }, the last without a top."""
+    if raw is None:
+        return ()
+    if not isinstance(raw, list) or not raw or not all(isinstance(d, dict) for d in raw):
+        raise ConfigError(source, "stack.dielectrics", raw, "[[stack.dielectrics]] tables { name, top, k }, bottom up")
+    out, below = [], 0.0
+    for i, d in enumerate(raw):
+        where = f"stack.dielectrics[{i}]"
+        last = i == len(raw) - 1
+        want = {"name", "k"} | (set() if last else {"top"})
+        if set(d) != want:
+            raise ConfigError(source, where, d, "{ name, top, k }" + (" (the last without top: it reaches up without "
+                                                                      "end)" if last else ""))
+        if not isinstance(d["name"], str) or not d["name"]:
+            raise ConfigError(source, f"{where}.name", d["name"], "a name")
+        kk = quantity(d["k"], "1", f"{where}.k", source)
+        if not 1.0 <= kk <= 20.0:
+            raise ConfigError(source, f"{where}.k", d["k"], "a relative permittivity 1 - 20")
+        top = float("inf") if last else quantity(d["top"], "m", f"{where}.top", source)
+        if not (top > below and top <= 1e-4 or last):
+            raise ConfigError(source, f"{where}.top", d.get("top"), f"a height above the layer below ({below * 1e6:g} um), "
+                              "at most 100 um")
+        out.append(Dielectric(d["name"], top, kk))
+        below = top
+    return tuple(out)
 
 
 def require_stack(tech, what: str = "--post-layout") -> Stack:

@@ -55,7 +55,7 @@ from .cornerfield import corner_couplings
 from .fringe import fringe, landing
 from .nets import GROUND
 from .plane import Plane
-from .topface import covered_top
+from .topface import covered_top, eps_fringe
 from .wedge import wedge_couplings
 
 SHIELD_K = 0.7     # fringe kept beside a neighbour: S / (S + SHIELD_K h)
@@ -132,7 +132,8 @@ def _under_parts(region, below, z, device=False):
 
 
 def _down(cpl, net, pieces, eps, t, per_area, weight, strips=None, areas=None):
-    """The downward fringe of a part of a band (``per_area``: edge length per band area) to what lies under
+    """The downward fringe of a part of a band (``per_area``: edge length per band area; ``eps(h)`` its
+    permittivity down to a plane h below) to what lies under
     it, ``pieces`` (``_under_parts`` of that part). ``strips`` ([(Region, x0, x1)]: the band by distance from
     the edge, ``_strips``) with ``areas`` ({(piece, strip): area}, ``_areas_by_strip``): each piece's share
     is the flux an edge over a plane at the piece's gap sends to the piece's distance (``fringe.landing``)
@@ -149,7 +150,7 @@ def _down(cpl, net, pieces, eps, t, per_area, weight, strips=None, areas=None):
     total = sum(p[1] for p in parts)
     conductance = sum(p[3] for p in parts)
     for m, a, h, w in parts:
-        cpl.add(net, m, fringe(eps, t, h) * per_area * total * w / conductance * weight(h))
+        cpl.add(net, m, fringe(eps(h), t, h) * per_area * total * w / conductance * weight(h))
 
 
 def _areas_by_strip(groups, strips) -> list:
@@ -171,13 +172,20 @@ def _areas_by_strip(groups, strips) -> list:
     return out
 
 
-def _fringe_band(cpl, net, band, below, above, eps, t, z, edge_len, band_area, device=False, strips=None):
+def _fringe_band(cpl, net, band, below, above, stack, t, z, edge_len, band_area, device=False, strips=None):
     """Share the fringe of ``edge_len`` (m) of a shape by what lies under and over ``band`` (the strip
     beside its edges, by area). Where a conductor of another net lies over the strip (gap h_u), the
     sidewall's field splits between the two planes: the downward fringe keeps h_u / (h_u + h_d)
-    and the upward one, ``fringe(t, h_u)``, h_d / (h_u + h_d)."""
+    and the upward one, ``fringe(t, h_u)``, h_d / (h_u + h_d). The permittivity of each: the stack's
+    along the fringe's path (``topface.eps_fringe`` down to a plane h below; ``Stack.eps_gap`` up to one above)."""
     if band_area <= 0 or edge_len <= 0:
         return
+
+    def eps(h):
+        return eps_fringe(stack, z, t, h)
+
+    def eps_up(hu):
+        return stack.eps_gap(z + t, z + t + hu)
     per_area = edge_len / band_area
     rest = band
     top_z = z + t
@@ -194,7 +202,7 @@ def _fringe_band(cpl, net, band, below, above, eps, t, z, edge_len, band_area, d
             if not a:
                 continue
             h_d = z   # the substrate (the nearest plane below decides each part's h_d in _down)
-            cpl.add(net, m, fringe(eps, t, hu) * per_area * a * h_d / (hu + h_d))
+            cpl.add(net, m, fringe(eps_up(hu), t, hu) * per_area * a * h_d / (hu + h_d))
             jobs.append((part, lambda hd, hu=hu: hu / (hu + hd)))
         rest = rest - union
     jobs.append((rest, lambda hd: 1.0))
@@ -208,7 +216,7 @@ def _fringe_band(cpl, net, band, below, above, eps, t, z, edge_len, band_area, d
 def capacitances(geo, stack) -> Couplings:
     """Every wiring capacitance of ``geo`` (a ``nets.NetGeometry``) with ``stack``'s numbers."""
     cpl = Couplings()
-    eps, dbu = stack.eps, geo.dbu
+    dbu = geo.dbu
     halo = int(round(stack.halo / dbu))
     spent = defaultdict(float)          # (layer, net) -> fringe length (m) the corner field took
     for i, cond in enumerate(stack.conductors):
@@ -221,7 +229,8 @@ def capacitances(geo, stack) -> Couplings:
         # area, to the nearest conductor below or the substrate
         for net, reg in nets.items():
             for m, a, h in _under(reg, below, z, cond.device_below):
-                cpl.add(net, m, eps * a * dbu * dbu / h)
+                cpl.add(net, m, stack.eps_gap(z - h, z) * a * dbu * dbu / h)
+        eps = stack.eps_band(z, z + t)     # the lateral field: along the layer's band
         # lateral: facing edges of different nets, nearest only (a shielded space check of the layer)
         polys, labels = [], []
         for k, (_net, reg) in enumerate(sorted(nets.items())):
@@ -255,12 +264,33 @@ def capacitances(geo, stack) -> Couplings:
             perim = reg.perimeter() * dbu
             taken = 0.0
             for m, lost in covered_top(net, reg, above, z, t, dbu):
-                cpl.add(net, m, fringe(eps, t, h) * lost)
+                cpl.add(net, m, fringe(eps_fringe(stack, z, t, h), t, h) * lost)
                 taken += lost
             length = max(0.0, perim - shielded.get(net, 0.0) - spent[(cond.name, net)] - taken)
             strips = _strips(reg, wb, dbu) if STRIPS else None
-            _fringe_band(cpl, net, band, below, above, eps, t, z, length, band.area(), cond.device_below, strips)
+            _fringe_band(cpl, net, band, below, above, stack, t, z, length, band.area(), cond.device_below, strips)
+    float_out(cpl)
     return cpl
+
+
+def float_out(cpl: Couplings) -> None:
+    """Eliminate the floating conductors (nets ``~...``: dummy fill) from ``cpl``: a floating node f with
+    couplings C_if is at the potential sum C_if V_i / C_f (its charge zero), which leaves each pair of its
+    neighbours i, j coupled by C_if C_jf / C_f more (the node eliminated from the capacitance matrix, a
+    Schur complement); one floating node after the other."""
+    from .nets import FLOATING
+    floating = sorted({n for k in cpl.c for n in k if n.startswith(FLOATING)})
+    for f in floating:
+        nb = {}
+        for (a, b), v in list(cpl.c.items()):
+            if f in (a, b):
+                nb[b if a == f else a] = v
+                del cpl.c[(a, b)]
+        total = sum(nb.values())
+        items = sorted(nb.items())
+        for i, (a, va) in enumerate(items):
+            for b, vb in items[i + 1:]:
+                cpl.add(a, b, va * vb / total)
 
 
 STRIPS = 5    # strips of the fringe band, each twice as wide as the one inside it

@@ -59,6 +59,7 @@ from typing import NamedTuple
 
 from .fringe import fringe
 from .plane import covered_area, rects
+from .topface import eps_fringe
 
 KAPPA = 1.6    # the two sidewall-to-face regions (2 by the construction), set on a metal1 / metal2 pair
 
@@ -80,7 +81,7 @@ def corner_couplings(cpl, geo, stack, i, spent) -> None:
     nets = geo.wires.get(cond.name, {})
     if not nets:
         return
-    dbu, eps = geo.dbu, stack.eps
+    dbu = geo.dbu
     top = cond.top
     reach = int(round(cond.z / dbu))
     lower = _merged(nets)
@@ -88,7 +89,7 @@ def corner_couplings(cpl, geo, stack, i, spent) -> None:
     own = _Layer.of(nets, lower)
     blocking = [(top, lower)]          # (height, conductors) between A's top and the upper layer
     covers = []                        # the layers above A so far (``_Layer``)
-    per_a = fringe(eps, cond.thickness, cond.z)
+    per_a = fringe(eps_fringe(stack, cond.z, cond.thickness, cond.z), cond.thickness, cond.z)
     for cb in stack.conductors[i + 1:]:
         up = geo.wires.get(cb.name, {})
         if not up:
@@ -125,7 +126,8 @@ def corner_couplings(cpl, geo, stack, i, spent) -> None:
         free[gap] = 1 - covered_area(rects(block), gaps[gap]) / area[gap]
         free = free * _landing_free(_strips(ends, flush, g + cb.thickness, g + cond.thickness, dbu),
                                     np.array(a_nets), np.array(b_nets), own, theirs, covers, covers_under)
-        per_b = fringe(eps, cb.thickness, cb.z)
+        per_b = fringe(eps_fringe(stack, cb.z, cb.thickness, cb.z), cb.thickness, cb.z)
+        eps = stack.eps_band(cond.z, cb.top)      # the corner field: between A's and B's levels
         for (ep, fl), a_net, b_net, f in zip(pairs, a_nets, b_nets, free.tolist()):
             d = 0.0 if fl else ep.distance() * dbu
             c = corner(eps, cb.thickness, g, d) * f * (ep.first.length() + ep.second.length()) / 2 * dbu

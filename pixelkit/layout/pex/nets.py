@@ -8,8 +8,11 @@ net's geometry carries the name the simulations use (``Xp.fd``: node ``fd`` of i
 A layout that does not match its netlist, or a net the comparer cannot pair, is an error that
 names it: parasitics are never hung on a guessed node.
 
-Shapes on no matched net (the top-metal shield, which the drawing leaves floating) are the
-net ``0``: a chip ties its shield to ground.
+Shapes on no matched net on the top metal (the shield, which the drawing leaves floating) are the
+net ``0``: a chip ties its shield to ground. Floating shapes on the other conductors (the dummy fill
+of ``pixelkit layout --fill``, on the technology's ``<layer>_fill`` layers or on the layer itself) are
+conductors of their own, each piece a net ``~<layer>.<k>``, which ``capacitance.capacitances`` reduces
+away: the coupling two nets gain through a floating piece between them is kept.
 """
 from __future__ import annotations
 
@@ -20,6 +23,9 @@ from ...errors import PixelkitError
 #: Conductors at the substrate surface (the kit's LVS layers): diffusions and wells.
 SURFACE = ("nsd", "psd", "ptap", "ntap", "well", "pd_n")
 GROUND = "0"
+#: prefix of a floating conductor's net (dummy fill, a piece of metal on no net): its couplings are
+#: reduced away after the extraction (``capacitance.float_out``), the series path through it kept
+FLOATING = "~"
 AFE_NODES = ("in", "out", "vref", "p1", "p1b", "p2", "p2b", "vdd", "vm", "x", "c")   # the drawn AFE's ports / nodes
 
 
@@ -35,6 +41,8 @@ class NetGeometry:
     junctions: dict = field(default_factory=dict)  # surface layer (nsd, psd, well, pd_n ...) -> {net: Region}
     openings: object = None                        # Region: the drawn light openings (the kit's marker)
     cover: object = None                           # Region: metal over the cell drawn by the cells around it
+    vias: dict = field(default_factory=dict)       # (z0, z1) m -> {net: Region}: the cuts between the metals
+                                                   # (the field solver's; the 2.5D model leaves them out)
 
 
 def _flat_names(view: list) -> tuple:
@@ -103,9 +111,8 @@ def view_geometry(gds, top: str, tech, view: list) -> NetGeometry:
     (``schematic.lvs_view``'s form: the kit's netlists, or a designer's read by ``signoff.netlist_in``);
     their geometry by layer."""
     import klayout.db as kdb
-    from ..signoff.lvs import extract, prepare
-    stack = tech.stack
     from ..gdsfile import read_klayout
+    from ..signoff.lvs import extract, has_devices, label_nets, prepare
     layout = read_klayout(gds, "gds")
     cell = layout.cell(top)
     if cell is None:
@@ -118,6 +125,11 @@ def view_geometry(gds, top: str, tech, view: list) -> NetGeometry:
     cell.flatten(-1, True)
     lvs = kdb.LayoutVsSchematic(kdb.RecursiveShapeIterator(layout, cell, []))
     L = extract(lvs, layout, tech)
+    if not has_devices(view):         # interconnect only: the nets are the labels (signoff.lvs.compare_nets)
+        names, bad = label_nets(lvs, top)
+        if bad:
+            raise PixelkitError(f"extraction of {top}: " + "; ".join(bad[:5]))
+        return _geometry(lvs, L, layout, cell, top, tech, lvs.netlist(), names)
     ref, dotted = _flat_names(view)
     nl = prepare(lvs, ref, tech=tech)
     comparer = kdb.NetlistComparer()
@@ -141,6 +153,13 @@ def view_geometry(gds, top: str, tech, view: list) -> NetGeometry:
     if unmatched:
         raise PixelkitError(f"extraction of {top}: layout net(s) {', '.join(sorted(unmatched))} match no net of "
                             "the kit's netlist")
+    return _geometry(lvs, L, layout, cell, top, tech, nl, names)
+
+
+def _geometry(lvs, L, layout, cell, top, tech, nl, names) -> NetGeometry:
+    """Each named net's shapes by conductor layer (``names``: {cluster id: name}); the rest ground."""
+    import klayout.db as kdb
+    stack = tech.stack
     dbu = layout.dbu * 1e-6
     geo = NetGeometry(top, dbu)
     circuit = nl.circuit_by_name(top) or next(nl.each_circuit_top_down())
@@ -170,15 +189,51 @@ def view_geometry(gds, top: str, tech, view: list) -> NetGeometry:
         surf = _flat(surf)
         if not surf.is_empty():
             geo.surface[name] = geo.surface.get(name, kdb.Region()) + surf
-    for lname, reg in layers.items():   # floating shapes (the shield): ground
-        rest = _flat(reg - claimed[lname])
-        if not rest.is_empty():
-            geo.wires.setdefault(lname, {})
+    top_metal = stack.conductors[-1].name
+    for lname, reg in layers.items():
+        rest = _flat(reg - claimed[lname]) + _fill(layout, cell, tech, lname)
+        if rest.is_empty():
+            continue
+        geo.wires.setdefault(lname, {})
+        if lname == top_metal:          # the shield, left floating by the drawing: a chip ties it to ground
             geo.wires[lname][GROUND] = geo.wires[lname].get(GROUND, kdb.Region()) + rest
+            continue
+        for k, p in enumerate(rest.merged().each()):   # dummy fill and other floating pieces: each its own net
+            geo.wires[lname][f"{FLOATING}{lname}.{k}"] = kdb.Region(p)
     if "opening" in tech.layout.layers or "opening" in tech.layout.aliases:
         lay = tech.layer("opening")
         idx = layout.find_layer(lay.layer, lay.datatype)
         geo.openings = _flat(kdb.Region(cell.begin_shapes_rec(idx))) if idx is not None else kdb.Region()
+    _vias(geo, lvs, L, circuit, names, stack)
     b = cell.bbox()
     geo.bbox = (b.left * dbu, b.bottom * dbu, b.right * dbu, b.top * dbu)
     return geo
+
+
+def _fill(layout, cell, tech, lname: str):
+    """The dummy fill of conductor ``lname`` (the technology's ``<lname>_fill`` layer), flattened."""
+    import klayout.db as kdb
+    name = f"{lname}_fill"
+    if name not in tech.layout.layers:
+        return kdb.Region()
+    lay = tech.layer(name)
+    idx = layout.find_layer(lay.layer, lay.datatype)
+    return _flat(kdb.Region(cell.begin_shapes_rec(idx))) if idx is not None else kdb.Region()
+
+
+def _vias(geo, lvs, L, circuit, names, stack) -> None:
+    """Each named net's vias, at the heights between the metals they join (``geo.vias``)."""
+    from ..signoff.lvs import METALS, VIAS
+    names_in = set(stack.names())
+    for k, via in enumerate(VIAS):
+        lo, hi = METALS[k], METALS[k + 1]
+        if via not in L or lo not in names_in or hi not in names_in:
+            continue
+        z0, z1 = stack.conductor(lo).top, stack.conductor(hi).z
+        for net in circuit.each_net():
+            name = names.get(net.cluster_id)
+            if name is None:
+                continue
+            r = _flat(lvs.shapes_of_net(net, L[via], True))
+            if not r.is_empty():
+                geo.vias.setdefault((z0, z1), {})[name] = r

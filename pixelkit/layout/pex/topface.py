@@ -79,3 +79,17 @@ def covered_top(net, reg, above, z, t, dbu):
                     out[m] = out.get(m, 0.0) + area / (a1 - a0) * dbu * share * z / (g + z)
             rest = rest - union
     return sorted(out.items())
+
+
+def eps_fringe(stack, z: float, t: float, h: float) -> float:
+    """The permittivity of the fringe of an edge of a conductor z .. z + t over a plane h below it, in a
+    layered stack (``Stack.eps_gap``: across the layers in series). The bottom face's share runs down
+    through the gap; the top face's, strip by strip (SHARES, within h of the edge), along field lines that
+    leave the face x from the edge and rise about x over it before wrapping round the edge: each strip
+    through the layers from the top face to x above it. In a uniform stack, the stack's permittivity.
+    No constant: the shares are the half-plane's."""
+    if not stack.dielectrics:
+        return stack.eps
+    top = z + t
+    up = sum(sh * stack.eps_gap(top, top + h * (k + 0.5) / SLICES) for k, sh in enumerate(SHARES))
+    return up + (1 - sum(SHARES)) * stack.eps_gap(z - h, z)

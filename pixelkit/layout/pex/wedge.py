@@ -45,6 +45,7 @@ import math
 from .cornerfield import _labelled
 from .fringe import fringe
 from .plane import covered_area, rects
+from .topface import eps_fringe
 
 
 def wedge(eps: float, t: float, angle: float, r_in, r_out):
@@ -156,7 +157,7 @@ def wedge_couplings(cpl, geo, stack, i, spent) -> None:
             blocks = np.stack([np.maximum(np.minimum(x0, x1), 0), np.maximum(np.minimum(y0, y1), 0),
                                np.maximum(x0, x1), np.maximum(y0, y1)], axis=1)
             inside = (blocks[:, 2] > blocks[:, 0]) & (blocks[:, 3] > blocks[:, 1])
-            args = (stack.eps, cond.thickness, *(x[kk, jj] * dbu for x in (r0, r1, q0, q1)))
+            args = (stack.eps_band(cond.z, cond.top), cond.thickness, *(x[kk, jj] * dbu for x in (r0, r1, q0, q1)))
             pair, blocks = pair[inside], blocks[inside] * dbu
             c = right_wedges(*args, pair, blocks)
             found.append((v[kk, 6], h[jj, 6], c))
@@ -177,7 +178,7 @@ def wedge_couplings(cpl, geo, stack, i, spent) -> None:
         keep = (hi > lo) & (area > 0)
         covered = covered_area(boxes_of_layer, np.stack([x0[keep], y0[keep], x1[keep], y1[keep]], axis=1))
         area = area[keep]
-        c = wedge(stack.eps, cond.thickness, math.pi, lo[keep] * dbu, hi[keep] * dbu) * (1 - covered / area)
+        c = wedge(stack.eps_band(cond.z, cond.top), cond.thickness, math.pi, lo[keep] * dbu, hi[keep] * dbu) * (1 - covered / area)
         found.append((v[kk[keep], 6], v[jj[keep], 6], c))
 
     a_net, b_net, c = (np.concatenate(x) for x in zip(*found))
@@ -190,6 +191,6 @@ def wedge_couplings(cpl, geo, stack, i, spent) -> None:
 def _couple(cpl, spent, stack, cond, a_net, b_net, c):
     """Add ``c`` between the two nets, half of it taken from each one's fringe on ``cond``."""
     cpl.add(a_net, b_net, c)
-    f = fringe(stack.eps, cond.thickness, cond.z)
+    f = fringe(eps_fringe(stack, cond.z, cond.thickness, cond.z), cond.thickness, cond.z)
     spent[(cond.name, a_net)] += c / 2 / f
     spent[(cond.name, b_net)] += c / 2 / f

@@ -303,11 +303,55 @@ def run_lvs(gds: Path, top: str, design, workdir: Path | None = None) -> LvsResu
     return compare_view(gds, top, design.tech, lvs_view(design, circuits_of(design, top)), workdir, circuit_of)
 
 
+def has_devices(view: list) -> bool:
+    """Whether a netlist view names any device (else it is interconnect only: nets, compared by label)."""
+    return any(c["mos"] or c["diodes"] or c.get("caps") or c.get("res") for c in view)
+
+
+def label_nets(lvs, top: str) -> tuple[dict, list]:
+    """{cluster id: name} of the nets of cell ``top`` that carry a label, and the mismatches of an
+    interconnect-only netlist's nets against those labels found on the way (a net with two names: a short)."""
+    names, bad = {}, []
+    circuit = lvs.netlist().circuit_by_name(top)
+    for net in (circuit.each_net() if circuit is not None else ()):
+        if net.name:
+            if "," in net.name:
+                bad.append(f"{top}: nets {net.name.replace(',', ' and ')} are shorted in the layout")
+            names[net.cluster_id] = net.name
+    return names, bad
+
+
+def compare_nets(gds: Path, top: str, tech, view: list) -> LvsResult:
+    """LVS of an interconnect-only netlist (its top circuit's pins, no device): each pin must be one
+    labelled net of the layout; a net with two names is a short, a name on two nets an open."""
+    import klayout.db as kdb
+    t0 = time.perf_counter()
+    layout = kdb.Layout()
+    layout.read(str(gds))
+    lvs = kdb.LayoutVsSchematic(kdb.RecursiveShapeIterator(layout, layout.cell(top), []))
+    extract(lvs, layout, tech)
+    names, bad = label_nets(lvs, top)
+    seen = {}
+    for n in names.values():
+        for part in n.split(","):
+            seen[part.lower()] = seen.get(part.lower(), 0) + 1
+    pins = [p for p in view[-1]["pins"] if p != VSS]
+    bad += [f"{top}: net {p} of the netlist has no labelled shape in the layout" for p in pins if p.lower() not in seen]
+    bad += [f"{top}: net {n} is open in the layout ({k} unconnected pieces carry its label)"
+            for n, k in sorted(seen.items()) if k > 1]
+    pin_set = {p.lower() for p in pins}
+    bad += [f"{top}: layout net {n} is not a net of the netlist" for n in sorted(seen) if n not in pin_set]
+    return LvsResult(top, not bad, time.perf_counter() - t0, bad, 0, len(names))
+
+
 def compare_view(gds: Path, top: str, tech, view: list, workdir: Path | None = None, circuit_for=None) -> LvsResult:
     """Extract cell ``top`` of ``gds`` (hierarchically) and compare it with the netlist ``view``
     (``schematic.lvs_view``'s form). ``circuit_for(cell)``: the view's circuit a layout cell draws
-    (None: looked through); by default the circuit of the same name (SPICE names are case-insensitive)."""
+    (None: looked through); by default the circuit of the same name (SPICE names are case-insensitive).
+    A view without devices is compared net by net through the layout's labels (``compare_nets``)."""
     import klayout.db as kdb
+    if not has_devices(view):
+        return compare_nets(gds, top, tech, view)
     t0 = time.perf_counter()
     from ..gdsfile import read_klayout
     layout = read_klayout(gds, "gds")

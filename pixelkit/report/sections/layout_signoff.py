@@ -25,10 +25,14 @@ def build(ctx) -> Section:
         return Section.unavailable(TITLE, f"technology {d.tech.name} names no MIM capacitor / resistor "
                                           "([passives]): the AFE cannot be drawn")
     run_drc = not ctx.quick and bool(d.tech.signoff.drc_deck)
+    chip_checks = run_drc and bool(d.tech.signoff.pv_decks)     # the foundry's LVS, density, antenna (fd_pv)
     folder = ctx.figure("layout_signoff/x").parent
-    ctx.progress("layout sign-off: 2 x 2 array with its AFEs" + (", foundry DRC" if run_drc else "") + ", LVS")
+    ctx.progress("layout sign-off: 2 x 2 array with its AFEs" + (", fill, foundry DRC / LVS / density / antenna"
+                                                                if chip_checks else ", foundry DRC" if run_drc else "")
+                 + ", LVS")
     try:
-        r = layout_design(d, folder, ROWS, COLS, pictures=False, drc=run_drc, lvs=True, afe=True, shield="full")
+        r = layout_design(d, folder, ROWS, COLS, pictures=False, drc=run_drc, lvs=True, afe=True, shield="full",
+                          foundry_lvs=chip_checks, density=chip_checks, antenna=chip_checks, fill=chip_checks)
     except PixelkitError as exc:
         return Section.unavailable(TITLE, f"the layout cannot be signed off: {exc}")
     from ...layout.render import plot_exposure
@@ -72,6 +76,7 @@ def build(ctx) -> Section:
     tables.append(Table("layout_signoff_lvs", "LVS", ["cell", "result", "mismatches"],
                         [[r["top"], "match" if lvs["match"] else "mismatch", "; ".join(lvs["mismatches"][:20])]]))
     checked.append(Checked("layout_signoff.lvs_match", float(lvs["match"]), "1"))
+    text.append(_foundry_text(r, run_drc, d))
     # areas -----------------------------------------------------------------------------------
     area_rows = _areas(d, r)
     tables.append(Table("layout_signoff_areas", "Area per block",
@@ -100,6 +105,31 @@ def build(ctx) -> Section:
                    data={"top": r["top"], "shield": sh, "blocks_m2": r["blocks"], "lvs": lvs,
                          "drc": None if drc is None else {**{k: drc[k] for k in ("clean", "total", "by_rule")},
                                                        "deck": f"{d.tech.signoff.drc_deck}: {drc['deck'].rsplit('/', 1)[-1]}"}})
+
+
+def _foundry_text(r: dict, run_drc: bool, d) -> str:
+    """Which of the foundry's chip checks ran (LVS, density, antenna: fd_pv), what they said, and why a check
+    was off."""
+    if not run_drc:
+        return ("The foundry's LVS, density and antenna decks: off in the quick profile (the full profile runs "
+                "them on the chip with its fill where the fd_pv decks are installed).")
+    if not d.tech.signoff.pv_decks:
+        return (f"The foundry's LVS, density and antenna decks: off (technology {d.tech.name} names none, "
+                "[signoff] pv_decks): the chip's density rules are not checked.")
+    parts = []
+    if "fill" in r:
+        f = r["fill"]
+        parts.append("dummy fill drawn (" + ", ".join(f"{k} {f['before'][k] * 100:.1f} -> {f['after'][k] * 100:.1f} %"
+                                                       for k in ("poly", "metal1", "metal2", "metal3")) + ")")
+    for key, what in (("foundry_lvs", "foundry LVS"), ("density", "density"), ("antenna", "antenna")):
+        v = r.get(key, {})
+        if not v.get("run", True):
+            parts.append(f"{what} NOT RUN ({v['reason']})")
+        elif key == "foundry_lvs":
+            parts.append(f"{what}: " + ("Netlists match" if v["match"] else f"{len(v['mismatches'])} mismatch(es)"))
+        else:
+            parts.append(f"{what}: " + ("clean" if v["clean"] else f"{v['total']} violation(s) ({', '.join(v['by_rule'])})"))
+    return "The foundry's chip checks (fd_pv decks): " + "; ".join(parts) + "."
 
 
 def _rules_run(report: str) -> int:

@@ -1,0 +1,143 @@
+"""Extraction checked where it was not tuned: test structures (one capacitance term each, a GDS with
+labelled nets: ``pixelkit.layout.pex.structures``) extracted by ``pixelkit signoff`` and compared with
+FastCap2 on the technology's layered stack, and with the PDK's own extraction coefficients.
+
+Independent references: FastCap2 (a 3D boundary-element field solver) on the same shapes and the same
+dielectric layers (GF180MCU's published table: STI, nitride liner, oxides, passivation nitride, air),
+stored in tests/data/extraction_structures.json by
+``python -m pixelkit.layout.pex.structures tests/data/extraction_structures.json`` (~2 min; the slow test
+re-solves it); the GF180MCU open PDK's area coefficients (aF/um2, as klayout-pex carries them). None of the
+structures is a geometry a constant of the model was set on (docs/post-layout.md lists those).
+"""
+import json
+from dataclasses import replace
+
+import pytest
+
+from conftest import ROOT
+from pixelkit.layout.pex import capacitance
+from pixelkit.layout.pex.capacitance import Couplings, float_out
+from pixelkit.layout.pex.structures import kit_terms, structures, term
+
+REF = json.loads((ROOT / "tests" / "data" / "extraction_structures.json").read_text())["terms_F"]
+#: outside 10 % of FastCap2, documented (docs/post-layout.md): the lateral formula past S / H ~ 1.5, and
+#: the crossing, whose coupling is mostly 3D (field along the lower line, away from the overlap)
+KNOWN_MISSES = {"lateral_2": 0.126, "lateral_3p2": 0.294, "crossing": -0.573}
+HELD = [n for n in REF if n not in KNOWN_MISSES]
+
+
+@pytest.fixture(scope="module")
+def gf():
+    from pixelkit.tech.technology import load_technology
+    return load_technology("gf180mcu_3v3")
+
+
+@pytest.fixture(scope="module")
+def signed(tmp_path_factory, gf):
+    """The structures through `pixelkit signoff` (LVS by labels, extraction): {structure: F}."""
+    from pixelkit.layout.anylayout import signoff
+    from pixelkit.layout.pex.structures import write
+    folder = tmp_path_factory.mktemp("structures")
+    gds, spice = write(gf, folder)
+    r = signoff(gds, spice, gf, folder / "o", skip=("drc", "foundry-lvs", "lightmap"))
+    assert r["lvs"]["match"] and r["pex"]["run"], r
+    cpl = Couplings()
+    for line in (folder / "o" / "STRUCTURES.caps.csv").read_text().splitlines()[1:]:
+        a, b, c = line.split(",")
+        cpl.add(a, b, float(c))
+    return {st.name: term(cpl, st) for st in structures(gf)}
+
+
+@pytest.fixture(scope="module")
+def geo(tmp_path_factory, gf):
+    from pixelkit.layout.pex.structures import geometry
+    return geometry(gf, tmp_path_factory.mktemp("geo"))
+
+
+@pytest.mark.parametrize("name", HELD)
+def test_structure_within_10_percent_of_fastcap_on_the_layered_stack(signed, name):
+    assert signed[name] == pytest.approx(REF[name], rel=0.10, abs=0), f"{name}: {signed[name] / REF[name] - 1:+.1%}"
+
+
+@pytest.mark.parametrize("name", sorted(KNOWN_MISSES))
+def test_documented_misses_stay_as_documented(signed, name):
+    """Outside 10 %, said so in docs/post-layout.md: held within 3 points of the figure written there, so a
+    change of the model that moves them is seen (and the docs re-measured)."""
+    err = signed[name] / REF[name] - 1
+    assert abs(err) > 0.10 and err == pytest.approx(KNOWN_MISSES[name], abs=0.03), f"{name}: {err:+.1%}"
+
+
+def test_the_stack_gives_the_pdks_area_coefficients(gf):
+    """The GF180MCU open PDK's extraction coefficients (Magic's tech file, as klayout-pex 0.6 carries them):
+    metal1 over the substrate 29.304 aF/um2, metal2 over metal1 59.027, metal1 over poly 51.434. The layered
+    stack gives them (the nitride liner raises metal1's by 1.8 % over a uniform k = 4: 28.79)."""
+    st = gf.stack
+    c = st.conductor
+    m1_sub = st.eps_gap(0, c("metal1").z) / c("metal1").z * 1e6
+    m2_m1 = st.eps_gap(c("metal1").top, c("metal2").z) / (c("metal2").z - c("metal1").top) * 1e6
+    m1_poly = st.eps_gap(c("poly").top, c("metal1").z) / (c("metal1").z - c("poly").top) * 1e6
+    assert m1_sub == pytest.approx(29.304, rel=1e-3, abs=0)
+    assert m2_m1 == pytest.approx(59.027, rel=1e-3, abs=0)
+    # the liner wraps the poly (0.05 um of k 7 over its top, in the 0.71 um to metal1): the stack lays it flat
+    # over the field, below the poly's top, so metal1 over poly is 3.0 % under the PDK's (49.88 aF/um2)
+    assert m1_poly == pytest.approx(51.434 * (0.66 / 4 + 0.05 / 7) / (0.71 / 4), rel=1e-3, abs=0)
+    uniform = replace(st, dielectrics=())
+    assert uniform.eps_gap(0, c("metal1").z) / c("metal1").z * 1e6 == pytest.approx(28.79, rel=1e-3, abs=0)
+
+
+def _parallel_plate_only(mp):
+    mp.setattr(capacitance, "fringe", lambda eps, t, h: 0.0)
+    mp.setattr(capacitance, "lateral", lambda *a: 0.0)
+    mp.setattr(capacitance, "corner_couplings", lambda *a: None)
+    mp.setattr(capacitance, "wedge_couplings", lambda *a: None)
+    mp.setattr(capacitance, "covered_top", lambda *a: [])
+
+
+def _fringe_dropped(mp):
+    mp.setattr(capacitance, "_fringe_band", lambda *a, **k: None)
+    mp.setattr(capacitance, "covered_top", lambda *a: [])
+
+
+WRONG = {"parallel plate only": (_parallel_plate_only, None), "fringe dropped": (_fringe_dropped, None),
+         "half the metal thickness": (None, lambda st: replace(st, conductors=tuple(
+             replace(c, thickness=c.thickness / 2) for c in st.conductors)))}
+
+
+@pytest.mark.parametrize("wrong", list(WRONG))
+def test_a_wrong_model_leaves_the_band_and_is_not_a_scaling(gf, geo, monkeypatch, wrong):
+    """Each wrong model takes some structure outside 10 % of FastCap2, where the kit's model is inside it;
+    and it moves the structures by different factors (a pure scaling, such as the dielectric taken as 2.0
+    instead of 4.0, would move them all alike)."""
+    patch, stack_of = WRONG[wrong]
+    right = kit_terms(gf, geo)
+    if patch:
+        patch(monkeypatch)
+    bad = kit_terms(gf, geo, stack_of(gf.stack) if stack_of else None)
+    out = [n for n in HELD if abs(bad[n] / REF[n] - 1) > 0.10]
+    assert out, {n: f"{bad[n] / REF[n] - 1:+.1%}" for n in HELD}
+    assert all(abs(right[n] / REF[n] - 1) <= 0.10 for n in out)
+    ratios = [bad[n] / right[n] for n in HELD if right[n] > 0]
+    assert max(ratios) / max(min(ratios), 1e-9) > 1.10, ratios
+
+
+def test_floating_fill_is_reduced_as_a_schur_complement():
+    """A floating conductor f between a and b (C_af = 2, C_bf = 3, C_f0 = 1 fF): eliminated, a and b gain
+    2 x 3 / 6 = 1 fF between them, and their ground 2 x 1 / 6 and 3 x 1 / 6 (the node at V = sum C V / C_f)."""
+    c = Couplings()
+    c.add("a", "~metal1.0", 2e-15)
+    c.add("b", "~metal1.0", 3e-15)
+    c.add("0", "~metal1.0", 1e-15)
+    c.add("a", "b", 0.5e-15)
+    float_out(c)
+    assert c.pair("a", "b") == pytest.approx(1.5e-15, rel=1e-12, abs=0)
+    assert c.pair("a", "0") == pytest.approx(2e-15 / 6, rel=1e-12, abs=0)
+    assert c.pair("b", "0") == pytest.approx(3e-15 / 6, rel=1e-12, abs=0)
+    assert not any(n.startswith("~") for k in c.c for n in k)
+
+
+@pytest.mark.slow
+def test_the_stored_fastcap_reference_is_fastcaps(gf, tmp_path):
+    """FastCap2 solved again (~2 min): the stored reference within 1 %."""
+    from pixelkit.layout.pex.structures import fastcap_reference
+    again = fastcap_reference(gf, tmp_path)
+    assert all(again[n] == pytest.approx(REF[n], rel=0.01, abs=0) for n in REF), again
