@@ -148,3 +148,22 @@ def test_27_row_column_settles_at_both_clocks(ref_design):
     assert not f.failures and not f.retried and not f.settling_notes
     for k in ("primary", "secondary"):
         assert np.nanmax(np.abs(f.settling[k])) < 0.5e-3, k
+
+
+def test_bright_rows_at_ss_85c_low_supply_leave_what_the_2_row_spec_does_not_see(ref_design):
+    """The corner docs/timing-and-settling.md reports failing, ss 85 degC -10 % supply: a dual column with
+    its AFE whose rows cycle dark / 5 % / 30 % / full / 3x and 30x full well (one cycle, 9 rows; the
+    27-row column of the slow test above reads 1.439 mV there, the docs' figure), at converged
+    tolerances, against the long read. The secondary keeps more than the 0.5 mV limit after a bright
+    row (measured 1.310 mV, 9 rows) while the primary settles (0.004 mV), and verify's own settling
+    figure at the same corner (a 2-row mid-light frame) stays below the limit (0.32 / 0.22 mV): what
+    docs/verify.md says its settling spec does not cover."""
+    from pixelkit.chip.frame import CONVERGED
+    from pixelkit.verify import conditions, measure
+    d = conditions.at(ref_design, conditions.Condition("ss", 358.15, -0.1))
+    cycle = [0.05, 1.0, 0.0, 30.0, 0.3, 0.8, 0.02, 3.0, 0.5]
+    f = _frame(d, levels=cycle, options=CONVERGED)
+    assert not f.failures and not f.retried and not f.settling_notes
+    assert np.nanmax(np.abs(f.settling["primary"])) < 0.5e-3
+    assert 0.9e-3 < np.nanmax(np.abs(f.settling["secondary"])) < 2e-3
+    assert max(measure.settling(d).values()) < 0.5e-3
