@@ -34,9 +34,9 @@ def report(quick_report):
 
 def named_values(tables: dict) -> dict:
     """{(figure label, subpixel): [(table, value), ...]} for every cell of a named figure."""
-    from pixelkit.report.names import GLOSSARY, label
+    from pixelkit.report.names import BIASED, GLOSSARY, label
     generic = {label(n) for n in GLOSSARY if "(V)" not in n}
-    pattern = re.compile(r"^(?:C_jdep|C_PD,node|CG_jdep)\([0-9.]+ V\) \((?:fF|uV/e-)\)$")
+    pattern = re.compile(r"^(?:" + "|".join(re.escape(b) for b in BIASED) + r")\([0-9.]+ V\) \((?:fF|uV/e-|ke-)\)$")
 
     def named(text):
         return isinstance(text, str) and (text in generic or bool(pattern.match(text)))
@@ -75,6 +75,19 @@ def test_every_name_carries_one_value(report):
     for figure in ("CG_out(0) (uV/e-)", "read noise at the column (e-)"):
         assert all(len(values[(figure, w)]) >= 2 for w in ARR), values.get((figure, "primary"))
     assert {("CG_jdep(2.5 V) (uV/e-)", "primary"), ("CG_jdep(2 V) (uV/e-)", "primary")} <= set(values)
+
+
+def test_the_names_table_lists_every_definition_left_with_why(report):
+    """The full wells (five values in one report before: table 3.2's, its C(V) form, EMVA's, the sign-off's
+    nominal and worst) and the conversion gains each under a name of their own, each with why it is kept."""
+    _, _, _, t = report
+    rows = {r[0]: r for r in t["figure_names"]["rows"]}
+    assert t["figure_names"]["columns"] == ["name", "unit", "definition", "why a name of its own"]
+    assert {"FW_jdep(2.5 V)", "FW_jdep,CV(2.5 V)", "full well at the column", "mu_e.sat (EMVA)", "CG_PD,node(2 V)",
+            "read noise at the column", "read noise with the AFE", "sigma_d (EMVA)"} <= set(rows)
+    assert all(len(r[3]) > 20 for r in rows.values()), [r[0] for r in rows.values() if len(r[3]) <= 20]
+    assert "mu_e.sat (EMVA) (e-)" in [r[0] for r in t["camera_emva"]["rows"]]
+    assert not [r for tab in t.values() for r in tab["rows"] if isinstance(r[0], str) and r[0].startswith("full well,")]
 
 
 def test_the_checker_finds_a_name_with_two_values():

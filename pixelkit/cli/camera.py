@@ -11,7 +11,7 @@ _ROWS = (("K (DN/e-)", "k_dn_per_e", 1.0, ".4g"),
          ("K x LSB (uV/e-)", None, 1e6, "sig"),
          ("CG_out(0), model (uV/e-)", "cg_out_V_per_e", 1e6, "sig"),
          ("CG_out(0), SPICE step (uV/e-)", "cg_out_spice_V_per_e", 1e6, "sig"),
-         ("QE (EMVA eta)", "qe", 1.0, ".4g"), ("saturation (e-)", "saturation_e", 1.0, ".0f"),
+         ("QE (EMVA eta)", "qe", 1.0, ".4g"), ("mu_e.sat (EMVA) (e-)", "saturation_e", 1.0, ".0f"),
          ("DR (dB)", "dr_db", 1.0, ".1f"), ("SNR max (dB)", "snr_max_db", 1.0, ".1f"),
          ("linearity error (%)", "linearity_error_pct", 1.0, ".2f"), ("GSE (signal)", "gse", 1.0, ".1f"),
          ("dark current (e-/s)", "dark_current_e_per_s", 1.0, ".1f"), ("PRNU (%)", "prnu_pct", 1.0, ".3f"))

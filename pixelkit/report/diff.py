@@ -74,7 +74,9 @@ def _change(old, new) -> float | None:
 RENAMED = {**{f"summary.{w}.{a}": f"summary.{w}.{b}" for w in ("primary", "secondary")
               for a, b in (("cg_pd_uV_per_e", "cg_jdep_uV_per_e"), ("cg_out_spice_uV_per_e", "cg_out_0_30_uV_per_e"),
                            ("cg_out_physics_uV_per_e", "cg_out_0_uV_per_e"))},
-           **{f"model_vs_spice.{w}.dark_signal_V": f"model_vs_spice.{w}.pedestal_V" for w in ("primary", "secondary")}}
+           **{f"model_vs_spice.{w}.dark_signal_V": f"model_vs_spice.{w}.pedestal_V" for w in ("primary", "secondary")},
+           # the camera's sigma_d (EMVA) was checked as "read_noise_e", a name the Noise section's read noise has
+           **{f"camera.read_noise_e_{w}": f"camera.sigma_d_e_{w}" for w in ("primary", "secondary")}}
 #: Figures earlier reports made that are not about the design (the other pixel families; the frame
 #: models' validation, kept for the reference chip): gone from a new report, they are "retired".
 RETIRED = ("families.", "frame.dv_kmh", "frame.lowgse_best_ratio")

@@ -20,13 +20,13 @@ def _pairs(a: dict, b: dict, specs) -> list[str]:
 
 def _model_rows(v: float):
     """Rows of the junction table at the technology's reference bias ``v`` (names: ``report.names``)."""
-    from .names import c_jdep, c_node, cg_jdep, label
+    from .names import c_jdep, c_node, cg_jdep, fw_jdep, fw_jdep_cv, label
     return (("PD area (um2)", "area_m2", 1e12, ".2f"), ("PD perimeter (um)", "perimeter_m", 1e6, ".2f"),
             ("photoactive area (um2)", "photoactive_area_m2", 1e12, ".3f"),
             (label(c_jdep(v)), "c_jdep_F", 1e15, "sig"), (label(c_node(v)), "c_node_F", 1e15, "sig"),
             (label(cg_jdep(v)), "cg_V_per_e", 1e6, "sig"),
-            (f"full well, swing x {c_jdep(v)} / q (ke-)", "fwc_e", 1e-3, ".1f"),
-            ("full well with C(V) (ke-)", "fwc_cv_e", 1e-3, ".1f"),
+            (label(fw_jdep(v)), "fwc_e", 1e-3, ".1f"),
+            (label(fw_jdep_cv(v)), "fwc_cv_e", 1e-3, ".1f"),
             ("dark current (fA)", "dark_current_A", 1e15, ".3f"))
 
 

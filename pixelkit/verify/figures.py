@@ -55,23 +55,29 @@ def _per_kind(stem, dim, unit, group, what, check, mc=True):
 
 _LIST = [
     *_per_kind("conversion_gain", "V/C", "uV/e-", "pixel",
-               "output-referred conversion gain of the {kind} subpixel: double-sampled column signal per "
-               "collected electron at a small signal (SPICE)",
+               "output-referred conversion gain of the {kind} subpixel, CG_out(0) in the report: double-sampled "
+               "column signal per collected electron at a small signal (SPICE)",
                "analytic C(V) of PD + FD times the SF gain (physics.fd.response)"),
     *_per_kind("pd_conversion_gain", "V/C", "uV/e-", "pixel",
-               "PD-referred conversion gain of the {kind} subpixel (thesis table 3.2): drop of the PD node "
-               "per collected electron during exposure, small signal (SPICE)",
+               "PD-referred conversion gain of the {kind} subpixel's PD node, CG_PD,node at the PD reset level in "
+               "the report: drop of the PD node (junction and EC / TG diffusions) per collected electron during "
+               "exposure, small signal (SPICE); thesis table 3.2's q / C_jdep is the bare junction's at 2.5 V",
                "analytic C(V) of the PD node (physics.subpixel.pd_node)"),
     *_per_kind("swing", "V", "V", "pixel",
                "column swing of the {kind} subpixel: saturated minus dark double-sampled signal (SPICE)",
                "pixel.swing minus the SF's drop (docs/pixel-model.md: 'Column swing ~0.85 V')"),
     *_per_kind("full_well", "C", "e-", "pixel",
-               "saturation capacity of the {kind} subpixel as EMVA 1288 defines it: column swing over the "
-               "output-referred conversion gain (SPICE)",
-               "swing x C(V) of the PD node (table 3.2's 248 / 69 ke- are 1.5 V x C_jdep)"),
+               "full well at the column of the {kind} subpixel: column swing over the small-signal output-"
+               "referred conversion gain (SPICE), the charge at which the column output saturates (not EMVA "
+               "1288's saturation capacity, which the virtual camera reads off its photon transfer, nor table "
+               "3.2's 1.5 V x C_jdep of the PD)",
+               "the dark column level from the follower's operating point over A_sf q / C_total "
+               "(tests/test_spec_limits.py)"),
     *_per_kind("read_noise", "C", "e-", "noise",
-               "temporal read noise of the {kind} subpixel through the AFE, input-referred (kTC, NCDS, SF and "
-               "load thermal and 1/f, dark shot, AFE; the SF gain from SPICE at the condition)",
+               "temporal read noise of the {kind} subpixel through the AFE ('read noise with the AFE' in the "
+               "report), input-referred through CG_out(0) (kTC, NCDS, SF and load thermal and 1/f, dark shot, AFE; "
+               "the SF gain from SPICE at the condition; with afe.opamp = \"ota\" the op-amp's terms are still "
+               "the macromodel's noise_r / noise_corner)",
                "ngspice .noise of the read chain (camera.spicenoise)"),
     *_per_kind("ktc_noise", "C", "e-", "noise",
                "FD reset (kT/C) noise of the {kind} subpixel's NCDS read, input-referred electrons",

@@ -27,7 +27,7 @@ def _rows(s: dict) -> list:
         [N.label("sigma_d (EMVA)"), *both(lambda f: f["read_noise_e"])],
         [N.label("read noise at the column"), *both(lambda f: f["read_noise_chain_e"])],
         ["QE eta", *both(lambda f: f["qe"])],
-        ["saturation (e-)", *both(lambda f: f["saturation_e"])],
+        [N.label("mu_e.sat (EMVA)"), *both(lambda f: f["saturation_e"])],
         ["DR (dB)", *both(lambda f: f["dr_db"])],
         ["SNR max (dB)", *both(lambda f: f["snr_max_db"])],
         ["linearity error (%)", *both(lambda f: f["linearity_error_pct"])],
@@ -79,8 +79,9 @@ def build(ctx) -> Section:
                    figures=[Figure(f1.name, "Photon transfer up to saturation (x: clipped or variance below dark, "
                                             "not data)"),
                             Figure(f2.name, "SNR up to saturation (x: clipped exposures)")],
-                   checked=[Checked(f"camera.{k}_{w}", s[w][k], u, tol_rel=0.03, note=note)
+                   checked=[Checked(f"camera.{name}_{w}", s[w][k], u, tol_rel=0.03, note=note)
                             for w in _ARR
-                            for k, u, note in (("k_dn_per_e", "DN/e-", "K"), ("read_noise_e", "e-", "sigma_d (EMVA)"),
-                                               ("dr_db", "dB", ""))],
+                            for name, k, u, note in (("k_dn_per_e", "k_dn_per_e", "DN/e-", "K"),
+                                                     ("sigma_d_e", "read_noise_e", "e-", "sigma_d (EMVA)"),
+                                                     ("dr_db", "dr_db", "dB", ""))],
                    data={"figures": s})

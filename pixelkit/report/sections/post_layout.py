@@ -10,6 +10,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 from ...constants import Q
+from .. import names as N
 from . import Checked, Figure, Section, Table
 
 TITLE = "Post-layout vs schematic"
@@ -119,12 +120,12 @@ def build(ctx) -> Section:
             rows.append([f"{label}, {w} ({unit})", a * scale, b * scale, (b / a - 1) * 100 if a else "-"])
     row("C_FD", lambda x, w: x[w]["c_fd_F"], 1e15, "fF")
     row("C_PD,node", lambda x, w: x[w]["c_pd_node_F"], 1e15, "fF")
-    row("CG_PD = q / C_PD,node", lambda x, w: Q / x[w]["c_pd_node_F"], 1e6, "uV/e-")
+    row(N.cg_node(d.pixel.v_pd_reset), lambda x, w: Q / x[w]["c_pd_node_F"], 1e6, "uV/e-")
     row("CG_FD", lambda x, w: x[w]["cg_fd_V_per_e"], 1e6, "uV/e-")
     row("CG_out(0), analytic", lambda x, w: x[w]["cg_out_V_per_e"], 1e6, "uV/e-")
     row("CG_out(0), SPICE charge step", lambda x, w: x[w]["cg_out_spice_V_per_e"], 1e6, "uV/e-")
     row("read noise at the column", lambda x, w: x[w]["read_noise_e"], 1.0, "e-")
-    row("full well", lambda x, w: x[w]["full_well_e"], 1e-3, "ke-")
+    row(N.fw_jdep_cv(d.tech.photodiode.reset_bias), lambda x, w: x[w]["full_well_e"], 1e-3, "ke-")
     for key, label, scale, unit in (("col_to_col", "column-to-column crosstalk (secondary / primary signal)", 100, "%"),
                                     ("pedestal_p_V", "pedestal, primary (row lines into FD)", 1e3, "mV"),
                                     ("pedestal_s_V", "pedestal, secondary (row lines into FD)", 1e3, "mV")):

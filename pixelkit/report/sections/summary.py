@@ -60,12 +60,13 @@ def build(ctx) -> Section:
         [N.label(N.c_node(v_r)), "-", kit["primary"]["c_node_F"] * 1e15, "-", kit["secondary"]["c_node_F"] * 1e15],
         [N.label(N.cg_jdep(v_r)), th["primary"]["cg_uV"], kit["primary"]["cg_V_per_e"] * 1e6, th["secondary"]["cg_uV"],
          kit["secondary"]["cg_V_per_e"] * 1e6],
+        [N.label(N.cg_node(v_reset)), "-", Q / kit["primary"]["at_reset"]["c_pd_node_F"] * 1e6, "-",
+         Q / kit["secondary"]["at_reset"]["c_pd_node_F"] * 1e6],
         [N.label("CG_out(0)"), "-", out_cg["primary"] * 1e6, "-", out_cg["secondary"] * 1e6],
         [N.label("CG_out(0-30 %)"), "-", spice_cg["primary"] * 1e6, "-", spice_cg["secondary"] * 1e6],
-        [f"full well, swing x {N.c_jdep(v_r)} / q (ke-)", th["primary"]["fwc_ke"], kit["primary"]["fwc_e"] * 1e-3,
+        [N.label(N.fw_jdep(v_r)), th["primary"]["fwc_ke"], kit["primary"]["fwc_e"] * 1e-3,
          th["secondary"]["fwc_ke"], kit["secondary"]["fwc_e"] * 1e-3],
-        [f"full well, charge of C_jdep(V) from {v_r:g} V down by the swing (ke-)", "-", kit["primary"]["fwc_cv_e"] * 1e-3, "-",
-         kit["secondary"]["fwc_cv_e"] * 1e-3],
+        [N.label(N.fw_jdep_cv(v_r)), "-", kit["primary"]["fwc_cv_e"] * 1e-3, "-", kit["secondary"]["fwc_cv_e"] * 1e-3],
         ["pixel swing (V)", th["primary"]["swing_V"], d.pixel.swing, th["secondary"]["swing_V"], d.pixel.swing],
         ["column swing, SPICE (V)", "-", exp["primary"]["swing_V"], "-", exp["secondary"]["swing_V"]],
         ["readout clock (kHz)", th["primary"]["f_read_kHz"], p.f_read * 1e-3, th["secondary"]["f_read_kHz"],
@@ -104,18 +105,20 @@ def build(ctx) -> Section:
                         [[r[0], r[2], r[4]] for r in rows]),
                   Table("design_ratios", "Sizing ratios", ["ratio", "value"], [[r[0], r[2]] for r in ratios])]
     tables.append(Table("figure_names", "Names of the figures that have more than one definition (used "
-                        "throughout this report)", ["name", "unit", "definition"],
+                        "throughout this report, and by the sign-off's figures), and why each is kept",
+                        N.GLOSSARY_COLUMNS,
                         N.glossary_rows([N.c_jdep(v_r), N.c_node(v_r), N.cg_jdep(v_r), N.cg_jdep(v_reset),
-                                         "CG_out(0)", "CG_out(0-30 %)", "K x LSB", "read noise at the column",
-                                         "read noise with the AFE", "sigma_d (EMVA)", "pedestal", "DSNU, model",
-                                         "DSNU, Monte Carlo"])))
+                                         N.cg_node(v_reset), "CG_out(0)", "CG_out(0-30 %)", "K x LSB",
+                                         N.fw_jdep(v_r), N.fw_jdep_cv(v_r), "full well at the column",
+                                         "mu_e.sat (EMVA)", "read noise at the column", "read noise with the AFE",
+                                         "sigma_d (EMVA)", "pedestal", "DSNU, model", "DSNU, Monte Carlo"])))
     checked = []
     for w in ("primary", "secondary"):
         checked += [
             Checked(f"summary.{w}.cg_jdep_uV_per_e", kit[w]["cg_V_per_e"] * 1e6, "uV/e-", 0.005, 0.0,
                     N.cg_jdep(v_r)),
             Checked(f"summary.{w}.cg_out_0_30_uV_per_e", spice_cg[w] * 1e6, "uV/e-", 0.02, 0.0, "CG_out(0-30 %)"),
-            Checked(f"summary.{w}.fwc_ke", kit[w]["fwc_e"] * 1e-3, "ke-", 0.005, 0.0, f"swing x {N.c_jdep(v_r)} / q"),
+            Checked(f"summary.{w}.fwc_ke", kit[w]["fwc_e"] * 1e-3, "ke-", 0.005, 0.0, N.fw_jdep(v_r)),
             Checked(f"summary.{w}.cg_out_0_uV_per_e", out_cg[w] * 1e6, "uV/e-", 0.01, 0.0, "CG_out(0)"),
         ]
     checked += [Checked("summary.c_a", mt["c_a"], "1", 0.002), Checked("summary.c_c", mt["c_c"], "1", 0.005)]
