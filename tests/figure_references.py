@@ -91,7 +91,7 @@ REPORT = {
         Ref("tests/test_camera.py::test_camera_cli_figures_against_spice", "SPICE circuit level", "k_dn_per_e",
             "K by EMVA's definition on the SPICE transfer", only="camera.k_dn_per_e_*"),
         Ref("tests/test_camera.py::test_camera_cli_figures_against_spice", "SPICE circuit level", "read_noise_e",
-            "sigma_d from ngspice .noise", only="camera.read_noise_e_*"),
+            "sigma_d from ngspice .noise", only="camera.sigma_d_e_*"),
         Ref("tests/test_camera.py::test_camera_cli_figures_against_spice", "derivation", "dr_db",
             "EMVA 1288: DR = mu_p.sat / mu_p.min, mu_p.min = (sigma_d + 1/2) / eta", only="camera.dr_db_*"),
     ],

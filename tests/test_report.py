@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from conftest import REF, run_cli
+from conftest import REF, REF_QUICK_EXIT, run_cli
 
 CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
 
@@ -173,7 +173,14 @@ def test_revision_diff_names_the_changed_device_and_fails_on_specs(quick_report,
     assert any("cg_out" in name for name in diff["moved"]), diff["moved"]
     assert any(n["status"] == "changed" for n in diff["netlists"]), "no generated netlist changed"
     assert "pixel.devices.sf_w" in stdout and "NEWLY FAILING  afe_gain_error" in stdout
-    assert (tmp_path / "revB" / "index.html").is_file()
+    # the verdict: FAIL first on the terminal and in the banner, the failing spec linked to its row,
+    # whose status cell carries the class the style colours
+    assert stdout.splitlines()[1].startswith("  FAIL: ") and "FAIL afe_gain_error:" in stdout
+    page = (tmp_path / "revB" / "index.html").read_text()
+    banner = page[page.index('<section id="verdict" class="banner fail"'):page.index('<nav class="toc">')]
+    assert 'href="#spec-afe_gain_error"' in banner
+    row = re.search(r'<tr id="spec-afe_gain_error" class="fail">(.*?)</tr>', page, re.S).group(1)
+    assert '<td class="status fail">FAIL</td>' in row
 
 
 def test_intentional_change_moves_figures_and_passes_on_specs_ranked(quick_report, tmp_path):
@@ -187,9 +194,9 @@ def test_intentional_change_moves_figures_and_passes_on_specs_ranked(quick_repor
     assert text != REF.read_text()
     changed.write_text(text)
     code, stdout, err = run_cli("report", changed, "--quick", "--out", tmp_path / "revB", "--baseline", base)
-    # exit 1 all the same: revA's own two specs fail at nominal, as they did in the baseline
-    assert code == 1, err + stdout
-    assert _failing(tmp_path / "revB") == _failing(base) and _failing(base)
+    # exit 5 all the same: no spec fails at nominal, the 85 degC one is not run, as in the baseline
+    assert code == REF_QUICK_EXIT == 5, err + stdout
+    assert _failing(tmp_path / "revB") == _failing(base) == []
     diff = json.loads((tmp_path / "revB" / "diff.json").read_text())
     assert [c["field"] for c in diff["design_changes"]] == ["pixel.devices.sf_l"]
     assert any("pedestal" in name for name in diff["moved"]), diff["moved"]
@@ -208,14 +215,15 @@ def _failing(folder) -> list[str]:
 
 
 def test_unchanged_revision_diff_passes_and_json_gives_it_without_html(quick_report, tmp_path):
-    """The diff of an unchanged revision passes; the command exits 1 all the same, on revA's own
-    failing specs (the verdict is the design's, the diff's is said beside it)."""
+    """The diff of an unchanged revision passes; the command exits 5 all the same, on revA's own
+    spec the nominal-only profile does not run (the verdict is the design's, the diff's is said beside
+    it)."""
     base, _ = quick_report
     out = tmp_path / "again"
     code, stdout, err = run_cli("report", REF, "--quick", "--out", out, "--baseline", base, "--json")
-    assert code == 1, err + stdout
+    assert code == REF_QUICK_EXIT, err + stdout
     r = json.loads(stdout)
-    assert r["verdict"]["verdict"] == "FAIL" and not r["verdict"]["diff_failed"]
+    assert r["verdict"]["verdict"] == "NOT MEASURED" and not r["verdict"]["diff_failed"]
     assert r["html"] is None and not (out / "index.html").exists()
     assert r["diff"]["passed"] and r["diff"]["moved"] == [] and r["diff"]["design_changes"] == []
     assert all(c["status"] == "same" for c in r["diff"]["checked"])

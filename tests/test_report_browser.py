@@ -1,5 +1,6 @@
-"""The report in a real browser with the network off (issue 42): headless Chromium loads the quick
-report of the reference design and its datasheet; the page itself reports (``docsite.browser``'s
+"""The report in a real browser with the network off (issue 42): headless Chromium loads a failing
+quick report (the reference with a spec its nominal condition misses, conftest's ``failing_report``)
+and its datasheet; the page itself reports (``docsite.browser``'s
 probe) the verdict banner's colour and text, a failing spec's status colour, each waveform drawn
 by plotly and answering a zoom and a legend click, script errors and failed resources. The
 colours are read as the browser computed them, against the style's values written out here; the
@@ -23,8 +24,8 @@ FAIL_CELL, PASS_CELL = "rgb(251, 224, 221)", "rgb(227, 243, 231)"
 
 
 @pytest.fixture(scope="module")
-def seen(quick_report):
-    out = quick_report["out"]
+def seen(failing_report):
+    out = failing_report["out"]
     with (out / "signoff.csv").open() as f:
         rows = list(csv.DictReader(f))
     failing = [r["spec"] for r in rows if r["status"] == "fail"]
@@ -69,8 +70,8 @@ def test_every_failing_spec_has_an_interactive_waveform(seen):
     assert p["hidden"] == "legendonly"
 
 
-def test_datasheet_renders_on_one_page(quick_report):
-    out = quick_report["out"]
+def test_datasheet_renders_on_one_page(failing_report):
+    out = failing_report["out"]
     s = browser.probe(out / "datasheet.html", ["#ds-verdict", "#ds-specs", "#ds-layout"], 820)
     assert s["errors"] == [] and s["console"] == []
     assert s["boxes"]["#ds-verdict"]["bg"] == RED and s["boxes"]["#ds-verdict"]["text"].startswith("FAIL")
@@ -81,9 +82,9 @@ def test_datasheet_renders_on_one_page(quick_report):
     assert summary["datasheet"] == {"html": "datasheet.html", "pdf": "datasheet.pdf", "why": ""}
 
 
-def test_the_docs_screenshots_come_from_this_code(quick_report, tmp_path):
+def test_the_docs_screenshots_come_from_this_code(failing_report, tmp_path):
     from PIL import Image
-    pics = screenshots.take(quick_report["out"], tmp_path)
+    pics = screenshots.take(failing_report["out"], tmp_path)
     assert [p.name for p in pics] == ["report_banner.png", "report_signoff.png", "report_waveform.png",
                                       "datasheet.png"]
     with Image.open(pics[0]) as im:   # the banner's picture is the banner: mostly its red
