@@ -92,7 +92,8 @@ def golden_text(name: str, design) -> str:
 def write_all(design, folder: Path) -> list[Path]:
     from .fileio import write_atomic
     from .spice.export import make_link
-    Path(folder).mkdir(parents=True, exist_ok=True)
+    from .fileio import out_folder
+    folder = out_folder(Path(folder), root=True)
     for link, target in GENERATORS["bench_dual_pixel"](design).model_links().items():
         make_link(Path(folder) / link, Path(target))
     return [write_atomic(folder / f"{n}.cir", golden_text(n, design)) for n in GENERATORS]

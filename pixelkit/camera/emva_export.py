@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import PixelkitError
-from ..fileio import check_output, honour_umask_tree, path_kind
+from ..fileio import check_output, honour_umask_tree, out_folder, path_kind
 from .png16 import png_bytes
 from .ptc import frame
 
@@ -44,7 +44,7 @@ def write_dataset(folder, cam, s, mm, seed: int, stack: int = 16) -> Path:
     folder = check_target(folder)
     bits = 8 if cam.adc.bits <= 8 else 16
     rng = np.random.default_rng([seed, 11 if cam.name == "primary" else 12])
-    folder.parent.mkdir(parents=True, exist_ok=True)
+    out_folder(folder.parent)   # checked or made (fileio)
     tmp = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", dir=folder.parent))
     try:
         (tmp / "images").mkdir()

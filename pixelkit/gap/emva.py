@@ -167,8 +167,10 @@ def _check_order(path, steps, temporal) -> None:
         raise EmvaError(str(path), "every exposure is 0: no photons can be collected (check the 'b' and 'd' lines)")
     seen, used = {}, {}
     for s_ in steps:
-        key = (s_["kind"], s_["t"], s_["mu_p"])
-        if key in seen and s_["kind"] == "b":   # darks may repeat an exposure (the irradiance method)
+        key = (s_["kind"], s_["t"], s_["mu_p"], len(s_["imgs"]) == 2)
+        # a bright temporal step twice (darks may repeat an exposure: the irradiance method; a spatial
+        # stack may sit at a temporal step's light)
+        if key in seen and s_["kind"] == "b" and len(s_["imgs"]) == 2:
             raise EmvaError(f"{path}:{s_['line']}", f"this step repeats the step of line {seen[key]} (same exposure "
                                                     "and photons): each step once")
         seen[key] = s_["line"]

@@ -472,8 +472,8 @@ def write_cases(design, nom, folder: Path = CASES_DIR, plan=None, progress=None,
     buf = io.StringIO()
     w = csv.writer(buf)
     truths = {}
-    folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
+    from ..fileio import out_folder
+    folder = out_folder(Path(folder), root=True)   # checked: a device, a file or a dangling link is refused
     if keep and (folder / "truth.json").exists():
         truths = json.loads((folder / "truth.json").read_text())
         with open(folder / "cases.csv", newline="") as fh:   # as written (csv's \r\n rows)
