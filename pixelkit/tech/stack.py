@@ -28,6 +28,7 @@ and FastCap2 solves the same layers with their interfaces (``layout/pex/fastcap.
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 from ..errors import MISSING, ConfigError
@@ -81,19 +82,11 @@ class Stack:
 
     def eps_gap(self, z0: float, z1: float) -> float:
         """Effective permittivity of a field across heights z0 .. z1 (the layers in series)."""
-        lo, hi = min(z0, z1), max(z0, z1)
-        if hi <= lo:
-            return EPS0 * self.k_at(lo)
-        inv = sum((min(b, hi) - max(a, lo)) / k for a, b, k in self._layers() if min(b, hi) > max(a, lo))
-        return EPS0 * (hi - lo) / inv
+        return _eps_gap(self, min(z0, z1), max(z0, z1))
 
     def eps_band(self, z0: float, z1: float) -> float:
         """Effective permittivity of a field along a band of heights z0 .. z1 (the layers in parallel)."""
-        lo, hi = min(z0, z1), max(z0, z1)
-        if hi <= lo:
-            return EPS0 * self.k_at(lo)
-        return EPS0 * sum((min(b, hi) - max(a, lo)) * k for a, b, k in self._layers()
-                          if min(b, hi) > max(a, lo)) / (hi - lo)
+        return _eps_band(self, min(z0, z1), max(z0, z1))
 
     def k_at(self, z: float) -> float:
         return next(k for a, b, k in self._layers() if a <= z < b or b == float("inf"))
@@ -103,6 +96,22 @@ class Stack:
 
     def names(self) -> tuple:
         return tuple(c.name for c in self.conductors)
+
+
+@functools.lru_cache(maxsize=1 << 14)     # the extraction asks the same few heights many times
+def _eps_gap(stack: Stack, lo: float, hi: float) -> float:
+    if hi <= lo:
+        return EPS0 * stack.k_at(lo)
+    inv = sum((min(b, hi) - max(a, lo)) / k for a, b, k in stack._layers() if min(b, hi) > max(a, lo))
+    return EPS0 * (hi - lo) / inv
+
+
+@functools.lru_cache(maxsize=1 << 14)
+def _eps_band(stack: Stack, lo: float, hi: float) -> float:
+    if hi <= lo:
+        return EPS0 * stack.k_at(lo)
+    return EPS0 * sum((min(b, hi) - max(a, lo)) * k for a, b, k in stack._layers()
+                      if min(b, hi) > max(a, lo)) / (hi - lo)
 
 
 _KEYS = {"z": "m", "thickness": "m", "sheet": "Ohm", "via_below": "Ohm"}

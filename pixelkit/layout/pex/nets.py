@@ -8,11 +8,12 @@ net's geometry carries the name the simulations use (``Xp.fd``: node ``fd`` of i
 A layout that does not match its netlist, or a net the comparer cannot pair, is an error that
 names it: parasitics are never hung on a guessed node.
 
-Shapes on no matched net on the top metal (the shield, which the drawing leaves floating) are the
-net ``0``: a chip ties its shield to ground. Floating shapes on the other conductors (the dummy fill
-of ``pixelkit layout --fill``, on the technology's ``<layer>_fill`` layers or on the layer itself) are
-conductors of their own, each piece a net ``~<layer>.<k>``, which ``capacitance.capacitances`` reduces
-away: the coupling two nets gain through a floating piece between them is kept.
+Shapes on no matched net (the top-metal shield, which the drawing leaves floating; a supply rail a
+cell extracted alone leaves unjoined) are the net ``0``: a chip ties them to ground. The dummy fill of
+``pixelkit layout --fill`` (the technology's ``<layer>_fill`` layers, and the kit's ``FILL_<LAYER>``
+cells, whose poly lies on the drawn poly) is floating: each square a conductor of its own, a net
+``~<layer>.<k>``, which ``capacitance.capacitances`` reduces away (the coupling two nets gain through a
+square between them is kept).
 """
 from __future__ import annotations
 
@@ -122,9 +123,11 @@ def view_geometry(gds, top: str, tech, view: list) -> NetGeometry:
         for li in layout.layer_indexes():
             for s in list(sub.shapes(li).each(kdb.Shapes.STexts)):
                 sub.shapes(li).erase(s)
+    fill = _fill_cells(layout, cell, tech)
     cell.flatten(-1, True)
     lvs = kdb.LayoutVsSchematic(kdb.RecursiveShapeIterator(layout, cell, []))
     L = extract(lvs, layout, tech)
+    L["fill_cells"] = fill
     if not has_devices(view):         # interconnect only: the nets are the labels (signoff.lvs.compare_nets)
         names, bad = label_nets(lvs, top)
         if bad:
@@ -163,7 +166,10 @@ def _geometry(lvs, L, layout, cell, top, tech, nl, names) -> NetGeometry:
     dbu = layout.dbu * 1e-6
     geo = NetGeometry(top, dbu)
     circuit = nl.circuit_by_name(top) or next(nl.each_circuit_top_down())
-    poly_wire = L["poly"] - L["active"]          # the gates are the devices' (their capacitance is the models')
+    # the gates are the devices' (their capacitance is the models'); the poly is the connectivity's (a resistor's
+    # body taken out: with the readout's passives drawn it is another layer object than the drawn poly, and
+    # the nets' poly read from the drawn one came back empty - every poly wire went to ground, before)
+    poly_wire = L["poly_conn"] - L["active"]
     layers = {c.name: _conductor(lvs, L, c.name, poly_wire) for c in stack.conductors}
     layers = {k: v for k, v in layers.items() if v is not None}
     claimed = {name: kdb.Region() for name in layers}
@@ -172,7 +178,7 @@ def _geometry(lvs, L, layout, cell, top, tech, nl, names) -> NetGeometry:
         if name is None:
             continue
         for lname, reg in layers.items():
-            r = lvs.shapes_of_net(net, L["poly"], True) - L["active"] if lname == "poly" else \
+            r = lvs.shapes_of_net(net, L["poly_conn"], True) - L["active"] if lname == "poly" else \
                 lvs.shapes_of_net(net, reg, True)
             r = _flat(r)
             if not r.is_empty():
@@ -189,17 +195,16 @@ def _geometry(lvs, L, layout, cell, top, tech, nl, names) -> NetGeometry:
         surf = _flat(surf)
         if not surf.is_empty():
             geo.surface[name] = geo.surface.get(name, kdb.Region()) + surf
-    top_metal = stack.conductors[-1].name
     for lname, reg in layers.items():
-        rest = _flat(reg - claimed[lname]) + _fill(layout, cell, tech, lname)
-        if rest.is_empty():
-            continue
-        geo.wires.setdefault(lname, {})
-        if lname == top_metal:          # the shield, left floating by the drawing: a chip ties it to ground
+        rest = _flat(reg - claimed[lname])
+        fill = L["fill_cells"].get(lname, kdb.Region())
+        floating = (rest & fill) + _fill(layout, cell, tech, lname)
+        rest = rest - fill
+        if not rest.is_empty():      # the shield, a supply rail joined outside the cell: ground
+            geo.wires.setdefault(lname, {})
             geo.wires[lname][GROUND] = geo.wires[lname].get(GROUND, kdb.Region()) + rest
-            continue
-        for k, p in enumerate(rest.merged().each()):   # dummy fill and other floating pieces: each its own net
-            geo.wires[lname][f"{FLOATING}{lname}.{k}"] = kdb.Region(p)
+        for k, p in enumerate(floating.merged().each()):   # dummy fill: each square its own, floating net
+            geo.wires.setdefault(lname, {})[f"{FLOATING}{lname}.{k}"] = kdb.Region(p)
     if "opening" in tech.layout.layers or "opening" in tech.layout.aliases:
         lay = tech.layer("opening")
         idx = layout.find_layer(lay.layer, lay.datatype)
@@ -208,6 +213,33 @@ def _geometry(lvs, L, layout, cell, top, tech, nl, names) -> NetGeometry:
     b = cell.bbox()
     geo.bbox = (b.left * dbu, b.bottom * dbu, b.right * dbu, b.top * dbu)
     return geo
+
+
+def _fill_cells(layout, cell, tech) -> dict:
+    """{conductor: Region} of the kit's fill cells under ``cell`` (``FILL_<LAYER>``: ``layout/fill.py``'s
+    squares, placed in its ``<chip>_FILL``), in ``cell``'s coordinates: poly fill lies on the drawn poly
+    layer (the density deck counts only that), so it is known by its cell."""
+    import klayout.db as kdb
+    out = {}
+    for c in layout.each_cell():
+        if not c.name.startswith("FILL_"):
+            continue
+        lname = c.name[len("FILL_"):].lower()
+        if lname not in tech.layout.layers:
+            continue
+        lay = tech.layer(lname)
+        idx = layout.find_layer(lay.layer, lay.datatype)
+        if idx is None:
+            continue
+        reg = kdb.Region()
+        inst = cell.begin_instances_rec()
+        inst.targets = [c.cell_index()]
+        while not inst.at_end():
+            reg.insert(kdb.Region(c.begin_shapes_rec(idx)).transformed(inst.trans() * inst.inst_trans()))
+            inst.next()
+        if not reg.is_empty():
+            out[lname] = reg.merged()
+    return out
 
 
 def _fill(layout, cell, tech, lname: str):

@@ -26,6 +26,7 @@ covers 3.831 fF (-2.0 %; 0.61 fF less); with the metal5 strap too FastCap2 3.616
 """
 from __future__ import annotations
 
+import functools
 import math
 
 SLICES = 6    # strips of the top face within the fringe strip's width of the edge
@@ -81,6 +82,7 @@ def covered_top(net, reg, above, z, t, dbu):
     return sorted(out.items())
 
 
+@functools.lru_cache(maxsize=1 << 14)    # a layer's edges ask the same few gaps
 def eps_fringe(stack, z: float, t: float, h: float) -> float:
     """The permittivity of the fringe of an edge of a conductor z .. z + t over a plane h below it, in a
     layered stack (``Stack.eps_gap``: across the layers in series). The bottom face's share runs down

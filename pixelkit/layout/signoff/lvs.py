@@ -115,7 +115,8 @@ def extract(lvs, layout, tech) -> dict:
         lvs.connect_global(r, VSS)
     lvs.extract_netlist()
     _mim_values(lvs.netlist(), tech)
-    return {**L, "nsd": nsd, "psd": psd, "ptap": ptap, "ntap": ntap, "well": well, "pd_n": pd_n}
+    return {**L, "nsd": nsd, "psd": psd, "ptap": ptap, "ntap": ntap, "well": well, "pd_n": pd_n,
+            "poly_conn": poly}          # the poly the connectivity holds (less a resistor's body)
 
 
 #: layers of the readout's passives: MIM top plate and its marker, salicide block, resistor marker
