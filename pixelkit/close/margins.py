@@ -15,9 +15,10 @@ from ..verify.conditions import spec_conditions
 from ..verify.figures import unit_scale
 
 #: Per spec, the conditions modelled: its worst and those whose margin is within BAND of it
-#: (at most PER_SPEC).
+#: (at most PER_SPEC); only specs whose worst margin is within ACTIVE of its target.
 PER_SPEC = 2
 BAND = 0.05
+ACTIVE = 0.10
 
 
 def _size(spec, limit) -> float:
@@ -66,20 +67,23 @@ def smallest(margins: dict, targets: dict | None = None) -> float:
     return min(vals) if vals else math.inf
 
 
-def binding(design, margins: dict, keep=()) -> list:
-    """The (spec, condition) pairs to model: per spec its worst condition and up to PER_SPEC - 1 others
-    within BAND of it, plus ``keep`` (pairs modelled before that are still near their spec's worst)."""
+def binding(design, margins: dict, targets: dict | None = None, default_target: float = 0.0) -> list:
+    """The (spec, condition) pairs to model: per spec whose worst margin is within ACTIVE of its target
+    (or below it), its worst condition and up to PER_SPEC - 1 others within BAND of it. A spec with
+    more margin than that is not modelled: every candidate is verified on the whole grid, and a spec
+    that fails there is modelled from then on (the caller's forced pairs)."""
+    targets = targets or {}
     by_spec: dict = {}
     for (name, c), m in margins.items():
-        by_spec.setdefault(name, []).append((math.inf if m is None else m, c))
+        by_spec.setdefault(name, []).append((-math.inf if m is None else m - targets.get((name, c), default_target),
+                                             c))
     out = []
     for name, items in by_spec.items():
         items.sort(key=lambda mc: (mc[0], mc[1]))
         w = items[0][0]
+        if w > ACTIVE:
+            continue
         for i, (m, c) in enumerate(items[:PER_SPEC]):
             if i == 0 or m <= w + BAND:
-                out.append((name, c))
-        for m, c in items[PER_SPEC:]:
-            if (name, c) in keep and m <= w + BAND:
                 out.append((name, c))
     return sorted(set(out), key=lambda p: (p[0], p[1]))

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -34,7 +34,7 @@ from ..verify.run import measure_at, verify
 from . import margins as mg
 from .knobs import Space, at_bound, check_bounds
 from .objective import of as objective_of
-from .step import Model, optimise, restore
+from .step import Model, correct, optimise, restore
 
 #: Finite-difference step in knob coordinates (3 % of a span or of a value).
 FD_STEP = 0.03
@@ -204,22 +204,44 @@ class Closer:
         return Model(rows, m0[keep] - targets, g[keep], f0, gf), conds, groups
 
     def _refuse_idle_knobs(self, rows, figs, designs) -> None:
-        """A knob that moves no spec's figure at any modelled condition (nor the objective) is refused."""
-        names = {self.spec[n].fig.name for n, _ in rows}
-        base = figs[0]
-        for j, k in enumerate(self.space.knobs):
-            moved = any(_moved(base.get(c, {}).get(f), figs[j + 1].get(c, {}).get(f)) for c in base for f in names)
-            if not self.objective.figure:
-                moved = moved or _moved(self.objective.value(designs[0], None),
-                                        self.objective.value(designs[j + 1], None))
-            if not moved and not self.refuse_idle:
+        """A knob that moves no figure of any spec nor the objective is refused (or, under a circuit
+        choice, kept still). First at the modelled conditions (its sensitivities, no extra run); a knob
+        that moved nothing there is tried on every spec's measurements at the nominal condition (and at
+        the first condition of each spec that does not hold there): the specs with a large margin are
+        not modelled, and a knob may move only those."""
+        names = {self.spec[n].fig.name for n, _ in rows} | ({self.objective.figure} if self.objective.figure else set())
+        suspects = [j for j in range(self.space.n) if not self._moves(j, figs, designs, names)]
+        if not suspects:
+            return
+        groups: dict = {}
+        for sp in self.base.spec:
+            held = conditions.spec_conditions(sp, [self.nominal] + self.grid)
+            if held:
+                groups.setdefault(held[0], set()).update(measure.groups_for([sp.fig.name]))
+        order = list(measure.GROUPS)
+        groups = {c: tuple(sorted(g, key=order.index)) for c, g in groups.items()}
+        more = self.at([designs[0]] + [designs[j + 1] for j in suspects], sorted(groups), groups, "dependence")
+        every = {sp.fig.name for sp in self.base.spec}
+        for i, j in enumerate(suspects):
+            k = self.space.knobs[j]
+            if self._moves(i, more, [designs[0]] + [designs[j + 1] for j in suspects], every):
+                continue
+            if not self.refuse_idle:
                 self.idle.append(k.name)
-                self.say(f"close{self.label}: {k.name} moves no spec at the binding conditions here: kept where it is")
-            elif not moved:
-                raise ConfigError(self.base.source, f"close.knobs.{k.name}", k.name,
-                                  "a knob some spec depends on: moving it by "
-                                  f"{100 * FD_STEP:g} % changed no figure of any spec at its binding conditions "
-                                  f"({', '.join(sorted({c.label for c in base}))}) nor the objective")
+                self.say(f"close{self.label}: {k.name} moves no spec here: kept where it is")
+                continue
+            raise ConfigError(self.base.source, f"close.knobs.{k.name}", k.name,
+                              "a knob some spec depends on: moving it by "
+                              f"{100 * FD_STEP:g} % changed no figure of any spec (at its binding conditions and at "
+                              f"{', '.join(c.label for c in sorted(groups))}) nor the objective")
+
+    def _moves(self, j: int, figs: list, designs: list, names: set) -> bool:
+        """Whether design j + 1 of ``designs`` differs from design 0 in a figure of ``names`` or the objective."""
+        base = figs[0]
+        if any(_moved(base.get(c, {}).get(f), figs[j + 1].get(c, {}).get(f)) for c in base for f in names):
+            return True
+        return not self.objective.figure and _moved(self.objective.value(designs[0], None),
+                                                    self.objective.value(designs[j + 1], None))
 
     # --- the loop -------------------------------------------------------------------------------
     def run(self) -> dict:
@@ -236,15 +258,14 @@ class Closer:
         p = self.full(x0)
         self.f_scale = abs(p.f) if p.f else 1.0
         self.record(p, accepted=True, mode="start", radius=None, where="grid")
-        radius, keep, first, status, last = RADIUS0, set(), True, None, None
+        radius, forced, first, status, last, shrunk = RADIUS0, set(), True, None, None, False
         yield_rounds, yield_result = 0, None
         if not self.space.n:   # nothing numeric to move (a circuit choice alone): the start is the answer
             status = "converged" if self.smallest(p.margins) >= 0 else "infeasible"
             if status == "converged" and self.yield_check:
                 yield_result = self.check_yield(p)
         while status is None:
-            pairs = set(mg.binding(self.base, p.margins, keep)) | set(self.targets)
-            keep = pairs
+            pairs = set(mg.binding(self.base, p.margins, self.targets, s.margin)) | set(self.targets) | forced
             model, conds, groups = self.model(p, sorted(pairs, key=lambda r: (r[0], r[1])), first)
             first, fresh = False, True
             u0 = self.space.to_u(p.x)
@@ -268,25 +289,45 @@ class Closer:
                 if not feasible and st.t < CUSHION and float(np.abs(st.d).max()) < s.tolerance:
                     status = "infeasible"          # the max-min point, to the tolerance, short of the targets
                     break
-                if not feasible and (np.array_equal(xc, p.x) or promise <= PROMISE or _seen(xc, self.tried)):
+                if not feasible and (np.array_equal(xc, p.x) or promise <= PROMISE):
                     if fresh or radius <= s.tolerance:     # no step raises the smallest margin: a max-min point
                         status = "infeasible"
                     break                                  # else: fresh sensitivities at this point
-                self.tell(f"candidate {self.candidates() + 1}: {len(conds)} modelled conditions")
-                self.tried.append(xc)
-                dc = self.space.design(self.base, xc)
-                cf = self.at([dc], conds, groups, "candidate")[0]
-                m_rows = self.row_margins(model.keys, cf)
-                targets = np.array([self.target(r) for r in model.keys])
-                fc = self.fnorm(self.objective_value(dc, cf.get(self.nominal)))
-                local = _local_gain(model, m_rows - targets, feasible, fc, st)
-                _secant(model, st.d, m_rows - targets, fc)
-                fresh = False
-                if local < ETA:
-                    self.record_partial(xc, cf, model.keys, fc, mode, radius)
+                if _seen(xc, self.tried):   # the models (fresh ones too) point where a candidate already failed
                     radius /= 2
+                    shrunk = True
                     if radius < s.tolerance:
                         status = "converged" if feasible else "infeasible"
+                    continue
+                sconds, sgroups, screen = self.screen(p, conds, groups)
+                targets = np.array([self.target(r) for r in model.keys])
+                xc, dc, cf, fc, local, bad = self.attempt(xc, model, st, feasible, sconds, sgroups, screen, p, targets)
+                fresh = False
+                if local < ETA and not bad and feasible and fc is not None and fc < model.f:
+                    # the objective improved but a modelled constraint curved away: a second-order
+                    # correction, back onto the passing side, before giving the step up
+                    self.record_partial(xc, cf, model.keys + screen, fc, mode, radius)
+                    m_at = self.row_margins(model.keys, cf) - targets
+                    d2 = correct(model, m_at, st.d, u0, lo, hi, radius, CUSHION)
+                    x2 = self.space.snap(self.space.to_x(u0 + d2))
+                    mode = "optimise, corrected"
+                    if np.array_equal(x2, xc) or _seen(x2, self.tried):
+                        radius /= 2
+                        shrunk = True
+                        if radius < s.tolerance:
+                            status = "converged"
+                        continue
+                    st = replace(st, d=d2)
+                    xc, dc, cf, fc, local, bad = self.attempt(x2, model, st, feasible, sconds, sgroups, screen, p, targets)
+                forced |= bad
+                if local < ETA:
+                    self.record_partial(xc, cf, model.keys + screen, fc, mode, radius)
+                    radius /= 2
+                    shrunk = True     # no growth on the next success: the radius just failed
+                    if radius < s.tolerance:
+                        status = "converged" if feasible else "infeasible"
+                    if bad:
+                        break         # a spec nothing modelled broke: model it (its sensitivities) first
                     continue
                 self.tell(f"candidate {self.candidates() + 1}: verifying on the whole grid")
                 pc = self.full(xc, dc)
@@ -294,16 +335,17 @@ class Closer:
                 self.record(pc, accepted=ok, mode=mode, radius=radius, where="grid")
                 if ok:
                     p = pc
-                    on_edge = float(np.abs(st.d).max()) >= 0.99 * radius
-                    radius = (min(2 * radius, RADIUS_MAX) if rho > 0.75 and on_edge else radius if rho > 0.25
-                              else radius / 2)
+                    grow = rho > 0.75 and float(np.abs(st.d).max()) >= 0.99 * radius and not shrunk
+                    radius = min(2 * radius, RADIUS_MAX) if grow else radius if rho > 0.25 else radius / 2
+                    shrunk = False
                     break
                 radius /= 2
-                new = {k for k, m in pc.margins.items() if (m is None or m - self.target(k) < 0) and k not in keep}
+                shrunk = True
+                new = {k for k, m in pc.margins.items() if (m is None or m - self.target(k) < 0) and k not in pairs}
                 if radius < s.tolerance:
                     status = "converged" if feasible else "infeasible"
                 elif new:     # it failed where nothing was modelled: model the worst of those from now on
-                    keep |= set(sorted(new, key=lambda k: -math.inf if pc.margins[k] is None else pc.margins[k])[:3])
+                    forced |= set(sorted(new, key=lambda k: -math.inf if pc.margins[k] is None else pc.margins[k])[:3])
                     break
             if status == "converged" and self.yield_check:
                 yield_result = self.check_yield(p)
@@ -312,6 +354,38 @@ class Closer:
                     self.targets.update(yield_result["targets"])
                     status, radius = None, RADIUS0
         return self.result(p, status, last, yield_result)
+
+    def screen(self, p: Point, conds: list, groups: dict) -> tuple[list, dict, list]:
+        """The conditions a candidate is simulated at before the whole grid: the modelled ones and each
+        spec's worst condition at ``p`` (a spec with a large margin is not modelled, but a step that
+        breaks it is caught here, at a fraction of the grid's cost); and those (spec, worst) pairs."""
+        screen = [(name, c) for name, (m, c) in mg.worst(self.base, p.margins).items() if c is not None]
+        order = list(measure.GROUPS)
+        out = {c: set(g) for c, g in groups.items()}
+        for name, c in screen:
+            out.setdefault(c, set()).update(measure.groups_for([self.spec[name].fig.name]))
+        return sorted(out), {c: tuple(sorted(g, key=order.index)) for c, g in out.items()}, screen
+
+    def attempt(self, xc, model, st, feasible, conds, groups, screen, p: Point, targets):
+        """Simulate candidate ``xc`` at ``conds``: (xc, its figures, objective, the share of the promised
+        gain it gave, the screened pairs it broke). The models take its secant."""
+        self.tell(f"candidate {self.candidates() + 1}: {len(conds)} conditions (modelled, and each spec's worst)")
+        self.tried.append(xc)
+        dc = self.space.design(self.base, xc)
+        cf = self.at([dc], conds, groups, "candidate")[0]
+        m_rows = self.row_margins(model.keys, cf) - targets
+        fc = self.fnorm(self.objective_value(dc, cf.get(self.nominal)))
+        local = _local_gain(model, m_rows, feasible, fc, st)
+        _secant(model, st.d, m_rows, fc)
+        floor = 0.0 if feasible else self.smallest(p.margins)
+        bad = set()
+        for k in screen:
+            m = mg.margin(self.spec[k[0]], cf.get(k[1], {}).get(self.spec[k[0]].fig.name))
+            if m is None or m - self.target(k) < floor:
+                bad.add(k)
+        if bad - set(model.keys):
+            local = -1.0   # an unmodelled spec broke (or fell below the current worst): model it from now on
+        return xc, dc, cf, fc, local, bad - set(model.keys)
 
     def candidates(self) -> int:
         """Candidates simulated so far (the start is not one)."""
@@ -362,7 +436,7 @@ class Closer:
         m = {k: mg.margin(self.spec[k[0]], figs.get(k[1], {}).get(self.spec[k[0]].fig.name)) for k in keys}
         runs, cached = self.counter.delta()
         rec = {"iteration": len(self.iterations), "mode": mode, "accepted": False,
-               "verified_on": "modelled conditions", "knobs": self.space.overrides(x), "radius": radius,
+               "verified_on": "modelled and worst conditions", "knobs": self.space.overrides(x), "radius": radius,
                "smallest_margin_pct": 100 * self.smallest(m),
                "objective": None if fc is None else fc * self.f_scale * (1 if self.objective.sense == "min" else -1),
                "specs": self._specs(m), "errors": [], "spice_runs": runs, "spice_cached": cached,

@@ -18,6 +18,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+import math
+
 import casadi as ca
 import numpy as np
 
@@ -100,7 +102,8 @@ def optimise(model: Model, u0, lo, hi, radius: float, cushion: float = 0.0) -> S
     dlo, dhi = _box(u0, lo, hi, radius)
     opti = _opti()
     d = opti.variable(n)
-    opti.subject_to(model.m + ca.mtimes(ca.DM(model.g), d) >= min(cushion, max(float(np.min(model.m)), 0.0)))
+    if len(model.m):   # no row: no spec close enough to its limit to be modelled (the grid checks them all)
+        opti.subject_to(model.m + ca.mtimes(ca.DM(model.g), d) >= min(cushion, max(float(np.min(model.m)), 0.0)))
     opti.subject_to(d >= ca.DM(dlo))
     opti.subject_to(d <= ca.DM(dhi))
     opti.minimize(ca.mtimes(ca.DM(model.gf).T, d) + REGULARISE * ca.sumsqr(d) / max(radius, 1e-9) ** 2)
@@ -109,4 +112,22 @@ def optimise(model: Model, u0, lo, hi, radius: float, cushion: float = 0.0) -> S
     ok = opti.stats().get("success", False)
     dv = np.clip(np.array(sol.value(d), float).reshape(n), dlo, dhi)
     pred = model.m + model.g @ dv
-    return Step(dv, float(pred.min()) if len(pred) else 0.0, float(model.f + model.gf @ dv), ok)
+    return Step(dv, float(pred.min()) if len(pred) else math.inf, float(model.f + model.gf @ dv), ok)
+
+
+def correct(model: Model, m_at: np.ndarray, d: np.ndarray, u0, lo, hi, radius: float, cushion: float) -> np.ndarray:
+    """A second-order correction of step ``d`` (Fletcher's): the candidate at u0 + d gave the margins
+    less targets ``m_at`` (some below 0: the constraints curve away from their tangents); the shortest
+    move e with m_at + g e >= cushion, inside the bounds and the trust region, puts it back on the
+    passing side of the linear models taken there. Returns d + e."""
+    n = len(u0)
+    dlo, dhi = _box(u0, lo, hi, radius)
+    opti = _opti()
+    e = opti.variable(n)
+    opti.subject_to(ca.DM(m_at) + ca.mtimes(ca.DM(model.g), e) >= cushion)
+    opti.subject_to(ca.DM(d) + e >= ca.DM(dlo))
+    opti.subject_to(ca.DM(d) + e <= ca.DM(dhi))
+    opti.minimize(ca.sumsqr(e))
+    opti.set_initial(e, 0.0)
+    sol = opti.solve()
+    return np.clip(d + np.array(sol.value(e), float).reshape(n), dlo, dhi)

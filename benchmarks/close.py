@@ -1,0 +1,156 @@
+"""The cost of ``pixelkit close``: SPICE runs and wall time per iteration and in total, and how they
+grow with the number of knobs (2, 5, 10), against one plain ``verify`` of the same design and grid
+measured in the same run (the unit a designer knows: "close costs N sign-offs").
+
+    python3 benchmarks/close.py [--knobs 2,5,10] [--grid small|full] [--mc N] [--max-iterations N]
+                                [--design FILE] [--json]
+
+For each knob count, with a fresh empty simulation cache each (``PIXELKIT_CACHE``): ``pixelkit verify``
+of the design with that grid (the baseline), then ``pixelkit close`` of the same design with the
+benchmark's ``[close]`` table (objective min power; the knobs below, the first N), each in its own
+process as a user runs them. Printed: per iteration (from close.json) the mode, whether it was
+accepted, where it was verified, SPICE runs, cache hits and wall time; the totals; the ratios close /
+verify in runs, wall and CPU (the command and its ngspice children; on a machine others load, CPU is
+the figure load moves least); and the growth of the runs per iteration from 2 knobs to 5 and 10.
+
+``--grid small``: corners tt and ss x 27 and 85 degC x -10 % and 0 % (8 conditions), the growth study;
+``--grid full``: the design's own ``[verify]`` grid (the reference: 45 conditions) with its Monte Carlo
+unless ``--mc``: the "close on the reference from an empty cache" figure (issue 40: within 30 min on
+2 cores).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+import tomllib
+from pathlib import Path
+
+from common import ROOT, child_cpu_s
+
+#: The knobs, in the order they are added (each moves at least one spec of the reference).
+KNOBS = [
+    ("pixel.v_pd_reset", ["1.6 V", "2.2 V"]),
+    ("pixel.sf_bias", {"min": "600 nA", "max": "1.5 uA", "scale": "log"}),
+    ("pixel.v_fd_reset", ["1.6 V", "2.2 V"]),
+    ("afe.c13", ["250 fF", "1 pF"]),
+    ("pixel.devices.sf_w", {"min": "0.5 um", "max": "3 um", "step": "5 nm"}),
+    ("pixel.devices.tg_w", {"min": "0.42 um", "max": "1.2 um", "step": "5 nm"}),
+    ("pixel.devices.ec_w", {"min": "0.42 um", "max": "1.2 um", "step": "5 nm"}),
+    ("pixel.devices.rst_w", {"min": "0.42 um", "max": "1.2 um", "step": "5 nm"}),
+    ("afe.gbw", ["20 MHz", "100 MHz"]),
+    ("secondary.t_int", ["8 ms", "16 ms"]),
+]
+SMALL = {"corners": ["tt", "ss"], "temperatures": ["27 degC", "85 degC"], "supplies": ["-10 %", "0 %"]}
+
+
+def design_file(src: Path, n: int, grid: str, mc: int | None, max_iterations: int, folder: Path) -> Path:
+    """The design's file with the benchmark's [close] table (the first ``n`` knobs) and grid."""
+    from pixelkit.schema import to_toml
+    text = src.read_text()
+    raw = tomllib.loads(text)
+    verify = dict(raw.get("verify", {}))
+    if grid == "small":
+        verify.update(SMALL)
+    if mc is not None:
+        verify["mc"] = mc
+    close = {"objective": "min power", "max_iterations": max_iterations, "knobs": dict(KNOBS[:n])}
+    head = text.split("\n[verify]")[0] if "\n[verify]" in text else text.split("\n[spec.")[0]
+    body = {k: v for k, v in raw.items() if k in ("spec",)}
+    path = folder / f"bench_{n}.toml"
+    if raw["technology"].endswith(".toml"):
+        head = head.replace(f'"{raw["technology"]}"', f'"{(src.parent / raw["technology"]).resolve()}"')
+    path.write_text(head + "\n" + to_toml({"verify": verify, **body, "close": close}))
+    return path
+
+
+def timed(cmd: list, env: dict) -> tuple[subprocess.CompletedProcess, float, float]:
+    t0, c0 = time.perf_counter(), child_cpu_s()
+    p = subprocess.run(cmd, capture_output=True, text=True, env=env, cwd=ROOT)
+    return p, time.perf_counter() - t0, child_cpu_s() - c0
+
+
+def one(src: Path, n: int, args, folder: Path) -> dict:
+    d = design_file(src, n, args.grid, args.mc, args.max_iterations, folder)
+    env = dict(os.environ, PIXELKIT_CACHE=tempfile.mkdtemp(prefix="pk-bench-verify-"), PIXELKIT_PROGRESS="0")
+    p, v_wall, v_cpu = timed([sys.executable, "-m", "pixelkit", "verify", str(d), "--mc", "0", "--json",
+                              "--out", str(folder / f"verify_{n}")], env)
+    if p.returncode not in (0, 1, 4, 5):
+        raise SystemExit(f"verify exited {p.returncode}: {p.stderr[-2000:]}")
+    v = json.loads(p.stdout)
+    v_runs = sum(1 for _ in Path(env["PIXELKIT_CACHE"], "sim").rglob("*.entry"))
+    env = dict(os.environ, PIXELKIT_CACHE=tempfile.mkdtemp(prefix="pk-bench-close-"), PIXELKIT_PROGRESS="0")
+    out = folder / f"closed_{n}.toml"
+    p, c_wall, c_cpu = timed([sys.executable, "-m", "pixelkit", "close", str(d), "--out", str(out), "--json"], env)
+    if p.returncode not in (0, 1, 5):
+        raise SystemExit(f"close exited {p.returncode}: {p.stderr[-2000:]}")
+    r = json.loads(p.stdout)
+    return {"knobs": n, "conditions": v["grid"]["conditions"], "verify": {"wall_s": v_wall, "cpu_s": v_cpu,
+                                                                          "spice_runs": v_runs},
+            "close": {"wall_s": c_wall, "cpu_s": c_cpu, "spice_runs": r["spice_runs"], "cached": r["spice_cached"],
+                      "status": r["status"], "exit": p.returncode, "candidates": len(r["iterations"]) - 1,
+                      "objective": r["objective"], "smallest_margin_pct": r["smallest_margin_pct"],
+                      "conflict": (r.get("conflict") or {}).get("text"),
+                      "iterations": [{k: i[k] for k in ("iteration", "mode", "accepted", "verified_on", "spice_runs",
+                                                        "spice_cached", "wall_s", "smallest_margin_pct")}
+                                     for i in r["iterations"]]}}
+
+
+def show(res: dict) -> None:
+    c, v = res["close"], res["verify"]
+    print(f"\n{res['knobs']} knobs, {res['conditions']} conditions: close {c['status']} (exit {c['exit']}) after "
+          f"{c['candidates']} candidates, smallest margin {c['smallest_margin_pct']:+.3g} %, objective "
+          f"{c['objective']['shown_start']} -> {c['objective']['shown']}"
+          + (f"; conflict: {c['conflict']}" if c["conflict"] else ""))
+    print("  iteration  mode      accepted  verified on          SPICE runs  cached  wall at end (s)")
+    for i in c["iterations"]:
+        print(f"  {i['iteration']:>9}  {i['mode']:<8}  {'yes' if i['accepted'] else 'no':<8}  {i['verified_on']:<19}  "
+              f"{i['spice_runs']:>10}  {i['spice_cached']:>6}  {i['wall_s']:>15.0f}")
+    print(f"  close:  {c['spice_runs']} SPICE runs, {c['wall_s']:.0f} s wall, {c['cpu_s']:.0f} s CPU (ngspice)")
+    print(f"  verify: {v['spice_runs']} SPICE runs, {v['wall_s']:.0f} s wall, {v['cpu_s']:.0f} s CPU (ngspice), "
+          "the same grid, no Monte Carlo")
+    print(f"  ratio close / verify: runs {c['spice_runs'] / max(v['spice_runs'], 1):.1f}, wall "
+          f"{c['wall_s'] / v['wall_s']:.1f}, CPU {c['cpu_s'] / max(v['cpu_s'], 1e-9):.1f}")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--knobs", default="2,5,10")
+    ap.add_argument("--grid", choices=("small", "full"), default="small")
+    ap.add_argument("--mc", type=int, default=None, help="Monte Carlo samples (default: 0 on the small grid, the "
+                                                         "design's on the full one)")
+    ap.add_argument("--max-iterations", type=int, default=15)
+    ap.add_argument("--design", type=Path, default=ROOT / "designs" / "dual_pixel_revA.toml")
+    ap.add_argument("--json", action="store_true")
+    args = ap.parse_args()
+    if args.mc is None and args.grid == "small":
+        args.mc = 0
+    counts = [int(x) for x in args.knobs.split(",")]
+    folder = Path(tempfile.mkdtemp(prefix="pk-bench-close-"))
+    load = os.getloadavg()[0]
+    results = [one(args.design, n, args, folder) for n in counts]
+    if args.json:
+        print(json.dumps({"results": results, "load_at_start": load, "load_at_end": os.getloadavg()[0]}, indent=1))
+        return
+    print(f"pixelkit close on {args.design.name}, grid {args.grid}, load average {load:.1f} at the start, "
+          f"{os.getloadavg()[0]:.1f} at the end; files in {folder}")
+    for res in results:
+        show(res)
+    base = results[0]
+    per = {r["knobs"]: r["close"]["spice_runs"] / max(r["close"]["candidates"], 1) for r in results}
+    if len(results) > 1:
+        print("\ngrowth with the knobs (SPICE runs per candidate, total runs, wall), against "
+              f"{base['knobs']} knobs:")
+        for r in results:
+            print(f"  {r['knobs']:>2} knobs: {per[r['knobs']]:.0f} runs per candidate "
+                  f"(x{per[r['knobs']] / per[base['knobs']]:.2f}), total runs x"
+                  f"{r['close']['spice_runs'] / base['close']['spice_runs']:.2f}, wall x"
+                  f"{r['close']['wall_s'] / base['close']['wall_s']:.2f}")
+
+
+if __name__ == "__main__":
+    main()
