@@ -8,7 +8,8 @@
 from __future__ import annotations
 
 __all__ = ["load_design", "benches", "bench", "simulate", "simulate_many", "measure_signals", "write_waveforms",
-           "export_deck", "models", "experiment", "size", "layout_design", "diagnose", "sign_off", "WorkingRangeWarning"]
+           "export_deck", "models", "experiment", "size", "layout_design", "diagnose", "sign_off", "close_design",
+           "WorkingRangeWarning"]
 
 
 def __getattr__(name):

@@ -15,10 +15,12 @@ The main commands of the command line are thin layers over these functions::
     lay = pk.layout_design(d, "layouts")                     # GDS, extraction, pictures
     gap = pk.diagnose(d, "measured.csv")                     # sim-to-real gap of measured data
     so = pk.sign_off(d, corners=("tt", "ss"), mc=20)         # [spec] over corners x T x supply, yield
+    cl = pk.close_design(d, "designs/my_revB.toml")          # the [close] knobs until every spec passes
 
 Units are SI throughout (A, V, s, m); results are plain dicts / numpy arrays.
-(``measure_signals``, ``layout_design`` and ``sign_off`` are not called ``measure`` / ``layout`` / ``verify``:
-those names are the subpackages ``pixelkit.measure``, ``pixelkit.layout`` and ``pixelkit.verify``.)
+(``measure_signals``, ``layout_design``, ``sign_off`` and ``close_design`` are not called ``measure`` / ``layout`` /
+``verify`` / ``close``: those names are the subpackages ``pixelkit.measure``, ``pixelkit.layout``, ``pixelkit.verify``
+and ``pixelkit.close``.)
 """
 from __future__ import annotations
 
@@ -157,3 +159,15 @@ def sign_off(design, corners=None, temperatures=None, supplies=None, mc=None, se
     from .verify.run import verify as _verify
     return _verify(design, corners, temperatures, supplies, mc, seed, backend=backend, jobs=jobs,
                    scheduler=scheduler, post_layout=post_layout)
+
+
+def close_design(design, out, backend: str = "batch", jobs=None, scheduler=None) -> dict:
+    """``pixelkit close``: move the knobs of the design's ``[close]`` table until every ``[spec]`` passes
+    at every condition of its ``[verify]`` grid with its Monte Carlo yield, optimising its objective
+    (docs/close.md). Writes ``<out stem>.close.json`` (the path) beside ``out`` and, when a revision
+    passes, the revision at ``out``; returns ``passes``, ``status``, the knobs, every iteration, the
+    final sign-off, the yield and, when none passes, the ``conflict``."""
+    from .close.run import close_design as _close
+    r = _close(design, out, backend=backend, jobs=jobs, scheduler=scheduler)
+    r.pop("design_obj", None)
+    return r
