@@ -167,7 +167,7 @@ def close_design(design, out, backend: str = "batch", jobs=None, scheduler=None)
     (docs/close.md). Writes ``<out stem>.close.json`` (the path) beside ``out`` and, when a revision
     passes, the revision at ``out``; returns ``passes``, ``status``, the knobs, every iteration, the
     final sign-off, the yield and, when none passes, the ``conflict``."""
-    from .close.run import close_design as _close
+    from .close.revision import close_design as _close
     r = _close(design, out, backend=backend, jobs=jobs, scheduler=scheduler)
     r.pop("design_obj", None)
     return r

@@ -17,7 +17,7 @@ def close_cmd(design, out, scheduler, backend, jobs, as_json):
     """Find the revision that passes every [spec] at every condition of the [verify] grid (with its
     Monte Carlo yield) by moving the [close] knobs; exit 1 naming the specs that conflict when none does."""
     from ..close.output import text
-    from ..close.run import close_design
+    from ..close.revision import close_design
     from ..errors import EXIT_REGRESSION, verdict_exit
     from ..progress import enabled
     from ..spice.counter import spice_progress

@@ -7,6 +7,7 @@
 - ``knobs``: the knob space (scaled coordinates, the values as written, designs at a point);
 - ``margins``: each spec's margin at each condition, normalised, and the binding conditions;
 - ``step``: the casadi subproblem on the linear models (trust region, conflicts);
-- ``run``: the loop (sensitivities, candidates re-verified by ``verify``, the yield);
+- ``run``: one close, the loop (sensitivities, candidates re-verified by ``verify``, the yield);
+- ``revision``: ``close_design``: a close per combination of circuit choices, the best, the files;
 - ``output``: the terminal text, ``close.json``, the written revision.
 """
