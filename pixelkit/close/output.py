@@ -7,6 +7,8 @@ import math
 import re
 from pathlib import Path
 
+import numpy as np
+
 #: A gradient counts as helping / hurting a spec above this (normalised margin per knob unit).
 _SIGN = 1e-6
 
@@ -49,10 +51,12 @@ def conflicts(closer, p, last) -> dict:
     knob moves them."""
     from .knobs import at_bound
     from .step import restore
-    st, model, _radius = last
+    st, model, radius = last
     u0 = closer.space.to_u(p.x)
     lo, hi = closer.space.u_bounds
-    r = restore(model, u0, lo, hi, closer.settings.tolerance, cap=0.0)
+    r = restore(model, u0, lo, hi, max(radius, closer.settings.tolerance), cap=0.0)
+    if len(r.multipliers) < 2 and not r.bounds:   # one row against the trust region: the models over the box
+        r = restore(model, u0, lo, hi, float(np.max(hi - lo)), cap=0.0)
     rows = sorted(r.multipliers.items(), key=lambda kv: -kv[1])
     index = {k: i for i, k in enumerate(model.keys)}
     specs = []
@@ -78,8 +82,10 @@ def conflicts(closer, p, last) -> dict:
             why.append(f"{kn['key']} is at its {kn['at_bound']} ({kn['bound']})")
     if len(specs) > 1:
         text = " against ".join(names)
-    elif specs:
+    elif specs and any(k["at_bound"] for k in knobs):
         text = f"{names[0]} cannot reach its limit within the knobs' bounds"
+    elif specs:
+        text = f"{names[0]} cannot be raised further by the knobs (a local max-min point of the margins)"
     else:
         text = "no spec carries the last step (the models found no direction)"
     if why:

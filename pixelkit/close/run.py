@@ -47,6 +47,10 @@ ETA = 0.1
 CUSHION = 0.002
 #: A step that promises less than this (smallest margin, or objective relative to its start) is none.
 PROMISE = 1e-5
+#: Refresh every gradient by finite differences after this many accepted steps on secants alone.
+REFRESH_EVERY = 3
+#: The key of the objective's gradient (a figure at the nominal condition).
+OBJECTIVE = ("objective", None)
 #: Rounds of "raise the nominal targets to the Monte Carlo spread" before close gives up on yield.
 YIELD_ROUNDS = 3
 #: A knob counts as moving a figure when the figure changes by more than this (relative).
@@ -103,6 +107,7 @@ class Closer:
         self.yield_check = _yield_needs(design)
         self.f_scale = None
         self.tried: list = []            # every candidate's knob values
+        self.grads: dict = {}            # (spec, condition) or OBJECTIVE -> gradient in u (kept across steps)
 
     # --- evaluation ---------------------------------------------------------------------------
     def target(self, key) -> float:
@@ -169,9 +174,52 @@ class Closer:
                          mg.margin(self.spec[n], figs.get(c, {}).get(self.spec[n].fig.name)) is not None
                          else np.nan for n, c in rows])
 
-    def model(self, p: Point, pairs, first: bool) -> tuple[Model, list, dict]:
+    def model(self, p: Point, pairs, first: bool) -> tuple[Model, list, dict, bool]:
+        """The linear models of the margins of ``pairs`` (and of every other spec the same groups measure
+        there) and of the objective at ``p``: (model, conditions, groups, whether every gradient is fresh).
+        A row modelled before keeps its gradient, as the secants of the candidates since corrected it
+        (Broyden: a quasi-Newton model); a row new to the model gets finite differences (at its
+        conditions only). ``self.grads.clear()`` makes them all fresh."""
         conds, groups = self.plan(pairs)
-        rows = self.rows(groups)
+        rows = [r for r in self.rows(groups) if p.margins.get(r) is not None]
+        obj = self.objective.figure is not None
+        need = {c for r in rows if r not in self.grads for c in [r[1]]}
+        if obj and OBJECTIVE not in self.grads:
+            need.add(self.nominal)
+        if first:
+            need = set(conds)
+        xs, du = self.fd_points(p)
+        designs = [p.design] + [self.space.design(self.base, x) for x in xs]
+        if need:
+            fd_conds = sorted(need)
+            self.tell(f"sensitivities: {self.space.n} knobs x {len(fd_conds)} conditions")
+            figs = self.at(designs, fd_conds, {c: groups[c] for c in fd_conds}, "sensitivities")
+            fd_rows = [r for r in self.rows({c: groups[c] for c in fd_conds}) if r in set(rows)]
+            m_base = self.row_margins(fd_rows, figs[0])
+            for i, r in enumerate(fd_rows):
+                self.grads[r] = np.array([_slope(self.row_margins([r], figs[j + 1])[0], m_base[i], du[j])
+                                          for j in range(self.space.n)])
+            if obj and self.nominal in need:
+                f_base = self.fnorm(figs[0].get(self.nominal, {}).get(self.objective.figure))
+                self.grads[OBJECTIVE] = np.array([_slope(self.fnorm(figs[j + 1].get(self.nominal, {}).get(
+                    self.objective.figure)), f_base, du[j]) for j in range(self.space.n)])
+            if first:
+                self._refuse_idle_knobs(fd_rows, figs, designs)
+        elif first:    # nothing modelled yet: the dependence check on every spec's groups alone
+            self._refuse_idle_knobs([], [{}] * len(designs), designs)
+        fresh = first or all(r[1] in need for r in rows)
+        m0 = np.array([p.margins[r] - self.target(r) for r in rows])
+        g = np.array([self.grads.get(r, np.zeros(self.space.n)) for r in rows]).reshape(len(rows), self.space.n)
+        f0 = self.fnorm(p.f)
+        if obj:
+            gf = self.grads.get(OBJECTIVE, np.zeros(self.space.n)).copy()
+        else:   # a closed form (area, a knob): exact differences, no simulation
+            gf = np.array([_slope(self.fnorm(self.objective.value(designs[j + 1], None)), f0, du[j])
+                           for j in range(self.space.n)])
+        return Model(rows, m0, g, f0, gf), conds, groups, fresh
+
+    def fd_points(self, p: Point) -> tuple[list, list]:
+        """The knob values of the finite differences at ``p`` (one knob moved each) and the moves in u."""
         u0 = self.space.to_u(p.x)
         lo, hi = self.space.u_bounds
         xs, du = [], []
@@ -184,24 +232,14 @@ class Closer:
             x = self.space.snap(self.space.to_x(u))
             xs.append(x)
             du.append(self.space.to_u(x)[j] - u0[j])
-        self.tell(f"sensitivities: {len(self.space.knobs)} knobs x {len(conds)} conditions")
-        designs = [p.design] + [self.space.design(self.base, x) for x in xs]
-        figs = self.at(designs, conds, groups, "sensitivities")
-        m0 = self.row_margins(rows, figs[0])
-        g = np.zeros((len(rows), self.space.n))
-        f0 = self.fnorm(self.objective_value(designs[0], figs[0].get(self.nominal)))
-        gf = np.zeros(self.space.n)
-        for j in range(self.space.n):
-            mj = self.row_margins(rows, figs[j + 1])
-            g[:, j] = np.where(np.isfinite(mj) & np.isfinite(m0), (mj - m0) / du[j], 0.0)
-            fj = self.fnorm(self.objective_value(designs[j + 1], figs[j + 1].get(self.nominal)))
-            gf[j] = (fj - f0) / du[j] if fj is not None and f0 is not None else 0.0
-        if first:
-            self._refuse_idle_knobs(rows, figs, designs)
-        keep = np.isfinite(m0)
-        rows = [r for r, ok in zip(rows, keep) if ok]
-        targets = np.array([self.target(r) for r in rows])
-        return Model(rows, m0[keep] - targets, g[keep], f0, gf), conds, groups
+        return xs, du
+
+    def keep_secant(self, model: Model) -> None:
+        """The models' rows, corrected by a candidate's secant, are the gradients from now on."""
+        for i, r in enumerate(model.keys):
+            self.grads[r] = model.g[i].copy()
+        if self.objective.figure is not None:
+            self.grads[OBJECTIVE] = model.gf.copy()
 
     def _refuse_idle_knobs(self, rows, figs, designs) -> None:
         """A knob that moves no figure of any spec nor the objective is refused (or, under a circuit
@@ -258,7 +296,7 @@ class Closer:
         p = self.full(x0)
         self.f_scale = abs(p.f) if p.f else 1.0
         self.record(p, accepted=True, mode="start", radius=None, where="grid")
-        radius, forced, first, status, last, shrunk = RADIUS0, set(), True, None, None, False
+        radius, forced, first, status, last, shrunk, on_secants = RADIUS0, set(), True, None, None, False, 0
         yield_rounds, yield_result = 0, None
         if not self.space.n:   # nothing numeric to move (a circuit choice alone): the start is the answer
             status = "converged" if self.smallest(p.margins) >= 0 else "infeasible"
@@ -266,8 +304,8 @@ class Closer:
                 yield_result = self.check_yield(p)
         while status is None:
             pairs = set(mg.binding(self.base, p.margins, self.targets, s.margin)) | set(self.targets) | forced
-            model, conds, groups = self.model(p, sorted(pairs, key=lambda r: (r[0], r[1])), first)
-            first, fresh = False, True
+            model, conds, groups, fresh = self.model(p, sorted(pairs, key=lambda r: (r[0], r[1])), first)
+            first = False
             u0 = self.space.to_u(p.x)
             lo, hi = self.space.u_bounds
             while status is None:
@@ -282,17 +320,20 @@ class Closer:
                 xc = self.space.snap(self.space.to_x(u0 + st.d))
                 now = float(model.m.min()) if len(model.m) else 0.0
                 promise = (model.f - st.f) if feasible else st.t - now
-                if feasible and (np.array_equal(xc, p.x) or promise <= PROMISE
-                                 or float(np.abs(st.d).max()) < s.tolerance):
-                    status = "converged"               # the model's next move is below the tolerance
-                    break
-                if not feasible and st.t < CUSHION and float(np.abs(st.d).max()) < s.tolerance:
-                    status = "infeasible"          # the max-min point, to the tolerance, short of the targets
+                small = float(np.abs(st.d).max()) < s.tolerance
+                if (feasible and (np.array_equal(xc, p.x) or promise <= PROMISE or small)
+                        or not feasible and st.t < CUSHION and small):
+                    if fresh:   # the model's next move is below the tolerance: passing, or a max-min point
+                        status = "converged" if feasible else "infeasible"
+                    else:       # on secants: sure of it only with fresh sensitivities
+                        self.grads.clear()
                     break
                 if not feasible and (np.array_equal(xc, p.x) or promise <= PROMISE):
                     if fresh or radius <= s.tolerance:     # no step raises the smallest margin: a max-min point
                         status = "infeasible"
-                    break                                  # else: fresh sensitivities at this point
+                    else:                                  # else: fresh sensitivities at this point
+                        self.grads.clear()
+                    break
                 if _seen(xc, self.tried):   # the models (fresh ones too) point where a candidate already failed
                     radius /= 2
                     shrunk = True
@@ -338,6 +379,9 @@ class Closer:
                     grow = rho > 0.75 and float(np.abs(st.d).max()) >= 0.99 * radius and not shrunk
                     radius = min(2 * radius, RADIUS_MAX) if grow else radius if rho > 0.25 else radius / 2
                     shrunk = False
+                    on_secants = 0 if fresh else on_secants + 1
+                    if rho < 0.5 or on_secants >= REFRESH_EVERY:
+                        self.grads.clear()    # the models predicted poorly, or have run on secants long enough
                     break
                 radius /= 2
                 shrunk = True
@@ -377,6 +421,7 @@ class Closer:
         fc = self.fnorm(self.objective_value(dc, cf.get(self.nominal)))
         local = _local_gain(model, m_rows, feasible, fc, st)
         _secant(model, st.d, m_rows, fc)
+        self.keep_secant(model)
         floor = 0.0 if feasible else self.smallest(p.margins)
         bad = set()
         for k in screen:
@@ -487,6 +532,10 @@ class Closer:
         if short and last is not None:
             out["conflict"] = conflicts(self, p, last)
         return out
+
+
+def _slope(a, b, h) -> float:
+    return (a - b) / h if a is not None and b is not None and np.isfinite(a) and np.isfinite(b) and h else 0.0
 
 
 def _seen(x, tried) -> bool:
