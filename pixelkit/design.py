@@ -208,6 +208,31 @@ class Sizing:
 
 
 @dataclass(frozen=True)
+class Light:
+    """Where the kit's light figures come from (docs/light-collection.md)."""
+    model: str = text("geometric", choices=("geometric", "modelled"),
+                      doc="geometric: the secondary's photocurrent is the primary's density times the mask opening, "
+                          "the storage node collects 1/pixel.gse of its photodiode's, the light map's junctions "
+                          "their exposed area times the QE; modelled: all three from the collection model of the "
+                          "drawn pixel (absorption by wavelength, the light field under the metals, diffusion "
+                          "to each junction) over the scene's spectrum (the technology needs a [collection] table)")
+    wavelength_min: float = qty("m", 400e-9, gt=0, plausible=(250e-9, 1200e-9),
+                                doc="shortest wavelength the collection model computes (the silicon table: 250 - 1200 nm)")
+    wavelength_max: float = qty("m", 1100e-9, gt=0, plausible=(250e-9, 1200e-9), doc="longest wavelength it computes")
+    wavelength_step: float = qty("m", 25e-9, gt=0, plausible=(1e-9, 200e-9), doc="wavelength step")
+    grid: float = qty("m", 0.25e-6, gt=0, plausible=(0.05e-6, 2e-6),
+                      doc="lateral spacing of the collection grid (the cell's sides must be multiples of it; the "
+                          "light field runs on a grid twice as fine where the wavelength needs it)")
+    depth: float = qty("m", 30e-6, gt=0, plausible=(2e-6, 1e-3),
+                       doc="depth of the 3D grid; below it the collection is laterally uniform and joined exactly")
+
+    def validate(self, path, source, raw):
+        if self.wavelength_max <= self.wavelength_min:
+            raise ConfigError(source, f"{path}.wavelength_max", as_written(raw, "wavelength_max", self.wavelength_max),
+                              f"a wavelength above wavelength_min ({as_written(raw, 'wavelength_min', '')})")
+
+
+@dataclass(frozen=True)
 class LayoutRef:
     gds: str = text(doc="GDS file (relative to the design file) whose extracted geometry the models use")
 
@@ -234,6 +259,8 @@ class Design:
     scene: Scene | None = table(Scene, None, doc="the measurement scene (sizing and frame models)")
     sizing: Sizing = table(Sizing, default=Sizing, doc="the sizing criteria and bounds")
     layout: LayoutRef | None = table(LayoutRef, None, doc="a GDS whose extracted geometry replaces the drawn one")
+    light: Light = table(Light, default=Light, doc="the light model: geometric openings or the collection model of the "
+                                                   "drawn pixel (docs/light-collection.md)")
     verify: VerifySettings = table(VerifySettings, default=VerifySettings,
                                    doc="the sign-off grid of pixelkit verify: corners, temperatures, supplies, Monte Carlo")
     spec: tuple = named(Spec, doc="specifications: one [spec.<name>] table each (docs/verify.md)")

@@ -12,7 +12,7 @@ from pathlib import Path
 
 from ..errors import MISSING, ConfigError
 from ..fileio import path_kind
-from ..schema import flag, ident, load, num, qty, read_toml, table, text
+from ..schema import flag, ident, load, named, num, qty, read_toml, table, text
 from .layout_data import Layer, LayoutData, Rule, Signoff, parse_layers, parse_rules, parse_signoff
 from .libcheck import check_devices
 from .mimcorner import mim_factors
@@ -137,6 +137,40 @@ class Passives:
 
 
 @dataclass(frozen=True)
+class MetalPlane:
+    """A metal level's height for the light field (``[collection.metals.<layer>]``)."""
+    z: float = qty("m", gt=0, plausible=(1e-8, 1e-4), doc="bottom of the metal above the silicon surface")
+    thickness: float = qty("m", gt=0, plausible=(1e-8, 1e-4), doc="metal thickness")
+    name: str = field(default="", metadata=dict(kind="skip"))
+
+
+@dataclass(frozen=True)
+class Collection:
+    """The silicon and the dielectric the light-collection model needs (docs/light-collection.md):
+    minority-carrier transport, surface recombination, junction depths, the dielectric's index and,
+    without a ``[stack]``, the metals' heights."""
+    electron_diffusion_length: float = qty("m", gt=0, plausible=(1e-7, 1e-2),
+                                           doc="electron (minority carrier) diffusion length in the p-substrate")
+    electron_diffusivity: float = qty("m2/s", gt=0, plausible=(1e-5, 1e-2),
+                                      doc="electron diffusivity in the p-substrate (kT/q x mobility)")
+    hole_diffusion_length: float = qty("m", gt=0, plausible=(1e-8, 1e-2), doc="hole diffusion length in the n-wells")
+    hole_diffusivity: float = qty("m2/s", gt=0, plausible=(1e-5, 1e-2), doc="hole diffusivity in the n-wells")
+    surface_recombination: float = qty("m/s", gt=0, plausible=(1e-4, 1e5),
+                                       doc="recombination velocity of the silicon surface under the oxide")
+    substrate_thickness: float = qty("m", gt=0, plausible=(1e-6, 2e-3),
+                                     doc="depth of the lightly doped silicon (an epitaxial layer, or the wafer)")
+    well_depth: float = qty("m", gt=0, plausible=(1e-8, 1e-4), doc="n-well junction depth (photodiode and PMOS wells)")
+    diffusion_depth: float = qty("m", gt=0, plausible=(1e-9, 1e-5), doc="N+ / P+ diffusion junction depth")
+    substrate_bottom: str = text("recombining", choices=("recombining", "reflecting"),
+                                 doc="what ends it: recombining (a wafer's back contact, a lifetime-killed substrate) "
+                                     "or reflecting (a p+ substrate under a p- epitaxial layer)")
+    dielectric_index: float = num(1.46, gt=1, plausible=(1.0, 4.0),
+                                  doc="refractive index of the dielectric between the metals (SiO2: 1.46)")
+    metals: tuple = named(MetalPlane, doc="heights of metal1 ... the top metal when the technology has no [stack] "
+                                          "(with one, its conductors' heights are used)")
+
+
+@dataclass(frozen=True)
 class Technology:
     name: str = ident(doc="technology name, shown with every table and report (a built-in file's is the name designs use)")
     description: str = text(doc="one line saying what the process is and where its models come from")
@@ -150,6 +184,8 @@ class Technology:
                                       "(Monte Carlo)")
     passives: Passives | None = table(Passives, None, doc="the MIM capacitor and poly resistor the readout is drawn "
                                       "with")
+    collection: Collection | None = table(Collection, None, doc="the silicon and dielectric of the light-collection "
+                                          "model (design key light.model = \"modelled\")")
     models: ModelLibrary = field(default=None, metadata=dict(kind="skip"))
     layout: LayoutData = field(default=None, metadata=dict(kind="skip"), repr=False)
     source: str = field(default="", metadata=dict(kind="skip"))

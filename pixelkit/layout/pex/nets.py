@@ -91,6 +91,13 @@ def _conductor(lvs, L, name, poly_wire):
     return L.get(name)
 
 
+def _metals(tech) -> tuple:
+    """The metal levels the kit's LVS connects (a technology without a ``[stack]``: the wires the light
+    model needs, by name, with no heights)."""
+    from ..signoff.lvs import METALS
+    return tuple(METALS)
+
+
 def _flat(region):
     """A flat, merged copy (free of the extraction's deep shape store, which dies with it)."""
     import klayout.db as kdb
@@ -163,6 +170,7 @@ def _geometry(lvs, L, layout, cell, top, tech, nl, names) -> NetGeometry:
     """Each named net's shapes by conductor layer (``names``: {cluster id: name}); the rest ground."""
     import klayout.db as kdb
     stack = tech.stack
+    conductors = stack.names() if stack is not None else ("poly", *_metals(tech))
     dbu = layout.dbu * 1e-6
     geo = NetGeometry(top, dbu)
     circuit = nl.circuit_by_name(top) or next(nl.each_circuit_top_down())
@@ -170,7 +178,7 @@ def _geometry(lvs, L, layout, cell, top, tech, nl, names) -> NetGeometry:
     # body taken out: with the readout's passives drawn it is another layer object than the drawn poly, and
     # the nets' poly read from the drawn one came back empty - every poly wire went to ground, before)
     poly_wire = L["poly_conn"] - L["active"]
-    layers = {c.name: _conductor(lvs, L, c.name, poly_wire) for c in stack.conductors}
+    layers = {name: _conductor(lvs, L, name, poly_wire) for name in conductors}
     layers = {k: v for k, v in layers.items() if v is not None}
     claimed = {name: kdb.Region() for name in layers}
     for net in circuit.each_net():
@@ -209,7 +217,8 @@ def _geometry(lvs, L, layout, cell, top, tech, nl, names) -> NetGeometry:
         lay = tech.layer("opening")
         idx = layout.find_layer(lay.layer, lay.datatype)
         geo.openings = _flat(kdb.Region(cell.begin_shapes_rec(idx))) if idx is not None else kdb.Region()
-    _vias(geo, lvs, L, circuit, names, stack)
+    if stack is not None:
+        _vias(geo, lvs, L, circuit, names, stack)
     b = cell.bbox()
     geo.bbox = (b.left * dbu, b.bottom * dbu, b.right * dbu, b.top * dbu)
     return geo
