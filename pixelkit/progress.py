@@ -21,11 +21,13 @@ from __future__ import annotations
 
 import os
 import sys
+import threading
 import time
 from contextlib import contextmanager
 
 _QUIET = False
 _COMMAND_BARS = 0
+_BARS_LOCK = threading.Lock()   # a report builds a section while its sign-off runs in another thread
 #: Lines mode: at most one line per this many seconds while the description stays the same.
 LINE_EVERY_S = 10.0
 
@@ -138,18 +140,19 @@ def command_bar(desc: str, total: int | None = None, unit: str = "step"):
     command bar opened inside another, a sweep's inside a report section, is silent too)."""
     global _COMMAND_BARS
     bar = _bar(None, total, desc, unit)
-    _COMMAND_BARS += 1
+    with _BARS_LOCK:
+        _COMMAND_BARS += 1
     try:
         yield bar
     finally:
-        _COMMAND_BARS -= 1
+        with _BARS_LOCK:
+            _COMMAND_BARS -= 1
         bar.close()
 
 
 @contextmanager
 def step(desc: str):
     """An indeterminate bar for one long step; closes when the block ends."""
-    import threading
     bar = progress(total=None, desc=desc, unit="s", bar_format="{desc}: {elapsed}")
     done = threading.Event()
 

@@ -37,6 +37,32 @@ def _planned(title: str, key: str, owner: str) -> Section:
                                       "when that capability lands")
 
 
+def _start_background(ctx: Context, options_of, use_cache: bool) -> dict:
+    """Start the background work of every section that has some (a module-level ``prefetch(ctx)``:
+    the sign-off's verify, most of the report's SPICE work) unless the section comes from the
+    cache: {key: (section from the cache, "cache")} or {key: (None, "background")}. The sections
+    are then built in the main thread one after the other (their pictures: matplotlib is not
+    thread-safe), those with background work last, while it runs on the cores they leave idle."""
+    out = {}
+    for key, _title, _owner in REGISTRY:
+        mod = load_section(key)
+        if mod is None or not hasattr(mod, "prefetch"):
+            continue
+        s = cache.load(cache.section_key(key, ctx.design, options_of(key)), ctx.out_dir) if use_cache else None
+        if s is not None:
+            out[key] = (s, "cache")
+        else:
+            mod.prefetch(ctx)
+            out[key] = (None, "background")
+    return out
+
+
+def _build_order(background: dict) -> list:
+    """REGISTRY with the sections whose work runs in the background moved to the end."""
+    return ([r for r in REGISTRY if background.get(r[0], (0, ""))[1] != "background"]
+            + [r for r in REGISTRY if background.get(r[0], (0, ""))[1] == "background"])
+
+
 def build_section(key: str, title: str, owner: str, ctx: Context, options: dict, use_cache: bool) -> tuple:
     """(Section, 'cache' | 'built' | 'planned' | 'failed')."""
     mod = load_section(key)
@@ -177,21 +203,28 @@ def build_report(design, out: Path, *, quick: bool = False, backend: str = "batc
             ctx = Context(design, stage, quick, backend, jobs, Path(measured) if measured else None, tell,
                           waves=tuple(waves), exhaustive=exhaustive)
             measured_hash = cache.file_hash(measured) if measured else None
+
+            def options_of(key):
+                options = {"quick": quick, "backend": backend}
+                if key in EXHAUSTIVE_SECTIONS and exhaustive:
+                    options["exhaustive"] = True
+                if key in MEASURED_SECTIONS:
+                    options["measured"] = measured_hash
+                if key == "signoff" and waves:
+                    options["waves"] = sorted(waves)
+                return options
+
             with counter:
-                for key, title, owner in REGISTRY:
-                    tell(title)
-                    options = {"quick": quick, "backend": backend}
-                    if key in EXHAUSTIVE_SECTIONS and exhaustive:
-                        options["exhaustive"] = True
-                    if key in MEASURED_SECTIONS:
-                        options["measured"] = measured_hash
-                    if key == "signoff" and waves:
-                        options["waves"] = sorted(waves)
-                    s, how[key] = build_section(key, title, owner, ctx, options, use_cache)
+                built = _start_background(ctx, options_of, use_cache)
+                for key, title, owner in _build_order(built):
+                    tell(title + (" (the sign-off beside it)" if ctx.background() else ""))
+                    if key not in built or built[key][0] is None:
+                        built[key] = build_section(key, title, owner, ctx, options_of(key), use_cache)
+                    s, how[key] = built[key]
                     s.key = key
                     s.checked = [as_percent(c) for c in s.checked]
-                    sections.append(s)
                     bar.update(1)
+                sections = [built[key][0] for key, _t, _o in REGISTRY]
             bar.set_description("report")
         meta = {"profile": "quick" if quick else "full", "exhaustive": exhaustive, "backend": backend,
                 "spice_runs": counter.runs, "spice_cached": counter.cached,
@@ -215,6 +248,9 @@ def build_report(design, out: Path, *, quick: bool = False, backend: str = "batc
         honour_umask_tree(stage)   # cached section files keep the cache's modes otherwise
         _swap_into_place(stage, out)
     except BaseException:
+        if "ctx" in locals() and ctx.background():   # an interrupt: its ngspice runs end too
+            from ..spice.batch import abort_runs
+            abort_runs()
         shutil.rmtree(stage, ignore_errors=True)
         raise
     result["html"] = str(out / "index.html") if html else None

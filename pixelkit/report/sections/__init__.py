@@ -165,6 +165,7 @@ class Context:
     waves: tuple = ()         # specs whose waveform the sign-off shows besides the failing ones ("all": every one)
     exhaustive: bool = False   # no early stop anywhere (the sign-off's Monte Carlo runs its full count)
     _memo: dict = field(default_factory=dict)
+    _started: dict = field(default_factory=dict)
 
     def figure(self, name: str) -> Path:
         """Where to write a picture (or any file) called ``name`` (beside the HTML)."""
@@ -173,10 +174,35 @@ class Context:
         return path
 
     def shared(self, name: str, fn: Callable[[], Any]) -> Any:
-        """Compute ``fn()`` once per report and hand the same object to every section."""
+        """Compute ``fn()`` once per report and hand the same object to every section (the result
+        of ``start(name, ...)`` when that started it: waited for, its error raised here)."""
         if name not in self._memo:
-            self._memo[name] = fn()
+            started = self._started.pop(name, None)
+            self._memo[name] = started.result() if started is not None else fn()
         return self._memo[name]
+
+    def start(self, name: str, fn: Callable[[], Any]) -> None:
+        """Run ``fn()`` in a background thread from now on (a section's ``prefetch``); ``shared(name,
+        ...)`` hands its result over. Only SPICE and numbers there: no pictures (matplotlib is not
+        thread-safe), no other section's ``shared`` results."""
+        import threading
+        from concurrent.futures import Future
+        if name in self._memo or name in self._started:
+            return
+        fut: Future = Future()
+
+        def run():
+            try:
+                fut.set_result(fn())
+            except BaseException as exc:  # noqa: BLE001 - handed to whoever asks for the result
+                fut.set_exception(exc)
+
+        self._started[name] = fut
+        threading.Thread(target=run, name=f"report-{name}", daemon=True).start()
+
+    def background(self) -> bool:
+        """Whether work started by ``start`` is still running."""
+        return any(not f.done() for f in self._started.values())
 
     @property
     def reference(self) -> bool:

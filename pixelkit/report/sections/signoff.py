@@ -12,20 +12,31 @@ from . import Checked, Section, Table
 TITLE = "Sign-off: specs over corners, Monte Carlo yield, power"
 
 
-def build(ctx) -> Section:
+def _verify(ctx) -> dict:
     from ...verify import conditions
     from ...verify.run import verify
+    d = ctx.design
+    if ctx.quick:
+        n = conditions.nominal(d)
+        return verify(d, corners=(n.corner,), temperatures=(n.temperature,), supplies=(0.0,), mc=0,
+                      backend=ctx.backend, jobs=ctx.jobs)
+    return verify(d, backend=ctx.backend, jobs=ctx.jobs, mc_full=ctx.exhaustive)
+
+
+def prefetch(ctx) -> None:
+    """The verify run starts in the background when the report starts; the other sections are
+    built beside it (report.build)."""
+    if ctx.design.spec:
+        ctx.start("signoff.verify", lambda: _verify(ctx))
+
+
+def build(ctx) -> Section:
     from ...verify.signoff import COLUMNS, csv_rows, mc_count, where
     d = ctx.design
     if not d.spec:
         return Section.unavailable(TITLE, "the design has no [spec] table (docs/verify.md)")
     ctx.progress("sign-off")
-    if ctx.quick:
-        n = conditions.nominal(d)
-        r = verify(d, corners=(n.corner,), temperatures=(n.temperature,), supplies=(0.0,), mc=0,
-                   backend=ctx.backend, jobs=ctx.jobs)
-    else:
-        r = verify(d, backend=ctx.backend, jobs=ctx.jobs, mc_full=ctx.exhaustive)
+    r = ctx.shared("signoff.verify", lambda: _verify(ctx))
     g, mc = r["grid"], r["mc"]
     text = [f"Every spec of the design file at {g['conditions']} condition(s): process corners "
             f"{', '.join(g['corners'])}, {', '.join(f'{t:g}' for t in g['temperatures_C'])} degC, supply "
