@@ -98,7 +98,7 @@ def _line_bar_class():
             if self.desc == last_desc and now - last_t < LINE_EVERY_S:
                 return None
             self._last_line = (self.desc, now)
-            self.fp.write(self.__str__().strip() + "\n")
+            self.fp.write(self.__str__().strip().replace(", ~? left", "") + "\n")   # no rate yet: no estimate
             self.fp.flush()
             return None
 
@@ -115,16 +115,20 @@ def _line_bar_class():
     return LineBar
 
 
-def _bar(iterable, total, desc, unit, **kw):
+def _bar(iterable, total, desc, unit, eta: bool = True, **kw):
     silent = mode() == "quiet" or _COMMAND_BARS > 0
     m = mode()
     if m == "lines" and not silent:
         known = total is not None or hasattr(iterable, "__len__")
-        fmt = kw.pop("bar_format", None) or ("{desc}: {n_fmt}/{total_fmt} {unit} [{elapsed}]{postfix}" if known
+        fmt = kw.pop("bar_format", None) or (("{desc}: {n_fmt}/{total_fmt} {unit} [{elapsed}, ~{remaining} left]{postfix}"
+                                              if eta else "{desc}: {n_fmt}/{total_fmt} {unit} [{elapsed}]{postfix}")
+                                             if known
                                              else "{desc}: {n_fmt} {unit} [{elapsed}]{postfix}")
         return _line_bar_class()(iterable, total=total, desc=desc, unit=unit, leave=False,
                                  file=_NoCarriageReturn(sys.stderr), mininterval=LINE_EVERY_S,
                                  bar_format=fmt, **kw)
+    if not eta and total is not None:   # counted items of unequal cost: no time estimate from their rate
+        kw.setdefault("bar_format", "{desc}: {n_fmt}/{total_fmt} {unit} |{bar}| [{elapsed}]{postfix}")
     return _tqdm()(iterable, total=total, desc=desc, unit=unit, disable=silent, leave=False,
                    file=sys.stderr, dynamic_ncols=True, **kw)
 
@@ -135,11 +139,12 @@ def progress(iterable=None, total: int | None = None, desc: str = "", unit: str 
 
 
 @contextmanager
-def command_bar(desc: str, total: int | None = None, unit: str = "step"):
+def command_bar(desc: str, total: int | None = None, unit: str = "step", eta: bool = True):
     """The one bar of a command: every other bar opened while it is open stays silent (so a
-    command bar opened inside another, a sweep's inside a report section, is silent too)."""
+    command bar opened inside another, a sweep's inside a report section, is silent too).
+    ``eta``: show the time left from the rate (off where the items' costs differ widely)."""
     global _COMMAND_BARS
-    bar = _bar(None, total, desc, unit)
+    bar = _bar(None, total, desc, unit, eta)
     with _BARS_LOCK:
         _COMMAND_BARS += 1
     try:

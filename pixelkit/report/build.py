@@ -194,8 +194,10 @@ def build_report(design, out: Path, *, quick: bool = False, backend: str = "batc
     stage = staging_dir(out.parent, f".{out.name}.new-{owners.tag()}-")
     try:
         sections, how = [], {}
-        with command_bar("report", total=len(REGISTRY), unit="sections") as bar:
-            counter = SpiceCounter(lambda c: bar.set_postfix_str(c.text(), refresh=True))
+        with command_bar("report", total=len(REGISTRY), unit="sections", eta=False) as bar:
+            # counts SPICE runs (within ``with counter`` below, where ``ctx`` exists) and the sign-off's progress
+            counter = SpiceCounter(lambda c: bar.set_postfix_str(
+                "; ".join(x for x in (c.text(), ctx.progress_text()) if x), refresh=True))
 
             def tell(stage_name, done=None, total=None):
                 bar.set_description(f"report: {stage_name}" + (f" {done}/{total}" if total else ""))

@@ -21,11 +21,14 @@ from ..errors import ConfigError
 from ..progress import command_bar
 
 
-def run_tasks(fn, tasks, jobs: int | None = None, scheduler=None, desc: str = "simulating", more=None):
+def run_tasks(fn, tasks, jobs: int | None = None, scheduler=None, desc: str = "simulating", more=None,
+              label=None, status=None):
     """Yield ``(index, fn(task))`` as tasks finish. ``more()``, if given, is called after each
     outcome has been handed to the caller and returns further tasks to run (indices continue
     after the ones given so far; an empty list adds nothing): a sequential Monte Carlo adds
-    its next stage only when the one before has not decided."""
+    its next stage only when the one before has not decided. ``label(task)``: what a task
+    simulates, shown after the count for the oldest task still running; ``status(done, total,
+    label)``: told the same after every task (a report shows its sign-off's progress so)."""
     tasks = list(tasks)
     if not tasks:
         return
@@ -35,18 +38,22 @@ def run_tasks(fn, tasks, jobs: int | None = None, scheduler=None, desc: str = "s
     from .engine import default_jobs
     jobs = max(1, int(jobs or default_jobs()))
     with command_bar(desc, total=len(tasks), unit="tasks") as bar:
+        tell = _teller(bar, tasks, label, status)
         if jobs == 1:
             i = 0
             while i < len(tasks):
+                tell(i, i)
                 out = fn(tasks[i])
                 bar.update(1)
                 yield i, out
                 i += 1
                 _extend(tasks, more, bar)
+            tell(None, i)
             return
         with ThreadPoolExecutor(max_workers=jobs) as ex:
             futs = {ex.submit(fn, t): i for i, t in enumerate(tasks)}
             pending = set(futs)
+            tell(0, 0)
             try:
                 while pending:
                     done, pending = wait(pending, return_when=FIRST_COMPLETED)
@@ -57,10 +64,23 @@ def run_tasks(fn, tasks, jobs: int | None = None, scheduler=None, desc: str = "s
                             g = ex.submit(fn, t)
                             futs[g] = len(futs)
                             pending.add(g)
+                    tell(min((futs[f] for f in pending), default=None), len(futs) - len(pending))
             except BaseException:
                 for f in futs:
                     f.cancel()
                 raise
+
+
+def _teller(bar, tasks, label, status):
+    """``tell(i, done)``: task ``i`` is the oldest still running (None: all done), ``done`` finished
+    (counted here: a bar inside a command's own bar is silent and counts nothing)."""
+    def tell(i, done):
+        what = label(tasks[i]) if label is not None and i is not None else ""
+        if what:
+            bar.set_postfix_str(f"now {what}", refresh=False)
+        if status is not None:
+            status(done, len(tasks), what)
+    return tell
 
 
 def _extend(tasks: list, more, bar) -> list:

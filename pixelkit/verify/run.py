@@ -131,17 +131,24 @@ class _Sequential:
         return self._next()
 
 
+def _label(task) -> str:
+    """What a task simulates, for the progress line."""
+    _d, c, groups, draw, _b = task
+    return f"Monte Carlo sample {draw.sample + 1}" if draw is not None else f"{c.label} {'+'.join(groups)}"
+
+
 def _ok(outcome: dict) -> dict:
     return {g: o["raw"] for g, o in outcome.items() if o["ok"]}
 
 
 def verify(design, corners=None, temperatures=None, supplies=None, mc: int | None = None, seed: int | None = None,
            backend: str = "batch", jobs=None, scheduler=None, post_layout: bool = False,
-           mc_full: bool = False) -> dict:
+           mc_full: bool = False, status=None) -> dict:
     """The sign-off of ``design`` over its grid (or the one given) with its Monte Carlo yield.
     The Monte Carlo stops early once every yield is decided against ``[verify] min_yield``
     (``_Sequential``; with min_yield 0, nothing to decide, after its first stage); ``mc_full``
-    runs every one of the ``mc`` samples."""
+    runs every one of the ``mc`` samples. ``status(done, total, what)``: told the progress after
+    every task (``spice.executors.run_tasks``)."""
     from ..spice.executors import run_tasks
     from .signoff import table
     if post_layout:
@@ -182,7 +189,8 @@ def verify(design, corners=None, temperatures=None, supplies=None, mc: int | Non
         tasks.extend(new)
         return new
 
-    for i, out in run_tasks(_task, tasks, jobs=jobs, scheduler=scheduler, desc="verify", more=more):
+    for i, out in run_tasks(_task, tasks, jobs=jobs, scheduler=scheduler, desc="verify", more=more, label=_label,
+                            status=status):
         take(tasks[i], out)
     raw_mc = {i: _ok(o) for i, o in seq.raw.items()}
     values = {c: _finite(measure.figures(r)) for c, r in raw_cond.items()}

@@ -204,6 +204,26 @@ class Context:
         """Whether work started by ``start`` is still running."""
         return any(not f.done() for f in self._started.values())
 
+    def status(self, name: str) -> Callable[[int, int, str], None]:
+        """A ``status(done, total, what)`` callback for long work (``verify``'s): ``progress_text``
+        shows its count and an estimate of its time left."""
+        import time
+        t0 = time.monotonic()
+
+        def tell(done: int, total: int, what: str) -> None:
+            self._memo.setdefault("_status", {})[name] = (done, total, what, time.monotonic() - t0)
+        return tell
+
+    def progress_text(self) -> str:
+        """What the long work told ``status``: "sign-off 120/345 tasks, ~1:20 left (now ...)"."""
+        out = []
+        for name, (done, total, what, elapsed) in list(self._memo.get("_status", {}).items()):
+            if total and done < total:
+                left = elapsed / done * (total - done) if done else None
+                eta = f", ~{int(left // 60)}:{int(left % 60):02d} left" if left is not None else ""
+                out.append(f"{name} {done}/{total} tasks{eta}" + (f" (now {what})" if what else ""))
+        return "; ".join(out)
+
     @property
     def reference(self) -> bool:
         """Whether the design is the test chip of [Thesis2019] (then the report compares with it)."""

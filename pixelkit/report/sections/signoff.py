@@ -19,8 +19,8 @@ def _verify(ctx) -> dict:
     if ctx.quick:
         n = conditions.nominal(d)
         return verify(d, corners=(n.corner,), temperatures=(n.temperature,), supplies=(0.0,), mc=0,
-                      backend=ctx.backend, jobs=ctx.jobs)
-    return verify(d, backend=ctx.backend, jobs=ctx.jobs, mc_full=ctx.exhaustive)
+                      backend=ctx.backend, jobs=ctx.jobs, status=ctx.status("sign-off"))
+    return verify(d, backend=ctx.backend, jobs=ctx.jobs, mc_full=ctx.exhaustive, status=ctx.status("sign-off"))
 
 
 def prefetch(ctx) -> None:
