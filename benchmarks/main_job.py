@@ -182,25 +182,25 @@ def main(argv=None):
         print(text(res))
 
 
+def _run_text(r: dict) -> str:
+    """One command's or replay's figures."""
+    extra = (f", largest process {r['max_rss_MB']:.0f} MB, {r['spice_runs']} SPICE runs, exit {r['exit']}, load "
+             f"{r['load_before']:.1f} -> {r['load_after']:.1f}" if "exit" in r else f", {r['decks']} decks on "
+             f"{r['jobs']} workers")
+    return f"wall {r['wall_s']:.1f} s, CPU {r['cpu_s']:.1f} s" + extra
+
+
 def text(res: dict) -> str:
     lines = [f"main job at {res['head']} against {res['baseline'] or '(no baseline)'}, {res['cores']} cores, "
              f"{res['jobs']} workers"]
     for name, out in res["parts"].items():
         cur = out["current"]
-        lines.append(f"\n{name}: wall {cur['wall_s']:.1f} s, CPU {cur['cpu_s']:.1f} s, largest process "
-                     f"{cur['max_rss_MB']:.0f} MB, {cur['spice_runs']} SPICE runs, exit {cur['exit']}, load "
-                     f"{cur['load_before']:.1f} -> {cur['load_after']:.1f}")
-        if "baseline" in out:
-            b = out["baseline"]
-            lines.append(f"  baseline: wall {b['wall_s']:.1f} s, CPU {b['cpu_s']:.1f} s, {b['max_rss_MB']:.0f} MB, "
-                         f"{b['spice_runs']} SPICE runs, exit {b['exit']}, load {b['load_before']:.1f} -> "
-                         f"{b['load_after']:.1f}; current / baseline: wall {cur['wall_s'] / b['wall_s']:.3f}, "
-                         f"CPU {cur['cpu_s'] / b['cpu_s']:.3f}")
-        if "raw" in out:
-            r = out["raw"]
-            lines.append(f"  raw ngspice on the same {r['decks']} decks ({r['jobs']} workers): wall {r['wall_s']:.1f} s, "
-                         f"CPU {r['cpu_s']:.1f} s; kit / raw: wall {cur['wall_s'] / r['wall_s']:.3f}, "
-                         f"CPU {cur['cpu_s'] / max(r['cpu_s'], 1e-9):.3f}")
+        lines.append(f"\n{name}: {_run_text(cur)}")
+        for side, label in (("baseline", "baseline"), ("raw", "raw ngspice on the same decks")):
+            if side in out:
+                o = out[side]
+                lines.append(f"  {label}: {_run_text(o)}; current / {side}: wall {cur['wall_s'] / o['wall_s']:.3f}, "
+                             f"CPU {cur['cpu_s'] / max(o['cpu_s'], 1e-9):.3f}")
         names = sorted(set(cur["groups"]) | set(out.get("baseline", {}).get("groups", {})))
         for g in names:
             c = cur["groups"].get(g, {"runs": 0, "simulated_s": 0.0, "deck_wall_s": 0.0})
