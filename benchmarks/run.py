@@ -200,7 +200,7 @@ def sizing(d, repeats: int = 5) -> dict:
 
 
 def gap(_d, rows: int = 2000) -> dict:
-    """On the thesis's read: the diagnosis needs a surrogate, and that design ships one (the
+    """On the thesis's read ([Thesis2019]): the diagnosis needs a surrogate, and that design ships one (the
     reference design's is built from SPICE by its first ``gap predict``, which
     ``benchmarks/main_job.py`` times)."""
     import gap as gap_bench

@@ -116,10 +116,15 @@ _HTML = re.compile(r"(<[^>]*>)")
 _KEEP = {"code", "pre", "a", "h1", "h2", "h3", "h4", "h5", "h6"}
 
 
-def link_html(html: str, keys: set[str], bib_url: str) -> str:
-    """Citation keys in generated HTML (the CLI reference from the commands' help, the API reference
-    from the docstrings: text the Markdown hook never sees) as links to ``bib_url#key``; text inside
-    code, links and headings kept as it is."""
+def link_html(html: str, keys: set[str], bib_url: str, page_url=lambda name: None) -> str:
+    """Citation keys and page mentions in generated HTML (the CLI reference from the commands' help,
+    the API reference from the docstrings: text the Markdown hook never sees) as links: a key to
+    ``bib_url#key``, ``docs/x.md`` to ``page_url("x.md")`` (None: left as it is); text inside code,
+    links and headings kept as it is."""
+    def page(m):
+        url = page_url(m.group(1))
+        return f'<a href="{url}{m.group(2) or ""}">{m.group(0)}</a>' if url else m.group(0)
+
     out, inside = [], []
     for part in _HTML.split(html):
         tag = re.match(r"<(/?)([A-Za-z0-9]+)", part) if part.startswith("<") else None
@@ -134,6 +139,7 @@ def link_html(html: str, keys: set[str], bib_url: str) -> str:
         elif inside or not part:
             out.append(part)
         else:
+            part = PAGE_BARE.sub(page, part)
             out.append(CITE.sub(lambda m: f'<a href="{bib_url}#{m.group(1).lower()}">[{m.group(1)}]</a>'
                                 if m.group(1) in keys else m.group(0), part))
     return "".join(out)
@@ -146,4 +152,5 @@ def on_page_content(html, page, config, files):
     bib = next((f for f in files if f.src_uri == "bibliography.md"), None)
     if bib is None:
         return html
-    return link_html(html, bibliography_keys(config["docs_dir"]), get_relative_url(bib.url, page.url))
+    urls = {f.src_uri: get_relative_url(f.url, page.url) for f in files if f.src_uri.endswith(".md")}
+    return link_html(html, bibliography_keys(config["docs_dir"]), get_relative_url(bib.url, page.url), urls.get)

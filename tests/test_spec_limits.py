@@ -13,7 +13,7 @@ there (V_col and A_sf from +-50 mV), and C_total from one ramped node carrying e
 shared charge sees at the read (PD junction, EC, TG, RST diffusions, the selected follower's gate).
 No analytic capacitance and no small-signal transient of the figure's own bench enters.
 
-And every other spec's note says where its limit comes from; the revisions carry the thesis chip's
+And every other spec's note says where its limit comes from; the revisions carry the [Thesis2019] chip's
 (revA's) derived limits unchanged.
 """
 import tomllib
