@@ -190,7 +190,9 @@ def uncovered_names(names, report: dict | None = None) -> list:
     for n in names:
         if n.startswith("signoff."):
             continue
-        refs = [r for k, rs in report.items() if fnmatch.fnmatchcase(n, k) for r in rs]
-        if not any(fnmatch.fnmatchcase(n, r.only) for r in refs):
+        # summary.json writes a code's ``*_frac`` figure as ``*_pct`` in % (report.build.as_percent)
+        code = {n, n[:-4] + "_frac"} if n.endswith("_pct") else {n}
+        if not any(fnmatch.fnmatchcase(c, r.only) for c in code
+                   for k, rs in report.items() if fnmatch.fnmatchcase(c, k) for r in rs):
             out.append(n)
     return out

@@ -180,8 +180,9 @@ def test_the_walk_catches_an_unreferenced_figure_a_round_trip_and_a_stale_entry(
                    "signoff noise_p: no test compares it"):
         assert any(b.startswith(needle) for b in bad), (needle, bad)
     assert not any(b.startswith("a.*.x") for b in bad), bad
-    assert uncovered_names(["a.1.x", "q"], {"a.*.x": [Ref(t + "test_ok", "derivation", "x", "r", only="a.1.*")]}) \
-        == ["q"]
+    assert uncovered_names(["a.1.x", "q", "a.1.y_pct", "a.2.x"],
+                           {"a.*.x": [Ref(t + "test_ok", "derivation", "x", "r", only="a.1.*")],
+                            "a.*.y_frac": [Ref(t + "test_ok", "derivation", "x", "r")]}) == ["q", "a.2.x"]
 
 
 if __name__ == "__main__":
