@@ -64,7 +64,8 @@ def _c11_marker(cv: Canvas):
 @pytest.fixture(scope="module")
 def drc(tmp_path_factory, gf, ref_design, chip):
     """One deep run of the foundry deck over the chip, the same chip with the thesis's shield
-    (``pixels``, its cells prefixed P_), the reference design's chip (c35_thesis, R_), and a copy
+    (``pixels``, its cells prefixed P_), the reference design's chip (c35_thesis, R_), the 1 x 1 chip
+    without AFEs (``layout --rows 1 --cols 1``, U_: each strap meets one line there), and a copy
     of AFE_S whose C11 lost its CAP_MK / MIM_L_MK markers."""
     from pixelkit.layout.signoff.drc import run_drc
     folder = tmp_path_factory.mktemp("drc")
@@ -75,8 +76,9 @@ def drc(tmp_path_factory, gf, ref_design, chip):
     top = gdstk.Cell("TOP")
     top.add(gdstk.Reference(next(c for c in lib.cells if c.name == TOP), (0, 0)))
     top.add(gdstk.Reference(cell, (-40, 0)))
-    for k, (prefix, d, mode) in enumerate((("P_", gf, "pixels"), ("R_", ref_design, "full"))):
-        cells, name = build_chip_cells(d, 2, 2, afe=True, shield=mode)
+    for k, (prefix, d, mode, n, afe) in enumerate((("P_", gf, "pixels", 2, True), ("R_", ref_design, "full", 2, True),
+                                                   ("U_", gf, "full", 1, False))):
+        cells, name = build_chip_cells(d, n, n, afe=afe, shield=mode)
         sub = to_library(d, cells)
         for c in sub.cells:
             c.name = prefix + c.name
@@ -98,6 +100,15 @@ def test_foundry_deck_finds_no_violation_in_the_2x2_array_with_its_afes(drc):
     names = {c.name for c in lib.cells}
     assert {"AFE_S", "AFE_P", "SHIELD_READOUT_S", TOP, f"P_{TOP}", f"R_{TOP}"} <= names
     assert "P_SHIELD_READOUT_S" not in names
+
+
+def test_the_1x1_chip_is_drc_clean(drc):
+    """``layout --rows 1 --cols 1``: its ec / tg straps meet one row line each, so each was its via3's
+    pad alone, 0.28 x 0.38 um of metal4 under the 0.1444 um2 minimum (M4.3, four markers in CHIP_1X1
+    before the chip drew such a strap at the minimum area)."""
+    result, lib = drc
+    assert "U_CHIP_1X1" in {c.name for c in lib.cells}
+    assert not [v for v in result.violations if v.cell.startswith("U_")], result.violations
 
 
 def test_foundry_deck_catches_a_mim_capacitor_without_its_marker(drc):

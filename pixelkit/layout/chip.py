@@ -24,6 +24,8 @@ wider pad next to its neighbours.
 """
 from __future__ import annotations
 
+import math
+
 from .canvas import Box, Canvas, box
 from .dual import CONTROLS, SUPPLIES
 from .rules import RuleError
@@ -175,10 +177,17 @@ def build_chip(design, lt, cells: dict, rows: int, cols: int, afe: bool) -> dict
             chip.add("metal3", box(0, y - w // 2, margin, y - w // 2 + w), net)
             chip.label("metal3_label", w, y, net)
     w4 = lt.width("metal4")
+    # a strap that meets one line only (a 1 x 1 chip's ec / tg) is its via's pad: drawn at least the
+    # metal's minimum area long (M4.3), centred on the via
+    least = lt.snap_up(math.ceil(lt.area("metal4.area") / w4)) if lt.has("metal4.area") else 0
     for net, (lo, hi) in reach.items():
         x = strap_x[net]
         e = lt.nm("metal4.enclosure.via3")
-        chip.add("metal4", box(x - w4 // 2, lo - cut // 2 - e, x - w4 // 2 + w4, hi + cut // 2 + e), net)
+        y0, y1 = lo - cut // 2 - e, hi + cut // 2 + e
+        if y1 - y0 < least:
+            mid = lt.snap((y0 + y1) / 2)
+            y0, y1 = min(y0, mid - lt.snap_up(least / 2)), max(y1, mid + lt.snap_up(least / 2))
+        chip.add("metal4", box(x - w4 // 2, y0, x - w4 // 2 + w4, y1), net)
         chip.label("metal4_label", x, (lo + hi) // 2, net)
     # per-column pins at the bottom and top edges
     for tag, y, count, step in (("s", info["s"]["pin_y"], n * cols, ps),
