@@ -6,8 +6,9 @@ lower end of its Clopper-Pearson interval reaches ``[verify] min_yield`` (``veri
 a spec only when the whole interval lies below it: close asks the stricter).
 
 When a spec falls short, its margin target at the nominal condition becomes what a Gaussian
-spread of its Monte Carlo margins needs: the pass probability p* at which N samples reach the
-required number of passes with probability 0.9 (binomial), z = Phi^-1(p*), and the target
+spread of its Monte Carlo margins needs: the pass probability p* at which N = ``[verify] mc`` samples
+reach the required number of passes with probability 0.9 (binomial; ``verify``'s sequential Monte
+Carlo may stop before N, its samples still give sigma and the mean), z = Phi^-1(p*), and the target
 z sigma_m - (mean_m - m_nominal), sigma_m and mean_m the samples' normalised margins and
 m_nominal the nominal design's (the offset between the Monte Carlo mean and the mismatch-free
 nominal run is kept as measured).
@@ -85,11 +86,12 @@ def check(design, signoff: dict, nominal, nominal_margins: dict) -> dict:
         m = np.array([mg.margin(s, x) for x in signoff["mc_values"][s.name] if x is not None], float)
         m = m[np.isfinite(m)]
         m_nom = nominal_margins.get((s.name, nominal))
-        k = passes_needed(len(m), v.min_yield, v.confidence)
+        n = max(v.mc, len(m))   # the samples a sign-off may draw (sequential: it may stop before)
+        k = passes_needed(n, v.min_yield, v.confidence)
         if m_nom is None or len(m) < 2 or k is None:
             continue
         from scipy.stats import norm
-        z = float(norm.ppf(required_pass_probability(len(m), k)))
+        z = float(norm.ppf(required_pass_probability(n, k)))
         targets[(s.name, nominal)] = max(z * float(m.std(ddof=1)) - (float(m.mean()) - m_nom), 0.0)
     ok = all(r["ok"] for r in rows) or not v.min_yield
     text = "Monte Carlo yield: " + ", ".join(
