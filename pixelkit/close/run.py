@@ -305,7 +305,7 @@ class Closer:
         while status is None:
             pairs = set(mg.binding(self.base, p.margins, self.targets, s.margin)) | set(self.targets) | forced
             model, conds, groups, fresh = self.model(p, sorted(pairs, key=lambda r: (r[0], r[1])), first)
-            first = False
+            first, built_fresh = False, fresh
             u0 = self.space.to_u(p.x)
             lo, hi = self.space.u_bounds
             while status is None:
@@ -379,7 +379,7 @@ class Closer:
                     grow = rho > 0.75 and float(np.abs(st.d).max()) >= 0.99 * radius and not shrunk
                     radius = min(2 * radius, RADIUS_MAX) if grow else radius if rho > 0.25 else radius / 2
                     shrunk = False
-                    on_secants = 0 if fresh else on_secants + 1
+                    on_secants = 0 if built_fresh else on_secants + 1
                     if rho < 0.5 or on_secants >= REFRESH_EVERY:
                         self.grads.clear()    # the models predicted poorly, or have run on secants long enough
                     break
