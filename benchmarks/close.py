@@ -3,7 +3,7 @@ grow with the number of knobs (2, 5, 10), against one plain ``verify`` of the sa
 measured in the same run (the unit a designer knows: "close costs N sign-offs").
 
     python3 benchmarks/close.py [--knobs 2,5,10] [--grid small|full] [--mc N] [--max-iterations N]
-                                [--design FILE] [--json]
+                                [--design FILE] [--reference] [--json]
 
 For each knob count, with a fresh empty simulation cache each (``PIXELKIT_CACHE``): ``pixelkit verify``
 of the design with that grid (the baseline), then ``pixelkit close`` of the same design with the
@@ -13,10 +13,11 @@ accepted, where it was verified, SPICE runs, cache hits and wall time; the total
 verify in runs, wall and CPU (the command and its ngspice children; on a machine others load, CPU is
 the figure load moves least); and the growth of the runs per iteration from 2 knobs to 5 and 10.
 
-``--grid small``: corners tt and ss x 27 and 85 degC x -10 % and 0 % (8 conditions), the growth study;
-``--grid full``: the design's own ``[verify]`` grid (the reference: 45 conditions) with its Monte Carlo
-unless ``--mc``: the "close on the reference from an empty cache" figure (issue 40: within 30 min on
-2 cores).
+``--grid small``: corners tt and ss x 27 and 85 degC x -10 % and 0 % (8 conditions), the growth
+study; ``--grid full``: the design's own ``[verify]`` grid (the reference: 45 conditions) with its
+Monte Carlo unless ``--mc``. ``--reference``: the design's own grid and Monte Carlo with
+``REFERENCE``'s knobs (the gates' drive as a circuit choice, the rail, both resets, the column
+load): "close on the reference from an empty cache" (issue 40: within 30 min on 2 cores).
 """
 from __future__ import annotations
 
@@ -46,6 +47,14 @@ KNOBS = [
     ("secondary.t_int", ["8 ms", "16 ms"]),
 ]
 SMALL = {"corners": ["tt", "ss"], "temperatures": ["27 degC", "85 degC"], "supplies": ["-10 %", "0 %"]}
+#: ``--reference``: the [close] table of the reference run (the circuit choice of the gates' drive, the
+#: rail, both resets and the column load; issue 40's revB changes the first four).
+REFERENCE = {"objective": "min power", "knobs": {
+    "pixel.gate_drive": {"choices": ["supply", "boosted"]},
+    "pixel.v_gate": ["3.3 V", "3.63 V"],
+    "pixel.v_pd_reset": ["1.8 V", "2.5 V"],
+    "pixel.v_fd_reset": ["1.8 V", "2.5 V"],
+    "pixel.sf_bias": {"min": "700 nA", "max": "1.5 uA", "scale": "log"}}}
 
 
 def design_file(src: Path, n: int, grid: str, mc: int | None, max_iterations: int, folder: Path) -> Path:
@@ -58,7 +67,8 @@ def design_file(src: Path, n: int, grid: str, mc: int | None, max_iterations: in
         verify.update(SMALL)
     if mc is not None:
         verify["mc"] = mc
-    close = {"objective": "min power", "max_iterations": max_iterations, "knobs": dict(KNOBS[:n])}
+    close = ({**REFERENCE, "max_iterations": max_iterations} if n == 0 else
+             {"objective": "min power", "max_iterations": max_iterations, "knobs": dict(KNOBS[:n])})
     head = text.split("\n[verify]")[0] if "\n[verify]" in text else text.split("\n[spec.")[0]
     body = {k: v for k, v in raw.items() if k in ("spec",)}
     path = folder / f"bench_{n}.toml"
@@ -102,7 +112,7 @@ def one(src: Path, n: int, args, folder: Path) -> dict:
 
 def show(res: dict) -> None:
     c, v = res["close"], res["verify"]
-    print(f"\n{res['knobs']} knobs, {res['conditions']} conditions: close {c['status']} (exit {c['exit']}) after "
+    print(f"\n{res['knobs'] or 'the reference'} knobs, {res['conditions']} conditions: close {c['status']} (exit {c['exit']}) after "
           f"{c['candidates']} candidates, smallest margin {c['smallest_margin_pct']:+.3g} %, objective "
           f"{c['objective']['shown_start']} -> {c['objective']['shown']}"
           + (f"; conflict: {c['conflict']}" if c["conflict"] else ""))
@@ -125,8 +135,12 @@ def main():
                                                          "design's on the full one)")
     ap.add_argument("--max-iterations", type=int, default=15)
     ap.add_argument("--design", type=Path, default=ROOT / "designs" / "dual_pixel_revA.toml")
+    ap.add_argument("--reference", action="store_true",
+                    help="the reference run instead: the design's full grid and Monte Carlo, REFERENCE's knobs")
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args()
+    if args.reference:
+        args.grid, args.knobs = "full", "0"
     if args.mc is None and args.grid == "small":
         args.mc = 0
     counts = [int(x) for x in args.knobs.split(",")]

@@ -363,7 +363,7 @@ class Closer:
                 forced |= bad
                 if local < ETA:
                     self.record_partial(xc, cf, model.keys + screen, fc, mode, radius)
-                    radius /= 2
+                    radius = min(radius, float(np.abs(st.d).max())) / 2   # below the step that failed
                     shrunk = True     # no growth on the next success: the radius just failed
                     if radius < s.tolerance:
                         status = "converged" if feasible else "infeasible"
@@ -383,7 +383,7 @@ class Closer:
                     if rho < 0.5 or on_secants >= REFRESH_EVERY:
                         self.grads.clear()    # the models predicted poorly, or have run on secants long enough
                     break
-                radius /= 2
+                radius = min(radius, float(np.abs(st.d).max())) / 2
                 shrunk = True
                 new = {k for k, m in pc.margins.items() if (m is None or m - self.target(k) < 0) and k not in pairs}
                 if radius < s.tolerance:
