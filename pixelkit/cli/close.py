@@ -3,7 +3,8 @@ from __future__ import annotations
 
 import click
 
-from .common import design_arg, emit, finishing, json_opt, load, main, out_opt, output_path, scheduler_address, spice_opts
+from .common import (design_arg, emit, finishing, json_opt, load, main, out_opt, output_path, post_layout_opt,
+                     scheduler_address, spice_opts)
 
 @main.command("close")
 @design_arg
@@ -11,6 +12,7 @@ from .common import design_arg, emit, finishing, json_opt, load, main, out_opt, 
          "the path goes beside it as <name>.close.json")
 @click.option("--scheduler", default=None, callback=scheduler_address,
               help="Dask scheduler address (default: local workers)")
+@post_layout_opt
 @spice_opts
 @json_opt
 def close_cmd(design, out, scheduler, backend, jobs, as_json):

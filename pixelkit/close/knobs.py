@@ -105,9 +105,15 @@ class Space:
         return dict(zip(self.names, self.texts(x)))
 
     def design(self, base, x):
-        """The design at knob values ``x`` (SI, already snapped), loaded as a file would be."""
+        """The design at knob values ``x`` (SI, already snapped), loaded as a file would be; in the
+        post-layout view when ``base`` is in it (the layout drawn and extracted again for these values)."""
         from ..sweep.space import design_with
-        return design_with(base, self.overrides(x))
+        d = design_with(base, self.overrides(x))
+        pl = getattr(base, "post_layout", None)
+        if pl is not None:
+            from ..layout.pex.overlay import post_layout_view
+            d = post_layout_view(d, pl.afe)
+        return d
 
 
 def check_bounds(space: Space, design) -> None:

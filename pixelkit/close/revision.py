@@ -97,9 +97,13 @@ def _under(design, setting: dict, numeric: list):
     values = {**setting, **space.overrides(x0)}
     left_out: list = []
     names = {k.name for k in numeric}
+    pl = getattr(design, "post_layout", None)
     while True:
         try:
             base = design_with(design, values)
+            if pl is not None:   # the post-layout view, as the command asked
+                from ..layout.pex.overlay import post_layout_view
+                base = post_layout_view(base, pl.afe)
             break
         except ConfigError as exc:
             if exc.field in names and values.get(exc.field) is not None:

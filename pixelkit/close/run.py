@@ -522,7 +522,7 @@ class Closer:
                "iterations": self.iterations, "final": self._specs(p.margins),
                "smallest_margin_pct": 100 * self.smallest(p.margins),
                "signoff": None if signoff is None else {k: signoff[k] for k in ("rows", "grid", "mc", "power", "failed",
-                                                                                "unmeasured", "errors")},
+                                                                                "unmeasured", "errors", "view")},
                "yield": None if yield_result is None else {k: v for k, v in yield_result.items()
                                                            if k not in ("signoff", "targets")},
                "spice_runs": sum(i["spice_runs"] for i in self.iterations),
