@@ -113,7 +113,7 @@ def one(src: Path, n: int, args, folder: Path) -> dict:
 def show(res: dict) -> None:
     c, v = res["close"], res["verify"]
     print(f"\n{res['knobs'] or 'the reference'} knobs, {res['conditions']} conditions: close {c['status']} (exit {c['exit']}) after "
-          f"{c['candidates']} candidates, smallest margin {c['smallest_margin_pct']:+.3g} %, objective "
+          f"{c['candidates']} candidates, smallest margin {c['smallest_margin_pct'] if c['smallest_margin_pct'] is None else round(c['smallest_margin_pct'], 3)} %, objective "
           f"{c['objective']['shown_start']} -> {c['objective']['shown']}"
           + (f"; conflict: {c['conflict']}" if c["conflict"] else ""))
     print("  iteration  mode      accepted  verified on          SPICE runs  cached  wall at end (s)")

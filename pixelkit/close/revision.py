@@ -63,7 +63,7 @@ def _choose(design, backend, jobs, scheduler, tell, say) -> dict:
     if passing:
         best = (min if sense == "min" else max)(passing, key=lambda r: r["objective"]["value"])
     else:
-        best = max(runs, key=lambda r: r["smallest_margin_pct"])
+        best = max(runs, key=lambda r: -1e300 if r["smallest_margin_pct"] is None else r["smallest_margin_pct"])
     out = dict(best)
     out["overrides"] = {**best["setting"], **best["overrides"], **{k: None for k in best["left_out"]}}
     absent = {k.name for k in numeric if _value(design, k.name) is None}

@@ -470,7 +470,7 @@ class Closer:
         runs, cached = self.counter.delta()
         rec = {"iteration": len(self.iterations), "mode": mode, "accepted": accepted, "verified_on": where,
                "knobs": self.space.overrides(p.x), "radius": radius,
-               "smallest_margin_pct": 100 * self.smallest(p.margins), "objective": p.f,
+               "smallest_margin_pct": _pct(self.smallest(p.margins)), "objective": p.f,
                "specs": self._specs(p.margins), "errors": p.errors[:5], "spice_runs": runs, "spice_cached": cached,
                "wall_s": time.perf_counter() - self.t0}
         self.iterations.append(rec)
@@ -482,7 +482,7 @@ class Closer:
         runs, cached = self.counter.delta()
         rec = {"iteration": len(self.iterations), "mode": mode, "accepted": False,
                "verified_on": "modelled and worst conditions", "knobs": self.space.overrides(x), "radius": radius,
-               "smallest_margin_pct": 100 * self.smallest(m),
+               "smallest_margin_pct": _pct(self.smallest(m)),
                "objective": None if fc is None else fc * self.f_scale * (1 if self.objective.sense == "min" else -1),
                "specs": self._specs(m), "errors": [], "spice_runs": runs, "spice_cached": cached,
                "wall_s": time.perf_counter() - self.t0}
@@ -520,7 +520,7 @@ class Closer:
                "targets": [{"spec": k[0], "condition": k[1].label, "target_pct": 100 * v} for k, v in
                            self.targets.items()],
                "iterations": self.iterations, "final": self._specs(p.margins),
-               "smallest_margin_pct": 100 * self.smallest(p.margins),
+               "smallest_margin_pct": _pct(self.smallest(p.margins)),
                "signoff": None if signoff is None else {k: signoff[k] for k in ("rows", "grid", "mc", "power", "failed",
                                                                                 "unmeasured", "errors", "view")},
                "yield": None if yield_result is None else {k: v for k, v in yield_result.items()
@@ -532,6 +532,11 @@ class Closer:
         if short and last is not None:
             out["conflict"] = conflicts(self, p, last)
         return out
+
+
+def _pct(x: float) -> float | None:
+    """A margin in % for the record: None when it is not a number (a spec not measured: JSON has no -inf)."""
+    return 100 * x if math.isfinite(x) else None
 
 
 def _slope(a, b, h) -> float:
