@@ -1,24 +1,28 @@
-"""The loop of ``pixelkit close``: a trust-region method on SPICE-built linear models, every
-candidate re-verified by ``verify`` (docs/close.md).
+"""One close: a trust-region method on SPICE-built linear models, every candidate re-verified by
+``verify`` (docs/close.md, "How it works").
 
 1. The start (the design's knob values, clipped into their bounds) is verified on the whole grid.
-2. The pairs (spec, condition) that bind - each spec's worst condition and the next within 5 % of
-   its limit - are modelled: each knob is moved by a fixed step (3 % of a lin knob's span or of a
-   log knob's value) and the groups those specs need are simulated there (``verify.run.measure_at``):
-   forward differences give each pair's margin gradient.
+2. The specs within ``margins.ACTIVE`` of their target are modelled, each at its worst condition and
+   the next within ``margins.BAND`` of it: each knob is moved by a fixed step (3 % of a lin knob's
+   span or of a log knob's value) and the groups those specs need are simulated there
+   (``verify.run.measure_at``): forward differences give each (spec, condition) margin's gradient.
+   A row keeps its gradient from step to step as the candidates' secants correct it (Broyden); all
+   are refreshed after a poorly predicted step, after ``REFRESH_EVERY`` steps, and before a verdict.
 3. casadi solves the step (``close.step``): while a margin is below its target, the step that
    raises the smallest margin most; once every target is met on the whole grid, the step that
    improves the objective keeping every modelled margin >= its target.
-4. The candidate is simulated at the modelled conditions; if it improves there as the model said
-   it would, it is verified on the whole grid (``verify.run.verify``). A candidate is accepted only
-   when the whole grid says so (the smallest margin rose; or, once passing, it still passes and
-   the objective improved). A rejected candidate halves the trust region and corrects the models
-   by its secant; a condition where it failed that was not modelled is modelled from then on.
-5. It ends when the trust region falls below ``[close] tolerance`` (or the model promises nothing
-   more): with a passing revision, its Monte Carlo yield is checked (``[verify] mc``; each spec's
-   yield interval's lower bound must reach ``min_yield``: if not, the spec's margin target at the
-   nominal condition is raised to its Monte Carlo spread and the loop goes on); without one, the
-   specs whose multipliers carry the last step (``close.step.restore``) are the conflict.
+4. The candidate is simulated at the modelled conditions and each spec's worst condition: rejected
+   there when it gives less than ``ETA`` of what the model promised or breaks a spec nothing modelled
+   (modelled from then on); a second-order correction is tried when the objective improved but a
+   modelled margin curved past its target. Otherwise it is verified on the whole grid
+   (``verify.run.verify``) and accepted only when the whole grid says so (the smallest margin rose;
+   or, once passing, it still passes and the objective improved). A rejection halves the trust
+   region below the step that failed.
+5. It ends when the model's next step is below ``[close] tolerance`` on fresh sensitivities: with a
+   passing revision, its Monte Carlo yield is checked (``[verify] mc``; each spec's yield interval's
+   lower bound must reach ``min_yield``: if not, the spec's margin target at the nominal condition is
+   raised to its Monte Carlo spread and the loop goes on); without one, the rows whose multipliers
+   carry the max-min step (``close.step.restore``) are the specs that conflict.
 """
 from __future__ import annotations
 
