@@ -41,9 +41,10 @@ MODAL_MAX = 3e-6
 #: the nets whose collection is solved one by one (the rest collect together)
 OWN = (".pd", ".fd")
 REST = "other junctions"
-#: the code the cached results depend on
-_CODE = ("physics/collection.py", "physics/lightfield.py", "physics/aperture.py", "physics/silicon.py",
-         "physics/data/silicon_green2008.csv", "layout/pex/collection.py")
+#: the code the cached results depend on: the collection maps, and the responses (the light too)
+_MAPS_CODE = ("physics/collection.py", "layout/pex/collection.py")
+_CODE = (*_MAPS_CODE, "physics/lightfield.py", "physics/aperture.py", "physics/silicon.py",
+         "physics/data/silicon_green2008.csv")
 
 
 def require(design):
@@ -219,13 +220,13 @@ def _bottom(c):
 
 
 def _layers(depth, junctions):
-    """Layers 50 nm thick at the surface growing 15 % a layer through the junctions' depletion
+    """Layers 50 nm thick at the surface growing 20 % a layer through the junctions' depletion
     regions, then 25 % a layer down to ``depth``."""
     z = [0.0]
     step = 0.05e-6
     while z[-1] < junctions + 0.5e-6:
         z.append(z[-1] + step)
-        step = min(step * 1.15, 0.5e-6)
+        step = min(step * 1.2, 0.5e-6)
     while z[-1] < depth * (1 - 1e-9):
         step *= 1.25
         z.append(min(z[-1] + step, depth) if depth - z[-1] > 1.5 * step else depth)
@@ -348,29 +349,45 @@ class Response:
                    d["depletion"], d["light"])
 
 
+def ratio(h: float, n: float, wavelength: float) -> int:
+    """How many light-field points per collection step: the light field's grid must carry every plane
+    wave that propagates in the dielectric (pi / h_light > 2 pi n / lambda, 2 % to spare)."""
+    return max(1, int(np.ceil(1.02 * 2 * n * h / wavelength)))
+
+
 def wavelengths(design) -> np.ndarray:
     lt = design.light
     n = int(np.floor((lt.wavelength_max - lt.wavelength_min) / lt.wavelength_step + 1e-9)) + 1
     return lt.wavelength_min + lt.wavelength_step * np.arange(n)
 
 
-def _code_hash() -> str:
+def _code_hash(files=_CODE) -> str:
     root = Path(__file__).resolve().parents[2]
     h = hashlib.sha256()
-    for rel in _CODE:
+    for rel in files:
         h.update(rel.encode())
         h.update((root / rel).read_bytes())
     return h.hexdigest()
 
 
 def _digest(*parts) -> str:
+    """SHA-256 of ``parts``: arrays by their bytes (never their repr, which numpy abbreviates), tuples and
+    lists item by item, anything else by its repr."""
     h = hashlib.sha256()
-    for p in parts:
+
+    def feed(p):
         if isinstance(p, np.ndarray):
-            h.update(str(p.shape).encode() + str(p.dtype).encode())
+            h.update(f"array{p.shape}{p.dtype}".encode())
             h.update(np.ascontiguousarray(p).tobytes())
+        elif isinstance(p, (tuple, list)):
+            h.update(f"seq{len(p)}(".encode())
+            for x in p:
+                feed(x)
+            h.update(b")")
         else:
             h.update(repr(p).encode())
+    for p in parts:
+        feed(p)
     return h.hexdigest()
 
 
@@ -385,7 +402,7 @@ _MAPS: dict = {}
 def maps(sil: Silicon):
     """The collection maps of ``sil`` (``physics.collection.solve``), cached by its geometry and parameters."""
     from ...physics import collection as pc
-    key = _digest("maps", _code_hash(), sil.grid.h, sil.grid.nx, sil.grid.ny, sil.grid.z, sil.labels, sil.n_type,
+    key = _digest("maps", _code_hash(_MAPS_CODE), sil.grid.h, sil.grid.nx, sil.grid.ny, sil.grid.z, sil.labels, sil.n_type,
                   sil.substrate)
     if key in _MAPS:
         return _MAPS[key]
@@ -412,7 +429,9 @@ def response(design, geo=None, secondary: float | None = None, light: str = "all
     geo = geo if geo is not None else pixel_geometry(design)
     sil = silicon(design, geo, lt.grid, lt.depth)
     wl = wavelengths(design)
-    opt = {r: optics(design, geo, lt.grid / r, secondary, light) for r in (1, 2)}
+    n_ox = require(design).dielectric_index
+    need = {float(w): ratio(lt.grid, n_ox, w) for w in wl}
+    opt = {r: optics(design, geo, lt.grid / r, secondary, light) for r in sorted(set(need.values()))}
     key = _digest("response", _code_hash(), sil.grid.h, sil.grid.z, sil.labels, sil.n_type, sil.substrate,
                   wl, design.temperature, *[(o.shield, o.modal, o.metals, o.shield_z, o.shield_thickness,
                                              o.n_dielectric) for o in opt.values()])
@@ -424,11 +443,9 @@ def response(design, geo=None, secondary: float | None = None, light: str = "all
     into = np.zeros(wl.size)
     trans = np.zeros(wl.size)
     for i, w in enumerate(wl):
-        n_ox = opt[1].n_dielectric
-        ratio = 1 if np.pi / lt.grid >= 1.02 * 2 * np.pi * n_ox / w else 2     # the finer grid where needed
-        o = opt[ratio]
-        ab = lf.absorbed(o, float(w), complex(si.index(w, design.temperature)),
-                         float(si.alpha(w, design.temperature)), sil.grid.z, ratio)
+        r = need[float(w)]
+        ab = lf.absorbed(opt[r], float(w), complex(si.index(w, design.temperature)),
+                         float(si.alpha(w, design.temperature)), sil.grid.z, r)
         col = m.collected(ab.voxels, ab.deep)
         for k, n in enumerate(sil.nets):
             eta[n][i] = col.get(k + 1, 0.0)
