@@ -170,7 +170,7 @@ def silicon(design, geo, h: float, depth: float) -> Silicon:
             else:
                 continue
             widths[(kind, net)] = (wb, ws)
-    z = _layers(depth, deepest)
+    z = _layers(min(depth, 0.9 * c.substrate_thickness), deepest)     # a thin epitaxial layer: the grid stops in it
     grid = pc.Grid(h, nx, ny, z)
     zc = 0.5 * (z[:-1] + z[1:])
     labels = np.zeros(grid.shape, int)
