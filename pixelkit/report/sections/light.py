@@ -68,8 +68,9 @@ def build(ctx) -> Section:
     if d.scene is None:
         return Section.needs_input(TITLE, "a [scene] table", "the model weights its wavelengths by the scene's spectrum")
     if ctx.quick and d.light.model != "modelled":
-        return Section.unavailable(TITLE, "quick profile: the collection model runs in the full profile, or for a "
-                                          "design with light.model = \"modelled\"")
+        return Section(TITLE, text=["Quick profile: the collection model is not run here (about a minute the first "
+                                    "time, cached after); the full profile shows it for every design, either profile "
+                                    "for a design with light.model = \"modelled\" (docs/light-collection.md)."])
     from ...layout.pex.collection import pixel_geometry, response
     from ...layout.pex.lightfigures import decomposition, figures, scene_spectrum
     from ...physics.photo import Spectrum
