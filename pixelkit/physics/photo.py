@@ -54,8 +54,9 @@ class Spectrum:
                   n=376) -> "Spectrum":
         """A phosphor-converted white LED (an LED headlight): the blue pump and the yellow phosphor band,
         each in the band shape of [Ohno2005] g = (exp(-x^2) + 2 exp(-5 x^2)) / 3, x = (lambda - peak) /
-        width (the pump 20 nm, the phosphor 110 nm wide at 0.6 of the pump's peak: a cool white,
-        ~5500 K). What matters to a pixel: no power beyond ~750 nm, where a halogen lamp puts most."""
+        width (the pump 20 nm, the phosphor 110 nm wide at 0.6 of the pump's peak: a cool white; its
+        luminous efficacy over 350 - 1100 nm is 332 lm/W, a 2856 K black body's 54). What matters to a
+        pixel: 1.7 % of its power lies beyond 700 nm, where a halogen lamp puts 78 %."""
         wl = np.linspace(lo, hi, n)
 
         def band(peak, width):
