@@ -39,6 +39,9 @@ class Subpixel:
                                      doc="metal-mask opening; absent = unmasked")
     timing: Timing = table(Timing, default=Timing, doc="global-shutter sequence and row read of this array")
     extracted: dict | None = field(default=None, metadata=dict(kind="skip"), compare=False)
+    #: the collection model's figures (``light.model = "modelled"``): photoactive_area_m2 (the effective
+    #: opening, lit like the primary), gse (eta_pd / eta_fd), over the scene's spectrum
+    modelled: dict | None = field(default=None, metadata=dict(kind="skip"), compare=False)
 
     @property
     def area(self) -> float:
@@ -55,6 +58,10 @@ class Subpixel:
 
     @property
     def photoactive_area(self) -> float:
+        """The area that, lit like the primary, collects this subpixel's signal: the mask opening (or the
+        PD) as drawn or extracted, or the collection model's effective opening (``modelled``)."""
+        if self.modelled:
+            return self.modelled["photoactive_area_m2"]
         if self.extracted:
             return self.extracted["photoactive_area_m2"]
         return photoactive_area(self.pd_width, self.pd_height, self.mask_opening)
@@ -225,6 +232,10 @@ class Light:
                           "light field runs on a grid twice as fine where the wavelength needs it)")
     depth: float = qty("m", 30e-6, gt=0, plausible=(2e-6, 1e-3),
                        doc="depth of the 3D grid; below it the collection is laterally uniform and joined exactly")
+    source_factor: float = num(1000.0, gt=1, plausible=(1.0, 1e9),
+                               doc="the bright source of the storage-light figures (verify storage_light_*): its "
+                                   "photocurrent in each subpixel over the background's (the sizing's), lit while the "
+                                   "frame is read out only (an LED headlight's PWM off during the exposure)")
 
     def validate(self, path, source, raw):
         if self.wavelength_max <= self.wavelength_min:
@@ -336,6 +347,9 @@ def load_design(path: str | Path) -> Design:
     check_conditions(design, tech)
     if design.layout is not None:
         design = with_layout(design, path.parent / design.layout.gds)
+    if design.light.model == "modelled":   # the collection model's effective opening and GSE (cached)
+        from .layout.pex.lightfigures import with_light
+        design = with_light(design)
     return design
 
 

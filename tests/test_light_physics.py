@@ -182,3 +182,15 @@ def test_open_cell_absorbs_the_fresnel_transmission():
         T = 1 - abs((1.46 - n) / (1.46 + n)) ** 2
         assert r.voxels.sum() + r.deep_density / a == pytest.approx(T, rel=1e-6)
         assert r.voxels[0].sum() == pytest.approx(T * (1 - np.exp(-a * z[1])), rel=1e-3)
+
+
+def test_headlight_spectra_differ_where_silicon_is_transparent():
+    """The two headlight lights of the storage table: a 2856 K lamp puts 78 % of its power (350 - 1100 nm)
+    above 700 nm, the white LED (blue pump and phosphor in Ohno's band shape) 1.7 %; their luminous
+    efficacies, 54 and 332 lm/W, from the CIE V(lambda) table (the docstring's figures)."""
+    from pixelkit.physics.photo import Spectrum, luminous_efficacy
+    lamp, led = Spectrum.blackbody(2856.0), Spectrum.white_led()
+    assert lamp.mean(lambda w: (w > 700e-9) * 1.0) == pytest.approx(0.78, abs=0.01)
+    assert led.mean(lambda w: (w > 700e-9) * 1.0) == pytest.approx(0.017, abs=0.002)
+    assert luminous_efficacy(lamp) == pytest.approx(54, rel=0.02)
+    assert luminous_efficacy(led) == pytest.approx(332, rel=0.02)

@@ -146,7 +146,7 @@ def array_camera(design, which: str, a_sf: float, transfer: dict, wavelength_m: 
         dark_e_per_s=(dark_current(sub.area, sub.perimeter, design.temperature, tech.photodiode)
                       + fd.pd_switch_leakage(design)) / Q,
         fd_leak_V_per_s=a_sf * fd.leakage(design) / r["c_fd_F"],
-        pls_V_per_e=a_sf * Q / (design.pixel.gse * r["c_fd_F"]),
+        pls_V_per_e=a_sf * Q / (fd.gse(design, which) * r["c_fd_F"]),
         t_row=1.0 / sub.f_read, t_pre=sub.timing.t_pre + sub.timing.t_store,
         t_s1=sub.timing.row(1.0 / sub.f_read)["s1_off"], t_int=sub.t_int, temperature_K=design.temperature,
         adc=Adc(bits, 1.2 * clip), chain=ch, cg0=r["cg_out_V_per_e"])

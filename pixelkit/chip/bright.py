@@ -38,6 +38,10 @@ HOLDS = (True, False)
 BLACK_SUN = 0.5
 KINDS = ("primary", "secondary")
 ROWS = 3          # dark, bright, dark
+#: bright sources of the storage-light table, in times the background
+STORAGE_FACTORS = (1e3, 1e4, 1e5)
+#: single wavelengths of the storage-light table (nm)
+LINES_NM = (450, 550, 650, 750, 850, 950)
 
 
 def full_well_current(design, kind: str) -> float:
@@ -127,7 +131,7 @@ def figures(design, factors=FACTORS, backend="batch", jobs=None, holds=HOLDS) ->
         droop = float(r.at(fd, t0)) - float(r.at(fd, t1))
         row.update(signal_V=ds[1], afe_V=afe[1], reset_level_V=sig[1][1],
                    fd_after_reset_e=c_fd[kind] * droop / Q,
-                   fd_light_e=pls_current(design, row["current_A"]) * (t1 - t0) / Q,
+                   fd_light_e=pls_current(design, row["current_A"], kind) * (t1 - t0) / Q,
                    recovery_V=ds[2] - ds[0], recovery_afe_V=afe[2] - afe[0])
         if f == 1.0:
             full[(hold, kind)] = ds[1]
@@ -138,3 +142,58 @@ def figures(design, factors=FACTORS, backend="batch", jobs=None, holds=HOLDS) ->
             row["of_full_well_signal"] = row["signal_V"] / ref
             row["black_sun"] = bool(row["of_full_well_signal"] < BLACK_SUN)
     return out
+
+
+def storage_lights(design) -> dict:
+    """The lights of the storage table: the scene's halogen, a white LED, single wavelengths."""
+    from ..physics.photo import Spectrum
+    out = {f"halogen {design.scene.spectrum_temperature:g} K": Spectrum.blackbody(design.scene.spectrum_temperature),
+           "white LED": Spectrum.white_led()}
+    out.update({f"{nm} nm": Spectrum.monochromatic(nm * 1e-9) for nm in LINES_NM})
+    return out
+
+
+def storage_table(design, swing: dict, a_sf: float, response=None, factors=STORAGE_FACTORS) -> list[dict]:
+    """The storage node's light over a frame's readout, around a bright source: per array, light (the
+    scene's halogen, a white LED, single wavelengths) and source (``factors`` x the background, as the
+    sizing's background photocurrent), the charge FD collects while the last row waits
+    ((rows - 1) row times, the source lit then) and the column signal it makes (A_sf q / C_FD per
+    electron, linear, clipped at the measured ``swing``), with geometric light (the drawn mask opening,
+    ``pixel.gse``) and, given the collection model's ``response``, modelled (each light's effective
+    opening and GSE, ``layout.pex.lightfigures``). Under the source the pixels' exposure saturates; the
+    rows are what a source lit only while the frame is read leaves (an LED headlight's PWM off during
+    the exposure), and what the storage node adds to a pixel the exposure did not saturate."""
+    from ..optimize.sizing import light
+    from ..physics.fd import capacitances
+    j_bg = light(design).j_bg
+    drawn = {"primary": design.primary.area if design.primary.mask_opening is None else design.primary.mask_opening,
+             "secondary": design.secondary.area if design.secondary.mask_opening is None else design.secondary.mask_opening}
+    c_fd = {k: capacitances(design, k, a_sf)["c_fd_F"] for k in KINDS}
+    lights = storage_lights(design)
+    figs = {}
+    if response is not None:
+        from ..layout.pex.lightfigures import figures
+        figs = {name: figures(design, response, spec) for name, spec in lights.items()}
+    rows = []
+    for kind in KINDS:
+        sub = getattr(design, kind)
+        t = (sub.rows - 1) / sub.f_read
+        for name in lights:
+            for f in factors:
+                row = {"array": kind, "light": name, "source_x_background": f, "wait_s": t}
+                for model in ("geometric", "modelled"):
+                    if model == "modelled" and name not in figs:
+                        continue
+                    if model == "geometric":
+                        area, gse = drawn[kind], design.pixel.gse
+                    else:
+                        fg = figs[name]
+                        area = fg["primary_area_m2"] if kind == "primary" else fg["effective_opening_m2"]
+                        gse = fg["gse_primary"] if kind == "primary" else fg["gse_secondary"]
+                    electrons = f * j_bg * area / gse * t / Q
+                    v = a_sf * electrons * Q / c_fd[kind]
+                    row[f"{model}_gse"] = gse
+                    row[f"{model}_fd_e"] = electrons
+                    row[f"{model}_of_swing"] = min(v / swing[kind], 1.0)
+                rows.append(row)
+    return rows

@@ -16,12 +16,13 @@ conducts as soon as it opens, so even a small signal is shared onto FD.
     RS:  sfo -> col   row select
 
 FD is a storage node with its own light and leakage: ``Fpls`` draws 1/gse of the
-photocurrent from it (the design's ``pixel.gse``, shielding); it leaks through the
+photocurrent from it (``physics.fd.gse``: the design's ``pixel.gse``, or the collection model's); it leaks through the
 TG and RST diffusions by the device models' junction law (``physics.fd.leakage``).
 """
 from __future__ import annotations
 
 from ..spice.netlist import Element, Param, Subckt
+from ..physics.fd import gse
 from .devices import mosfet, photodiode
 
 PORTS = ("vdd", "vpdr", "vrst", "ec", "tg", "rst", "rs", "col")
@@ -47,7 +48,7 @@ def pixel5t(design, which: str, compressed: bool = False) -> Subckt:
         Element("Vph", ("nph", "0"), 0.0),             # senses the photocurrent for Fpls
         # storage node: parasitic light, 1/gse of the PD's photocurrent (its leakage is the
         # BSIM4 junction current of the TG and RST diffusions, in the device models)
-        Element("Fpls", ("fd", "0", "Vph"), 1.0 / design.pixel.gse),
+        Element("Fpls", ("fd", "0", "Vph"), 1.0 / gse(design, which)),
         mosfet("ec", "vpdr", "ec", "pd", "0", dev.ec_w, dev.ec_l, t),
         mosfet("tg", "fd", "tg", "pd", "0", dev.tg_w, dev.tg_l, t),
         mosfet("rst", "vrst", "rst", "fd", "0", dev.rst_w, dev.rst_l, t),

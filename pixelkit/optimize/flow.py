@@ -6,13 +6,13 @@ from pathlib import Path
 
 from ..circuits.testbench import dual_pixel_bench, timings
 from ..experiments.thesis import run_experiment
-from ..errors import PixelkitError
+from ..errors import InfeasibleError, PixelkitError
 from ..fileio import check_output, moved_path, path_kind, write_atomic
 from ..measure.pixel import double_sampled
 from ..schema import to_toml
 from ..spice import simulate
 from .levels import analytic_curves, spice_curves
-from .sizing import light, solve
+from .sizing import Opening, light, opening_of, solve
 
 WHY = ("The analytic level sees only the PD node (PD junction + EC/TG diffusions) and takes the "
        "signal as its voltage drop over the design swing; the SPICE level reads the double-sampled "
@@ -31,7 +31,7 @@ def verify(design, sized: dict, experiment: dict) -> dict:
     """
     lt = light(design)
     i_p = lt.j_bg * design.primary.area
-    i_s = lt.j_bg * sized["mask_open_m2"]
+    i_s = lt.j_bg * sized.get("effective_opening_m2", sized["mask_open_m2"])
     tm = timings(design, sized["t_int_primary_s"], 1, sized["t_int_secondary_s"])
     r = simulate(dual_pixel_bench(design, i_p, i_s, title="size_verify", tm=tm))
     fp = (double_sampled(r, "col_p", tm["primary"]) - experiment["primary"]["pedestal_V"]) \
@@ -87,11 +87,14 @@ def variants(design):
     return out
 
 
-def sensitivity(design, nominal: dict, backend="batch") -> list[dict]:
+def sensitivity(design, nominal: dict, backend="batch", opening: Opening | None = None) -> list[dict]:
+    """Re-sized per variant; the secondary's opening law (geometric, or the collection model's) held at
+    the nominal design's (``opening``)."""
     from ..progress import progress
     rows = []
+    opening = opening if opening is not None else opening_of(design)
     for label, d in progress(list(variants(design)), desc="sensitivity (re-sizing each variant)", unit="variant"):
-        s = solve(d, spice_curves(d, run_experiment(d, backend=backend)))
+        s = solve(d, spice_curves(d, run_experiment(d, backend=backend)), opening)
         rows.append({"variant": label, "c_m": s["c_m"], "mask_open_m2": s["mask_open_m2"],
                      "t_int_primary_s": s["t_int_primary_s"], "t_int_secondary_s": s["t_int_secondary_s"],
                      "c_m_change_frac": s["c_m"] / nominal["c_m"] - 1,
@@ -109,10 +112,20 @@ def size_result(design, out: Path | None = None, with_sensitivity: bool = False,
     if path_kind(out) == "dir":
         raise PixelkitError(f"{out}: cannot write the sized design here: it is a folder (give a file name)")
     exp = run_experiment(design, backend=backend)
-    analytic = solve(design, analytic_curves(design))
-    spice = solve(design, spice_curves(design, exp))
+    opening = opening_of(design)
+    curves = {"analytic": analytic_curves(design), "spice": spice_curves(design, exp)}
+    geometric = solve(design, curves[design.sizing.level], Opening()) if not opening.geometric else None
+    try:
+        analytic = solve(design, curves["analytic"], opening)
+        spice = solve(design, curves["spice"], opening)
+    except InfeasibleError as exc:
+        if geometric is not None:     # say what the geometric light would have sized
+            raise InfeasibleError(f"{str(exc).split(': constraints in conflict')[0]}; with geometric light C_M = {geometric['c_m']:.3g} "
+                                  f"({geometric['mask_open_m2'] * 1e12:.3g} um2)", exc.conflicts) from None
+        raise
     chosen = spice if design.sizing.level == "spice" else analytic
-    result = {k: chosen[k] for k in ("c_m", "mask_open_m2", "t_int_primary_s", "t_int_secondary_s",
+    result = {k: chosen[k] for k in ("c_m", "mask_open_m2", "effective_opening_m2", "light",
+                                     "t_int_primary_s", "t_int_secondary_s",
                                      "trace_px_at_speed_min", "motion_px_primary", "dark_frac_secondary",
                                      "headlight_frac")}
     checked = verify(design, chosen, exp)
@@ -120,8 +133,11 @@ def size_result(design, out: Path | None = None, with_sensitivity: bool = False,
                   verify=checked, levels={"analytic": analytic, "spice": spice},
                   why_levels_differ=WHY, sized_design=str(out),
                   retried=exp.get("retried", []) + checked.pop("retried"))
+    if geometric is not None:
+        result["geometric"] = {k: geometric[k] for k in ("c_m", "mask_open_m2", "t_int_primary_s", "t_int_secondary_s")}
+        result["c_m_change_frac"] = chosen["c_m"] / geometric["c_m"] - 1
     if with_sensitivity:
-        result["sensitivity"] = sensitivity(design, spice, backend)
+        result["sensitivity"] = sensitivity(design, spice, backend, opening)
     return result, sized_design_text(design, chosen, out)
 
 

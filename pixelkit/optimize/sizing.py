@@ -67,9 +67,45 @@ def _read_noise_e(design, temperature_K: float) -> float:
     return chain(d, "secondary", sf_gain(d), models_for(d))["pixel_e"]
 
 
-def _bounds(design, curves: Curves, lt: Light):
+class Opening:
+    """The secondary's effective opening against its drawn one: the identity (geometric light) or the
+    collection model's table (``light.model = "modelled"``, ``layout.pex.lightfigures.opening_table``),
+    interpolated linearly in log - log (numbers and casadi expressions alike)."""
+
+    def __init__(self, table: dict | None = None):
+        self.table = table
+        if table is not None:
+            self._la, self._le = np.log(table["drawn_m2"]), np.log(table["effective_m2"])
+
+    @property
+    def geometric(self) -> bool:
+        return self.table is None
+
+    def __call__(self, a):
+        if self.table is None:
+            return a
+        return float(np.exp(np.interp(np.log(a), self._la, self._le)))
+
+    def casadi(self, la):
+        """exp(log A_eff(log a)) for the casadi variable ``la`` = log(a)."""
+        if self.table is None:
+            return ca.exp(la)
+        f = ca.interpolant("aeff", "linear", [self._la], self._le)
+        return ca.exp(f(la))
+
+
+def opening_of(design) -> Opening:
+    """The design's opening law: geometric, or the collection model's (computed and cached)."""
+    if design.light.model != "modelled":
+        return Opening()
+    from ..layout.pex.lightfigures import opening_table
+    return Opening(opening_table(design))
+
+
+def _bounds(design, curves: Curves, lt: Light, opening: Opening | None = None):
     """Closed-form bounds on t_p and t_s: {name: (kind, value)} with kind 'lo'/'hi'."""
     d, sc, op, sz = design, design.scene, design.optics, design.sizing
+    opening = opening or Opening()
     m = sz.margin
     z, f = sc.distance, op.focal_length
     q_mid = curves.charge_at("primary", d.experiment.mid_fraction)
@@ -81,8 +117,8 @@ def _bounds(design, curves: Curves, lt: Light):
         "trace": ("lo", sz.min_trace_px * (1 + m) * z * d.secondary.pitch / (sc.speed_min * f)),
         "fov": ("hi", sz.fov_fraction * (1 - m) * d.secondary.cols * d.secondary.pitch * z / (sc.speed_max * f)),
         "dark": ("hi", sz.dark_fraction * (1 - m) * curves.q_full_secondary / i_dark),
-        "opening_max": ("lo", q_low / (lt.j_bg * d.secondary.area)),
-        "opening_min": ("hi", q_low / (lt.j_bg * min_open * (1 + m))),
+        "opening_max": ("lo", q_low / (lt.j_bg * opening(d.secondary.area))),
+        "opening_min": ("hi", q_low / (lt.j_bg * opening(min_open * (1 + m)))),
     }
     tp = {"motion": ("hi", sz.max_motion_px * (1 - m) * z * d.primary.pitch / (sc.speed_max * f)),
           "criterion": ("eq", t_p)}
@@ -95,7 +131,7 @@ def _bounds(design, curves: Curves, lt: Light):
                                 q_noise=q_noise, i_dark=i_dark, min_open=min_open)
 
 
-def _feasibility(design, ts, tp, checks):
+def _feasibility(design, ts, tp, checks, opening: Opening | None = None):
     """Collect every conflict the closed-form bounds show; raise once naming them all."""
     conflicts, reasons = [], []
     bad = [name for name, ok in checks.items() if not ok]
@@ -120,24 +156,31 @@ def _feasibility(design, ts, tp, checks):
                 conflicts += [a, b]
                 reasons.append(f"{a} needs t_secondary >= {va * 1e3:.3g} ms, {b} allows <= {vb * 1e3:.3g} ms")
     if conflicts:
+        if opening is not None and not opening.geometric:
+            lo = opening.table["drawn_m2"][0]
+            reasons.append(f"with the collection model's light the secondary collects like an opening of "
+                           f"{opening(lo) * 1e12:.3g} um2 when its mask opening is the smallest, {lo * 1e12:.3g} um2 "
+                           f"(docs/light-collection.md)")
         raise InfeasibleError("; ".join(reasons), list(dict.fromkeys(conflicts + ["criterion (5 % / mid-scale)"])))
 
 
-def solve(design, curves: Curves) -> dict:
-    """Solve the sizing problem at one model level; returns the sized values and checks."""
+def solve(design, curves: Curves, opening: Opening | None = None) -> dict:
+    """Solve the sizing problem at one model level; returns the sized values and checks. ``opening``:
+    the secondary's effective opening against the drawn one (default: the design's, ``opening_of``)."""
     _require(design)
+    opening = opening if opening is not None else opening_of(design)
     lt = light(design)
-    ts, tp, checks, q = _bounds(design, curves, lt)
-    _feasibility(design, ts, tp, checks)
+    ts, tp, checks, q = _bounds(design, curves, lt, opening)
+    _feasibility(design, ts, tp, checks, opening)
     sz, d = design.sizing, design
     t0 = time.perf_counter()
     fp = ca.interpolant("fp", "linear", [curves.q_primary], np.maximum.accumulate(curves.f_primary))
     fs = ca.interpolant("fs", "linear", [curves.q_secondary], np.maximum.accumulate(curves.f_secondary))
     opti = ca.Opti()
     la, ltp, lts = opti.variable(), opti.variable(), opti.variable()
-    a_open, t_p, t_s = ca.exp(la), ca.exp(ltp), ca.exp(lts)
+    t_p, t_s = ca.exp(ltp), ca.exp(lts)
     opti.subject_to(fp(lt.j_bg * d.primary.area * t_p) == d.experiment.mid_fraction)
-    opti.subject_to(fs(lt.j_bg * a_open * t_s) == d.experiment.low_fraction)
+    opti.subject_to(fs(lt.j_bg * opening.casadi(la) * t_s) == d.experiment.low_fraction)
     slack = opti.variable()
     for name, (kind, v) in ts.items():
         if name.startswith("opening"):
@@ -153,7 +196,10 @@ def solve(design, curves: Curves) -> dict:
     t_guess = tp["criterion"][1]
     opti.set_initial(ltp, math.log(t_guess))
     opti.set_initial(lts, math.log(t_guess * (sz.t_ratio or 10)))
-    opti.set_initial(la, math.log(q["q_low"] / (lt.j_bg * t_guess * (sz.t_ratio or 10))))
+    a0 = q["q_low"] / (lt.j_bg * t_guess * (sz.t_ratio or 10))
+    if not opening.geometric:     # the drawn opening whose effective one is a0
+        a0 = float(np.exp(np.interp(math.log(a0), opening._le, opening._la)))
+    opti.set_initial(la, math.log(a0))
     opti.set_initial(slack, 0.0)
     opti.solver("ipopt", {"print_time": False}, {"print_level": 0, "sb": "yes", "tol": 1e-10})
     try:
@@ -167,6 +213,8 @@ def solve(design, curves: Curves) -> dict:
         "level": curves.level,
         "c_m": d.secondary.area / a,
         "mask_open_m2": a,
+        "effective_opening_m2": opening(a),
+        "light": "geometric" if opening.geometric else "modelled",
         "t_int_primary_s": tpv,
         "t_int_secondary_s": tsv,
         "t_ratio": tsv / tpv,

@@ -46,7 +46,7 @@ import numpy as np
 #: systems at most this size are factorised directly
 DIRECT = 60_000
 #: relative residual of the multigrid solves
-TOL = 1e-9
+TOL = 1e-7
 
 
 @dataclass(frozen=True)

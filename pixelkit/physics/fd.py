@@ -32,7 +32,7 @@ the kit has no closed form for those models. Everything else is closed form.
 
 Storage: FD leaks through its diffusions by the device models' junction law
 (``dark.diffusion_leakage``: BSIM4's, which SPICE applies to the same diffusions), and collects a parasitic photocurrent I_ph / gse (the design's
-``pixel.gse`` = eta_pd / eta_FD, a charge ratio set by the shielding) while it waits.
+``gse``: ``pixel.gse`` or the collection model's, a charge ratio eta_pd / eta_FD) while it waits.
 """
 from __future__ import annotations
 
@@ -174,20 +174,28 @@ def response(design, which: str, a_sf: float, sf_models: dict, v_bias: float | N
             "cg_fd_V_per_e": cg_fd, "a_sf": a_sf, "cg_out_V_per_e": a_sf * cg_fd}
 
 
-def pls_current(design, i_ph: float) -> float:
+def gse(design, which: str) -> float:
+    """The charge ratio eta_pd / eta_FD of ``which`` subpixel: the design's ``pixel.gse`` (geometric
+    light), or the collection model's for this subpixel over the scene's spectrum
+    (``light.model = "modelled"``: ``layout.pex.lightfigures.with_light`` puts it on the subpixel)."""
+    m = getattr(design, which).modelled
+    return m["gse"] if m else design.pixel.gse
+
+
+def pls_current(design, i_ph: float, which: str = "primary") -> float:
     """Parasitic photocurrent (A) on FD for a PD photocurrent ``i_ph``: i_ph / gse.
 
-    ``pixel.gse`` is the charge ratio eta_pd / eta_FD the shielding gives. The
+    ``gse`` is the charge ratio eta_pd / eta_FD the shielding gives. The
     signal GSE a camera measures (dS/dt_exp over dS/dt_wait) is
     smaller by C_FD / C_total: a charge on the small FD moves it more (``signal_gse``).
     """
-    return i_ph / design.pixel.gse
+    return i_ph / gse(design, which)
 
 
 def signal_gse(design, which: str, a_sf: float) -> float:
     """GSE on the signal: gse x C_FD / (C_PD,node + C_FD)."""
     r = capacitances(design, which, a_sf)
-    return design.pixel.gse * r["c_fd_F"] / r["c_total_F"]
+    return gse(design, which) * r["c_fd_F"] / r["c_total_F"]
 
 
 def storage_signal(design, which: str, a_sf: float, i_ph: float, t_wait: float,
@@ -197,5 +205,5 @@ def storage_signal(design, which: str, a_sf: float, i_ph: float, t_wait: float,
     ``v_fd``: the FD's bias while it stores (default the PD reset level); ``a_sf`` the SF
     gain there."""
     r = capacitances(design, which, a_sf, v_fd)
-    i = leakage(design, temperature_K) + pls_current(design, i_ph)
+    i = leakage(design, temperature_K) + pls_current(design, i_ph, which)
     return a_sf * i * t_wait / r["c_fd_F"]

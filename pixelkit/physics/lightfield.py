@@ -62,8 +62,8 @@ class Optics:
     modal: tuple = ()               # Opening, each also open in ``shield``
     metals: tuple = ()              # ((z, bool (ny, nx) mask), ...) the lower metals, any order
     lattice: float = 4e-6           # period of the lattice each modal opening is solved in
-    bounces: int = 12               # at most this many arrivals at the silicon
-    floor: float = 2e-3             # stop when the light left under the shield is below this
+    bounces: int = 8                # at most this many arrivals at the silicon
+    floor: float = 5e-3             # stop when the light left under the shield is below this share of what entered
 
     @property
     def area(self) -> float:
@@ -136,12 +136,7 @@ def exit_field(o: Optics, k0: float, kt, polarisations) -> tuple:
     for op in o.modal:
         shape = (round(op.a / o.h * 64), round(op.b / o.h * 64))
         if shape not in solved:                 # identical openings: one solution
-            P = max(o.lattice, 2 * max(op.a, op.b))
-            kc = _kc(op, eps, k0)
-            lat = ap.Lattice(P, P, eps, k0, kc + 4 * np.pi / min(op.a, op.b), tuple(kt))
-            md = ap.rect_modes((P - op.a) / 2, (P - op.b) / 2, op.a, op.b, eps, k0, kc)
-            sols = ap.solve_screen(lat, [md], o.shield_thickness, list(polarisations))
-            solved[shape] = (P, sols)
+            solved[shape] = local_solution(o, op, k0, kt, polarisations)
         P, sols = solved[shape]
         trans[op] = float(np.mean([s.transmittance for s in sols]) * P * P / (op.a * op.b))
         md = ap.rect_modes(op.x0, op.y0, op.a, op.b, eps, k0, _kc(op, eps, k0))
@@ -151,6 +146,28 @@ def exit_field(o: Optics, k0: float, kt, polarisations) -> tuple:
             out[j][0] = out[j][0] + sx
             out[j][1] = out[j][1] + sy
     return out, trans
+
+
+def local_solution(o: Optics, op: Opening, k0: float, kt, polarisations) -> tuple:
+    """(P, solutions): the modal solution of opening ``op`` alone in a P x P lattice (P = ``o.lattice``,
+    at least twice the opening), one per incident polarisation."""
+    eps = o.n_dielectric ** 2
+    P = max(o.lattice, 2 * max(op.a, op.b))
+    kc = _kc(op, eps, k0)
+    lat = ap.Lattice(P, P, eps, k0, kc + 4 * np.pi / min(op.a, op.b), tuple(kt))
+    md = ap.rect_modes((P - op.a) / 2, (P - op.b) / 2, op.a, op.b, eps, k0, kc)
+    return P, ap.solve_screen(lat, [md], o.shield_thickness, list(polarisations))
+
+
+def transmission(o: Optics, op: Opening, wavelength: float, kt=(0.0, 0.0), modal_max: float = 3e-6) -> float:
+    """Power the opening passes over the power incident on its drawn area, unpolarised light (1 for an
+    opening wider than ``modal_max``: geometric, as the light field treats it)."""
+    if min(op.a, op.b) > modal_max:
+        return 1.0
+    k0 = 2 * np.pi / wavelength
+    es, ep = ap.polarisations(np.array([kt[0]]), np.array([kt[1]]))
+    P, sols = local_solution(o, op, k0, kt, [(es[0, 0], es[1, 0]), (ep[0, 0], ep[1, 0])])
+    return float(np.mean([s.transmittance for s in sols]) * P * P / (op.a * op.b))
 
 
 def _kc(op: Opening, eps, k0):
@@ -208,6 +225,7 @@ def absorbed(o: Optics, wavelength: float, n_si: complex, alpha: float, grid_z: 
 def _bounce(o, ex, ey, kz, base, planes, fresnel, p_inc):
     """The field's successive arrivals at the silicon (s, p spectra of E_t just inside it): the lower
     metals reflect both ways where drawn, the shield's underside reflects, its openings let light out."""
+    p_exit = base.power(ex, ey)
     zs = [0.0] + [p[0] for p in planes] + [o.shield_z]
     masks = [None] + [p[1] for p in planes] + [o.shield]
     n = len(zs)
@@ -241,7 +259,7 @@ def _bounce(o, ex, ey, kz, base, planes, fresnel, p_inc):
             else:
                 down[i] = _masked(au, m, -1)
         left = sum(base.power(*f) for f in down + up if f is not None)
-        if len(out) >= o.bounces or left < o.floor * p_inc:
+        if len(out) >= o.bounces or left < o.floor * p_exit:
             break
     return out
 

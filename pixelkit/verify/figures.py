@@ -45,7 +45,7 @@ PLAUSIBLE = {"conversion_gain": (1e-3 * 1e-6 / _Q, 1e4 * 1e-6 / _Q),     # 0.001
              "dynamic_range": (1.0, 1e10),                   # 0 - 200 dB
              "pd_dark_drop": (1e-9, 10.0), "settling": (1e-9, 10.0),   # 1 nV - 10 V
              "image_lag": (-1.0, 1.0),                        # -100 % - 100 % of the swing
-             "gse": (1e-3, 1e12), "criterion_secondary": (1e-6, 1.0), "afe_gain_error": (1e-9, 1.0),
+             "gse": (1e-3, 1e12), "storage_light": (-1.0, 100.0), "criterion_secondary": (1e-6, 1.0), "afe_gain_error": (1e-9, 1.0),
              "power_pixel": (1e-15, 100.0), "power_column": (1e-15, 100.0), "power_chip": (1e-15, 100.0)}   # 1 fW - 100 W
 
 
@@ -97,6 +97,14 @@ _LIST = [
                "global-shutter efficiency of the {kind} subpixel on the signal: signal per second of "
                "exposure over signal per second of storage under the same light (1 / PLS) (SPICE)",
                "pixel.gse x C_FD / (C_PD,node + C_FD) (physics.fd.signal_gse)"),
+    *_per_kind("storage_light", "1", "%", "storage+pixel",
+               "storage-node light of the {kind} array over a frame's readout: the double-sampled signal FD adds "
+               "while the last row waits ((rows - 1) row times), in % of the column swing, under a source "
+               "light.source_factor x the background (the sizing's background photocurrent of the subpixel) lit "
+               "only then (an LED headlight's PWM off during the exposure); FD collects the photodiode's "
+               "photocurrent over the GSE (pixel.gse, or the collection model's with light.model = \"modelled\") "
+               "(SPICE)",
+               "A_sf I_FD t / C_FD over the swing (physics.fd.storage_signal; tests/test_light_model.py)", mc=False),
     *_per_kind("settling", "V", "mV", "settling",
                "settling error of the {kind} array: worst |double-sampled signal - that of the same read with "
                "S1 and S2 four row times longer| over a 2-row dual column with its AFE (SPICE, chip.settling)",

@@ -11,6 +11,8 @@ A *group* is a set of decks run together; ``run_group`` returns its raw measurem
   at the *equivalent* current (the method of [Thesis2019]: I_s = I_p (A_s / A_p)
   (t_s / t_p), same window).
 - ``gse``: the same bench with and without storage, with and without light.
+- ``storage``: a dark exposure, then the storage node lit over the last row's wait by a bright
+  source's FD current (photocurrent / GSE).
 - ``lag``: dark frames that follow the saturated and the dark frame.
 - ``noise``: the SF gain from two operating points of the read chain, then the read-noise
   chain of ``physics.noise`` at the condition's temperature.
@@ -201,6 +203,35 @@ def gse(design, draw=None, backend="batch") -> dict:
             "storage_signal_V": store}
 
 
+def storage(design, draw=None, backend="batch") -> dict:
+    """The storage node's light over a frame's readout: per array, a dark exposure, then FD holds for the
+    last row's wait ((rows - 1) row times after the transfer, EC holding the PD) while a source
+    ``light.source_factor`` x the background lights the pixel: FD collects the photodiode's photocurrent
+    over its GSE (``physics.fd.gse``), put on FD as a current for the hold. The signal it adds is the
+    double-sampled signal against the same dark deck without it."""
+    from ..circuits.testbench import timings
+    from ..gap.circuit_edits import EDGE, add_to_subckt, pulse
+    from ..optimize.sizing import light
+    from ..physics.fd import gse
+    from ..spice.netlist import Element
+    b = _Bench(design)
+    j_bg = light(design).j_bg
+    out = {"signal_V": [], "fd_current_A": [], "hold_s": []}
+    for i, kind in enumerate(("primary", "secondary")):
+        sub = getattr(design, kind)
+        tm = timings(design, b.tw, t_store=(sub.rows - 1) / sub.f_read, ec_hold=True)
+        t0, t1 = tm[kind].t_tx + 2 * EDGE, tm[kind].t_read
+        i_fd = design.light.source_factor * j_bg * sub.photoactive_area / gse(design, kind)
+        dark = b.net(0.0, 0.0, f"vfy_sto_dark_{kind}", tm=tm)
+        lit = add_to_subckt(b.net(0.0, 0.0, f"vfy_sto_lit_{kind}", tm=tm), f"pix5t_{kind}",
+                            Element("Isto", ("fd", "0"), pulse(t0, t1, i_fd)))
+        r_dark, r_lit = _run([dark, lit], design, draw, backend)
+        out["signal_V"].append(b.sig(r_lit, tm)[i] - b.sig(r_dark, tm)[i])
+        out["fd_current_A"].append(i_fd)
+        out["hold_s"].append(t1 - t0 - EDGE)
+    return out
+
+
 def lag(design, draw=None, backend="batch") -> dict:
     """A dark frame after a saturated one against a dark frame after a dark one, each starting
     from the state the previous frame ended in (``_end_state``)."""
@@ -277,7 +308,7 @@ def power(design, draw=None, backend="batch") -> dict:
     return measure(design, draw, backend)
 
 
-GROUPS = {"pixel": pixel, "gse": gse, "lag": lag, "noise": noise, "dark": dark, "afe": afe, "settling": settling, "power": power}
+GROUPS = {"pixel": pixel, "gse": gse, "storage": storage, "lag": lag, "noise": noise, "dark": dark, "afe": afe, "settling": settling, "power": power}
 
 
 def run_group(group: str, design, draw=None, backend: str = "batch") -> dict:
@@ -312,6 +343,8 @@ def figures(raw: dict) -> dict:
             out[f"dynamic_range_{kind}"] = (px["swing_V"][i] / px["cg_out_V_per_e"][i]) / nz[kind]["read_e"]
         if raw.get("gse"):
             out[f"gse_{kind}"] = raw["gse"]["gse"][i]
+        if raw.get("storage") and px:
+            out[f"storage_light_{kind}"] = raw["storage"]["signal_V"][i] / px["swing_V"][i]
         if raw.get("lag"):
             out[f"image_lag_{kind}"] = abs(raw["lag"]["lag_V"][i]) / raw["lag"]["swing_V"][i]
         if raw.get("dark"):

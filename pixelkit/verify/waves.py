@@ -29,6 +29,8 @@ VIEWS = {
     "image_lag": (("vfy_lag_dark", "vfy_lag_sat"), "col"),
     "gse": (("vfy_gse_l0", "vfy_gse_l1", "vfy_gse_d0", "vfy_gse_d1"), "col"),
     "pd_dark_drop": (("vfy_dark_p", "vfy_dark_s"), "pd"),
+    "storage_light": (("vfy_sto_dark_primary", "vfy_sto_lit_primary", "vfy_sto_dark_secondary",
+                       "vfy_sto_lit_secondary"), "col"),
     "criterion": (("vfy_mid_lo", "vfy_mid_hi"), "col"),
     "afe_gain_error": (("vfy_afe",), "out"),
 }
@@ -43,6 +45,8 @@ def view_of(figure: str):
             kind = figure[len(stem) + 1:] or None
             if stem == "pd_dark_drop":
                 decks = tuple(d for d in decks if d.endswith("_" + kind[0]))
+            if stem == "storage_light":
+                decks = tuple(d for d in decks if d.endswith("_" + kind))
             kinds = ("primary", "secondary") if stem == "criterion" else ((kind,) if kind else ())
             return decks, node, kinds
     return None

@@ -41,9 +41,10 @@ MODAL_MAX = 3e-6
 #: the nets whose collection is solved one by one (the rest collect together)
 OWN = (".pd", ".fd")
 REST = "other junctions"
-#: the code the cached results depend on
-_CODE = ("physics/collection.py", "physics/lightfield.py", "physics/aperture.py", "physics/silicon.py",
-         "physics/data/silicon_green2008.csv", "layout/pex/collection.py")
+#: the code the cached results depend on: the collection maps, and the responses (the light too)
+_MAPS_CODE = ("physics/collection.py", "layout/pex/collection.py")
+_CODE = (*_MAPS_CODE, "physics/lightfield.py", "physics/aperture.py", "physics/silicon.py",
+         "physics/data/silicon_green2008.csv")
 
 
 def require(design):
@@ -139,22 +140,35 @@ class Silicon:
     depletion: dict            # net -> (bottom width, sidewall width) (m)
 
 
-def cell_size(geo, h: float) -> tuple:
-    """(nx, ny) of the cell at spacing ``h``; the cell must be a whole number of steps."""
+def cell_size(geo, h: float, pad_y: bool = False) -> tuple:
+    """(nx, ny) of the cell at spacing ``h``; the cell must be a whole number of steps (``pad_y``: a cell
+    that does not repeat along y is padded up to one)."""
     x0, y0, x1, y1 = geo.bbox
     nx, ny = (x1 - x0) / h, (y1 - y0) / h
+    if pad_y:
+        ny = float(np.ceil(ny - 1e-6))
     if abs(nx - round(nx)) > 1e-6 or abs(ny - round(ny)) > 1e-6:
         raise ConfigError("design", "light.grid", f"{h * 1e6:g} um",
                           f"a spacing that divides the pixel cell ({(x1 - x0) * 1e6:g} x {(y1 - y0) * 1e6:g} um)")
     return int(round(nx)), int(round(ny))
 
 
-def silicon(design, geo, h: float, depth: float) -> Silicon:
-    """The labelled grid of the cell's silicon (``physics.collection``)."""
+def polar(kind: str, net: str) -> str:
+    """The name of a junction's collection in the model: the net for an n-type junction (electrons from
+    the substrate: N+ diffusions, wells), ``<net>:p+`` for a P+ diffusion in a well (holes: its current
+    has the other sign)."""
+    return f"{net}:p+" if kind == "psd" else net
+
+
+def silicon(design, geo, h: float, depth: float, own=None, periodic=(True, True)) -> Silicon:
+    """The labelled grid of the cell's silicon (``physics.collection``). ``own``: the junctions (names of
+    :func:`polar`) whose collection is solved one by one (default: the photodiodes and storage nodes);
+    the others collect together. ``periodic``: a side that does not repeat reflects (a cell at the
+    array's edge: the column circuits, the AFEs)."""
     from ...physics import collection as pc
     c = require(design)
     pd, mos = design.tech.photodiode, design.tech.mos
-    nx, ny = cell_size(geo, h)
+    nx, ny = cell_size(geo, h, pad_y=not periodic[1])
     widths = {}
     deepest = c.well_depth
     for kind, nets in geo.junctions.items():
@@ -169,12 +183,13 @@ def silicon(design, geo, h: float, depth: float) -> Silicon:
             else:
                 continue
             widths[(kind, net)] = (wb, ws)
-    z = _layers(depth, deepest)
-    grid = pc.Grid(h, nx, ny, z)
+    z = _layers(min(depth, 0.9 * c.substrate_thickness), deepest)     # a thin epitaxial layer: the grid stops in it
+    grid = pc.Grid(h, nx, ny, z, tuple(periodic))
     zc = 0.5 * (z[:-1] + z[1:])
     labels = np.zeros(grid.shape, int)
     n_type = np.zeros(grid.shape, bool)
-    own = sorted({n for nets in geo.junctions.values() for n in nets if n.endswith(OWN)})
+    names = {polar(k, n) for k, nets in geo.junctions.items() if k in ("pd_n", "well", "nsd", "psd") for n in nets}
+    own = sorted(n for n in names if (n.endswith(OWN) if own is None else n in own))
     ids = {n: i + 1 for i, n in enumerate(own)}
     rest = len(own) + 1
     dbu = geo.dbu
@@ -189,7 +204,7 @@ def silicon(design, geo, h: float, depth: float) -> Silicon:
     order = ("pd_n", "well", "nsd", "psd", "ptap")
     for kind in order:
         for net, reg in sorted(geo.junctions.get(kind, {}).items()):
-            label = ids.get(net, rest)
+            label = ids.get(polar(kind, net), rest)
             if kind in ("pd_n", "well"):
                 wb, ws = widths[(kind, net)]
                 shell = lat(reg, ws)[None] & (zc < c.well_depth + wb)[:, None, None]
@@ -219,13 +234,13 @@ def _bottom(c):
 
 
 def _layers(depth, junctions):
-    """Layers 50 nm thick at the surface growing 15 % a layer through the junctions' depletion
+    """Layers 50 nm thick at the surface growing 20 % a layer through the junctions' depletion
     regions, then 25 % a layer down to ``depth``."""
     z = [0.0]
     step = 0.05e-6
     while z[-1] < junctions + 0.5e-6:
         z.append(z[-1] + step)
-        step = min(step * 1.15, 0.5e-6)
+        step = min(step * 1.2, 0.5e-6)
     while z[-1] < depth * (1 - 1e-9):
         step *= 1.25
         z.append(min(z[-1] + step, depth) if depth - z[-1] > 1.5 * step else depth)
@@ -267,13 +282,16 @@ def _shield_name(design) -> str:
     return design.tech.layout.aliases.get("shield", "metal5")
 
 
-def optics(design, geo, h: float, secondary: tuple | None = None, light: str = "all"):
+def optics(design, geo, h: float, secondary: tuple | None = None, light: str = "all", pad_y: bool = False,
+           ny: int | None = None):
     """``physics.lightfield.Optics`` of the cell at spacing ``h``. ``secondary``: the small openings
     resized to this side (m) about their centres (the sizing's table); ``light``: ``all`` openings,
-    ``small`` (the mask openings only: the secondary's own light) or ``large`` (the primary's only)."""
+    ``small`` (the mask openings only: the secondary's own light), ``large`` (the primary's only) or
+    ``full`` (a top metal over everything but the photodiodes' openings: the light map's full shield)."""
     from ...physics import lightfield as lf
     c = require(design)
-    nx, ny = cell_size(geo, h)
+    nx, n_y = cell_size(geo, h, pad_y)
+    ny = ny or n_y                     # a padded cell: as many rows as the collection grid's times its ratio
     dbu = geo.dbu
     import klayout.db as kdb
     move = kdb.Vector(-int(round(geo.bbox[0] / dbu)), -int(round(geo.bbox[1] / dbu)))
@@ -305,6 +323,11 @@ def optics(design, geo, h: float, secondary: tuple | None = None, light: str = "
         covered[:] = True
         for op in modal:
             covered[(X > op.x0) & (X < op.x0 + op.a) & (Y > op.y0) & (Y < op.y0 + op.b)] = False
+    if light == "full":                                        # only the photodiodes' openings stay open
+        wells = kdb.Region()
+        for reg in geo.junctions.get("pd_n", {}).values():
+            wells += reg
+        covered |= ~(coverage(wells.moved(move), dbu, h, nx, ny) >= 0.5)
     planes = []
     for name, (z, t) in sorted(hs.items(), key=lambda kv: kv[1][0]):
         if name == shield:
@@ -348,29 +371,46 @@ class Response:
                    d["depletion"], d["light"])
 
 
-def wavelengths(design) -> np.ndarray:
+def ratio(h: float, n: float, wavelength: float) -> int:
+    """How many light-field points per collection step: the light field's grid must carry every plane
+    wave that propagates in the dielectric (pi / h_light > 2 pi n / lambda, 2 % to spare)."""
+    return max(1, int(np.ceil(1.02 * 2 * n * h / wavelength)))
+
+
+def wavelengths(design, step: float | None = None) -> np.ndarray:
     lt = design.light
-    n = int(np.floor((lt.wavelength_max - lt.wavelength_min) / lt.wavelength_step + 1e-9)) + 1
-    return lt.wavelength_min + lt.wavelength_step * np.arange(n)
+    step = step or lt.wavelength_step
+    n = int(np.floor((lt.wavelength_max - lt.wavelength_min) / step + 1e-9)) + 1
+    return lt.wavelength_min + step * np.arange(n)
 
 
-def _code_hash() -> str:
+def _code_hash(files=_CODE) -> str:
     root = Path(__file__).resolve().parents[2]
     h = hashlib.sha256()
-    for rel in _CODE:
+    for rel in files:
         h.update(rel.encode())
         h.update((root / rel).read_bytes())
     return h.hexdigest()
 
 
 def _digest(*parts) -> str:
+    """SHA-256 of ``parts``: arrays by their bytes (never their repr, which numpy abbreviates), tuples and
+    lists item by item, anything else by its repr."""
     h = hashlib.sha256()
-    for p in parts:
+
+    def feed(p):
         if isinstance(p, np.ndarray):
-            h.update(str(p.shape).encode() + str(p.dtype).encode())
+            h.update(f"array{p.shape}{p.dtype}".encode())
             h.update(np.ascontiguousarray(p).tobytes())
+        elif isinstance(p, (tuple, list)):
+            h.update(f"seq{len(p)}(".encode())
+            for x in p:
+                feed(x)
+            h.update(b")")
         else:
             h.update(repr(p).encode())
+    for p in parts:
+        feed(p)
     return h.hexdigest()
 
 
@@ -385,7 +425,7 @@ _MAPS: dict = {}
 def maps(sil: Silicon):
     """The collection maps of ``sil`` (``physics.collection.solve``), cached by its geometry and parameters."""
     from ...physics import collection as pc
-    key = _digest("maps", _code_hash(), sil.grid.h, sil.grid.nx, sil.grid.ny, sil.grid.z, sil.labels, sil.n_type,
+    key = _digest("maps", _code_hash(_MAPS_CODE), sil.grid.periodic, sil.grid.h, sil.grid.nx, sil.grid.ny, sil.grid.z, sil.labels, sil.n_type,
                   sil.substrate)
     if key in _MAPS:
         return _MAPS[key]
@@ -404,31 +444,38 @@ def maps(sil: Silicon):
     return m
 
 
-def response(design, geo=None, secondary: float | None = None, light: str = "all", say=None) -> Response:
-    """The collection model of ``design``'s dual pixel (cached; ``geo``: its ``pixel_geometry`` when made).
-    ``secondary``, ``light``: as :func:`optics`."""
+def response(design, geo=None, secondary: float | None = None, light: str = "all", say=None, own=None,
+             periodic=(True, True), grid: float | None = None, step: float | None = None) -> Response:
+    """The collection model of ``design``'s dual pixel (cached; ``geo``: its ``pixel_geometry`` when made),
+    or of another cell ``geo`` (``own``, ``periodic``: as :func:`silicon`; ``grid``, ``step``: the lateral
+    spacing and wavelength step instead of the design's). ``secondary``, ``light``: as :func:`optics`."""
     from ...physics import lightfield as lf, silicon as si
     lt = design.light
+    h = grid or lt.grid
     geo = geo if geo is not None else pixel_geometry(design)
-    sil = silicon(design, geo, lt.grid, lt.depth)
-    wl = wavelengths(design)
-    opt = {r: optics(design, geo, lt.grid / r, secondary, light) for r in (1, 2)}
-    key = _digest("response", _code_hash(), sil.grid.h, sil.grid.z, sil.labels, sil.n_type, sil.substrate,
+    sil = silicon(design, geo, h, lt.depth, own, periodic)
+    wl = wavelengths(design, step)
+    n_ox = require(design).dielectric_index
+    need = {float(w): ratio(h, n_ox, w) for w in wl}
+    opt = {r: optics(design, geo, h / r, secondary, light, not periodic[1], sil.grid.ny * r)
+           for r in sorted(set(need.values()))}
+    key = _digest("response", _code_hash(), sil.grid.h, sil.grid.periodic, sil.nets, sil.grid.z, sil.labels,
+                  sil.n_type, sil.substrate,
                   wl, design.temperature, *[(o.shield, o.modal, o.metals, o.shield_z, o.shield_thickness,
                                              o.n_dielectric) for o in opt.values()])
     files = _store().load(key)
     if files:
         return Response.from_json(files["response.json"].decode())
+    if say:
+        say(f"collection model of {geo.top}: {len(sil.nets)} collection maps, {wl.size} wavelengths")
     m = maps(sil)
     eta = {n: np.zeros(wl.size) for n in sil.nets}
     into = np.zeros(wl.size)
     trans = np.zeros(wl.size)
     for i, w in enumerate(wl):
-        n_ox = opt[1].n_dielectric
-        ratio = 1 if np.pi / lt.grid >= 1.02 * 2 * np.pi * n_ox / w else 2     # the finer grid where needed
-        o = opt[ratio]
-        ab = lf.absorbed(o, float(w), complex(si.index(w, design.temperature)),
-                         float(si.alpha(w, design.temperature)), sil.grid.z, ratio)
+        r = need[float(w)]
+        ab = lf.absorbed(opt[r], float(w), complex(si.index(w, design.temperature)),
+                         float(si.alpha(w, design.temperature)), sil.grid.z, r)
         col = m.collected(ab.voxels, ab.deep)
         for k, n in enumerate(sil.nets):
             eta[n][i] = col.get(k + 1, 0.0)

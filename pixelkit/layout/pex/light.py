@@ -22,6 +22,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
+
 from .nets import AFE_NODES, GROUND
 
 SIGNAL_AFE = ("in", "vm", "x", "c")     # AFE nodes where a photocurrent leaves charge (out is driven)
@@ -84,6 +86,43 @@ def with_currents(design, junctions) -> list[Junction]:
     from ...physics.photo import photocurrent
     e, spec = irradiance(design)
     return [Junction(j.net, j.kind, j.area_m2, photocurrent(e, j.area_m2, spec, design.tech.qe)) for j in junctions]
+
+
+#: the collection model of the readout cells: their lateral grid and wavelength step (their currents are
+#: sums over the scene's spectrum; the cells are up to 365 um long)
+READOUT_GRID, READOUT_STEP = 0.5e-6, 100e-9
+
+
+def _mapped(cell: str, net: str, n_secondary: int) -> bool:
+    if cell == "DUALPIX_COL":
+        return bench_node(net, n_secondary) is not None
+    return net in AFE_NODES and net not in ("vdd", "vref")
+
+
+def modelled(design, geo, cell: str, shield: str = "pixels") -> list[Junction]:
+    """The junctions of ``cell`` that the light map puts on the bench, with the collection model's currents
+    (``light.model = "modelled"``, docs/light-collection.md): every diffusion of those nets collects, not
+    only where no metal covers it - the carriers the light generates anywhere in the cell (and, in the
+    dual pixel's column cell, under its photodiodes' openings) diffuse to them. The cell repeats along the
+    row (periodic x), ends at its top and bottom (reflecting); ``shield``: ``pixels`` the metals as drawn,
+    ``full`` a top metal over all but the photodiodes' openings. Each junction's ``area_m2`` is its exposed
+    area (as the geometric map gives it)."""
+    from .collection import polar, response
+    e, spec = irradiance(design)
+    n = design.secondary_per_pixel
+    own = {polar(k, net) for k, nets in geo.junctions.items() if k in ("nsd", "psd") for net in nets
+           if _mapped(cell, net, n)}
+    r = response(design, geo, light="all" if shield == "pixels" else "full", own=own, periodic=(True, False),
+                 grid=READOUT_GRID, step=READOUT_STEP)
+    seen = {(j.net, "psd" if j.kind == "psd" else "nsd"): j.area_m2 for j in exposed(geo, shield)}
+    from ...physics.photo import responsivity
+    out = []
+    for name in sorted(own):
+        net, kind = (name[:-3], "psd") if name.endswith(":p+") else (name, "nsd")
+        rr = responsivity(r.wavelength_m, r.eta[name])
+        current = e * r.cell_area_m2 * spec.mean(lambda w: np.interp(w, r.wavelength_m, rr, left=0.0, right=0.0))
+        out.append(Junction(net, kind, seen.get((net, kind), 0.0), float(current)))
+    return out
 
 
 def bench_node(net: str, n_secondary: int) -> str | None:
@@ -172,8 +211,12 @@ def light_map(design, shield: str = "pixels", backend: str = "batch", geos: dict
     SPICE, its ratio to the read noise there. ``geos``: ``chip_geometry(design)`` when already made."""
     from . import chip_geometry
     geos = geos if geos is not None else chip_geometry(design, ("DUALPIX_COL", "AFE_P", "AFE_S"))
-    js = with_currents(design, exposed(geos["DUALPIX_COL"], shield))
-    afe = {c: with_currents(design, exposed(geos[c], shield)) for c in ("AFE_P", "AFE_S")}
+    if design.light.model == "modelled":
+        js = modelled(design, geos["DUALPIX_COL"], "DUALPIX_COL", shield)
+        afe = {c: modelled(design, geos[c], c, shield) for c in ("AFE_P", "AFE_S")}
+    else:
+        js = with_currents(design, exposed(geos["DUALPIX_COL"], shield))
+        afe = {c: with_currents(design, exposed(geos[c], shield)) for c in ("AFE_P", "AFE_S")}
     err = output_error(design, js, backend, list(afe.values()))
     err_row = output_error(design, js, backend, list(afe.values()), from_row=True)
     noise = read_noise_at_afe(design)
@@ -190,7 +233,7 @@ def light_map(design, shield: str = "pixels", backend: str = "batch", geos: dict
                 "error_from_row_V": err_row[c],
                 "error_from_row_over_noise": abs(err_row[c]) / noise["primary" if c == "col_p" else "secondary"]}
             for c, v in err.items()}
-    return {"shield": shield, "irradiance_W_m2": e, "junctions": rows, "columns": cols,
+    return {"shield": shield, "light": design.light.model, "irradiance_W_m2": e, "junctions": rows, "columns": cols,
             "readout_area_m2": sum(r["area_m2"] for r in rows if r["readout"]),
             "afe_area_m2": {c: sum(j.area_m2 for j in lst) for c, lst in afe.items()},
             "worst_error_over_noise": max(c["error_over_noise"] for c in cols.values())}

@@ -84,6 +84,7 @@ REGISTRY: list[tuple[str, str, str]] = [
     ("layout_signoff", "Layout sign-off", "issue 29 (readout layout, arrays, shield)"),
     ("post_layout", "Post-layout vs schematic", "issue 30 (extraction)"),
     ("light_map", "Light map: what the shield leaves open", "issue 30 (extraction)"),
+    ("light", "Light collection: the masked secondary and the storage node by wavelength", "issue 48 (light)"),
     ("noise", "Noise", "issue 11 (noise / virtual camera)"),
     ("camera", "Virtual camera: EMVA 1288 figures", "issue 11 (noise / virtual camera)"),
     ("frame", "Frame-level models", "issue 15 (frame-level models)"),
