@@ -126,3 +126,19 @@ def test_transient_noise_agrees_with_the_noise_analysis(d4t):
     r = read_noise(d4t, columns=8, frames=12)
     lo, hi = r["interval_V"]
     assert lo <= noise(d4t)["sigma_V"] <= hi
+
+
+def test_the_figures_docs_pixel4t_quotes_are_the_experiments(experiment):
+    """docs/pixel4t.md marks each number it quotes from the experiment (``p4t:`` keys, docsite/figures.py)."""
+    import sys
+    sys.path.insert(0, str(ROOT))
+    from docsite import figures
+
+    def value(key):
+        x = experiment
+        for part in key.split("."):
+            x = x[int(part)] if isinstance(x, list) else x[part]
+        return float(x)
+    bad, n = figures.check(None, [ROOT / "docs" / "pixel4t.md"], getters={"p4t": value})
+    assert n >= 12
+    assert not bad, bad

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from ..physics.cdstiming import CdsTiming
 from ..spice.netlist import Element, Netlist, Pwl, Tran
-from .devices import mosfet
+from .devices import mosfet, photodiode_model
 from .ppd import LIGHT_SCALE
 from .roles import CDS_ROLES as CDS_NEEDS
 from .testbench import waveform
@@ -120,7 +120,8 @@ def instance(cell, k: int) -> Element:
 def deck(design, cell, elements, analysis, title: str, ic=(), saves=(), options=(), models=()) -> Netlist:
     t = design.tech
     return Netlist(title=title, elements=tuple(elements), analysis=analysis,
-                   subckts=(*cell.support, cell.subckt), models=tuple(models),
+                   subckts=(*cell.support, cell.subckt),
+                   models=(*photodiode_model(t, design.temperature), *cell.models, *models),
                    includes=t.models.includes(design.corner or None), ic=tuple(ic),
                    temperature_C=design.temperature - 273.15, saves=tuple(saves), options=tuple(options))
 

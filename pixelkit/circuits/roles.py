@@ -47,6 +47,8 @@ class PixelCell:
     #: ((element name, "gate" | "drain"), ...): the devices whose noise the transient-noise check
     #: injects (``rolepix.trnoise``); empty: the check does not run on this cell
     noise: tuple = ()
+    #: deck-level ``.model`` cards the cell's subcircuits use (a designer's netlist's)
+    models: tuple = ()
 
     def port(self, role: str) -> str | None:
         return dict(self.roles).get(role)

@@ -45,7 +45,7 @@ def figures(raw: dict) -> dict:
         if raw.get("dark"):
             out["dark_current"] = raw["dark"]["dark_V"] / cg * Q / raw["dark"]["dt_s"]
     if raw.get("lag"):
-        out["image_lag"] = raw["lag"]["lag_frac"]
+        out["image_lag"] = abs(raw["lag"]["lag_frac"])
     if raw.get("prnu"):
         out["prnu"] = raw["prnu"]["prnu"]
     if raw.get("power"):

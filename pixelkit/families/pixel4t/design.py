@@ -94,7 +94,7 @@ def tg_channel(design):
     from ...physics.ppd import Channel
     from ...techfit.ekv import fit
     dev = design.devices
-    ekv, _rms = fit(design.tech, dev.tg_w, dev.tg_l, design.temperature)
+    ekv, _rms = fit(design.tech, dev.tg_w, dev.tg_l, design.temperature, corner=design.corner or None)
     return Channel(ekv.vt0, ekv.gamma, ekv.phi, ekv.kp, dev.tg_w / dev.tg_l)
 
 
