@@ -18,7 +18,13 @@ DEFAULT = "dual_pixel"
 FAMILIES = {
     "wdr": ("families.wdr.design", "load_wdr_design", "families.wdr.experiment", "run_wdr_experiment"),
     "ratio": ("families.ratio.design", "load_ratio_design", "families.ratio.experiment", "run_ratio_experiment"),
+    "pixel4t": ("families.pixel4t.design", "load_pixel4t_design", "families.pixel4t.experiment",
+                "run_pixel4t_experiment"),
+    "netlist": ("families.netlist.design", "load_netlist_design", "families.netlist.experiment",
+                "run_netlist_experiment"),
 }
+#: the families read by role with true CDS (``rolepix``): verify runs their specs like the dual pixel's
+ROLE_FAMILIES = ("pixel4t", "netlist")
 
 
 #: family -> regression figure -> (relative, absolute tolerance in the figure's SI unit)
@@ -64,6 +70,10 @@ def family_waveforms(path, family: str, out, backend: str = "batch") -> str:
     from .families import goldens
     from .spice import simulate
     d = load_family_design(path, family)
+    if family in ROLE_FAMILIES:   # the lag deck: flush, window, window (dark / small / bright pixels)
+        from .rolepix.signal import lag_run
+        _out, r, _net, _lad = lag_run(d, None, backend)
+        return str(write_waveforms(r, out))
     net = goldens.wdr_sweep_of(d) if family == "wdr" else goldens.ratio_sweep_of(d)
     return str(write_waveforms(simulate(net, backend=backend), out))
 
@@ -74,6 +84,12 @@ def family_models(path, family: str) -> dict:
     if family == "wdr":
         from .families.wdr.model import figures
         return {"design": d.name, "family": family, **figures(d)}
+    if family == "pixel4t":
+        from .families.pixel4t.model import figures
+        return {"design": d.name, "family": family, **figures(d)}
+    if family == "netlist":
+        from .families.netlist.experiment import describe
+        return {"design": d.name, "family": family, **describe(d)}
     from .families.ratio.circuit import tau_nominal
     from .families.ratio.law import resolution
     ro = d.readout

@@ -164,25 +164,30 @@ def generate() -> str:
            "about (`pixelkit/working_range.py`)."]
     _table(Design, "", out)
     _figures(out)
+    from .families.pixel4t.design import Pixel4tDesign
     from .families.ratio.design import RatioDesign
     from .families.wdr.design import WdrDesign
     for fam, cls, example in (("wdr", WdrDesign, "designs/wdr_pixel.toml"), ("ratio", RatioDesign,
-                                                                             "designs/ratio_pixel.toml")):
+                                                                             "designs/ratio_pixel.toml"),
+                              ("pixel4t", Pixel4tDesign, "designs/pixel4t_gf180.toml")):
         out += ["", f"# Design files of the `{fam}` family", "",
                 f"A file with `family = \"{fam}\"` (example: `{example}`) is read by this schema instead; the "
                 "rules above (units, ranges, unknown fields refused) are the same."]
         _table(cls, "", out, fam)
+        if fam == "pixel4t":
+            from .verify.figures import ROLE_FIGURES
+            _figures(out, ROLE_FIGURES, "Figures a `[spec.<name>]` of a pixel read by role can name")
     return "\n".join(out) + "\n"
 
 
-def _figures(out: list) -> None:
+def _figures(out: list, table=None, title: str = "Figures a `[spec.<name>]` can name") -> None:
     """The figures a ``[spec.<name>]`` can name (``pixelkit/verify/figures.py``)."""
     from .verify.figures import FIGURES
-    out += ["", "## Figures a `[spec.<name>]` can name", "",
+    out += ["", f"## {title}", "",
             "Each is measured at every condition of the grid; `pixelkit verify` and docs/verify.md say how. "
             "A limit must carry a unit of the figure's kind (or be a plain number in the spec's `unit`).", "",
             "| figure | unit | Monte Carlo | what |", "|---|---|---|---|"]
-    for f in FIGURES.values():
+    for f in (table or FIGURES).values():
         out.append(f"| `{f.name}` | {f.unit or '1'} | {'yes' if f.mc else 'no (mismatch does not move it)'} | "
                    f"{f.what} |")
 

@@ -180,7 +180,7 @@ def _with_close(tmp, key=None, value=None):
     p = tmp / f"c{abs(hash((key, repr(value)))) % 10**8}.toml"
     p.write_text(to_toml(raw))
     return p
-FAMILIES = ("ratio_pixel.toml", "wdr_pixel.toml")
+FAMILIES = ("ratio_pixel.toml", "wdr_pixel.toml", "pixel4t_gf180.toml")
 
 
 def _cases():

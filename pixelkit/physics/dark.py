@@ -72,7 +72,13 @@ def diffusion_leakage(w: float, tech, temperature_K: float) -> float:
     from .geometry import diffusion
     mos = tech.mos
     a, p = diffusion(w, mos.diff_ext)
+    return (mos.js * a + mos.jsw * (p - w)) * mos_junction_scale(tech, temperature_K)
+
+
+def mos_junction_scale(tech, temperature_K: float) -> float:
+    """BSIM4's factor on a MOS diffusion's saturation current from the models' tnom to ``temperature_K``."""
+    mos = tech.mos
     t0, t = mos.t_nom, temperature_K
     kq = K_B / Q
     arg = (bandgap(t0) / (kq * t0) - bandgap(t) / (kq * t) + mos.xtis * np.log(t / t0)) / mos.njs
-    return (mos.js * a + mos.jsw * (p - w)) * float(np.exp(arg))
+    return float(np.exp(arg))

@@ -92,12 +92,73 @@ class Pwl:
         return "PWL(" + " ".join(f"{fmt(t, 'pwl')} {fmt(v, 'pwl')}" for t, v in self.points) + ")"
 
 
+#: The functions a behavioural expression may call (ngspice B-source functions; nothing else).
+EXPR_FUNCTIONS = frozenset({"exp", "ln", "log", "sqrt", "abs", "min", "max", "pow", "tanh", "atan", "sin", "cos",
+                            "u", "uramp", "v", "i"})
+_EXPR_CHARS = re.compile(r"^[A-Za-z0-9_.+\-*/(),^ <>=!&|?:]{1,2000}$")
+_EXPR_WORD = re.compile(r"[A-Za-z_][A-Za-z0-9_.#]*")
+
+
+def check_expression(expr, what: str = "expression") -> str:
+    """A behavioural expression: numbers, operators, node voltages ``V(node)`` / ``V(a,b)``, currents
+    ``I(source)`` and the functions of ``EXPR_FUNCTIONS``; one line, no quote, brace or ';'."""
+    if not isinstance(expr, str) or not _EXPR_CHARS.match(expr):
+        raise ConfigError("netlist", what, expr, "an expression of numbers, operators, V(node), I(source) and "
+                          "functions on one line (at most 2000 characters)")
+    depth = 0
+    for ch in expr:
+        depth += {"(": 1, ")": -1}.get(ch, 0)
+        if depth < 0:
+            break
+    if depth:
+        raise ConfigError("netlist", what, expr, "an expression with balanced parentheses")
+    rest = re.sub(r"\b[vViI]\s*\(\s*[A-Za-z0-9_.#]+\s*(,\s*[A-Za-z0-9_.#]+\s*)?\)", "0", expr)
+    rest = re.sub(r"(?<![A-Za-z_])\d+\.?\d*(?:[eE][-+]?\d+)?[A-Za-z]*|(?<![A-Za-z_])\.\d+(?:[eE][-+]?\d+)?[A-Za-z]*",
+                  "0", rest)
+    for word in _EXPR_WORD.findall(rest):
+        if word.lower() not in EXPR_FUNCTIONS:
+            raise ConfigError("netlist", what, word, "a function of " + ", ".join(sorted(EXPR_FUNCTIONS - {"v", "i"}))
+                              + ", V(node) or I(source)")
+    return expr
+
+
+@dataclass(frozen=True)
+class Behavioral:
+    """A behavioural source's value, ``I = expr`` or ``V = expr`` (an ngspice B element)."""
+    kind: str          # "I" or "V"
+    expr: str
+
+    def __post_init__(self):
+        if self.kind not in ("I", "V"):
+            raise ConfigError("netlist", "behavioural source", self.kind, "I or V")
+        check_expression(self.expr)
+
+    def text(self) -> str:
+        return f"{self.kind} = {self.expr}"
+
+
+@dataclass(frozen=True)
+class Trnoise:
+    """A voltage source's transient noise: ``DC dc TRNOISE(na nt nalpha namp)`` (ngspice 4.1.7):
+    white noise of rms ``na`` drawn every ``nt`` (linearly interpolated), plus 1/f^nalpha noise of
+    amplitude ``namp``; the draws follow ``.options seed``."""
+    dc: float
+    na: float
+    nt: float
+    nalpha: float = 0.0
+    namp: float = 0.0
+
+    def text(self) -> str:
+        return (f"DC {fmt(self.dc, 'trnoise')} TRNOISE({fmt(self.na, 'trnoise')} {fmt(self.nt, 'trnoise')} "
+                f"{fmt(self.nalpha, 'trnoise')} {fmt(self.namp, 'trnoise')})")
+
+
 @dataclass(frozen=True)
 class Element:
     """One device line: ``name nodes... [value|model] [key=value ...]``."""
     name: str
     nodes: tuple
-    value: object = None          # number, Param, Pulse, Pwl, or model/subckt name (str)
+    value: object = None          # number, Param, Pulse, Pwl, Behavioral, Trnoise, or model/subckt name (str)
     params: tuple = ()            # ((key, number|Param), ...)
 
     def __post_init__(self):
@@ -112,7 +173,7 @@ class Element:
     def text(self) -> str:
         parts = [self.name, *self.nodes]
         v = self.value
-        if isinstance(v, (Pulse, Pwl)):
+        if isinstance(v, (Pulse, Pwl, Behavioral, Trnoise)):
             parts.append(v.text())
         elif isinstance(v, str):
             parts.append(v)

@@ -19,30 +19,30 @@ V_G = (1.1, 1.4, 1.7, 2.0, 2.4)
 CURRENTS = (50e-9, 200e-9, 800e-9, 4e-6)
 
 
-def _deck(tech, w, l, temperature_K):
+def _deck(tech, w, l, temperature_K, corner=None):
     el = [Element("Vdd", ("vdd", "0"), tech.supply)]
     for k, vg in enumerate(V_G):
         el.append(Element(f"Vg{k}", (f"g{k}", "0"), vg))
         for j, i in enumerate(CURRENTS):
             el.append(mosfet(f"m{k}_{j}", "vdd", f"g{k}", f"s{k}_{j}", "0", w, l, tech))
             el.append(Element(f"I{k}_{j}", (f"s{k}_{j}", "0"), i))
-    return Netlist(title="ekv_fit", elements=tuple(el), analysis=Op(), includes=tech.models.includes(),
+    return Netlist(title="ekv_fit", elements=tuple(el), analysis=Op(), includes=tech.models.includes(corner),
                    temperature_C=temperature_K - 273.15)
 
 
-def source_voltages(tech, w, l, temperature_K, backend="batch") -> np.ndarray:
+def source_voltages(tech, w, l, temperature_K, backend="batch", corner=None) -> np.ndarray:
     """ngspice's follower outputs, [gate voltage, current]."""
     from ..spice import simulate
-    r = simulate(_deck(tech, w, l, temperature_K), backend=backend)
+    r = simulate(_deck(tech, w, l, temperature_K, corner), backend=backend)
     return np.array([[float(r[f"v(s{k}_{j})"][0]) for j in range(len(CURRENTS))] for k in range(len(V_G))])
 
 
 _FITS: dict = {}
 
 
-def _fit(tech, w, l, temperature_K, backend):
+def _fit(tech, w, l, temperature_K, backend, corner=None):
     from scipy.optimize import least_squares
-    vs = source_voltages(tech, w, l, temperature_K, backend)
+    vs = source_voltages(tech, w, l, temperature_K, backend, corner)
     ok = vs > 0.05          # the source must be above ground for the follower to be a follower
 
     def resid(p):
@@ -54,11 +54,13 @@ def _fit(tech, w, l, temperature_K, backend):
     return Ekv(*map(float, r.x)), float(np.sqrt(np.mean(r.fun ** 2)))
 
 
-def fit(tech, w: float, l: float, temperature_K: float, backend: str = "batch") -> tuple[Ekv, float]:
-    """(EKV parameters, rms error of the fitted source voltages in V) of a w x l NMOS of ``tech``."""
-    key = (tech.name, tech.source, w, l, temperature_K, backend)
+def fit(tech, w: float, l: float, temperature_K: float, backend: str = "batch", corner: str | None = None
+        ) -> tuple[Ekv, float]:
+    """(EKV parameters, rms error of the fitted source voltages in V) of a w x l NMOS of ``tech`` (at the model
+    library's ``corner``; default its default corner)."""
+    key = (tech.name, tech.source, w, l, temperature_K, backend, corner)
     if key not in _FITS:
-        _FITS[key] = _fit(tech, w, l, temperature_K, backend)
+        _FITS[key] = _fit(tech, w, l, temperature_K, backend, corner)
     return _FITS[key]
 
 

@@ -135,6 +135,43 @@ _LIST = [
 FIGURES: dict[str, Figure] = {f.name: (f if f.name not in PLAUSIBLE else
                                        Figure(**{**f.__dict__, "plausible": PLAUSIBLE[f.name]})) for f in _LIST}
 
+#: The figures of a pixel read by role with true CDS (the ``pixel4t`` and ``netlist`` families,
+#: ``rolepix.measure``): one pixel kind, so no _primary / _secondary. Groups are ``rolepix``'s.
+ROLE_FIGURES: dict[str, Figure] = {f.name: f for f in (
+    Figure("conversion_gain", "V/C", "uV/e-", "signal",
+           "output-referred conversion gain: the CDS output (SHR - SHS held on the column's sample-and-hold "
+           "capacitors) per transferred electron at a small signal, a known photo-charge against a dark frame "
+           "(SPICE)", "q A_sf A_sh / C_FD of the FD's devices (rolepix.model)", True, PLAUSIBLE["conversion_gain"]),
+    Figure("full_well", "C", "e-", "signal",
+           "full well at the CDS output: the saturated CDS output over the small-signal conversion gain "
+           "(SPICE): the smaller of what the photodiode holds and what FD and the column can swing",
+           "C_PPD V_pin of the pinned photodiode (physics.ppd) and FD's swing (rolepix.model)", True,
+           PLAUSIBLE["full_well"]),
+    Figure("read_noise", "C", "e-", "signal+noise",
+           "temporal read noise of the true-CDS read, input-referred through the conversion gain: ngspice "
+           ".noise of the read chain at the sample-and-hold node weighted by the CDS difference "
+           "2 (1 - cos 2 pi f dt), plus the sample-and-hold capacitors' kT/C of both samples",
+           "transient noise: the same read in the time domain with each device's noise as a source "
+           "(rolepix.trnoise)", True, PLAUSIBLE["read_noise"]),
+    Figure("image_lag", "1", "%", "lag",
+           "image lag: the CDS output of a dark frame after a frame at 50 % of the full well, minus that of a "
+           "dark frame after a dark one, in % of the bright frame's signal (SPICE)",
+           "the thermionic-emission residual of physics.ppd over both transfers", True, PLAUSIBLE["image_lag"]),
+    Figure("dark_current", "A", "e-/s", "signal+dark",
+           "dark signal rate at the CDS output over the design's integration time: (dark CDS at t_int - dark "
+           "CDS at the shortest exposure) / conversion gain / (t_int - shortest) (SPICE; the photodiode's "
+           "generation and diffusion currents)", "I_gen + I_dif of physics.ppd at the temperature", True,
+           (1e-25, 1e-6)),
+    Figure("prnu", "1", "%", "prnu",
+           "photo-response non-uniformity at 50 % of the full well: the spread (sigma / mean) of the CDS signal "
+           "over the Monte Carlo's device draws (mismatch of RST, SF, RS, the column) at the nominal condition",
+           "sigma of A_sf and C_FD from Pelgrom's law", False, (1e-9, 1.0)),
+    Figure("power_chip", "W", "mW", "power",
+           "average power of the array read at the design's frame rate: the column loads and their bias "
+           "mirror while rows are read, the pixel resets (SPICE supply current over a row x columns)",
+           "bias currents x supply (rolepix.power)", False, PLAUSIBLE["power_chip"]),
+)}
+
 
 def unit_scale(unit: str, dim: str) -> tuple[str, float] | None:
     """(kind, scale) to show an SI value of ``dim`` in ``unit``: kind "dB" (20 log10), "%"

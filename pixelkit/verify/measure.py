@@ -66,12 +66,17 @@ def _mark(r, node: str, t: float, what: str) -> None:
                              "v": float(r.at(node, t)), "what": what})
 
 
+def record(results) -> None:
+    """Keep ``results`` (by deck title) while ``recording()`` is active."""
+    rec = _RECORD.get()
+    if rec is not None:
+        rec["results"].update({r.meta.get("title"): r for r in results})
+
+
 def _run(nets, design, draw, backend):
     from ..spice import simulate_many
     out = simulate_many([mismatch.apply(n, design, draw) for n in nets], backend=backend, jobs=1)
-    rec = _RECORD.get()
-    if rec is not None:
-        rec["results"].update({r.meta.get("title"): r for r in out})
+    record(out)
     return out
 
 
@@ -359,3 +364,8 @@ def figures(raw: dict) -> dict:
         for k in ("pixel", "column", "chip"):
             out[f"power_{k}"] = raw["power"][f"{k}_W"]
     return out
+
+
+def mark(r, node: str, t: float, what: str) -> None:
+    """A reading a measurement took (kept while ``recording()`` is active): the waveform view's marks."""
+    _mark(r, node, t, what)

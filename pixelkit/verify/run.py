@@ -19,17 +19,33 @@ from .signoff import _margin
 from .yields import decided, looks, stop_confidence
 
 
+class _Dual:
+    """The dual pixel's suite: ``verify.measure``'s groups and figures, ``conditions.at``."""
+    GROUPS = measure.GROUPS
+    run_group = staticmethod(measure.run_group)
+    groups_for = staticmethod(measure.groups_for)
+    figures = staticmethod(measure.figures)
+    at = staticmethod(conditions.at)
+
+
+def suite(design):
+    """What verify runs for ``design``: its family's suite (a design read by role hands over
+    ``rolepix.suite``), else the dual pixel's."""
+    return getattr(design, "suite", None) or _Dual
+
+
 def _task(task):
     """The groups of one condition (and draw), in one worker: groups that share decks (the
     pixel, lag and gse groups start from the same dark / small / saturated decks) find them
     in the cache instead of simulating them twice at once. A group whose simulation fails is
     kept with ngspice's message; the others still run."""
     design, cond, groups, draw, backend = task
-    d = conditions.at(design, cond)
+    su = suite(design)
+    d = su.at(design, cond)
     out = {}
     for group in groups:
         try:
-            out[group] = {"ok": True, "raw": measure.run_group(group, d, draw, backend)}
+            out[group] = {"ok": True, "raw": su.run_group(group, d, draw, backend)}
         except SimulationError as exc:
             out[group] = {"ok": False, "error": f"{exc.what or exc.deck}: {exc.message}"}
     return out
@@ -46,9 +62,9 @@ def measure_at(items, backend: str = "batch", jobs=None, scheduler=None, desc: s
     for i, out in run_tasks(_task, tasks, jobs=jobs, scheduler=scheduler, desc=desc):
         outs[i] = out
     result = []
-    for (_d, c, _gs, _draw, _b), outcome in zip(tasks, outs):
+    for (d, c, _gs, _draw, _b), outcome in zip(tasks, outs):
         raw = {g: o["raw"] for g, o in outcome.items() if o["ok"]}
-        result.append({"figures": _finite(measure.figures(raw)),
+        result.append({"figures": _finite(suite(d).figures(raw)),
                        "errors": [f"{c.label} ({g}): {o['error']}" for g, o in outcome.items() if not o["ok"]]})
     return result
 
@@ -64,14 +80,15 @@ def post_layout_view(design):
 def plan(design, grid: list, mc: int) -> tuple[list, list]:
     """([(condition, its groups)], Monte Carlo specs): which groups run where. The Monte Carlo runs at the
     nominal condition, so it serves the specs that hold there and whose figure mismatch moves."""
+    su = suite(design)
     need: dict = {}
     for s in design.spec:
         for c in conditions.spec_conditions(s, grid):
-            for g in measure.groups_for([s.fig.name]):
+            for g in su.groups_for([s.fig.name]):
                 need.setdefault(c, set()).add(g)
     nominal = [conditions.nominal(design)]
     mc_specs = [s for s in design.spec if mc and s.mc and s.fig.mc and conditions.spec_conditions(s, nominal)]
-    order = list(measure.GROUPS)
+    order = list(su.GROUPS)
     return [(c, tuple(sorted(gs, key=order.index))) for c, gs in sorted(need.items())], mc_specs
 
 
@@ -112,7 +129,7 @@ class _Sequential:
         if self.full:
             return []
         v = self.design.verify
-        samples = [_finite(measure.figures(_ok(self.raw[i]))) for i in range(self.n)]
+        samples = [_finite(suite(self.design).figures(_ok(self.raw[i]))) for i in range(self.n)]
         verdicts = []
         for s in self.specs:
             vals = [x for x in (y.get(s.fig.name) for y in samples) if x is not None]
@@ -157,15 +174,16 @@ def verify(design, corners=None, temperatures=None, supplies=None, mc: int | Non
         raise ConfigError(design.source, "spec", None, "a [spec] table with at least one spec (docs/verify.md)")
     t0 = time.perf_counter()
     grid = conditions.grid(design, corners, temperatures, supplies)
+    su = suite(design)
     for c in grid:   # a supply corner that puts a reference above the supply: refused before any run
-        conditions.at(design, c)
+        su.at(design, c)
     mc = design.verify.mc if mc is None else mc
     seed = design.verify.seed if seed is None else seed
     cond_tasks, mc_specs = plan(design, grid, mc)
     src, mc_groups, nominal = None, [], conditions.nominal(design)
     if mc_specs:
         src = mismatch.source(design)
-        mc_groups = sorted(measure.groups_for([s.fig.name for s in mc_specs]), key=list(measure.GROUPS).index)
+        mc_groups = sorted(su.groups_for([s.fig.name for s in mc_specs]), key=list(su.GROUPS).index)
     seq = _Sequential(design, mc_specs, mc, mc_full,
                       lambda i: (design, nominal, tuple(mc_groups), mismatch.Draw(seed, i, src), backend))
     tasks = [*seq.first(), *((design, c, gs, None, backend) for c, gs in cond_tasks)]
@@ -193,11 +211,12 @@ def verify(design, corners=None, temperatures=None, supplies=None, mc: int | Non
                             status=status):
         take(tasks[i], out)
     raw_mc = {i: _ok(o) for i, o in seq.raw.items()}
-    values = {c: _finite(measure.figures(r)) for c, r in raw_cond.items()}
-    samples = [_finite(measure.figures(raw_mc[i])) for i in sorted(raw_mc)]
+    values = {c: _finite(su.figures(r)) for c, r in raw_cond.items()}
+    samples = [_finite(su.figures(raw_mc[i])) for i in sorted(raw_mc)]
     rows = table(design, grid, values, samples, mc_specs)
     _refuse_zero_spread(rows, len(samples))
-    return {"design": design.name, "revision": design.revision, "rows": rows,
+    return {"design": design.name, "revision": design.revision, "family": getattr(design, "family", "dual_pixel"),
+            "rows": rows,
             "grid": {"corners": sorted({c.corner for c in grid}),
                      "temperatures_C": sorted({round(c.temperature - 273.15, 6) for c in grid}),
                      "supplies": sorted({c.supply for c in grid}), "conditions": len(grid)},

@@ -170,7 +170,10 @@ def text(result: dict) -> str:
             lines.append(f"{r['status'].upper()} {r['spec']}: " + (", ".join(r.get("not_measured_at", []))
                                                                   or r.get("why", "")))
     p = result.get("power")
-    if p:
+    if p and "chip_blocks_W" not in p:   # a pixel read by role (rolepix.power)
+        lines.append(f"power at {p['condition']}: chip {1e3 * p['chip_W']:.4g} mW (estimate {1e3 * p['estimate_W']:.4g} "
+                     f"mW), per column {1e6 * p['column_W']:.4g} uW, read duty {100 * p['duty']:.3g} %")
+    elif p:
         blocks, est = p["chip_blocks_W"], p["estimate"]["chip_blocks_W"]
         lines.append(f"power at {p['condition']}, frame {1e3 * p['frame_period_s']:.4g} ms: chip "
                      f"{1e3 * p['chip_W']:.4g} mW (estimate {1e3 * p['estimate']['chip_W']:.4g} mW): "

@@ -26,11 +26,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 from ..errors import ConfigError
 from ..schema import flag, ident, integer, items, limit, num, qty, text
 from ..units import quantity
-from .figures import FIGURES, unit_scale, units_for
+from .figures import FIGURES, ROLE_FIGURES, unit_scale, units_for
 
 _TEMP = (213.15, 473.15)
 
@@ -55,10 +56,12 @@ class Spec:
     lo: float | None = field(default=None, metadata=dict(kind="skip"))
     hi: float | None = field(default=None, metadata=dict(kind="skip"))
     typical: float | None = field(default=None, metadata=dict(kind="skip"))
+    #: the figures this spec may name (the dual pixel's; ``RoleSpec``: a pixel read by role)
+    TABLE: ClassVar[dict] = FIGURES
 
     @property
     def fig(self):
-        return FIGURES[self.figure or self.name]
+        return self.TABLE[self.figure or self.name]
 
     @property
     def shown_unit(self) -> str:
@@ -67,11 +70,11 @@ class Spec:
     def validate(self, path, source, raw):
         name = path.rsplit(".", 1)[-1]
         fig_name = self.figure or name
-        if fig_name not in FIGURES:
+        if fig_name not in self.TABLE:
             where = f"{path}.figure" if self.figure else path
-            raise ConfigError(source, where, fig_name, "a figure the kit measures: " + ", ".join(FIGURES)
+            raise ConfigError(source, where, fig_name, "a figure the kit measures: " + ", ".join(self.TABLE)
                               + ("" if self.figure else " (or name it with figure = \"...\")"))
-        fig = FIGURES[fig_name]
+        fig = self.TABLE[fig_name]
         unit = self.unit or fig.unit
         if unit_scale(unit, fig.dim) is None:
             raise ConfigError(source, f"{path}.unit", self.unit, f"a unit of {fig.name} ({units_for(fig.dim)})")
@@ -90,6 +93,13 @@ class Spec:
         object.__setattr__(self, "lo", vals["min"])
         object.__setattr__(self, "hi", vals["max"])
         object.__setattr__(self, "typical", vals["typ"])
+
+
+@dataclass(frozen=True)
+class RoleSpec(Spec):
+    """A spec of a pixel read by role (families ``pixel4t`` and ``netlist``): its figures are
+    ``verify.figures.ROLE_FIGURES``."""
+    TABLE: ClassVar[dict] = ROLE_FIGURES
 
 
 def _edge(x: float, unit: str, fig) -> str:

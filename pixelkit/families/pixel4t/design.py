@@ -1,0 +1,104 @@
+"""Design file of the 4T pinned-photodiode pixel (``designs/pixel4t_gf180.toml``), validated on load.
+
+``[pixel]`` (pitch, PPD drawn size), ``[ppd]`` (the pinned photodiode's model parameters:
+docs/pixel4t.md gives each one's source), ``[devices]`` (TG, RST, SF, RS), and the tables every
+pixel read by role has (``families.roledesign``).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from ...errors import ConfigError
+from ...schema import qty, table, text
+from ...verify.spec import check_conditions
+from ..base import load_family_design
+from ..roledesign import RoleDesign, check_levels
+
+_WL = (0.1e-6, 1e-3)
+
+
+@dataclass(frozen=True)
+class Pixel:
+    pitch: float = qty("m", 8e-6, gt=0, plausible=(0.5e-6, 1e-3), doc="pixel cell side (square)")
+    ppd_width: float = qty("m", 4e-6, gt=0, plausible=(0.1e-6, 1e-3), doc="drawn width of the pinned photodiode")
+    ppd_height: float = qty("m", 4e-6, gt=0, plausible=(0.1e-6, 1e-3), doc="drawn height of the pinned photodiode")
+
+    @property
+    def area(self) -> float:
+        return self.ppd_width * self.ppd_height
+
+    @property
+    def perimeter(self) -> float:
+        return 2 * (self.ppd_width + self.ppd_height)
+
+    def validate(self, path, source):
+        for side in ("ppd_width", "ppd_height"):
+            if getattr(self, side) > self.pitch:
+                raise ConfigError(source, f"{path}.{side}", getattr(self, side), f"a PPD no larger than its cell "
+                                  f"({self.pitch * 1e6:g} um)")
+
+
+@dataclass(frozen=True)
+class PpdParams:
+    """The pinned photodiode's model (physics.ppd)."""
+    v_pin: float = qty("V", 1.0, gt=0, plausible=(0.1, 3.0),
+                       doc="pinning voltage: the potential of the empty, fully depleted PPD")
+    c_area: float = qty("F/m2", 0.12e-3, gt=0, plausible=(1e-6, 1e-2),
+                        doc="PPD capacitance per area (the dQ/dV of the filling well)")
+    c_perimeter: float = qty("F/m", 0.05e-9, ge=0, plausible=(0.0, 1e-8), doc="PPD capacitance per perimeter")
+    barrier: float = qty("V", 1.0, plausible=(-1.0, 3.0),
+                         doc="TG-edge barrier: the transfer barrier is the TG channel's pinch-off potential minus this "
+                             "(a pocket or barrier of the pinning implant under the TG edge)")
+    j_gen: float = qty("A/m2", 1e-7, ge=0, plausible=(0.0, 1e-3),
+                       doc="generation dark current per PPD area at t_ref (TG edge and isolation; ~n_i)")
+    j_dif: float = qty("A/m2", 2e-8, gt=0, plausible=(1e-15, 1e-3),
+                       doc="bulk diffusion dark current per PPD area at t_ref (~n_i^2): also the saturation current of "
+                           "the PPD's diode, hence the full well's light dependence")
+    t_ref: float = qty("K", 298.15, gt=0, plausible=(213.15, 473.15), doc="temperature of j_gen and j_dif")
+
+
+@dataclass(frozen=True)
+class Devices:
+    tg_w: float = qty("m", 0.8e-6, gt=0, plausible=_WL, doc="transfer gate width (the PPD edge it spans)")
+    tg_l: float = qty("m", 0.6e-6, gt=0, plausible=_WL, doc="transfer gate length")
+    rst_w: float = qty("m", 0.6e-6, gt=0, plausible=_WL, doc="reset NMOS width")
+    rst_l: float = qty("m", 0.5e-6, gt=0, plausible=_WL, doc="reset NMOS length")
+    sf_w: float = qty("m", 1.0e-6, gt=0, plausible=_WL, doc="source-follower width")
+    sf_l: float = qty("m", 0.5e-6, gt=0, plausible=_WL, doc="source-follower length")
+    rs_w: float = qty("m", 0.6e-6, gt=0, plausible=_WL, doc="row-select width")
+    rs_l: float = qty("m", 0.5e-6, gt=0, plausible=_WL, doc="row-select length")
+
+
+@dataclass(frozen=True)
+class Pixel4tDesign(RoleDesign):
+    family: str = text(choices=("pixel4t",), doc="the 4T pinned-photodiode pixel with true CDS")
+    pixel: Pixel = table(Pixel, default=Pixel, doc="cell pitch and the PPD's drawn size")
+    ppd: PpdParams = table(PpdParams, default=PpdParams, doc="the pinned photodiode's model parameters")
+    devices: Devices = table(Devices, default=Devices, doc="TG, RST, SF and RS sizes")
+
+    def cell(self):
+        return cell_of(self)
+
+
+def load_pixel4t_design(path: str | Path) -> Pixel4tDesign:
+    d = load_family_design(Pixel4tDesign, path)
+    check_levels(d)
+    check_conditions(d, d.tech)
+    return d
+
+
+def tg_channel(design):
+    """The TG channel: the technology's NMOS fitted (EKV, ``techfit.ekv``) at the TG's size and the design's
+    temperature and corner."""
+    from ...physics.ppd import Channel
+    from ...techfit.ekv import fit
+    dev = design.devices
+    ekv, _rms = fit(design.tech, dev.tg_w, dev.tg_l, design.temperature, corner=design.corner or None)
+    return Channel(ekv.vt0, ekv.gamma, ekv.phi, ekv.kp, dev.tg_w / dev.tg_l)
+
+
+def cell_of(design):
+    """The design's pixel as a role cell (``circuits.pixel4t``)."""
+    from ...circuits.pixel4t import pixel4t
+    return pixel4t(design, tg_channel(design))
