@@ -64,7 +64,8 @@ PARTS = {
 #: Figure group of a deck, by its title (verify.measure's groups; other sections' decks by what they are).
 GROUPS = [(r"^vfy_(dark|small|sat|mid_lo|mid_hi)$", "pixel"), (r"^vfy_lag_", "lag"), (r"^vfy_gse_", "gse"),
           (r"^vfy_sf_", "noise"), (r"^vfy_dark_[ps]$", "dark"), (r"^vfy_afe", "afe"), (r"^vfy_power_", "power"),
-          (r"^frame_2x1_", "settling"), (r"^frame_", "frames"), (r"^(nom|surr|gap|coarse|refine)", "gap surrogate")]
+          (r"^frame_2x1_", "settling"), (r"^frame_", "frames"), (r"^gap", "gap surrogate"),
+          (r"^(coarse|refine)\d", "experiment (fig. A.1 - A.3)")]
 
 
 def group_of(title: str) -> str:
@@ -170,6 +171,7 @@ def main(argv=None):
                 print(f"main_job: {name}: raw ngspice replay ...", file=sys.stderr, flush=True)
                 out["raw"] = replay(Path(out["current"]["log"]), jobs)
             res["parts"][name] = out
+            (work / "results.json").write_text(json.dumps(res, indent=1))   # a long run's parts so far
     finally:
         if base_tree is not None:
             subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", str(base_tree)],

@@ -108,3 +108,27 @@ def test_sequential_gives_the_full_runs_verdict_far_from_and_near_min_yield(tmp_
     else:
         assert y_fast["samples"] == 20 and "every yield decided" in fast["mc"]["stop"]
         assert s_full == ("pass" if case == "far above" else "fail")
+
+
+@pytest.mark.slow
+def test_reference_design_fast_path_against_the_full_count(ref_design):
+    """(slow: ~50 s of CPU, 330 decks; 10 min of wall at a load of 16) The reference design's own
+    specs at its nominal condition, Monte Carlo of 40 (of its 200): the default (sequential: min_yield 0, so 20 samples) against --mc-full. Every
+    spec's value, worst condition, margin and status are the same (the Monte Carlo does not enter
+    them: the checked figures of the report's summary.json are these values); each yield keeps
+    its verdict and its interval holds the full run's yield; the 20 are the full run's first 20."""
+    from dataclasses import replace
+    d = replace(ref_design, verify=replace(ref_design.verify, mc=40))
+    full = verify(d, mc_full=True, **NOMINAL)
+    fast = verify(d, **NOMINAL)
+    assert fast["mc"]["samples"] == 20 and full["mc"]["samples"] == 40
+    for a, b in zip(fast["rows"], full["rows"]):
+        assert {k: v for k, v in a.items() if k != "yield"} == {k: v for k, v in b.items() if k != "yield"}
+        if b["yield"] is None:
+            assert a["yield"] is None
+            continue
+        lo, hi = a["yield"]["interval"]
+        assert lo <= b["yield"]["yield"] <= hi, (a["spec"], a["yield"], b["yield"])
+    for name, values in fast["mc_values"].items():
+        assert values == full["mc_values"][name][:20]
+    assert fast["power"] == full["power"] and fast["conditions"] == full["conditions"]

@@ -302,6 +302,11 @@ def _held(node: str, v: float, rest: dict, t_rise: float, edge: float):
     return ((0.0, rest[node]), (t_rise, rest[node]), (t_rise + edge, v))
 
 
+def _task_title(task) -> str:
+    """What a frame task simulates (the progress line): its chain's or its deck's title."""
+    return task[0].title if len(task) == 6 else task[11]   # a tile's (net, ...) or a chain's (design, ...)
+
+
 def default_split(with_afe: bool, seeded: bool = False) -> str:
     """``none`` for a Monte Carlo frame (one deck draws every device once, so a column's
     circuits are the same chip for all its rows); else ``columns`` with the AFE (its
@@ -362,7 +367,7 @@ def simulate_frame(design, iph_p, iph_s, with_afe: bool = False, split: str | No
     notes = [] if split != "none" else ["not measured: a frame with split='none' reads every row in one deck"]
     t0 = time.perf_counter()
     fn, desc = (_chain, "frame column chains") if split == "columns" else (_probe, "frame tiles")
-    for i, out in run_tasks(fn, tasks, jobs=jobs, scheduler=scheduler, desc=desc):
+    for i, out in run_tasks(fn, tasks, jobs=jobs, scheduler=scheduler, desc=desc, label=_task_title):
         failures += out["failures"]
         retried += out["retried"]
         decks += out["decks"]
