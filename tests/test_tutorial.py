@@ -117,8 +117,9 @@ def run_blocks(blocks, folder, parse_slow=False):
 
 @pytest.fixture
 def clone(tmp_path):
-    """What the pages' commands read from a clone: the designs, the examples, the EMVA 1288 test data."""
-    for d in ("designs", "examples", "tests/data"):
+    """What the pages' commands read from a clone: the designs, the examples, the EMVA 1288 test
+    data and the docs tooling (``python -m docsite...`` run from the clone's root)."""
+    for d in ("designs", "examples", "tests/data", "docsite"):
         shutil.copytree(ROOT / d, tmp_path / d)
     return tmp_path
 

@@ -36,8 +36,9 @@ def build(ctx) -> Section:
     from ...readfile import read_text
     p = path_of(ctx.design)
     if p is None:
-        return Section.unavailable(TITLE, "this revision was not written by pixelkit close (no "
-                                          f"{Path(ctx.design.source).stem}.close.json beside the design file)")
+        stem = Path(ctx.design.source).stem if getattr(ctx.design, "source", None) else "<design>"
+        return Section.needs_input(TITLE, f"{stem}.close.json beside the design file",
+                                   "written by pixelkit close; this revision was not closed by it (docs/close.md)")
     try:
         r = json.loads(read_text(p, "close.json", "json"))
     except (ValueError, PixelkitError) as exc:
