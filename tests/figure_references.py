@@ -141,6 +141,12 @@ REPORT = {
             "derivation", "pedestal", "linear propagation of the model card's sigmas")],
     "variation.offset_fpn_ratio": [Ref("tests/test_montecarlo.py::test_offset_fpn_matches_pelgrom", "derivation",
                                        "pelgrom", "Pelgrom: G_SF sigma_VT")],
+    "light.effective_opening_m2": [Ref("tests/test_light_model.py::test_a_modelled_design_uses_the_model", "derivation",
+                                       "photoactive_area", "A_primary x R_secondary / R_primary recomputed from the "
+                                       "model's eta (its physics: tests/test_light_physics.py's closed forms)")],
+    "light.gse_*": [Ref("tests/test_light_model.py::test_gse_within_the_published_range_of_fd_storage_pixels",
+                        "published table", "gse", "Aptina's FD-storage global shutters, GSE 310 - 3000 "
+                        "([Thesis2019]'s table)")],
     "signoff.*": [],      # each spec's figure: SIGNOFF below
 }
 
@@ -170,6 +176,9 @@ SIGNOFF = {
                         "derivation", "image_lag", "a gate a threshold below the reset level resets softly (lag %)")],
     "gse_*": [Ref(_VF + "test_gse_against_the_analytic_storage_signal", "derivation", "gse",
                   "A_sf (I / gse + leakage) t / C_FD where FD stores (12 %)")],
+    "storage_light_*": [Ref("tests/test_light_model.py::test_storage_light_is_the_fd_charge_through_the_readout",
+                            "derivation", "storage", "A_sf I_FD t / C_FD where it does not clip (10 %); the swing "
+                            "where it does")],
     "settling_*": [Ref("tests/test_settling.py::test_reference_from_where_the_reads_part_is_the_whole_long_read",
                        "SPICE circuit level", "settling", "the converged long read")],
     "criterion_secondary": [Ref(_VF + "test_criterion_against_the_experiments_secondary_transfer",

@@ -130,8 +130,6 @@ def build(ctx) -> Section:
     checked = [Checked("light.effective_opening_m2", scene["effective_opening_m2"], "m2", tol_rel=0.03),
                Checked("light.gse_primary", scene["gse_primary"], "1", tol_rel=0.05),
                Checked("light.gse_secondary", scene["gse_secondary"], "1", tol_rel=0.05)]
-    if mod_s:
-        checked.append(Checked("light.c_m_modelled", mod_s["c_m"], "1", tol_rel=0.02))
     data = {"by_wavelength": {k: np.asarray(v).tolist() for k, v in by.items() if k != "drawn_m2"},
             "decomposition": parts, "spectra": {n: {k: v for k, v in f.items() if k != "by_wavelength"}
                                                 for n, f in figs.items()},
