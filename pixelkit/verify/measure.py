@@ -297,13 +297,20 @@ def settling(design, draw=None, backend="batch") -> dict:
     """Worst |settling error| (V) of each array over a 2-row dual column with its AFE at the
     default stimulus: each row's double-sampled signal against the same read with long S1 and
     S2 from the same column state (``chip.settling``). Nominal devices: a Monte Carlo draw
-    does not enter (the figure's ``mc`` is false)."""
-    from ..chip.frame import simulate_frame
+    does not enter (the figure's ``mc`` is false).
+
+    Both reads run at ``chip.frame.CONVERGED`` tolerances (reltol 1e-6, abstol 1e-12): at the engine's
+    default reltol 1e-5 the difference of the two reads carries the integration error of each, 0.1 -
+    0.6 mV on the reference's revision B and the GF180 port (0.568 mV at tt -20 degC +10 % on the
+    GF180 port's revision B, 0.016 mV converged), as large as the 0.5 mV limit: the figure would
+    measure the solver, not the read. Converged costs ~30 % more on these decks."""
+    from ..chip.frame import CONVERGED, simulate_frame
     from ..chip.scene import default_stimulus
     n = design.secondary_per_pixel
     stim = default_stimulus(design, design.experiment.t_window)
     ip, is_ = np.full((2, 1), stim["iph_p"]), np.full((2, n), stim["iph_s"])
-    f = simulate_frame(design, ip, is_, with_afe=True, split="columns", settling=True, backend=backend, jobs=1)
+    f = simulate_frame(design, ip, is_, with_afe=True, split="columns", settling=True, backend=backend, jobs=1,
+                       options=CONVERGED)
     return {k: float(np.nanmax(np.abs(f.settling[k]))) if np.isfinite(f.settling[k]).any() else float("nan")
             for k in ("primary", "secondary")}
 
