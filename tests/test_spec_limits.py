@@ -114,3 +114,13 @@ def test_every_spec_says_where_its_limit_comes_from():
     for path in sorted((ROOT / "designs").glob("*.toml")):
         for name, s in tomllib.loads(path.read_text()).get("spec", {}).items():
             assert len(s.get("note", "")) > 40, f"{path.name}: spec.{name} has no derivation in its note"
+
+
+def test_revisions_keep_their_revision_a_specs():
+    """The closed revisions answer to their revision A's datasheet: the same specs, the same limits (the
+    revision B files say so in the derived specs' notes); only the yield requirement is new."""
+    for a, b in (("dual_pixel_revA", "dual_pixel_revB"), ("dual_pixel_gf180", "dual_pixel_gf180_revB")):
+        sa, sb = (tomllib.loads((ROOT / "designs" / f"{n}.toml").read_text()) for n in (a, b))
+        limits = {n: {k: v for k, v in s.items() if k != "note"} for n, s in sa["spec"].items()}
+        assert limits == {n: {k: v for k, v in s.items() if k != "note"} for n, s in sb["spec"].items()}, b
+        assert sb["verify"]["min_yield"] == "95 %" and "min_yield" not in sa["verify"]
