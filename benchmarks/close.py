@@ -15,9 +15,10 @@ the figure load moves least); and the growth of the runs per iteration from 2 kn
 
 ``--grid small``: corners tt and ss x 27 and 85 degC x -10 % and 0 % (8 conditions), the growth
 study; ``--grid full``: the design's own ``[verify]`` grid (the reference: 45 conditions) with its
-Monte Carlo unless ``--mc``. ``--reference``: the design's own grid and Monte Carlo with
-``REFERENCE``'s knobs (the gates' drive as a circuit choice, the rail, both resets, the column
-load): "close on the reference from an empty cache" (issue 40: within 30 min on 2 cores).
+Monte Carlo unless ``--mc``. ``--reference``: the design's own grid, Monte Carlo and ``[close]`` table (the reference's: the
+gates' drive as a circuit choice, the rail, both resets, the transistor OTA's bias and compensation,
+the AFE's capacitors): "close on the reference from an empty cache" (issue 40: within 30 min on 2
+cores), the run that writes designs/dual_pixel_revB.toml.
 """
 from __future__ import annotations
 
@@ -47,16 +48,6 @@ KNOBS = [
     ("secondary.t_int", ["8 ms", "16 ms"]),
 ]
 SMALL = {"corners": ["tt", "ss"], "temperatures": ["27 degC", "85 degC"], "supplies": ["-10 %", "0 %"]}
-#: ``--reference``: the [close] table of the reference run (the circuit choice of the gates' drive, the
-#: rail, both resets and the column load; issue 40's revB changes the first four).
-REFERENCE = {"objective": "min power", "knobs": {
-    "pixel.gate_drive": {"choices": ["supply", "boosted"]},
-    "pixel.v_gate": ["3.3 V", "3.63 V"],
-    "pixel.v_pd_reset": ["1.8 V", "2.5 V"],
-    "pixel.v_fd_reset": ["1.8 V", "2.5 V"],
-    "pixel.sf_bias": {"min": "700 nA", "max": "1.5 uA", "scale": "log"}}}
-
-
 def design_file(src: Path, n: int, grid: str, mc: int | None, max_iterations: int, folder: Path) -> Path:
     """The design's file with the benchmark's [close] table (the first ``n`` knobs) and grid."""
     from pixelkit.schema import to_toml
@@ -67,7 +58,7 @@ def design_file(src: Path, n: int, grid: str, mc: int | None, max_iterations: in
         verify.update(SMALL)
     if mc is not None:
         verify["mc"] = mc
-    close = ({**REFERENCE, "max_iterations": max_iterations} if n == 0 else
+    close = (raw["close"] if n == 0 else     # --reference: the design's own [close] table
              {"objective": "min power", "max_iterations": max_iterations, "knobs": dict(KNOBS[:n])})
     head = text.split("\n[verify]")[0] if "\n[verify]" in text else text.split("\n[spec.")[0]
     body = {k: v for k, v in raw.items() if k in ("spec",)}
@@ -136,7 +127,7 @@ def main():
     ap.add_argument("--max-iterations", type=int, default=15)
     ap.add_argument("--design", type=Path, default=ROOT / "designs" / "dual_pixel_revA.toml")
     ap.add_argument("--reference", action="store_true",
-                    help="the reference run instead: the design's full grid and Monte Carlo, REFERENCE's knobs")
+                    help="the reference run instead: the design's full grid, Monte Carlo and [close] table")
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args()
     if args.reference:

@@ -21,6 +21,7 @@ ONE = {"corners": ["tt"], "temperatures": ["27 degC"], "supplies": ["0 %"], "mc"
 def _write(tmp_path, close, spec=AFE_SPEC, verify=ONE, name="d.toml"):
     raw = copy.deepcopy(BASE)
     raw["spec"], raw["verify"] = spec, verify
+    raw.pop("close", None)      # the reference's own [close] table (its revB's knobs)
     if close is not None:
         raw["close"] = close
     p = tmp_path / name
@@ -173,3 +174,19 @@ def test_knob_no_spec_depends_on_exits_2(tmp_path, cli):
     e = json.loads(out)
     assert e["field"] == "close.knobs.pixel.sf_bias" and "some spec depends on" in e["allowed"], e
     assert not (tmp_path / "b.toml").exists() and not (tmp_path / "b.close.json").exists()
+
+
+def test_one_choice_is_the_designers_circuit_and_absent_knobs_start_mid_bounds():
+    """The reference's own [close] table: ``afe.opamp = { choices = ["ota"] }`` is one circuit, the
+    designer's (close solves under it, never the macromodel); under ``gate_drive = "boosted"`` the rail
+    revA leaves absent starts at the middle of its bounds, under ``"supply"`` it is left out."""
+    from pixelkit.close.revision import _under
+    d = load_design(REF)
+    by = {k.name: k for k in d.close.knobs}
+    assert by["afe.opamp"].choices == ("ota",) and by["pixel.gate_drive"].choices == ("boosted", "supply")
+    numeric = [k for k in d.close.knobs if not k.choices]
+    base, active, left = _under(d, {"pixel.gate_drive": "boosted", "afe.opamp": "ota"}, numeric)
+    assert base.afe.opamp == "ota" and base.pixel.gate_drive == "boosted" and left == []
+    assert base.pixel.v_gate == pytest.approx((3.3 + 3.63) / 2)
+    base, active, left = _under(d, {"pixel.gate_drive": "supply", "afe.opamp": "ota"}, numeric)
+    assert left == ["pixel.v_gate"] and base.pixel.v_gate is None and base.afe.opamp == "ota"

@@ -88,11 +88,11 @@ def test_design_reference_lists_every_field_of_the_reference_design():
     def walk(table, path):
         for k, v in table.items():
             if isinstance(v, dict):
-                named = path == "spec."   # [spec.<name>]: the names are the designer's
-                key = f"{path}<name>" if named else path + k
-                assert f"## `[{key}]`" in doc or f"## `[{key}.<name>]`" in doc, key
+                named = path in ("spec.", "close.knobs.")   # [spec.<name>]: the names are the designer's
+                key = (f"{path}<design key>" if path == "close.knobs." else f"{path}<name>") if named else path + k
+                assert f"## `[{key}]`" in doc or any(f"## `[{key}.<{n}>]`" in doc for n in ("name", "design key")), key
                 walk(v, f"{key}.")
-            else:
+            elif path != "close.knobs.":   # a knob as two bounds: its name is a design key
                 assert f"| `{k}` |" in doc, path + k
     walk(raw, "")
     assert "**required**" in doc and ">= 1" in doc

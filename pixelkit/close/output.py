@@ -107,8 +107,8 @@ STATUS = {
 def text(r: dict) -> str:
     lines = [f"close of {r['design']}: {STATUS.get(r['status'], r['status'])}",
              f"{candidates(r)} candidates, {r['spice_runs']} SPICE runs ({r['spice_cached']} from cache), "
-             f"{r['wall_s']:.0f} s; objective {r['objective']['goal']}: {r['objective']['shown_start']} -> "
-             f"{r['objective']['shown']}"]
+             f"{r['wall_s']:.0f} s wall" + (f", {r['cpu_s']:.0f} s CPU" if r.get("cpu_s") is not None else "")
+             + f"; objective {r['objective']['goal']}: {r['objective']['shown_start']} -> {r['objective']['shown']}"]
     for c in r.get("choices", []):
         lines.append(f"  with {c['choice']}: {STATUS.get(c['status'], c['status']).split(':')[0]}, smallest margin "
                      f"{_pct(c['smallest_margin_pct'])}, {r['objective']['goal']} {c['objective_shown']}"

@@ -26,7 +26,9 @@ def close_design(design, out, backend: str = "batch", jobs=None, scheduler=None,
     out = check_output(Path(out))
     path = check_output(out.with_name(out.stem + ".close.json"))
     check_samples(design)
+    cpu0 = cpu_s()
     r = _choose(design, backend, jobs, scheduler, tell, say)
+    r["cpu_s"] = cpu_s() - cpu0
     r["json"] = str(path)
     if r["passes"]:
         body = revision_text(design, r["overrides"], out, r)
@@ -35,6 +37,14 @@ def close_design(design, out, backend: str = "batch", jobs=None, scheduler=None,
     if r["passes"]:
         write_atomic(out, body)
     return r
+
+
+def cpu_s() -> float:
+    """CPU seconds (user + system) of this process and of every child it waited for: with the batch
+    backend, every ngspice run (the shared backend's pool workers count when they end)."""
+    import resource
+    me, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return me.ru_utime + me.ru_stime + kids.ru_utime + kids.ru_stime
 
 
 def _choose(design, backend, jobs, scheduler, tell, say) -> dict:

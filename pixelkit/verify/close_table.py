@@ -68,10 +68,11 @@ class Knob:
                           "min > 0 and max >= 3 x min, else lin")
     step: object = limit(of="design key", doc="grid the written value is rounded to (\"5 nm\"): every candidate is "
                                               "simulated as rounded (absent: 6 significant digits)")
-    choices: tuple = items(text(), (), min_len=2, max_len=8,
+    choices: tuple = items(text(), (), min_len=1, max_len=8,
                            doc="a circuit choice instead of bounds: the values of a key that names one "
                                "(\"pixel.gate_drive\" = { choices = [\"supply\", \"boosted\"] }): close solves the "
-                               "numeric knobs for each and keeps the best")
+                               "numeric knobs for each and keeps the best; one value: the circuit the revision uses "
+                               "(\"afe.opamp\" = { choices = [\"ota\"] }), chosen by the designer, not by close")
     name: str = field(default="", metadata=dict(kind="skip"))
     lo: float = field(default=0.0, metadata=dict(kind="skip"))
     hi: float = field(default=0.0, metadata=dict(kind="skip"))

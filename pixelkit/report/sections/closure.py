@@ -50,7 +50,8 @@ def build(ctx) -> Section:
     obj = r["objective"]
     text = [f"This revision was written by pixelkit close from {src}: {STATUS.get(r['status'], r['status'])}. "
             f"{candidates(r)} candidates, {r['spice_runs']} SPICE runs ({r['spice_cached']} from the cache), "
-            f"{r['wall_s']:.0f} s; objective {obj['goal']}: {obj['shown_start']} at the start, {obj['shown']} "
+            f"{r['wall_s']:.0f} s wall" + (f" ({r['cpu_s']:.0f} s CPU)" if r.get("cpu_s") is not None else "")
+            + f"; objective {obj['goal']}: {obj['shown_start']} at the start, {obj['shown']} "
             f"closed. Every candidate was re-verified in SPICE, the accepted ones on the whole sign-off grid "
             "(docs/close.md).",
             "The design file is the one close wrote (sha256 " + r["out_sha256"][:12] + ")." if same else
