@@ -1,7 +1,7 @@
 """The main job, part by part, against an earlier commit's code and against raw ngspice, in one run.
 
     python3 benchmarks/main_job.py [--baseline REV] [--parts report,verify,gap,afe4x4,chip]
-                                   [--no-baseline] [--no-raw] [--json] [--keep DIR]
+                                   [--no-baseline | --baseline-parts P,..] [--no-raw] [--json] [--keep DIR]
 
 Each part is a command as a user types it, on the reference design, run in a fresh process with an
 EMPTY simulation cache of its own:
@@ -138,6 +138,8 @@ def main(argv=None):
     ap.add_argument("--baseline", default=BASELINE, help=f"the earlier commit to compare with (default {BASELINE})")
     ap.add_argument("--parts", default=",".join(PARTS), help="comma-separated, of: " + ", ".join(PARTS))
     ap.add_argument("--no-baseline", action="store_true", help="measure this tree only")
+    ap.add_argument("--baseline-parts", default=None,
+                    help="run the baseline only for these parts (comma-separated; default: every part)")
     ap.add_argument("--no-raw", action="store_true", help="skip the raw ngspice replay")
     ap.add_argument("--json", action="store_true")
     ap.add_argument("--keep", default=None, help="keep the runs' folders (logs, decks, outputs) here")
@@ -160,7 +162,8 @@ def main(argv=None):
         if not a.no_baseline:
             base_tree = checkout(a.baseline, work / "baseline-tree")
         for k, name in enumerate(parts):
-            sides = [("current", ROOT)] + ([("baseline", base_tree)] if base_tree else [])
+            with_base = base_tree is not None and (a.baseline_parts is None or name in a.baseline_parts.split(","))
+            sides = [("current", ROOT)] + ([("baseline", base_tree)] if with_base else [])
             if k % 2:
                 sides.reverse()
             out = {}
