@@ -2,7 +2,7 @@
 
     python3 benchmarks/main_job.py [--baseline REV] [--parts report,verify,gap,afe4x4,chip]
                                    [--no-baseline | --baseline-parts P,..] [--no-raw] [--json] [--keep DIR]
-    python3 benchmarks/main_job.py --docs RESULTS.json [--write]
+    python3 benchmarks/main_job.py --docs RESULTS.json [RESULTS.json ...] [--write]
 
 Each part is a command as a user types it, on the reference design, run in a fresh process with an
 EMPTY simulation cache of its own:
@@ -160,12 +160,13 @@ def main(argv=None):
     ap.add_argument("--no-raw", action="store_true", help="skip the raw ngspice replay")
     ap.add_argument("--json", action="store_true")
     ap.add_argument("--keep", default=None, help="keep the runs' folders (logs, decks, outputs) here")
-    ap.add_argument("--docs", default=None, metavar="RESULTS.json",
-                    help="render a run's figures as the docs' tables (measures nothing)")
+    ap.add_argument("--docs", default=None, nargs="+", metavar="RESULTS.json",
+                    help="render runs' figures as the docs' tables (measures nothing); several runs of the same "
+                         "code (parts run side by side) are merged")
     ap.add_argument("--write", action="store_true", help="with --docs: store the run and rewrite the pages' blocks")
     a = ap.parse_args(argv)
     if a.docs:
-        return write_docs(Path(a.docs), a.write)
+        return write_docs([Path(x) for x in a.docs], a.write)
     parts = [p.strip() for p in a.parts.split(",") if p.strip()]
     for p in parts:
         if p not in PARTS:
@@ -256,9 +257,11 @@ def docs_block(res: dict) -> str:
     """docs/benchmarks.md's tables of one run (between DOCS_BEGIN and DOCS_END)."""
     loads = [x for sides in res["parts"].values() for r in sides.values() if "load_before" in r
              for x in (r["load_before"], r["load_after"])]
-    lines = [f"Measured at {res['head']} on {res.get('date', 'an unrecorded date')}, against "
+    lines = [f"Measured at {res['head']} on {res.get('date') or 'an unrecorded date'}, against "
              f"{res['baseline'] or 'no baseline'}'s code in the same run, {res['cores']} cores, {res['jobs']} workers, "
-             f"each command in a fresh process with an empty cache; 1-minute load average "
+             "each command in a fresh process with an empty cache"
+             + (f" ({res['side_by_side']} runs of this script side by side, each part sharing the machine with the "
+                "other's)" if res.get("side_by_side", 1) > 1 else "") + "; 1-minute load average "
              f"{min(loads):.1f} - {max(loads):.1f} over the run. CPU is the command's and every process it "
              "waited for (ngspice, KLayout); `CPU / workers` is the wall the same work needs on that many idle "
              "cores. The targets are issue 41's, in wall time on 2 cores.", "",
@@ -313,8 +316,23 @@ def blocks(text: str, begin: str, end: str) -> str:
     return text[i + len(begin):j].strip()
 
 
-def write_docs(path: Path, write: bool) -> None:
-    res = trimmed(json.loads(path.read_text()))
+def merged(runs: list) -> dict:
+    """Runs of the same code side by side (e.g. the report beside the whole chip) as one: their parts in
+    order, the baseline of the runs that had one, the earliest date."""
+    heads = {r["head"] for r in runs}
+    if len(heads) > 1:
+        raise SystemExit(f"main_job --docs: the runs measured different code ({', '.join(sorted(heads))})")
+    out = dict(runs[0], parts={})
+    out["baseline"] = next((r["baseline"] for r in runs if r["baseline"]), None)
+    out["date"] = min(r.get("date", "") for r in runs) or None
+    out["side_by_side"] = len(runs)
+    for r in runs:
+        out["parts"].update(r["parts"])
+    return out
+
+
+def write_docs(paths: list, write: bool) -> None:
+    res = trimmed(merged([json.loads(p.read_text()) for p in paths]))
     if "report" not in res["parts"]:
         raise SystemExit("main_job --docs: the run has no report part (the README's sentence needs it)")
     if not write:

@@ -1,4 +1,5 @@
-"""The benchmark suite runs to the end on the reference design: ``benchmarks/run.py --quick``.
+"""The benchmark suite runs to the end on the reference design: ``benchmarks/run.py --quick``; the
+main job's runs merge only when they measured the same code (``benchmarks/main_job.py``).
 
 Only that it completes and gives every figure, finite and of its kind, is checked here: the
 figures themselves are times on a shared machine, measured as ratios by the script and quoted
@@ -9,6 +10,8 @@ import math
 import os
 import subprocess
 import sys
+
+import pytest
 
 from conftest import ROOT
 
@@ -28,3 +31,22 @@ def test_benchmark_suite_quick_profile_completes(tmp_path):
     assert set(r["frame_s"]) == {"2x2", "4x4"} and all(v > 0 for v in r["frame_s"].values())
     assert r["decks"] == 2 and r["points"] == 4 and r["workers"] >= 1
     assert "whole_array_s" not in r   # the quick profile leaves the whole chip out
+
+
+def _main_job():
+    import importlib.util
+    spec = importlib.util.spec_from_file_location("main_job", ROOT / "benchmarks" / "main_job.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_main_job_merges_side_by_side_runs_of_the_same_code_only():
+    mj = _main_job()
+    a = {"head": "h1", "baseline": "b", "date": "2", "cores": 2, "jobs": 2, "parts": {"report": {}}}
+    b = {"head": "h1", "baseline": None, "date": "1", "cores": 2, "jobs": 2, "parts": {"chip": {}}}
+    m = mj.merged([a, b])
+    assert list(m["parts"]) == ["report", "chip"] and m["baseline"] == "b" and m["date"] == "1"
+    assert m["side_by_side"] == 2
+    with pytest.raises(SystemExit, match="different code"):
+        mj.merged([a, dict(b, head="h2")])
