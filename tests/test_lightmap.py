@@ -65,14 +65,57 @@ def test_exposed_area_against_the_gds(gf, geo, tmp_path):
     assert sum(j.area_m2 for j in exposed(geo) if j.net.startswith(("col", "out", "nbias"))) > 5e-12
 
 
-def test_open_readout_fails_as_the_thesis_chip_and_a_full_shield_cures_it(gf, geos):
+def _charge_bound(design, geos, t) -> float:
+    """J A t / C: what the light can leave on an SC AFE's output by the ideal charge analysis of
+    [Thesis2019]'s eq. 3.1 stage (docs/post-layout.md), not by SPICE. p1 resets vm to vref and x to the
+    output; S1X / S2X drive ``in`` from the column line and So ties ``c`` to the output: charge collected
+    before p1 opens, or on ``in`` / ``c`` / the column line, is erased. What is left is the charge the
+    island's own junctions collect from p1's opening to the output's sample at the end of p2: q_vm lands on
+    C13, q_x (x held by the op-amp) moves vm by q_x / C12 and so the output by (C11 + C12 + C13) / C12
+    times q_x / C13. Currents: each open junction's area x the scene's photocurrent density (the mean of
+    the drawn AFEs: one AFE cell serves every column), counted by magnitude."""
+    from pixelkit.layout.pex.light import with_currents
+    a = design.afe
+    cur = {"vm": 0.0, "x": 0.0}
+    cells = ("AFE_P", "AFE_S")
+    for c in cells:
+        for j in with_currents(design, exposed(geos[c], "pixels")):
+            if j.net in cur:
+                cur[j.net] += abs(j.current_A) / len(cells)
+    p1_off = t.s1(1)[0][1] - a.nonoverlap
+    dt = t.t_reset_level(0) - p1_off
+    return (cur["vm"] + (a.c11 + a.c12 + a.c13) / a.c12 * cur["x"]) * dt / a.c13
+
+
+#: the resolution of a light-map figure: the difference of two transient benches (lit minus dark) is not
+#: resolved below it (measured: on the drawn shield the figure at 0.5 / 1 / 2 / 10 x the light read
+#: -0.20 / +0.40 / +0.69 / +0.05 mV on col_p, where the charge analysis scales 2.7 - 54 uV; docs/post-layout.md)
+RESOLUTION_V = 1e-3
+
+
+def test_light_map_error_within_the_charge_bound_and_a_full_shield_cures_it(gf, geos):
+    """The light map's figure (the light switched on from the dark state at the frame's start, on through the
+    design's own exposures and the row's read) of the drawn shield, which leaves the readout's junctions open,
+    lies within the J A t / C bound of an SC AFE (``_charge_bound``: the charge the AFE's island collects after
+    its reset, on its capacitors: 5.4 uV primary, 2.8 uV secondary) plus the resolution of a SPICE difference;
+    the DC-operating-point figure of the same junctions (the light on as constant sources: the floating nodes
+    start at their clamp, docs/post-layout.md) breaks it by over two orders of magnitude. With the full
+    shield nothing of the readout is lit: no error, only photodiodes."""
+    from pixelkit.circuits.testbench import real_timings
+    from pixelkit.layout.pex.light import output_error, with_currents
     bad = light_map(gf, "pixels", geos=geos)
     assert bad["readout_area_m2"] > 5e-12
-    assert all(c["error_over_noise"] > 10 for c in bad["columns"].values()), bad["columns"]
     assert min(bad["afe_area_m2"].values()) > 10e-12          # the AFEs' junctions are open too
-    # the error is the charge the open nodes gather while the bench's readout idles before the row:
-    # lit from the row's start only, it is below the read noise (docs/post-layout.md)
-    assert all(c["error_from_row_over_noise"] < 1 for c in bad["columns"].values()), bad["columns"]
+    tm = real_timings(gf)
+    bound = {c: _charge_bound(gf, geos, tm["primary" if c == "col_p" else "secondary"]) for c in bad["columns"]}
+    assert 1e-6 < bound["col_p"] < 20e-6 and 1e-6 < bound["col_s0"] < 20e-6
+    for c, v in bad["columns"].items():
+        assert abs(v["error_V"]) <= bound[c] + RESOLUTION_V, (c, v, bound[c])
+        assert abs(v["error_from_row_V"]) <= bound[c] + RESOLUTION_V, (c, v, bound[c])
+    steady = output_error(gf, with_currents(gf, exposed(geos["DUALPIX_COL"], "pixels")),
+                          afe_junctions=[with_currents(gf, exposed(geos[c], "pixels")) for c in ("AFE_P", "AFE_S")],
+                          window="steady")
+    assert all(abs(v) > 100 * (bound[c] + RESOLUTION_V) for c, v in steady.items()), steady
     good = light_map(gf, "full", geos=geos)
     assert good["readout_area_m2"] == 0
     assert all(c["error_over_noise"] < 0.1 for c in good["columns"].values()), good["columns"]
@@ -96,7 +139,7 @@ def test_report_section(gf, tmp_path):
     s = section.build(Context(gf, tmp_path))
     assert (tmp_path / "light_map.png").stat().st_size > 1000
     worst = next(c for c in s.checked if c.name == "light_map.worst_error_over_noise_pixels").value
-    assert worst > 10
+    assert 0 < worst < 1          # within the read noise: the figure is bounded in test_light_map_error_within_...
     ref = section.build(Context(load_design(ROOT / "designs" / "dual_pixel_revA.toml"), tmp_path))
     assert not ref.available and "[stack]" in ref.needs and "no process stack" in ref.why
 
@@ -121,7 +164,7 @@ def test_idle_light_effect_lights_what_the_light_map_lights(gf, geos):
     col = [j for j in with_currents(gf, exposed(geos["DUALPIX_COL"], "pixels")) if j.net.startswith(("out_", "col_"))]
     afe = [[j for j in with_currents(gf, exposed(geos[c], "pixels")) if j.net in SIGNAL_AFE]
            for c in ("AFE_P", "AFE_S")]
-    err = output_error(post, col, afe_junctions=afe)
+    err = output_error(post, col, afe_junctions=afe, window="steady")
     j_scene = col[0].current_A / col[0].area_m2
     pat = idlelight.pattern(post)
     area = {c: sum(a for n, _, a in post.post_layout.open_readout if n in (f"in_{c}", c) or n.startswith("scafe."))

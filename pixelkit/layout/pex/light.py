@@ -16,7 +16,10 @@ Each exposed junction's photocurrent (the technology's QE over the scene's spect
 scene's headlight irradiance on the die) is put on its node in the dual-pixel bench with its AFE
 columns - an N+ junction draws it from its node to the substrate, a P+ junction in a well pushes it
 from the well's supply into its node - and the AFE outputs are compared with the same bench
-without it: the output error the light causes, per node and all together, against the read noise.
+without it: the output error the light causes, per node and all together, against the read noise. The
+light is switched on from the dark state at the frame's start and stays on through the design's own
+exposures and the row's read (``output_errors``: not as constant sources, whose operating point would
+start the floating readout nodes at their junctions' clamp).
 """
 from __future__ import annotations
 
@@ -165,32 +168,70 @@ def afe_sources(afe_junctions) -> list:
     return [Element(f"Ilight{k}", pins, i) for k, (pins, i) in enumerate(sorted(acc.items()))]
 
 
-def output_error(design, junctions, backend: str = "batch", afe_junctions=(), from_row: bool = False) -> dict:
-    """AFE output of each column with the junctions' photocurrents minus without (V), by SPICE
-    (``afe_junctions``: the drawn AFEs' exposed junctions, one list per AFE cell). The light is on for
-    the whole deck (the exposure included, while the bench's samplers and AFE are idle); ``from_row``:
-    from the first row's start only (what a readout clocked every row keeps of it)."""
+#: the light map's windows: ``exposure`` (its figure), ``row``, ``steady`` (``output_errors``)
+WINDOWS = ("exposure", "row", "steady")
+
+
+def output_errors(design, junctions, backend: str = "batch", afe_junctions=(), windows=("exposure", "row")) -> dict:
+    """AFE output of each column with the junctions' photocurrents minus without (V), by SPICE, for each of
+    ``windows`` ({window: {column: V}}; ``afe_junctions``: the drawn AFEs' exposed junctions, one list per
+    AFE cell):
+
+    - ``exposure`` (the light map's figure): the light switched on from the dark state at the frame's
+      start and on through the design's own integration times (``primary.t_int``, ``secondary.t_int``:
+      each array read after its real exposure, the readout idle meanwhile) and the first row's read;
+    - ``row``: lit from the first row's start only (what a readout clocked through the exposure keeps), on
+      the bench of the experiment's window (both arrays' rows at once, as the one AFE cell serves both);
+    - ``steady``: the light on as constant sources for the whole bench of the experiment's window: the
+      operating point at t = 0 is then the lit circuit's equilibrium, the floating readout nodes at their
+      junctions' clamp, a state the clocked readout does not reach within a frame (docs/post-layout.md);
+      kept as the virtual chip of ``gap``'s ``readout_light_idle``.
+    """
     from dataclasses import replace as _r
-    from ...circuits.testbench import dual_pixel_bench, timings
+    from ...circuits.testbench import dual_pixel_bench, real_timings, timings
     from ...gap.circuit_edits import EDGE, pulse
     from ...measure.afe import afe_output
     from ...spice import simulate_many
+    bad = [w for w in windows if w not in WINDOWS]
+    if bad:
+        raise ValueError(f"light map window {bad[0]!r}: one of {', '.join(WINDOWS)}")
     n = design.secondary_per_pixel
-    tm = timings(design, design.experiment.t_window)
-    t0, t1 = min(t.row(0) for t in tm.values()), min(t.t_stop for t in tm.values()) - EDGE
-    timed = (lambda els: [_r(e, value=pulse(t0, t1, e.value)) for e in els]) if from_row else (lambda els: els)
-    base = dual_pixel_bench(design, 0.0, 0.0, with_afe=True, title="light_dark")
-    lit = dual_pixel_bench(design, 0.0, 0.0, with_afe=True, title="light_readout_row" if from_row else "light_readout")
-    inner = timed(afe_sources(afe_junctions))
-    subs = tuple(_r(sc, elements=sc.elements + tuple(inner)) if sc.name == "scafe" else sc for sc in lit.subckts)
-    lit = _r(lit, elements=(*lit.elements, *timed(sources(junctions, n))), subckts=subs)
-    r0, r1 = simulate_many([base, lit], backend=backend)
-    out = {}
-    for col in ["col_p", *(f"col_s{k}" for k in range(n))]:
-        t = tm["primary" if col == "col_p" else "secondary"]
-        node = f"out_{col}"
-        out[col] = afe_output(r1, t, 0, node) - afe_output(r0, t, 0, node)
+    real, short = real_timings(design), timings(design, design.experiment.t_window)
+    benches = {"exposure": real, "row": short, "steady": short}
+    decks, keys = [], []
+    for name, tm in (("real", real), ("window", short)):
+        used = [w for w in windows if benches[w] is tm]
+        if not used:
+            continue
+        decks.append(dual_pixel_bench(design, 0.0, 0.0, with_afe=True, title=f"light_dark_{name}", tm=tm))
+        keys.append((None, tm))
+        t1 = max(t.t_stop for t in tm.values()) - EDGE
+        for w in used:
+            start = {"exposure": EDGE, "row": min(t.row(0) for t in tm.values())}.get(w)
+
+            def timed(els, start=start):
+                return list(els) if start is None else [_r(e, value=pulse(start, t1, e.value)) for e in els]
+            lit = dual_pixel_bench(design, 0.0, 0.0, with_afe=True, title=f"light_readout_{w}", tm=tm)
+            inner = timed(afe_sources(afe_junctions))
+            subs = tuple(_r(sc, elements=sc.elements + tuple(inner)) if sc.name == "scafe" else sc for sc in lit.subckts)
+            decks.append(_r(lit, elements=(*lit.elements, *timed(sources(junctions, n))), subckts=subs))
+            keys.append((w, tm))
+    results = simulate_many(decks, backend=backend)
+    out, dark = {}, None
+    for (w, tm), r in zip(keys, results):
+        if w is None:
+            dark = r
+            continue
+        out[w] = {}
+        for col in ["col_p", *(f"col_s{k}" for k in range(n))]:
+            t = tm["primary" if col == "col_p" else "secondary"]
+            out[w][col] = afe_output(r, t, 0, f"out_{col}") - afe_output(dark, t, 0, f"out_{col}")
     return out
+
+
+def output_error(design, junctions, backend: str = "batch", afe_junctions=(), window: str = "exposure") -> dict:
+    """``output_errors`` of one ``window`` ({column: V})."""
+    return output_errors(design, junctions, backend, afe_junctions, (window,))[window]
 
 
 def read_noise_at_afe(design) -> dict:
@@ -217,8 +258,8 @@ def light_map(design, shield: str = "pixels", backend: str = "batch", geos: dict
     else:
         js = with_currents(design, exposed(geos["DUALPIX_COL"], shield))
         afe = {c: with_currents(design, exposed(geos[c], shield)) for c in ("AFE_P", "AFE_S")}
-    err = output_error(design, js, backend, list(afe.values()))
-    err_row = output_error(design, js, backend, list(afe.values()), from_row=True)
+    errs = output_errors(design, js, backend, list(afe.values()))
+    err, err_row = errs["exposure"], errs["row"]
     noise = read_noise_at_afe(design)
     e, _ = irradiance(design)
     rows = [{"cell": "DUALPIX_COL", "net": j.net, "node": bench_node(j.net, design.secondary_per_pixel) or "-",

@@ -68,18 +68,21 @@ def build(ctx) -> Section:
             "technology's QE over the scene's spectrum); each current put on its node in the dual-pixel bench "
             "with its AFE columns and the AFE outputs compared with the dark bench (ngspice): the error the light "
             "causes through the real readout. 'pixels' is the shield as drawn (over the subpixels, the readout "
-            "open: the chip of [Thesis2019], which failed this way); 'full' leaves only the pixels' light openings.",
+            "open, as on the chip of [Thesis2019], which failed with light on its readout); 'full' leaves only the "
+            "pixels' light openings.",
             f"Shield as drawn: {bad['readout_area_m2'] * 1e12:.2f} um2 of readout junctions open, the worst column "
-            f"error {bad['worst_error_over_noise']:.0f} x its read noise; full shield: "
+            f"error {bad['worst_error_over_noise']:.2g} x its read noise; full shield: "
             f"{maps['full']['worst_error_over_noise']:.2g} x. Not counted: light through the gates into the "
             "channels (collected by the devices' sources and drains).",
-            "The light is on for the whole bench, the exposure included, while the samplers and the AFE are idle "
-            "(their nodes float); lit from the first row's start only (what a readout clocked every row keeps), "
-            f"the worst error is {max(v['error_from_row_over_noise'] for v in bad['columns'].values()):.2g} x the "
-            "read noise: the failure is the charge the open nodes gather before the row is read. [Thesis2019] does "
-            "not say whether its chip's AFE was clocked through the exposure (its pixel can integrate while reading; "
-            "every control came from an FPGA): the headline figure is the idle readout, the kit's bench; a readout "
-            "clocked every row would show the second figure."]
+            "The light is switched on from the dark state at the frame's start and stays on through each array's "
+            "own exposure (the design's t_int: the readout idle, its samplers open and its AFE unclocked) and the "
+            "first row's read; lit from the first row's start only (what a readout clocked through the exposure "
+            f"keeps), the worst error is {max(v['error_from_row_over_noise'] for v in bad['columns'].values()):.2g} x "
+            "the read noise. Where both are a fraction of a millivolt they are at the resolution of a difference of "
+            "two SPICE benches (about 1 mV; docs/post-layout.md): the AFE's reset erases what its nodes gathered "
+            "while idle, and the charge its island collects after the reset is microvolts on C13. Constant light "
+            "sources would start the bench at its lit operating point, the floating nodes at their junctions' "
+            "clamp: hundreds of millivolts that a readout reset every frame never reaches."]
     from ...verify.light import DEFAULT, judge
     verdicts = {s: judge(m["columns"], DEFAULT) for s, m in maps.items()}
     text.insert(0, "Verdict (pixelkit lightmap's, each column's AFE output error against the read noise there): "
