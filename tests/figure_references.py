@@ -121,7 +121,7 @@ REPORT = {
         Ref("tests/test_lightmap.py::test_light_map_error_within_the_charge_bound_and_a_full_shield_cures_it",
             "derivation", "_charge_bound",
             "J A t / C: the charge the SC AFE's island collects after its reset, on C13 (ideal charge analysis), "
-            "plus the 1 mV resolution of a SPICE difference; the DC-operating-point figure breaks it")],
+            "plus the 50 uV resolution of a SPICE difference; the DC-operating-point figure breaks it")],
     "post_layout.cg_model_vs_spice_frac": [
         Ref("tests/test_post_layout.py::test_conversion_gain_model_vs_spice_within_2_percent_post_layout",
             "SPICE circuit level", "output_cg", "a SPICE charge step on the post-layout netlist")],

@@ -170,6 +170,11 @@ def afe_sources(afe_junctions) -> list:
 
 #: the light map's windows: ``exposure`` (its figure), ``row``, ``steady`` (``output_errors``)
 WINDOWS = ("exposure", "row", "steady")
+#: the benches' tolerances: the light's effect through a clocked readout is microvolts, and at the engine's
+#: default tolerances the difference of two benches (lit minus dark) scatters by up to a millivolt on the long
+#: benches (the figure at 0.5 / 1 / 2 / 10 x the light: -0.20 / +0.40 / +0.69 / +0.05 mV on col_p); at these
+#: (the converged tolerances of ``chip.frame``) by about 10 uV (docs/post-layout.md)
+CONVERGED = (("reltol", 1e-6), ("abstol", 1e-12))
 
 
 def output_errors(design, junctions, backend: str = "batch", afe_junctions=(), windows=("exposure", "row")) -> dict:
@@ -216,7 +221,7 @@ def output_errors(design, junctions, backend: str = "batch", afe_junctions=(), w
             subs = tuple(_r(sc, elements=sc.elements + tuple(inner)) if sc.name == "scafe" else sc for sc in lit.subckts)
             decks.append(_r(lit, elements=(*lit.elements, *timed(sources(junctions, n))), subckts=subs))
             keys.append((w, tm))
-    results = simulate_many(decks, backend=backend)
+    results = simulate_many(decks, backend=backend, options=CONVERGED)
     out, dark = {}, None
     for (w, tm), r in zip(keys, results):
         if w is None:

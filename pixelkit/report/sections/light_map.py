@@ -78,9 +78,9 @@ def build(ctx) -> Section:
             "own exposure (the design's t_int: the readout idle, its samplers open and its AFE unclocked) and the "
             "first row's read; lit from the first row's start only (what a readout clocked through the exposure "
             f"keeps), the worst error is {max(v['error_from_row_over_noise'] for v in bad['columns'].values()):.2g} x "
-            "the read noise. Where both are a fraction of a millivolt they are at the resolution of a difference of "
-            "two SPICE benches (about 1 mV; docs/post-layout.md): the AFE's reset erases what its nodes gathered "
-            "while idle, and the charge its island collects after the reset is microvolts on C13. Constant light "
+            "the read noise. Both are microvolts, near the resolution of a difference of two SPICE benches (about "
+            "10 uV at the map's converged tolerances; docs/post-layout.md): the AFE's reset erases what its nodes "
+            "gathered while idle, and the charge its island collects after the reset is microvolts on C13. Constant light "
             "sources would start the bench at its lit operating point, the floating nodes at their junctions' "
             "clamp: hundreds of millivolts that a readout reset every frame never reaches."]
     from ...verify.light import DEFAULT, judge
