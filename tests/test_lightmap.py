@@ -134,7 +134,7 @@ def test_lightmap_command_and_a_technology_without_stack():
 
 
 def test_report_section(gf, tmp_path):
-    """The section runs on the GF180 design (its picture written, the failure checked) and says why not
+    """The section runs on the GF180 design (its picture written, its figure within the read noise) and says why not
     on a technology without a stack."""
     from pixelkit.report.sections import Context
     from pixelkit.report.sections import light_map as section
