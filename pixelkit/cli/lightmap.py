@@ -18,7 +18,7 @@ def _text(r: dict) -> str:
                  + (" the read noise" if v["limit_kind"] != "V" else "") + " in every column"
                  + (f" (beyond it: {', '.join(v['failed'])})" if v["failed"] else ""))
     for c, v in r["columns"].items():
-        lines.append(f"  {c}: AFE output error {v['error_V'] * 1e3:+.3f} mV, {v['error_over_noise']:.1f} x the read "
+        lines.append(f"  {c}: AFE output error {v['error_V'] * 1e3:+.3f} mV, {v['error_over_noise']:.2g} x the read "
                      f"noise there ({v['read_noise_V'] * 1e3:.3f} mV; lit from the dark state through the exposures); from the row on "
                      f"{v['error_from_row_V'] * 1e3:+.3f} mV ({v['error_from_row_over_noise']:.2g} x); limit "
                      f"{r['verdict']['columns'][c]['limit_V'] * 1e3:.3f} mV: {r['verdict']['columns'][c]['status'].upper()}")
