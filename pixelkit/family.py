@@ -34,6 +34,11 @@ REGRESS_TOLERANCES = {
     "ratio": {"ratio_law_max_err_frac": (0.0, 0.005), "interval_law_max_err_frac": (0.0, 0.005),
               "tau_s": (0.01, 0.0), "rf_min_spice": (0.01, 0.0),
               "high_bias.ratio_law_max_err_frac": (0.0, 0.01), "intensity_spread_frac": (0.0, 0.01)},
+    "pixel4t": {"conversion_gain_uV_per_e": (0.01, 0.0), "full_well_e": (0.01, 0.0), "read_noise_e": (0.02, 0.0),
+                "image_lag_pct": (0.0, 0.01), "dark_current_e_per_s": (0.03, 0.0), "power_chip_W": (0.01, 0.0),
+                "ppd_full_well.spice_e": (0.005, 0.0), "transfer_curve.max_abs_err_e": (0.0, 3.0)},
+    "netlist": {"conversion_gain_uV_per_e": (0.01, 0.0), "full_well_e": (0.01, 0.0), "read_noise_e": (0.02, 0.0),
+                "image_lag_pct": (0.0, 0.01), "dark_current_e_per_s": (0.03, 0.0), "power_chip_W": (0.01, 0.0)},
 }
 
 

@@ -142,3 +142,40 @@ def test_the_figures_docs_pixel4t_quotes_are_the_experiments(experiment):
     bad, n = figures.check(None, [ROOT / "docs" / "pixel4t.md"], getters={"p4t": value})
     assert n >= 12
     assert not bad, bad
+
+
+def test_the_exported_cds_deck_runs_in_raw_ngspice_and_reads_the_kit_signals(d4t, cli, tmp_path):
+    """``pixelkit netlist`` of a role design writes its true-CDS deck; ``ngspice -b -r`` runs it alone (no
+    kit code, another folder) and its held samples give the kit's own run of the same deck within
+    0.1 mV: a dark pixel near 0, 1 ke- and 10 ke- at the conversion gain (independent path: raw ngspice)."""
+    import os
+    import subprocess
+    from pixelkit.circuits.cds import timing_of
+    from pixelkit.measure.cds import cds
+    from pixelkit.rolepix.run import run
+    from pixelkit.rolepix.signal import CDS_EXPORT_E, export_benches
+    from pixelkit.spice.raw import read_raw
+    from pixelkit.spice.result import Result, vector_key
+    deck = tmp_path / "out" / "cds.cir"
+    code, _out, err = cli("netlist", DESIGN, "--bench", "cds", "--out", deck, "--json")
+    assert code == 0, err
+    code, _out, err = cli("netlist", DESIGN, "--bench", "nope", "--out", tmp_path / "x.cir", "--json")
+    assert code == 2 and "cds" in err and "noise" in err
+    where = tmp_path / "elsewhere"
+    where.mkdir()
+    p = subprocess.run(["ngspice", "-b", "-r", str(where / "out.raw"), str(deck)], cwd=where, capture_output=True,
+                       text=True, timeout=300, env={**os.environ, "OMP_NUM_THREADS": "1"})
+    assert (where / "out.raw").exists(), p.stdout[-2000:] + p.stderr[-2000:]
+    data = read_raw(where / "out.raw")[-1]["data"]
+    vec = {vector_key(k): np.real(v) for k, v in data.items()}
+    raw = Result(np.real(vec.pop("time")), vec, {})
+    net = export_benches(d4t)["cds"]()
+    (kit,) = run([net], d4t)
+    tm, fr = timing_of(d4t), net.meta["frames"]
+
+    def outs(r):
+        return [cds(r, tm, fr["exposures"], fr["starts"], k, 1) for k in range(len(CDS_EXPORT_E))]
+    a, b = outs(raw), outs(kit)
+    assert max(abs(x - y) for x, y in zip(a, b)) < 1e-4, (a, b)
+    cg = (a[1] - a[0]) / CDS_EXPORT_E[1]
+    assert 40e-6 < cg < 80e-6 and (a[2] - a[0]) / CDS_EXPORT_E[2] == pytest.approx(cg, rel=0.05)

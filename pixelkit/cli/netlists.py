@@ -27,6 +27,21 @@ REFERENCE = "designs/dual_pixel_revA.toml"
 def netlist(design, bench_name, out, models_mode, as_json):
     """Write a deck that runs as it is in `ngspice -b`: the kit's options, models, stimulus."""
     from ..api import export_deck
+    from ..family import ROLE_FAMILIES, family_of, load_family_design
+    fam = family_of(design)
+    if fam in ROLE_FAMILIES:   # a pixel read by role: its own benches (rolepix.signal.export_benches)
+        from ..errors import ConfigError
+        from ..rolepix.signal import export_benches
+        from ..spice.export import export_deck as write_deck
+        d = load_family_design(design, fam)
+        benches = export_benches(d)
+        name = "cds" if bench_name == "bench_dual_pixel" else bench_name
+        if name not in benches:
+            raise ConfigError(design, "--bench", bench_name, f"one of {', '.join(benches)} (a {fam} design)")
+        path = write_deck(benches[name](), output_path(out, d, f"{name}.cir"), models=models_mode)
+        emit({"design": d.name, "bench": name, "deck": str(path), "run_with": f"ngspice -b {path}"},
+             as_json, lambda x: f"wrote {x['deck']} (run: {x['run_with']})")
+        return
     d = load(design)
     path = export_deck(d, bench_name, output_path(out, d, f"{bench_name}.cir"), models=models_mode)
     emit({"design": d.name, "bench": bench_name, "deck": str(path), "run_with": f"ngspice -b {path}"},

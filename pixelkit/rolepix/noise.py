@@ -60,7 +60,14 @@ def deck(design, v_fd: float):
           mosfet("ld0", "col0", "nbias", "0", "0", c.load_w, c.load_l, t), Element("Ccol0", ("col0", "0"), c.cap),
           mosfet("shr0", "col0", "shg", "vshr0", "0", c.sw_w, c.sw_l, t), Element("Cshr0", ("vshr0", "0"), c.sh_cap)]
     return cds_deck(design, cell, el, Noise("vshr0", "rs", vdd, *F_RANGE, POINTS), "role_noise",
-                    options=NOISE_OPTIONS)
+                    options=(*NOISE_OPTIONS, RSHUNT))
+
+
+#: 1 fS from every node to ground in the .noise deck: a pinned photodiode's charge node has no
+#: conductance of its own in DC (an empty well's potential is undefined), which made the operating
+#: point fail at some conditions (ss -20 degC -10 %); its 2 fA at FD and its thermal noise (corner
+#: below 0.1 Hz, removed by the CDS weighting) change the figure by < 1e-6
+RSHUNT = ("rshunt", 1e15)
 
 
 def cds_variance(f, psd, dt: float) -> float:
@@ -72,8 +79,16 @@ def cds_variance(f, psd, dt: float) -> float:
 def noise(design, draw=None, backend: str = "batch") -> dict:
     from ..camera.spicenoise import run_noise
     from ..circuits.cds import timing_of
+    from ..errors import PixelkitError, SimulationError
     op = read_point(design, backend)
-    r = run_noise(apply_draw(deck(design, op["v_fd"]), design, draw))
+    net = apply_draw(deck(design, op["v_fd"]), design, draw)
+    try:
+        r = run_noise(net)
+    except SimulationError:
+        raise
+    except PixelkitError as exc:   # ngspice's own failure: recorded at this condition, not a user error
+        raise SimulationError(net.title, ".noise", str(exc), what=f"the read chain of {design.name} at its read "
+                              f"point (FD {op['v_fd']:.3g} V)") from None
     dt = timing_of(design).cds_interval
     var = cds_variance(r["f"], r["psd"], dt)
     return {"sigma_V": float(np.sqrt(var)), "sample_V": r["total_V"], "dt_s": dt, **op}
