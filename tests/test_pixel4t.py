@@ -153,7 +153,7 @@ def test_the_exported_cds_deck_runs_in_raw_ngspice_and_reads_the_kit_signals(d4t
     from pixelkit.circuits.cds import timing_of
     from pixelkit.measure.cds import cds
     from pixelkit.rolepix.run import run
-    from pixelkit.rolepix.signal import CDS_EXPORT_E, export_benches
+    from pixelkit.rolepix.export import CDS_EXPORT_E, export_benches
     from pixelkit.spice.raw import read_raw
     from pixelkit.spice.result import Result, vector_key
     deck = tmp_path / "out" / "cds.cir"

@@ -31,7 +31,7 @@ def netlist(design, bench_name, out, models_mode, as_json):
     fam = family_of(design)
     if fam in ROLE_FAMILIES:   # a pixel read by role: its own benches (rolepix.signal.export_benches)
         from ..errors import ConfigError
-        from ..rolepix.signal import export_benches
+        from ..rolepix.export import export_benches
         from ..spice.export import export_deck as write_deck
         d = load_family_design(design, fam)
         benches = export_benches(d)
