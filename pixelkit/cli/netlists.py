@@ -22,30 +22,49 @@ REFERENCE = "designs/dual_pixel_revA.toml"
 @click.option("--models", "models_mode", type=click.Choice(["absolute", "link"]), default="absolute",
               show_default=True, help="absolute model paths, or 'models/<file>' with a 'models' link "
                                       "written beside the deck")
+@click.option("--schematic", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="also draw the bench (with --bench cell: the pixel's subcircuit) as an Xschem schematic "
+                   "FILE.sch, its pk_*.sym symbols beside it (docs/netlist-benches.md)")
 @post_layout_opt
 @json_opt
-def netlist(design, bench_name, out, models_mode, as_json):
+def netlist(design, bench_name, out, models_mode, schematic, as_json):
     """Write a deck that runs as it is in `ngspice -b`: the kit's options, models, stimulus."""
-    from ..api import export_deck
     from ..family import ROLE_FAMILIES, family_of, load_family_design
+    from ..spice.export import export_deck as write_deck
+    if schematic is not None and schematic.suffix != ".sch":
+        from ..errors import ConfigError
+        raise ConfigError(design, "--schematic", str(schematic), "an Xschem schematic file name ending in .sch")
     fam = family_of(design)
-    if fam in ROLE_FAMILIES:   # a pixel read by role: its own benches (rolepix.signal.export_benches)
+    if fam in ROLE_FAMILIES:   # a pixel read by role: its own benches (rolepix.export)
         from ..errors import ConfigError
         from ..rolepix.export import export_benches
-        from ..spice.export import export_deck as write_deck
         d = load_family_design(design, fam)
         benches = export_benches(d)
         name = "cds" if bench_name == "bench_dual_pixel" else bench_name
         if name not in benches:
             raise ConfigError(design, "--bench", bench_name, f"one of {', '.join(benches)} (a {fam} design)")
-        path = write_deck(benches[name](), output_path(out, d, f"{name}.cir"), models=models_mode)
-        emit({"design": d.name, "bench": name, "deck": str(path), "run_with": f"ngspice -b {path}"},
-             as_json, lambda x: f"wrote {x['deck']} (run: {x['run_with']})")
-        return
-    d = load(design)
-    path = export_deck(d, bench_name, output_path(out, d, f"{bench_name}.cir"), models=models_mode)
-    emit({"design": d.name, "bench": bench_name, "deck": str(path), "run_with": f"ngspice -b {path}"},
-         as_json, lambda x: f"wrote {x['deck']} (run: {x['run_with']})")
+        net = benches[name]()
+    else:
+        from ..api import bench
+        from ..registry import require_bench
+        d, name = load(design), bench_name
+        require_bench(name)
+        net = bench(d, name)
+    path = write_deck(net, output_path(out, d, f"{name}.cir"), models=models_mode)
+    row = {"design": d.name, "bench": name, "deck": str(path), "run_with": f"ngspice -b {path}"}
+    if schematic is not None:
+        row["schematic"] = str(draw(net, schematic))
+    emit(row, as_json, lambda x: f"wrote {x['deck']} (run: {x['run_with']})"
+         + (f"; schematic {x['schematic']}" if "schematic" in x else ""))
+
+
+def draw(net, path):
+    """The bench drawn (a deck without top-level elements, such as a cell: its last subcircuit)."""
+    from ..spice.export import deck_text
+    from ..spice.schematic import deck_schematic, subckt_schematic
+    if not net.elements and net.subckts:
+        return subckt_schematic(net.subckts[-1], path, support=net.subckts[:-1])
+    return deck_schematic(net, deck_text(net, "absolute"), path)
 
 
 @main.command()

@@ -37,14 +37,14 @@ def _planned(title: str, key: str, owner: str) -> Section:
                                       "when that capability lands")
 
 
-def _start_background(ctx: Context, options_of, use_cache: bool) -> dict:
+def _start_background(ctx: Context, options_of, use_cache: bool, registry=REGISTRY) -> dict:
     """Start the background work of every section that has some (a module-level ``prefetch(ctx)``:
     the sign-off's verify, most of the report's SPICE work) unless the section comes from the
     cache: {key: (section from the cache, "cache")} or {key: (None, "background")}. The sections
     are then built in the main thread one after the other (their pictures: matplotlib is not
     thread-safe), those with background work last, while it runs on the cores they leave idle."""
     out = {}
-    for key, _title, _owner in REGISTRY:
+    for key, _title, _owner in registry:
         mod = load_section(key)
         if mod is None or not hasattr(mod, "prefetch"):
             continue
@@ -57,10 +57,10 @@ def _start_background(ctx: Context, options_of, use_cache: bool) -> dict:
     return out
 
 
-def _build_order(background: dict) -> list:
-    """REGISTRY with the sections whose work runs in the background moved to the end."""
-    return ([r for r in REGISTRY if background.get(r[0], (0, ""))[1] != "background"]
-            + [r for r in REGISTRY if background.get(r[0], (0, ""))[1] == "background"])
+def _build_order(background: dict, registry=REGISTRY) -> list:
+    """The registry with the sections whose work runs in the background moved to the end."""
+    return ([r for r in registry if background.get(r[0], (0, ""))[1] != "background"]
+            + [r for r in registry if background.get(r[0], (0, ""))[1] == "background"])
 
 
 def build_section(key: str, title: str, owner: str, ctx: Context, options: dict, use_cache: bool) -> tuple:
@@ -118,6 +118,12 @@ def _checked(sections) -> dict:
     return out
 
 
+def _file_content(design) -> dict:
+    """The design file's tables (a family design keeps no ``raw``: read again, as loaded)."""
+    from ..schema import read_toml
+    return read_toml(Path(design.source), "design") if getattr(design, "source", None) else {}
+
+
 def _write_outputs(stage: Path, design, sections, meta: dict) -> dict:
     tables = {}
     for s in sections:
@@ -128,7 +134,8 @@ def _write_outputs(stage: Path, design, sections, meta: dict) -> dict:
             tables[t.name] = {"section": s.key, "caption": t.caption, "columns": t.columns, "rows": t.rows}
         if s.data:
             (stage / f"data_{s.key}.json").write_text(json.dumps(s.data, indent=1, default=json_default))
-    (stage / "design.json").write_text(json.dumps(design.raw, indent=1, default=json_default) + "\n")
+    raw = design.raw if hasattr(design, "raw") else _file_content(design)
+    (stage / "design.json").write_text(json.dumps(raw, indent=1, default=json_default) + "\n")
     summary = {"design": design.name, "revision": design.revision, **meta,
                "sections": {s.key: s.status for s in sections},
                "needs": {s.key: {"input": s.needs, "why": s.why} for s in sections if s.needs},
@@ -176,8 +183,10 @@ def _clear_debris(out: Path) -> None:
 
 def build_report(design, out: Path, *, quick: bool = False, backend: str = "batch", jobs: int | None = None,
                  measured: Path | None = None, baseline: Path | None = None, use_cache: bool = True,
-                 html: bool = True, waves: tuple = (), exhaustive: bool = False) -> dict:
-    """Build the report of ``design`` into ``out``; returns the summary (with the diff when asked)."""
+                 html: bool = True, waves: tuple = (), exhaustive: bool = False, registry=None) -> dict:
+    """Build the report of ``design`` into ``out``; returns the summary (with the diff when asked).
+    ``registry``: the sections (default ``REGISTRY``; a pixel read by role: ``ROLE_REGISTRY``)."""
+    registry = REGISTRY if registry is None else registry
     from ..progress import command_bar
     t0 = time.perf_counter()
     out = Path(out)
@@ -194,7 +203,7 @@ def build_report(design, out: Path, *, quick: bool = False, backend: str = "batc
     stage = staging_dir(out.parent, f".{out.name}.new-{owners.tag()}-")
     try:
         sections, how = [], {}
-        with command_bar("report", total=len(REGISTRY), unit="sections", eta=False) as bar:
+        with command_bar("report", total=len(registry), unit="sections", eta=False) as bar:
             # counts SPICE runs (within ``with counter`` below, where ``ctx`` exists) and the sign-off's progress
             counter = SpiceCounter(lambda c: bar.set_postfix_str(
                 "; ".join(x for x in (c.text(), ctx.progress_text()) if x), refresh=True))
@@ -217,8 +226,8 @@ def build_report(design, out: Path, *, quick: bool = False, backend: str = "batc
                 return options
 
             with counter:
-                built = _start_background(ctx, options_of, use_cache)
-                for key, title, owner in _build_order(built):
+                built = _start_background(ctx, options_of, use_cache, registry)
+                for key, title, owner in _build_order(built, registry):
                     tell(title + (" (the sign-off beside it)" if ctx.background() else ""))
                     if key not in built or built[key][0] is None:
                         built[key] = build_section(key, title, owner, ctx, options_of(key), use_cache)
@@ -226,7 +235,7 @@ def build_report(design, out: Path, *, quick: bool = False, backend: str = "batc
                     s.key = key
                     s.checked = [as_percent(c) for c in s.checked]
                     bar.update(1)
-                sections = [built[key][0] for key, _t, _o in REGISTRY]
+                sections = [built[key][0] for key, _t, _o in registry]
             bar.set_description("report")
         meta = {"profile": "quick" if quick else "full", "exhaustive": exhaustive, "backend": backend,
                 "spice_runs": counter.runs, "spice_cached": counter.cached,

@@ -149,5 +149,6 @@ def run_pixel4t_experiment(design, backend: str = "batch", jobs: int | None = No
         "dark_current_e_per_s": figs["dark_current"] / Q, "dark_current_model_e_per_s": (p.i_gen + p.i_dif) / Q,
         "power_chip_W": figs["power_chip"], "power_estimate_W": raw["power"]["estimate_W"],
         "lag_vs_tg": curve, "transfer_curve": transfer,
+        "ladder": {"electrons": raw["signal"]["ladder"]["electrons"], "signal_V": raw["signal"]["ladder"]["signal_V"]},
         "wall_s": time.perf_counter() - t0,
     }

@@ -94,6 +94,13 @@ REGISTRY: list[tuple[str, str, str]] = [
     ("reproducibility", "Reproducibility", "report"),
 ]
 
+#: The report of a pixel read by role (families ``pixel4t`` and ``netlist``: docs/pixel4t.md): its sign-off
+#: and its figures against their derivations; the dual pixel's sections do not apply to it.
+ROLE_REGISTRY: list[tuple[str, str, str]] = [
+    ("signoff", "Sign-off: specs over corners, Monte Carlo yield, power", "report"),
+    ("pixel", "The pixel read by role: figures against their derivations", "issue 47 (pixel)"),
+]
+
 
 @dataclass
 class Table:

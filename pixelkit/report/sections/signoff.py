@@ -53,7 +53,13 @@ def build(ctx) -> Section:
     text += [f"Simulation failed at {e['condition']} ({e['group']}): {e['error']}" for e in r["errors"][:5]]
     tables = [Table("signoff", "Sign-off table", list(COLUMNS), csv_rows(r["rows"]))]
     power = r.get("power")   # verify's power measurement: at the nominal condition
-    if power:
+    if power and "per_column_W" not in power:   # a pixel read by role (rolepix.power): one column, the chip
+        tables.append(Table("signoff_power", "Power at the nominal condition (W): one column's read and idle "
+                            f"supply current over the frame (duty {power['duty']:.3g}), the array; the estimate is "
+                            "the load's bias x supply x (1 + duty)", ["block", "SPICE", "estimate"],
+                            [["column", power["column_W"], power["estimate_W"] / (power["chip_W"] / power["column_W"])],
+                             ["chip", power["chip_W"], power["estimate_W"]]]))
+    elif power:
         pc = power["per_column_W"]
         tables.append(Table("signoff_power", f"Power per block at the nominal condition ({power['condition']}, W): "
                             "per column of each array and the chip, over a "
@@ -71,7 +77,7 @@ def build(ctx) -> Section:
                     + "".join(f" {w}" for w in why))
     data = {"waves": waves, "rows": r["rows"], "grid": g, "mc": mc, "errors": r["errors"], "conditions": r["conditions"],
             "mc_values": r["mc_values"], "view": r["view"], "profile": "quick" if ctx.quick else "full",
-            "power": None if not power else {k: power[k] for k in ("condition", "chip_W", "pixel_W", "column_W")}}
+            "power": None if not power else {k: power.get(k) for k in ("condition", "chip_W", "pixel_W", "column_W")}}
     return Section(TITLE, text=text, tables=tables, checked=checked, data=data,
                    files=[f for w in waves.values() for f in w["files"]])
 
