@@ -312,8 +312,10 @@ def load_design(path: str | Path) -> Design:
     path = Path(path)
     raw = read_toml(path, "design")
     if raw.get("family", "dual_pixel") != "dual_pixel":  # another family: a clear refusal
-        raise ConfigError(str(path), "family", raw["family"], "a dual-pixel design for this command "
-                          "(wdr and ratio designs run with simulate, models and regress)")
+        runs = ("simulate, models, regress, verify, netlist and report" if raw["family"] in ("pixel4t", "netlist")
+                else "simulate, models and regress")
+        raise ConfigError(str(path), "family", raw["family"], f"a dual-pixel design for this command (a "
+                          f"{raw['family']} design runs with {runs})")
     design = load(Design, raw, "", str(path))
     tech = load_technology(design.technology, relative_to=path.parent, source=str(path))
     src = str(path)

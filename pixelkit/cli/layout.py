@@ -91,11 +91,17 @@ def foundry_lines(x: dict) -> list:
 def layout(design, out, rows, cols, drc, lvs, foundry_lvs, density, antenna, fill, afe, shield, pictures, golden, as_json):
     """Write the GDS (an R x C array with its column circuits, --afe its AFEs, the light shield) and
     each cell's SPICE netlist, extract PD area / perimeter / photoactive area and the junction
-    the shield leaves open per block, draw 2D and 3D views; --drc / --lvs sign the array off."""
+    the shield leaves open per block, draw 2D and 3D views; --drc / --lvs sign the array off. A pixel4t
+    design: its one 4T cell and LVS netlist, --drc / --lvs / --foundry-lvs its sign-off (docs/pixel4t.md)."""
+    from ..family import ROLE_FAMILIES, family_of
     from ..layout.fit import as_config_error
     from ..layout.flow import layout_design, verdict, write_gds
     from ..layout.library import build_library
     from ..layout.rules import RuleError
+    fam = family_of(design)
+    if fam in ROLE_FAMILIES:   # one 4T cell (layout.pixel4t); a designer's netlist: their own GDS
+        return _layout_role(design, fam, out, drc, lvs, foundry_lvs, dict(density=density, antenna=antenna, fill=fill,
+                                                                        afe=afe, golden=golden), as_json)
     d = load(design, drawable=False)
     for opt, n, field in (("--rows", rows, "rows"), ("--cols", cols, "cols")):
         most = getattr(d.primary, field)
@@ -115,3 +121,37 @@ def layout(design, out, rows, cols, drc, lvs, foundry_lvs, density, antenna, fil
     status = verdict(r)
     if status:
         sys.exit(status)
+
+
+def _layout_role(design, fam, out, drc, lvs, foundry_lvs, chip_options: dict, as_json) -> None:
+    """``pixelkit layout`` of a pixel read by role: the 4T cell, its LVS netlist and its sign-off."""
+    from ..family import load_family_design
+    from ..layout.pixel4t import layout_pixel4t
+    from ..layout.route import RouteError
+    from ..layout.rules import RuleError
+    if fam != "pixel4t":
+        raise ConfigError(design, "family", fam, "a pixel4t design (a pixel from a netlist has no layout the kit "
+                          "draws: sign off your own GDS with pixelkit signoff GDS --netlist FILE)")
+    for name, asked in chip_options.items():
+        if asked:
+            raise ConfigError("command line", f"--{name}", True, "not with a pixel4t design (the kit draws one 4T "
+                              "cell: no array, column circuits or AFE)")
+    d = load_family_design(design, fam)
+    try:
+        r = layout_pixel4t(d, output_path(out, d, "layout"), drc=drc, lvs=lvs, foundry_lvs=foundry_lvs)
+    except (RuleError, RouteError) as exc:   # the cell does not fit: name the 4T design's own field
+        field = (getattr(exc, "field", "") or "").replace("pixel.devices.", "devices.").replace("primary.pd_", "pixel.ppd_")
+        raise ConfigError(design, field or "pixel.pitch", exc.value if field else d.pixel.pitch,
+                          f"a value the 4T cell fits ({exc})") from None
+    emit(r, as_json, _render_role)
+    if r["exit_status"]:
+        sys.exit(r["exit_status"])
+
+
+def _render_role(x: dict) -> str:
+    lines = [f"wrote {x['gds']} (cell {x['top']}, {x['pitch_um']:g} um) and {x['spice']}"]
+    s = x.get("signoff")
+    if s:
+        from .signoff import _text
+        lines.append(_text(s))
+    return "\n".join(lines)

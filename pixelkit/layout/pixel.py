@@ -33,6 +33,17 @@ from .rules import RuleError
 LINE_NETS = ("vss", "vpdr", "ec", "tg", "rst", "vrst", "vdd", "rs")
 STRIP1 = ("ec", "tg", "rst")
 STRIP2 = ("sf", "rs")
+#: the first strip's chain: each device's lower terminal net (its upper one is the next device's)
+CHAIN_BELOW = {"ec": "vpdr", "tg": "pd", "rst": "fd"}
+
+
+def chain_nets(devices) -> list:
+    """[sd0, g0, sd1, g1, ... sdN] of the first strip (``vpdr | EC | pd | TG | fd | RST | vrst``, or without
+    EC for a 4T pixel: ``pd | TG | fd | RST | vrst``)."""
+    out = []
+    for d in devices:
+        out += [CHAIN_BELOW[d], d]
+    return out + ["vrst"]
 METAL_UP = ("metal1", "metal2", "metal3", "metal4")
 
 
@@ -47,6 +58,7 @@ class SubpixelPlan:
     col_x: int
     keep_m3: tuple = ()      # y bands without lines (the dual pixel's jogs)
     reserved: tuple = ()     # (layer, Box): tracks left free for the dual pixel
+    strip1: tuple = STRIP1   # the first strip's transistors (a 4T pixel: no EC)
 
     @property
     def name(self) -> str:
@@ -101,12 +113,13 @@ def subpixel(design, lt, plan: SubpixelPlan, place_only: bool = False) -> Canvas
     cv.add("boundary", box(0, 0, P, P), "")
     s1 = pad_side(lt, "metal1")
     m1s = lt.space("metal1")
-    d1, d2 = device_sizes(design, lt, STRIP1), device_sizes(design, lt, STRIP2)
-    nets1 = ["vpdr", "ec", "pd", "tg", "fd", "rst", "vrst"]
+    d1, d2 = device_sizes(design, lt, plan.strip1), device_sizes(design, lt, STRIP2)
+    nets1 = chain_nets(plan.strip1)
+    on1 = [True] * (len(d1) + 1)
     nets2 = ["vdd", "fd", "sfo", "rs", "col"]
     # heights: a scratch drawing of each strip at y = 0
     scratch = Canvas("scratch", lt)
-    h1 = mos_strip(scratch, lt, "n", 0, 0, d1, nets1, [True] * 4, "right")
+    h1 = mos_strip(scratch, lt, "n", 0, 0, d1, nets1, on1, "right")
     h2 = mos_strip(scratch, lt, "n", 0, 0, d2, nets2, [True, False, True], "left")
     off_pd = dict(h1.sd)["pd"].cy
     gap12 = lt.space("active")
@@ -133,7 +146,7 @@ def subpixel(design, lt, plan: SubpixelPlan, place_only: bool = False) -> Canvas
     n_iside = tap_size(lt, "n")[1]
     inset = lt.snap_up(max(inset, pd.x1 - (x1 - lt.nm("nplus.enclosure.gate") - lt.space("nplus")) + n_iside // 2))
     lane2 = s1 + lt.space("metal2")                 # second lane of the first strip's gate vias
-    a = mos_strip(cv, lt, "n", x1, y1, d1, nets1, [True] * 4, "right", stagger=lane2)
+    a = mos_strip(cv, lt, "n", x1, y1, d1, nets1, on1, "right", stagger=lane2)
     # the substrate tap under the first strip: at its right end when the cell has room there
     # (its long jog to the lines then clears the strip's own), else at its left end
     ty = y1 - below + side // 2
@@ -180,7 +193,7 @@ def subpixel(design, lt, plan: SubpixelPlan, place_only: bool = False) -> Canvas
     lines = Lines("metal3", 0, P, bands)
     terminals = {"vss": sub_pad, **{n: p for n, p in a.sd if n in LINE_NETS}, **{n: p for n, p in b.sd if n in LINE_NETS},
                  **{n: p for n, p in a.gates}, "rs": b.gates[1][1]}
-    order = sorted((n for n in LINE_NETS if n != "vss"), key=lambda n: terminals[n].cy) + ["vss"]
+    order = sorted((n for n in LINE_NETS if n != "vss" and n in terminals), key=lambda n: terminals[n].cy) + ["vss"]
     route_all(cv, lt, lines, terminals, order)
     cv.ports = {"lines": dict(lines.y), "col": (plan.col_layer, plan.col_x)}
     # light shield and the opening marker

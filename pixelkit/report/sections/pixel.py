@@ -37,6 +37,19 @@ def _experiment(ctx) -> dict:
     return ctx.shared("pixel.experiment", lambda: _attr(module, name)(ctx.design, backend=ctx.backend, jobs=ctx.jobs))
 
 
+def _save(ctx, fig, ax, xlabel: str, ylabel: str, name: str):
+    import matplotlib.pyplot as plt
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.legend()
+    ax.grid(True, which="both", alpha=0.3)
+    path = ctx.figure(name)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
 def _plots(ctx, r: dict) -> list[Figure]:
     import matplotlib
     matplotlib.use("Agg")
@@ -46,15 +59,8 @@ def _plots(ctx, r: dict) -> list[Figure]:
     fig, ax = plt.subplots(figsize=(5.5, 3.6))
     ax.loglog(lad["electrons"], [max(v, 1e-6) for v in lad["signal_V"]], "o-", label="SPICE (CDS output)")
     cg = r["conversion_gain_uV_per_e"] * 1e-6
-    ax.loglog(lad["electrons"], [n * cg for n in lad["electrons"]], "--", label=f"conversion gain x charge")
-    ax.set_xlabel("electrons in the window")
-    ax.set_ylabel("CDS output (V)")
-    ax.legend()
-    ax.grid(True, which="both", alpha=0.3)
-    path = ctx.figure("pixel_ladder.png")
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    ax.loglog(lad["electrons"], [n * cg for n in lad["electrons"]], "--", label="conversion gain x charge")
+    path = _save(ctx, fig, ax, "electrons in the window", "CDS output (V)", "pixel_ladder.png")
     out.append(Figure(path.name, "The CDS output against the charge in the window: linear at the conversion "
                                  "gain, then saturated (the full well)"))
     tc = r.get("transfer_curve") or {}
@@ -62,14 +68,8 @@ def _plots(ctx, r: dict) -> list[Figure]:
         fig, ax = plt.subplots(figsize=(5.5, 3.6))
         ax.semilogy([t * 1e6 for t in tc["t_s"]], tc["spice_e"], "o", label="SPICE (PPD charge node)")
         ax.semilogy([t * 1e6 for t in tc["t_s"]], tc["model_e"], "-", label="closed form Q(t)")
-        ax.set_xlabel(f"time into a TG pulse at {tc['tg_high_V']:.2f} V (us)")
-        ax.set_ylabel("electrons in the PPD")
-        ax.legend()
-        ax.grid(True, which="both", alpha=0.3)
-        path = ctx.figure("pixel_transfer.png")
-        fig.tight_layout()
-        fig.savefig(path, dpi=110)
-        plt.close(fig)
+        path = _save(ctx, fig, ax, f"time into a TG pulse at {tc['tg_high_V']:.2f} V (us)", "electrons in the PPD",
+                     "pixel_transfer.png")
         out.append(Figure(path.name, "Charge transfer over the TG-edge barrier: the PPD's charge against the "
                                      "thermionic-emission closed form (docs/pixel4t.md)"))
     return out
