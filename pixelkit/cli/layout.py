@@ -8,6 +8,7 @@ import click
 
 from ..errors import ConfigError
 from .common import design_arg, emit, json_opt, load, main, out_opt, output_path
+from .signofftext import foundry_lines, signoff_text
 
 
 def _render(x: dict) -> str:
@@ -40,27 +41,6 @@ def _render(x: dict) -> str:
                                                         for k in f["before"]))
     lines += foundry_lines(x)
     return "\n".join(lines)
-
-
-def foundry_lines(x: dict) -> list:
-    """The foundry LVS / density / antenna results of a sign-off result, as text lines."""
-    lines = []
-    for key, what in (("foundry_lvs", "foundry LVS"), ("density", "density"), ("antenna", "antenna")):
-        v = x.get(key)
-        if v is None:
-            continue
-        if not v.get("run", True):
-            lines.append(f"{what}: NOT RUN - {v['reason']}")
-        elif key == "foundry_lvs":
-            lines.append(f"{what} (fd_pv deck, deep, {v['top']}, {v['seconds']:g} s): "
-                         + ("Netlists match" if v["match"] else "Netlists don't match"))
-            lines += [f"  {m}" for m in v["mismatches"]]
-        else:
-            lines.append(f"{what} (fd_pv deck, {v['top']}, {v['seconds']:g} s): "
-                         + ("clean" if v["clean"] else f"{v['total']} violation(s)"))
-            lines += [f"  {r['rule']} x{r['count']} in {r['cell']}: {r['description'].splitlines()[0]}"
-                      for r in v["violations"]]
-    return lines
 
 
 @main.command()
@@ -152,6 +132,5 @@ def _render_role(x: dict) -> str:
     lines = [f"wrote {x['gds']} (cell {x['top']}, {x['pitch_um']:g} um) and {x['spice']}"]
     s = x.get("signoff")
     if s:
-        from .signoff import _text
-        lines.append(_text(s))
+        lines.append(signoff_text(s))
     return "\n".join(lines)
