@@ -29,11 +29,13 @@ def test_the_4t_cell_is_drc_clean_lvs_matched_and_extracted(drawn):
     assert code == 0, err[-2000:]
     s = r["signoff"]
     assert s["drc"]["run"] and s["drc"]["clean"], s["drc"]
-    assert s["lvs"]["match"] and s["lvs"]["devices"] == 5, s["lvs"]
-    assert s["pex"]["run"] and s["pex"]["nets"] >= 10
+    assert s["lvs"]["match"] and s["lvs"]["devices"] == 5 and s["lvs"]["nets"] == 10, s["lvs"]
+    assert s["pex"]["run"] and s["pex"]["nets"] == 11
     pd = [j for j in s["lightmap"]["junctions"] if j["kind"] == "photodiode well"]
     drawn_um2 = r["ppd_um"][0] * r["ppd_um"][1]
     assert len(pd) == 1 and 0.95 * drawn_um2 < pd[0]["area_m2"] * 1e12 < drawn_um2
+    # the figures docs/pixel4t.md quotes (section "Layout on GF180MCU")
+    assert pd[0]["area_m2"] * 1e12 == pytest.approx(15.72, abs=0.005)
 
 
 def test_lvs_of_the_4t_cell_catches_a_wrong_tg_width(drawn, cli, tmp_path):
