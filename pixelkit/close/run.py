@@ -14,8 +14,9 @@
 4. The candidate is simulated at the modelled conditions and each spec's worst condition: rejected
    there when it gives less than ``ETA`` of what the model promised or breaks a spec nothing modelled
    (modelled from then on); a second-order correction is tried when the objective improved but a
-   modelled margin curved past its target. Otherwise it is verified on the whole grid
-   (``verify.run.verify``) and accepted only when the whole grid says so (the smallest margin rose;
+   modelled margin curved past its target. While restoring, a candidate still short at those conditions
+   is judged there (its smallest margin there rose: accepted), without the grid. Otherwise it is
+   verified on the whole grid (``verify.run.verify``) and accepted only when the whole grid says so (the smallest margin rose;
    or, once passing, it still passes and the objective improved). A rejection halves the trust
    region below the step that failed.
 5. It ends when the model's next step is below ``[close] tolerance`` on fresh sensitivities: with a
@@ -374,10 +375,15 @@ class Closer:
                     if bad:
                         break         # a spec nothing modelled broke: model it (its sensitivities) first
                     continue
-                self.tell(f"candidate {self.candidates() + 1}: verifying on the whole grid")
-                pc = self.full(xc, dc)
+                on_screen = not feasible and self.smallest(self.screened_margins(dc, sgroups, cf)) < 0
+                if on_screen:   # restoring and still short where it was simulated: judged there, not on the grid
+                    pc = self.screened(xc, dc, sgroups, cf, fc)
+                else:
+                    self.tell(f"candidate {self.candidates() + 1}: verifying on the whole grid")
+                    pc = self.full(xc, dc)
                 ok, rho = self.accept(p, pc, feasible, st)
-                self.record(pc, accepted=ok, mode=mode, radius=radius, where="grid")
+                self.record(pc, accepted=ok, mode=mode, radius=radius,
+                            where="modelled and worst conditions" if on_screen else "grid")
                 if ok:
                     p = pc
                     grow = rho > 0.75 and float(np.abs(st.d).max()) >= 0.99 * radius and not shrunk
@@ -389,7 +395,8 @@ class Closer:
                     break
                 radius = min(radius, float(np.abs(st.d).max())) / 2
                 shrunk = True
-                new = {k for k, m in pc.margins.items() if (m is None or m - self.target(k) < 0) and k not in pairs}
+                new = set() if on_screen else {k for k, m in pc.margins.items()
+                                               if (m is None or m - self.target(k) < 0) and k not in pairs}
                 if radius < s.tolerance:
                     status = "converged" if feasible else "infeasible"
                 elif new:     # it failed where nothing was modelled: model the worst of those from now on
@@ -401,7 +408,21 @@ class Closer:
                     yield_rounds += 1
                     self.targets.update(yield_result["targets"])
                     status, radius = None, RADIUS0
+        if p.signoff is None:   # ended on a candidate judged where it was simulated: its whole grid, for the record
+            self.tell("verifying the last candidate on the whole grid")
+            p = self.full(p.x, p.design)
+            self.record(p, accepted=True, mode="final", radius=None, where="grid")
         return self.result(p, status, last, yield_result)
+
+    def screened_margins(self, design, groups: dict, figs: dict) -> dict:
+        """{(spec, condition): margin} of the rows the simulated ``groups`` measure at their conditions."""
+        return {k: m for k, m in mg.table(design, sorted(groups), figs).items() if k in set(self.rows(groups))}
+
+    def screened(self, x, design, groups: dict, figs: dict, fc) -> Point:
+        """A candidate judged at the conditions it was simulated at (the modelled ones and each spec's worst),
+        not on the whole grid: while restoring, a candidate still short there needs no grid to say so."""
+        f = None if fc is None else fc * self.f_scale * (1 if self.objective.sense == "min" else -1)
+        return Point(x, design, figs, self.screened_margins(design, groups, figs), f)
 
     def screen(self, p: Point, conds: list, groups: dict) -> tuple[list, dict, list]:
         """The conditions a candidate is simulated at before the whole grid: the modelled ones and each
