@@ -65,8 +65,9 @@ def quick_source(report: Path):
 
 SOURCES = {"quick": quick_source}
 #: sources checked by their own tests, not from the quick report: ``p4t`` (``pixelkit simulate
-#: designs/pixel4t_gf180.toml --json``, dotted keys into its JSON; tests/test_pixel4t.py)
-OTHER_SOURCES = ("p4t",)
+#: designs/pixel4t_gf180.toml --json``, dotted keys into its JSON; tests/test_pixel4t.py); ``closed``
+#: (the reference's close record, designs/dual_pixel_revB.close.json, dotted keys; tests/test_close_table.py)
+OTHER_SOURCES = ("p4t", "closed")
 
 
 def _digits(text: str) -> float:

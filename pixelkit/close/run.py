@@ -14,9 +14,11 @@
 4. The candidate is simulated at the modelled conditions and each spec's worst condition: rejected
    there when it gives less than ``ETA`` of what the model promised or breaks a spec nothing modelled
    (modelled from then on); a second-order correction is tried when the objective improved but a
-   modelled margin curved past its target. While restoring, a candidate still short at those conditions
-   is judged there (its smallest margin there rose: accepted), without the grid. Otherwise it is
-   verified on the whole grid (``verify.run.verify``) and accepted only when the whole grid says so (the smallest margin rose;
+   modelled margin curved past its target. A candidate still short at those conditions (restoring), or
+   passing them once the design passes (optimising), is judged there, without the grid; the first that
+   passes them is verified on the whole grid (``verify.run.verify``), and so is the optimum the loop
+   ends on (failing somewhere unscreened: back to the last grid-verified revision, that condition
+   modelled). A grid-verified candidate is accepted only when the whole grid says so (the smallest margin rose;
    or, once passing, it still passes and the objective improved). A rejection halves the trust
    region below the step that failed.
 5. It ends when the model's next step is below ``[close] tolerance`` on fresh sensitivities: with a
@@ -302,6 +304,7 @@ class Closer:
         self.f_scale = abs(p.f) if p.f else 1.0
         self.record(p, accepted=True, mode="start", radius=None, where="grid")
         radius, forced, first, status, last, shrunk, on_secants = RADIUS0, set(), True, None, None, False, 0
+        anchor = p
         yield_rounds, yield_result = 0, None
         if not self.space.n:   # nothing numeric to move (a circuit choice alone): the start is the answer
             status = "converged" if self.smallest(p.margins) >= 0 else "infeasible"
@@ -375,8 +378,9 @@ class Closer:
                     if bad:
                         break         # a spec nothing modelled broke: model it (its sensitivities) first
                     continue
-                on_screen = not feasible and self.smallest(self.screened_margins(dc, sgroups, cf)) < 0
-                if on_screen:   # restoring and still short where it was simulated: judged there, not on the grid
+                on_screen = feasible or self.smallest(self.screened_margins(dc, sgroups, cf)) < 0
+                if on_screen:   # judged where it was simulated: the grid when the design first passes there, and
+                    # for the optimum (below)
                     pc = self.screened(xc, dc, sgroups, cf, fc)
                 else:
                     self.tell(f"candidate {self.candidates() + 1}: verifying on the whole grid")
@@ -385,6 +389,8 @@ class Closer:
                 self.record(pc, accepted=ok, mode=mode, radius=radius,
                             where="modelled and worst conditions" if on_screen else "grid")
                 if ok:
+                    if pc.signoff is not None and self.smallest(pc.margins) >= 0:
+                        anchor = pc    # the last revision that passed on the whole grid
                     p = pc
                     grow = rho > 0.75 and float(np.abs(st.d).max()) >= 0.99 * radius and not shrunk
                     radius = min(2 * radius, RADIUS_MAX) if grow else radius if rho > 0.25 else radius / 2
@@ -402,6 +408,18 @@ class Closer:
                 elif new:     # it failed where nothing was modelled: model the worst of those from now on
                     forced |= set(sorted(new, key=lambda k: -math.inf if pc.margins[k] is None else pc.margins[k])[:3])
                     break
+            if status == "converged" and p.signoff is None:   # the optimum, judged on screens: its whole grid
+                self.tell("verifying the optimum on the whole grid")
+                pg = self.full(p.x, p.design)
+                short = {k for k, m in pg.margins.items() if m is None or m - self.target(k) < 0}
+                self.record(pg, accepted=not short, mode="grid check", radius=radius, where="grid")
+                if short:      # it failed where no screen looked: back to the last grid-verified revision,
+                    # those conditions modelled from now on
+                    forced |= set(sorted(short, key=lambda k: -math.inf if pg.margins[k] is None else pg.margins[k])[:3])
+                    p, status, radius = anchor, None, RADIUS0
+                    self.grads.clear()
+                    continue
+                p = anchor = pg
             if status == "converged" and self.yield_check:
                 yield_result = self.check_yield(p)
                 if not yield_result["ok"] and yield_rounds < YIELD_ROUNDS and yield_result.get("targets"):
@@ -410,8 +428,10 @@ class Closer:
                     status, radius = None, RADIUS0
         if p.signoff is None:   # ended on a candidate judged where it was simulated: its whole grid, for the record
             self.tell("verifying the last candidate on the whole grid")
-            p = self.full(p.x, p.design)
-            self.record(p, accepted=True, mode="final", radius=None, where="grid")
+            pg = self.full(p.x, p.design)
+            passes = self.smallest(pg.margins) >= 0
+            self.record(pg, accepted=passes, mode="final", radius=None, where="grid")
+            p = pg if passes or self.smallest(anchor.margins) < 0 else anchor   # else the last that passed the grid
         return self.result(p, status, last, yield_result)
 
     def screened_margins(self, design, groups: dict, figs: dict) -> dict:
