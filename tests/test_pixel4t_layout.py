@@ -27,6 +27,7 @@ def drawn(tmp_path_factory):
 def test_the_4t_cell_is_drc_clean_lvs_matched_and_extracted(drawn):
     code, r, _out, err = drawn
     assert code == 0, err[-2000:]
+    assert "stand-in" in r["photodiode"] and "pinning layer" in r["photodiode"]
     s = r["signoff"]
     assert s["drc"]["run"] and s["drc"]["clean"], s["drc"]
     assert s["lvs"]["match"] and s["lvs"]["devices"] == 5 and s["lvs"]["nets"] == 10, s["lvs"]

@@ -29,6 +29,17 @@ def _library() -> Path:
 
 def xschem_netlist(sch: Path, tmp: Path) -> list[str]:
     """Xschem's SPICE netlist of ``sch`` (a copy: Xschem rewrites the file it opens), continuations joined."""
+    lines = []
+    for ln in xschem_file(sch, tmp).read_text().splitlines():
+        if ln.startswith("+") and lines:
+            lines[-1] += " " + ln[1:].strip()
+        else:
+            lines.append(ln)
+    return lines
+
+
+def xschem_file(sch: Path, tmp: Path) -> Path:
+    """The SPICE file Xschem writes for ``sch`` (run on a copy of its folder)."""
     work = tmp / f"xs_{sch.stem}"
     shutil.copytree(sch.parent, work, dirs_exist_ok=True)
     out = work / "netlist"
@@ -40,13 +51,7 @@ def xschem_netlist(sch: Path, tmp: Path) -> list[str]:
                        cwd=work, capture_output=True, text=True, timeout=120)
     spice = out / f"{sch.stem}.spice"
     assert p.returncode == 0 and spice.exists(), p.stdout[-2000:] + p.stderr[-2000:]
-    lines = []
-    for ln in spice.read_text().splitlines():
-        if ln.startswith("+") and lines:
-            lines[-1] += " " + ln[1:].strip()
-        else:
-            lines.append(ln)
-    return lines
+    return spice
 
 
 def _split(lines):
@@ -72,14 +77,16 @@ def _norm(text: str) -> str:
 def test_the_pixel_drawn_is_the_pixel_xschem_reads_back(design, cli, tmp_path):
     from pixelkit.family import family_of, load_family_design
     d = load_family_design(design, family_of(design))
-    sub = d.cell().subckt
+    cell = d.cell()
+    sub = cell.subckt
     code, _out, err = cli("netlist", design, "--bench", "cell", "--out", tmp_path / "cell.cir",
                           "--schematic", tmp_path / "draw" / "cell.sch", "--json")
     assert code == 0, err
     els, block, ports = _split(xschem_netlist(tmp_path / "draw" / "cell.sch", tmp_path))
     assert sorted(els) == sorted(_norm(e.text()) for e in sub.elements)
     assert ports == list(sub.ports)
-    assert block == [_norm(ln) for ln in sub.text().splitlines() if ln.startswith(".model ")]
+    cards = [ln for ln in sub.text().splitlines() if ln.startswith(".model ")] + [m.text() for m in cell.models]
+    assert block == [_norm(ln) for ln in cards] and len(block) == 2   # FD's junction models, either way
 
 
 def test_a_bench_drawn_is_its_deck(cli, tmp_path):
@@ -123,3 +130,26 @@ def test_schematic_name_and_reference_bench(cli, tmp_path):
     from pixelkit.api import bench
     from pixelkit.design import load_design
     assert sorted(els) == sorted(_norm(e.text()) for e in bench(load_design(REF), "bench_dual_pixel").elements)
+
+
+def test_xschems_netlist_of_a_drawn_pixel_is_a_netlist_design(tmp_path):
+    """The designer's path from Xschem: the 4T netlist file drawn, Xschem's netlist of the drawing (as Xschem
+    2.8 writes a top level: ``**.subckt`` ... ``**.ends``) named in a netlist design: the kit reads the same
+    pixel - every element line, the ports, the light device - as from the original file."""
+    from pixelkit.families.netlist.design import load_netlist_design
+    from pixelkit.spice.netlist_in import read_netlist
+    from pixelkit.spice.schematic import subckt_schematic
+    parsed = read_netlist(NETLIST.parent / "pixel4t_netlist" / "pix4t.spice")
+    sch = subckt_schematic(parsed.subckts["pix4t"], tmp_path / "draw" / "pix4t.sch", models=tuple(parsed.models.values()))
+    spice = xschem_file(sch, tmp_path)
+    assert "**.subckt pix4t" in spice.read_text()
+    design = tmp_path / "mine" / "pix4t_xschem.toml"
+    design.parent.mkdir()
+    shutil.copy(spice, design.parent / "pix4t_from_xschem.spice")
+    text = NETLIST.read_text()
+    assert 'file = "pixel4t_netlist/pix4t.spice"' in text
+    design.write_text(text.replace('file = "pixel4t_netlist/pix4t.spice"', 'file = "pix4t_from_xschem.spice"'))
+    a, b = load_netlist_design(NETLIST).cell(), load_netlist_design(design).cell()
+    assert a.subckt.ports == b.subckt.ports and a.roles == b.roles
+    assert sorted(_norm(e.text()) for e in b.subckt.elements) == sorted(_norm(e.text()) for e in a.subckt.elements)
+    assert sorted(m[0] for m in b.subckt.models) == sorted(m[0] for m in a.subckt.models)

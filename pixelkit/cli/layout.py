@@ -129,7 +129,8 @@ def _layout_role(design, fam, out, drc, lvs, foundry_lvs, chip_options: dict, as
 
 
 def _render_role(x: dict) -> str:
-    lines = [f"wrote {x['gds']} (cell {x['top']}, {x['pitch_um']:g} um) and {x['spice']}"]
+    lines = [f"wrote {x['gds']} (cell {x['top']}, {x['pitch_um']:g} um) and {x['spice']}",
+             f"photodiode: {x['photodiode']}"]
     s = x.get("signoff")
     if s:
         lines.append(signoff_text(s))

@@ -63,7 +63,7 @@ def draw(net, path):
     from ..spice.export import deck_text
     from ..spice.schematic import deck_schematic, subckt_schematic
     if not net.elements and net.subckts:
-        return subckt_schematic(net.subckts[-1], path, support=net.subckts[:-1])
+        return subckt_schematic(net.subckts[-1], path, support=net.subckts[:-1], models=net.models)
     return deck_schematic(net, deck_text(net, "absolute"), path)
 
 

@@ -21,6 +21,10 @@ from .primitives import pad_side
 from .techview import LayoutTech
 
 CELL = "PIX4T"
+#: what the drawn photodiode is (the layout's output says it)
+STAND_IN = ("a stand-in: an n-well / p-substrate junction under the photodiode marker (GF180MCU has no pinned "
+            "implant: a pinned photodiode needs an n storage well depleting at V_pin, a p+ pinning layer "
+            "self-aligned to the TG edge and a TG threshold implant; the simulations use the behavioural PPD)")
 #: the cell's pins (the row lines and column as the 5T subpixel names them, and the substrate)
 PINS = ("vdd", "vrst", "rst", "tg", "rs", "col", "vss")
 
@@ -94,7 +98,8 @@ def layout_pixel4t(design, out_dir: Path, drc: bool = False, lvs: bool = False, 
     gds = write_gds(lib, out_dir / f"{design.name}.gds")
     spice = write_atomic(out_dir / f"{CELL}.spice", lvs_spice(design, cv))
     r = {"gds": str(gds), "spice": str(spice), "top": CELL, "pitch_um": design.pixel.pitch * 1e6,
-         "ppd_um": [design.pixel.ppd_width * 1e6, design.pixel.ppd_height * 1e6], "exit_status": 0}
+         "ppd_um": [design.pixel.ppd_width * 1e6, design.pixel.ppd_height * 1e6], "photodiode": STAND_IN,
+         "exit_status": 0}
     if drc or lvs or foundry_lvs:
         from .anylayout import signoff
         skip = (() if drc else ("drc",)) + (() if lvs else ("lvs", "pex")) + (() if foundry_lvs else ("foundry-lvs",))

@@ -13,7 +13,8 @@ subset of SPICE is accepted, each line parsed into the kit's validated ``Element
 - ``.param NAME = number`` (numbers only; ``{NAME}`` in an element is replaced by it);
 - ``.include "file"``: a file inside the design's folder (resolved, no way out through ``..`` or a
   link), at most ``MAX_DEPTH`` deep, never one already open (an include loop);
-- comments (``*`` lines, ``;`` and ``$`` tails), ``+`` continuation lines, ``.end``.
+- comments (``*`` lines, ``;`` and ``$`` tails), ``+`` continuation lines, ``.end``; Xschem's top-level
+  ``**.subckt`` / ``**.ends`` (a schematic netlisted by Xschem 2.8 as it is) read as ``.subckt`` / ``.ends``.
 
 Refused, exit 2 naming the file, line and what is allowed: ``.control`` / ``.endc`` (ngspice runs shell
 commands there), every other dot card (``.lib``, ``.option``, ``.tran``, ``.save``, ``.temp``, ``.global``,
@@ -74,11 +75,18 @@ def number(text: str, where: str, source: str, params: dict | None = None) -> fl
     return x
 
 
+#: Xschem (2.8) netlists a schematic's top level as ``**.subckt NAME ports...`` ... ``**.ends``: read as the
+#: subcircuit it is (``pixelkit netlist --schematic`` drawings netlisted by Xschem, tests/test_schematic.py)
+XSCHEM_TOP = re.compile(r"^\*\*\.(subckt\s|ends\b)", re.I)
+
+
 def _logical_lines(text: str, source: str):
     """(line number, text) of each logical line: comments dropped, '+' continuations joined."""
     out = []
     for no, raw in enumerate(text.splitlines(), 1):
         line = raw.rstrip()
+        if XSCHEM_TOP.match(line):   # Xschem's top level: its .subckt / .ends written as comments
+            line = line[2:]
         if not line.strip() or line.lstrip().startswith("*"):
             continue
         line = re.split(r"\s[;$]|^[;$]", line)[0].rstrip()

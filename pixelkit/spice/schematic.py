@@ -140,10 +140,11 @@ def write_xschem(path, ports, elements, code: str = "") -> Path:
     return path
 
 
-def subckt_schematic(subckt, path, support=()) -> Path:
-    """The subcircuit ``subckt`` drawn (its ports as pins; its own ``.model`` cards and the subcircuits
-    ``support`` it instantiates in the code block; the technology's models are the designer's tools')."""
-    cards = [ln for ln in subckt.text().splitlines() if ln.startswith(".model ")]
+def subckt_schematic(subckt, path, support=(), models=()) -> Path:
+    """The subcircuit ``subckt`` drawn (its ports as pins; in the code block its own ``.model`` cards, the
+    deck-level ``models`` it uses (a designer's netlist's) and the subcircuits ``support`` it instantiates;
+    the technology's model library is the designer's tools')."""
+    cards = [ln for ln in subckt.text().splitlines() if ln.startswith(".model ")] + [m.text() for m in models]
     return write_xschem(path, subckt.ports, subckt.elements, "\n".join([*cards, *(s.text() for s in support)]))
 
 
