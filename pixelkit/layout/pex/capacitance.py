@@ -51,22 +51,13 @@ from __future__ import annotations
 
 from collections import defaultdict
 
+from . import section
 from .cornerfield import corner_couplings
 from .fringe import fringe, landing
 from .nets import GROUND
 from .plane import Plane
 from .topface import covered_top, eps_fringe
 from .wedge import wedge_couplings
-
-SHIELD_K = 0.7     # fringe kept beside a neighbour: S / (S + SHIELD_K h)
-
-
-def lateral(eps: float, t: float, h: float, w: float, s: float) -> float:
-    """Coupling per length (F/m) of two lines t thick, w wide, s apart, h over a plane (Chern et al.)."""
-    return eps * (1.144 * (t / s) * (h / (h + 2.059 * s)) ** 0.0944
-                  + 0.7428 * (w / (w + 1.592 * s)) ** 1.144
-                  + 1.158 * (w / (w + 1.874 * s)) ** 0.1612 * (h / (h + 0.9801 * s)) ** 1.179)
-
 
 class Couplings:
     """Symmetric net-pair capacitances (F); ``(a, a)`` is never stored."""
@@ -242,17 +233,17 @@ def capacitances(geo, stack) -> Couplings:
             pairs = _facing(polys, labels, halo)
             owners = _nets_of(nets, [e for ep in pairs for e in (ep.first, ep.second)], dbu)
             gaps = _plane_gaps([ep.polygon(0) for ep in pairs], below, above, z, t)
-            for ep, (a_net, wa), (b_net, wb), h in zip(pairs, owners[0::2], owners[1::2], gaps):
+            for ep, (a_net, wa), (b_net, wb), (h_d, h_u) in zip(pairs, owners[0::2], owners[1::2], gaps):
                 if a_net is None or b_net is None or a_net == b_net:
                     continue
                 s = ep.distance() * dbu
                 la, lb = ep.first.length() * dbu, ep.second.length() * dbu
                 if s <= 0 or min(la, lb) <= 0:
                     continue
-                cpl.add(a_net, b_net, lateral(eps, t, h, min(wa, wb), s) * (la + lb) / 2)
-                keep = s / (s + SHIELD_K * z)
-                shielded[a_net] += (1 - keep) * la
-                shielded[b_net] += (1 - keep) * lb
+                cpl.add(a_net, b_net, eps * section.pair(wa, wb, t, s, h_d, h_u)[0] * (la + lb) / 2)
+                keep_a, keep_b = section.kept(wa, wb, t, s, h_d, h_u)
+                shielded[a_net] += (1 - keep_a) * la
+                shielded[b_net] += (1 - keep_b) * lb
         corner_couplings(cpl, geo, stack, i, spent)
         wedge_couplings(cpl, geo, stack, i, spent)
         # fringe downwards, less what neighbours, the corner field and covers over its top face take (a
@@ -339,8 +330,9 @@ def _canon(e):
 
 
 def _plane_gaps(polys, below, above, z, t) -> list:
-    """H of the lateral formula for each pair (``polys``: the space between its edges): the gap from the
-    pair to the nearest conductor under or over that space (the substrate when there is none below)."""
+    """The planes of each pair's cross-section (``polys``: the space between its edges): [(gap down to the
+    nearest conductor under that space, the substrate when there is none; gap up to the nearest one over
+    it, None when there is none)]."""
     import numpy as np
     h = np.full(len(polys), z)
     open_ = np.ones(len(polys), dtype=bool)
@@ -348,12 +340,13 @@ def _plane_gaps(polys, below, above, z, t) -> list:
         hit = open_ & plane.covers(polys)
         h[hit] = z - plane.z
         open_ &= ~hit
+    up = np.full(len(polys), np.nan)
     open_[:] = True
     for plane in above:
         hit = open_ & plane.covers(polys)
-        h[hit] = np.minimum(h[hit], plane.z - (z + t))
+        up[hit] = plane.z - (z + t)
         open_ &= ~hit
-    return h.tolist()
+    return [(d, None if u != u else u) for d, u in zip(h.tolist(), up.tolist())]
 
 
 def _nets_of(nets, edges, dbu) -> list:

@@ -60,10 +60,8 @@ def _prism(surf, reg, d, z0, z1, md, cuts=()):
     zs = [z0] + sorted(c for c in cuts if z0 < c < z1) + [z1]
     for p in reg.merged().each():
         for t in p.decompose_trapezoids(kdb.Polygon.TD_htrapezoids):
-            b = t.bbox()
             for z, outward in ((z0, -1e-9), (z1, 1e-9)):     # the medium beside each face
-                _quad(surf(z + outward), (b.left * d, b.bottom * d, z), (b.right * d, b.bottom * d, z),
-                      (b.left * d, b.top * d, z), md)
+                _face(surf(z + outward), t, d, z, md)
         for e in p.each_edge():
             for za, zb in zip(zs, zs[1:]):
                 _quad(surf((za + zb) / 2), (e.p1.x * d, e.p1.y * d, za), (e.p2.x * d, e.p2.y * d, za),
@@ -75,9 +73,44 @@ def _sheet(surf, reg, d, z, md):
     import klayout.db as kdb
     for p in reg.merged().each():
         for t in p.decompose_trapezoids(kdb.Polygon.TD_htrapezoids):
-            b = t.bbox()
-            _quad(surf, (b.left * d, b.bottom * d, z), (b.right * d, b.bottom * d, z),
-                                 (b.left * d, b.top * d, z), md)
+            _face(surf, t, d, z, md)
+
+
+def _face(surf, trap, d, z, md):
+    """A horizontal face at height z: ``trap`` (a trapezoid with horizontal top and bottom, dbu) as a
+    meshed rectangle, or, where its sides slant (a layout off the axes), as a meshed parallelogram and the
+    triangle left over, the triangle split into four until its sides are within ``md``."""
+    b = trap.bbox()
+    if trap.area() == b.area():
+        _quad(surf, (b.left * d, b.bottom * d, z), (b.right * d, b.bottom * d, z), (b.left * d, b.top * d, z), md)
+        return
+    pts = [(q.x, q.y) for q in trap.each_point()]
+    y0, y1 = b.bottom, b.top
+    lo = sorted(x for x, y in pts if y == y0)
+    hi = sorted(x for x, y in pts if y == y1)
+    (b0, b1), (t0, t1) = (lo[0], lo[-1]), (hi[0], hi[-1])
+    w = min(b1 - b0, t1 - t0)
+    if w > 0:
+        surf.add_meshed_quad((b0 * d, y0 * d, z), (t0 * d, y1 * d, z), ((b0 + w) * d, y0 * d, z), max_dim=md)
+    if b1 - b0 > t1 - t0:
+        tri = ((b0 + w, y0), (b1, y0), (t1, y1))
+    else:
+        tri = ((t0 + w, y1), (t1, y1), (b1, y0))
+    if tri[0] != tri[1]:
+        _triangle(surf, [(x * d, y * d, z) for x, y in tri], md)
+
+
+def _triangle(surf, tri, md):
+    """A triangle (three 3D points) split into four by its sides' middles until every side is within ``md``."""
+    import math
+    a, b, c = tri
+    if max(math.dist(a, b), math.dist(b, c), math.dist(c, a)) <= md:
+        # the native triangle: fastcap2 2.1's Surface.add_tri hands its three points to the quad call
+        super(type(surf), surf)._add_tri(a, b, c)
+        return
+    ab, bc, ca = (tuple((u + v) / 2 for u, v in zip(p, q)) for p, q in ((a, b), (b, c), (c, a)))
+    for t in ((a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca)):
+        _triangle(surf, t, md)
 
 
 #: a dielectric layer thinner than this (um) is solved merged with the layer below it, by their series

@@ -21,6 +21,7 @@ nets, no device) for ``pixelkit signoff``; ``STRUCTURES`` gives each one's windo
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -33,18 +34,20 @@ class Structure:
     name: str
     pair: tuple          # the two nets whose coupling is the term ((net, "0"): to ground)
     term: str
-    shapes: tuple        # (layer name, x0, y0, x1, y1 um, net)
+    shapes: tuple        # (layer name, x0, y0, x1, y1 um, net) or (layer name, ((x, y), ...) um, net)
     window: tuple = ()   # x0, y0, x1, y1 um (set by _placed)
 
 
-def _vias(tech, x, y, net):
-    """A 1 x 1 um pad stack metal1 - metal5 at (x, y) with a 2 x 2 array of each via."""
+def _vias(tech, x, y, net, top="metal5", side=1.0):
+    """A ``side`` x ``side`` um pad stack metal1 - ``top`` at (x, y) with a 2 x 2 array of each via."""
     from ..techview import LayoutTech
     lt = LayoutTech(tech)
-    out = [(m, x, y, x + 1.0, y + 1.0, net) for m in ("metal1", "metal2", "metal3", "metal4", "metal5")]
-    for v in ("via1", "via2", "via3", "via4"):
+    metals = ("metal1", "metal2", "metal3", "metal4", "metal5")
+    metals = metals[:metals.index(top) + 1]
+    out = [(m, x, y, x + side, y + side, net) for m in metals]
+    for v in ("via1", "via2", "via3", "via4")[:len(metals) - 1]:
         cut, space = lt.cut(v) / 1000, max(lt.nm(f"{v}.space") / 1000, 0.26)
-        x0 = x + (1.0 - 2 * cut - space) / 2
+        x0 = x + (side - 2 * cut - space) / 2
         for i in range(2):
             for j in range(2):
                 cx, cy = x0 + i * (cut + space), x0 - x + y + j * (cut + space)
@@ -52,8 +55,45 @@ def _vias(tech, x, y, net):
     return out
 
 
-def structures(tech) -> list:
-    """The structures of the module's table, placed along x."""
+def _line(layer, cx, cy, length, width, degrees, net):
+    """A line ``length`` x ``width`` um centred on (cx, cy), its axis ``degrees`` from x: a box on the axes,
+    else a polygon (corners on the 5 nm grid)."""
+    if degrees % 90 == 0:
+        a, b = (length, width) if degrees % 180 == 0 else (width, length)
+        return (layer, cx - a / 2, cy - b / 2, cx + a / 2, cy + b / 2, net)
+    ux, uy = math.cos(math.radians(degrees)), math.sin(math.radians(degrees))
+    corners = [(cx + sa * ux * length / 2 - sb * uy * width / 2, cy + sa * uy * length / 2 + sb * ux * width / 2)
+               for sa, sb in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
+    return (layer, tuple((round(x / 0.005) * 0.005, round(y / 0.005) * 0.005) for x, y in corners), net)
+
+
+def _pair(name, layer, w1, w2, s, length, tag, over=None, under=None):
+    """Two lines of ``layer`` w1 and w2 wide, s apart, ``length`` long (nets ``<tag>a``, ``<tag>b``), with a
+    plate of another net (``<tag>p``) ``over`` or ``under`` them on the layer named (2 um beyond them)."""
+    shapes = [(layer, 0, 0, length, w1, f"{tag}a"), (layer, 0, w1 + s, length, w1 + s + w2, f"{tag}b")]
+    for plate in (over, under):
+        if plate:
+            shapes.append((plate, -2, -2, length + 2, w1 + s + w2 + 2, f"{tag}p"))
+    return Structure(name, (f"{tag}a", f"{tag}b"), f"lateral coupling, {layer} {w1:g} / {w2:g} um, {s:g} um apart"
+                     + (f", {over} over them" if over else "") + (f", {under} under them" if under else ""),
+                     tuple(shapes))
+
+
+def _cross(name, lower, wa, upper, wb, degrees, tag, length=20.0, offset=0.0):
+    """A ``lower`` line (``wa`` wide, along x, net ``<tag>a``) crossed by an ``upper`` one (``wb`` wide, its
+    axis ``degrees`` from x, net ``<tag>b``), both ``length`` long, crossing at their middles (the upper
+    one's middle ``offset`` um along its axis from the crossing: a line that ends over the other)."""
+    c = length / 2
+    ux, uy = math.cos(math.radians(degrees)), math.sin(math.radians(degrees))
+    return Structure(name, (f"{tag}a", f"{tag}b"), f"crossing, {lower} {wa:g} um under {upper} {wb:g} um at {degrees:g} deg"
+                     + (f", the upper line's end {length / 2 - offset:g} um past the crossing" if offset else ""),
+                     (_line(lower, c, c, length, wa, 0, f"{tag}a"),
+                      _line(upper, c + offset * ux, c + offset * uy, length, wb, degrees, f"{tag}b")))
+
+
+def _first(tech) -> list:
+    """The first check (the structures of the module's table): set before the lateral term was solved and
+    the crossing term added; since then development structures too."""
     items = [Structure("plate_sub", ("ps", "0"), "plate to substrate",
                        (("metal1", 0, 0, 20, 20, "ps"),)),
              Structure("plate_plate", ("pb", "pt"), "plate over plate",
@@ -70,32 +110,107 @@ def structures(tech) -> list:
                         (("metal1", 0, 9.75, 20, 10.25, "xa"), ("metal2", 9.75, 0, 10.25, 20, "xb"))),
               Structure("via_stack", ("va", "vb"), "via stack to via stack",
                         tuple(_vias(tech, 0, 0, "va") + _vias(tech, 2.0, 0, "vb")))]
+    return items
+
+
+def _development(tech) -> list:
+    """Structures the lateral and crossing terms were developed on (looked at while the model was changed)."""
+    return [_pair("d_lat_m2", "metal2", 0.28, 0.28, 1.5, 40, "dl2"),
+            _pair("d_lat_m1_unequal", "metal1", 1.0, 0.3, 3.0, 40, "dlu"),
+            _pair("d_lat_m3_over_plate", "metal3", 0.5, 0.5, 1.0, 40, "dlo", under="metal1"),
+            _pair("d_lat_m1_under_plate", "metal1", 0.5, 0.5, 1.5, 40, "dlp", over="metal2"),
+            _cross("d_cross_m1m2_1", "metal1", 1.0, "metal2", 1.0, 90, "dc1"),
+            _cross("d_cross_m1m3", "metal1", 0.5, "metal3", 0.5, 90, "dc3"),
+            _cross("d_cross_m2m3_wide", "metal2", 2.0, "metal3", 0.3, 90, "dcw"),
+            _cross("d_cross_m3m4", "metal3", 0.5, "metal4", 0.5, 90, "dc4"),
+            _cross("d_cross_m1m2_45", "metal1", 0.5, "metal2", 0.5, 45, "dc45"),
+            _cross("d_tee_m1m2", "metal1", 0.5, "metal2", 0.5, 90, "dct", offset=9.5),
+            Structure("d_parallel_m1m3", ("dpa", "dpb"), "metal1 and metal3 lines side by side, 3 um apart in plan",
+                      (("metal1", 0, 0, 30, 0.5, "dpa"), ("metal3", 0, 3.5, 30, 4.0, "dpb"))),
+            Structure("d_plate_m3_sub", ("dps", "0"), "metal3 plate to substrate", (("metal3", 0, 0, 10, 10, "dps"),)),
+            Structure("d_plate_m4_m2", ("dpl", "dpu"), "metal4 plate over a metal2 plate",
+                      (("metal2", 0, 0, 16, 16, "dpl"), ("metal4", 4, 4, 12, 12, "dpu")))]
+
+
+def _validation(tech) -> list:
+    """Structures held out: drawn once, solved by FastCap2 once, never looked at while the model changed."""
+    return [_pair("v_lat_m1_narrow", "metal1", 0.23, 0.23, 0.8, 30, "va1"),
+            _pair("v_lat_m2_close", "metal2", 0.8, 0.8, 0.4, 30, "va2"),
+            _pair("v_lat_m2_far", "metal2", 0.8, 0.8, 2.8, 30, "va3"),
+            _pair("v_lat_m3_wide", "metal3", 2.0, 2.0, 1.2, 30, "va4"),
+            _pair("v_lat_m4_far", "metal4", 0.5, 0.5, 5.0, 30, "va5"),
+            _pair("v_lat_m1_unequal", "metal1", 0.25, 1.5, 0.6, 30, "va6"),
+            _pair("v_lat_m2_over_plate", "metal2", 0.4, 0.4, 2.0, 30, "va7", under="metal1"),
+            _pair("v_lat_m3_under_plate", "metal3", 0.6, 0.6, 1.8, 30, "va8", over="metal5"),
+            _cross("v_cross_m1m2", "metal1", 0.8, "metal2", 0.3, 90, "vc1"),
+            _cross("v_cross_m2m3_wide", "metal2", 1.5, "metal3", 1.5, 90, "vc2"),
+            _cross("v_cross_m1m4", "metal1", 0.4, "metal4", 0.6, 90, "vc3"),
+            _cross("v_cross_m3m4_45", "metal3", 0.5, "metal4", 1.0, 45, "vc4"),
+            _cross("v_cross_m1m2_60", "metal1", 0.6, "metal2", 0.4, 60, "vc5"),
+            _cross("v_tee_m2m3", "metal2", 1.0, "metal3", 0.5, 90, "vc6", offset=9.0),
+            Structure("v_plate_m2_sub", ("vps", "0"), "metal2 plate to substrate", (("metal2", 0, 0, 8, 12, "vps"),)),
+            Structure("v_plate_m3_m2", ("vpl", "vpu"), "metal3 plate over a metal2 plate",
+                      (("metal2", 0, 0, 12, 12, "vpl"), ("metal3", 3, 3, 9, 9, "vpu"))),
+            Structure("v_fringe_m4", ("vfl", "vfp"), "metal4 line over a metal2 plate (the fringe to a plane)",
+                      (("metal2", 0, 0, 36, 16, "vfp"), ("metal4", 3, 7.7, 33, 8.3, "vfl"))),
+            Structure("v_parallel_m2m4", ("vpa", "vpb"), "metal2 and metal4 lines side by side, 1.5 um apart in plan",
+                      (("metal2", 0, 0, 30, 0.6, "vpa"), ("metal4", 0, 2.1, 30, 2.7, "vpb"))),
+            Structure("v_via_stack_m3", ("vva", "vvb"), "metal1 - metal3 pad stacks 1.5 um wide, 2 um apart",
+                      tuple(_vias(tech, 0, 0, "vva", "metal3", 1.5) + _vias(tech, 3.5, 0, "vvb", "metal3", 1.5)))]
+
+
+SETS = {"first": _first, "development": _development, "validation": _validation}
+
+
+def _bounds(shape):
+    """x0, y0, x1, y1 of a shape (a box or a polygon)."""
+    if len(shape) == 3:
+        xs, ys = [p[0] for p in shape[1]], [p[1] for p in shape[1]]
+        return min(xs), min(ys), max(xs), max(ys)
+    return shape[1:5]
+
+
+def _moved(shape, dx):
+    if len(shape) == 3:
+        return (shape[0], tuple((x + dx, y) for x, y in shape[1]), shape[2])
+    lay, x0, y0, x1, y1, n = shape
+    return (lay, x0 + dx, y0, x1 + dx, y1, n)
+
+
+def structures(tech, which: str = "first") -> list:
+    """The structures of set ``which`` (``SETS``: first, development, validation), placed along x."""
     out = []
-    for k, st in enumerate(items):
-        dx = k * PITCH
-        shapes = tuple((lay, x0 + dx, y0, x1 + dx, y1, n) for lay, x0, y0, x1, y1, n in st.shapes)
-        xs = [v for s in shapes for v in (s[1], s[3])]
-        ys = [v for s in shapes for v in (s[2], s[4])]
-        out.append(Structure(st.name, st.pair, st.term, shapes, (min(xs), min(ys), max(xs), max(ys))))
+    for k, st in enumerate(SETS[which](tech)):
+        shapes = tuple(_moved(s, k * PITCH) for s in st.shapes)
+        b = [_bounds(s) for s in shapes]
+        out.append(Structure(st.name, st.pair, st.term, shapes, (min(v[0] for v in b), min(v[1] for v in b),
+                                                                  max(v[2] for v in b), max(v[3] for v in b))))
     return out
 
 
-def write(tech, folder: Path) -> tuple[Path, Path]:
-    """``structures.gds`` (cell STRUCTURES) and ``structures.spice`` in ``folder``."""
+def write(tech, folder: Path, which: str = "first") -> tuple[Path, Path]:
+    """``structures.gds`` (cell STRUCTURES) and ``structures.spice`` of set ``which`` in ``folder``."""
     import gdstk
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     lib = gdstk.Library(unit=1e-6, precision=1e-9)
     cell = gdstk.Cell("STRUCTURES")
     nets = []
-    for st in structures(tech):
+    for st in structures(tech, which):
         labelled = set()
-        for lay, x0, y0, x1, y1, net in st.shapes:
+        for shape in st.shapes:
+            lay, net = shape[0], shape[-1]
             ly = tech.layer(lay)
-            cell.add(gdstk.rectangle((x0, y0), (x1, y1), layer=ly.layer, datatype=ly.datatype))
+            if len(shape) == 3:
+                cell.add(gdstk.Polygon(shape[1], layer=ly.layer, datatype=ly.datatype))
+                at = (sum(x for x, _ in shape[1]) / len(shape[1]), sum(y for _, y in shape[1]) / len(shape[1]))
+            else:
+                x0, y0, x1, y1 = shape[1:5]
+                cell.add(gdstk.rectangle((x0, y0), (x1, y1), layer=ly.layer, datatype=ly.datatype))
+                at = ((x0 + x1) / 2, (y0 + y1) / 2)
             if lay.startswith("metal") and net not in labelled:
                 lb = tech.layer(f"{lay}_label")
-                cell.add(gdstk.Label(net, ((x0 + x1) / 2, (y0 + y1) / 2), layer=lb.layer, texttype=lb.datatype))
+                cell.add(gdstk.Label(net, at, layer=lb.layer, texttype=lb.datatype))
                 labelled.add(net)
                 nets.append(net)
     lib.add(cell)
@@ -107,12 +222,12 @@ def write(tech, folder: Path) -> tuple[Path, Path]:
     return gds, spice
 
 
-def geometry(tech, folder: Path):
-    """The structures written to ``folder`` and their nets' geometry (``nets.view_geometry``, named by the
-    labels), as ``pixelkit signoff`` extracts them."""
+def geometry(tech, folder: Path, which: str = "first"):
+    """The structures of set ``which`` written to ``folder`` and their nets' geometry (``nets.view_geometry``,
+    named by the labels), as ``pixelkit signoff`` extracts them."""
     from ..signoff.netlist_in import read_netlist
     from .nets import view_geometry
-    gds, spice = write(tech, folder)
+    gds, spice = write(tech, folder, which)
     return view_geometry(gds, "STRUCTURES", tech, read_netlist(spice, tech).top_view("STRUCTURES"))
 
 
@@ -131,40 +246,41 @@ def term(couplings, st: Structure) -> float:
 MARGIN = 10e-6     # the window FastCap2 solves round each structure (m)
 
 
-def fastcap_reference(tech, folder: Path, mesh: float = 0.5e-6) -> dict:
+def _window(geo, st):
+    from .fastcap import clip
+    x0, y0, x1, y1 = st.window
+    return clip(geo, (x0 * 1e-6 - MARGIN, y0 * 1e-6 - MARGIN, x1 * 1e-6 + MARGIN, y1 * 1e-6 + MARGIN))
+
+
+def fastcap_reference(tech, folder: Path, mesh: float = 0.5e-6, which: str = "first") -> dict:
     """{structure: F} by FastCap2 on the technology's stack (its layered dielectrics), each structure in a
     window MARGIN beyond it; a net's term to ground is its total (the substrate sheet and the space round
-    it). The via stack with its vias."""
-    from .fastcap import clip, solve
-    geo = geometry(tech, folder)
-    out = {}
-    for st in structures(tech):
-        x0, y0, x1, y1 = st.window
-        g = clip(geo, (x0 * 1e-6 - MARGIN, y0 * 1e-6 - MARGIN, x1 * 1e-6 + MARGIN, y1 * 1e-6 + MARGIN))
-        out[st.name] = term(solve(g, tech.stack, mesh, vias=st.name == "via_stack"), st)
-    return out
+    it). The via stacks with their vias."""
+    from .fastcap import solve
+    geo = geometry(tech, folder, which)
+    return {st.name: term(solve(_window(geo, st), tech.stack, mesh, vias=any(s[0].startswith("via") for s in st.shapes)), st)
+            for st in structures(tech, which)}
 
 
-def kit_terms(tech, geo, stack=None) -> dict:
+def kit_terms(tech, geo, stack=None, which: str = "first") -> dict:
     """{structure: F} by the kit's 2.5D model (``capacitance.capacitances``) on the same windows."""
     from .capacitance import capacitances
-    from .fastcap import clip
-    out = {}
-    for st in structures(tech):
-        x0, y0, x1, y1 = st.window
-        g = clip(geo, (x0 * 1e-6 - MARGIN, y0 * 1e-6 - MARGIN, x1 * 1e-6 + MARGIN, y1 * 1e-6 + MARGIN))
-        out[st.name] = term(capacitances(g, stack or tech.stack), st)
-    return out
+    return {st.name: term(capacitances(_window(geo, st), stack or tech.stack), st) for st in structures(tech, which)}
 
 
-if __name__ == "__main__":      # python -m pixelkit.layout.pex.structures OUT.json: the FastCap2 reference
+REFERENCE = {"first": "extraction_structures.json", "development": "extraction_structures_development.json",
+             "validation": "extraction_structures_validation.json"}
+
+
+if __name__ == "__main__":      # python -m pixelkit.layout.pex.structures SET OUT.json: the FastCap2 reference
     import json
     import sys
     import tempfile
     from ...tech.technology import load_technology
     t = load_technology("gf180mcu_3v3")
+    which, out = (sys.argv[1], sys.argv[2]) if len(sys.argv) > 2 else ("first", sys.argv[1])
     with tempfile.TemporaryDirectory() as tmp:
-        ref = fastcap_reference(t, Path(tmp))
-    Path(sys.argv[1]).write_text(json.dumps({"technology": t.name, "stack": t.stack.source, "mesh_um": 0.5,
-                                             "margin_um": MARGIN * 1e6, "solver": "fastcap2 (pip), layered dielectrics",
-                                             "terms_F": ref}, indent=1) + "\n")
+        ref = fastcap_reference(t, Path(tmp), which=which)
+    Path(out).write_text(json.dumps({"technology": t.name, "set": which, "stack": t.stack.source, "mesh_um": 0.5,
+                                     "margin_um": MARGIN * 1e6, "solver": "fastcap2 (pip), layered dielectrics",
+                                     "terms_F": ref}, indent=1) + "\n")
