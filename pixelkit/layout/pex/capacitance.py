@@ -53,6 +53,7 @@ from collections import defaultdict
 
 from . import section
 from .cornerfield import corner_couplings
+from .farfield import far_couplings
 from .fringe import fringe, landing
 from .nets import GROUND
 from .plane import Plane
@@ -60,15 +61,24 @@ from .topface import covered_top, eps_fringe
 from .wedge import wedge_couplings
 
 class Couplings:
-    """Symmetric net-pair capacitances (F); ``(a, a)`` is never stored."""
+    """Symmetric net-pair capacitances (F); ``(a, a)`` is never stored. ``near``: the 2.5D terms between
+    conductors of two layers by kind ({(lower layer, upper layer, lower net, upper net): {kind: F}}: area,
+    top, down, up, corner), which the far field (``farfield.py``) weighs its own estimate against."""
 
     def __init__(self):
         self.c = defaultdict(float)
+        self.near = defaultdict(lambda: defaultdict(float))
 
-    def add(self, a: str, b: str, value: float) -> None:
+    def add(self, a: str, b: str, value: float, near: tuple | None = None) -> None:
+        """Add ``value`` between nets a and b; ``near`` = (kind, a's layer, b's layer, whether a is the lower
+        one) records it as a 2.5D term between two layers."""
         if a == b or value <= 0:
             return
         self.c[(a, b) if a < b else (b, a)] += value
+        if near and GROUND not in (a, b) and "surface" not in near[1:3]:
+            kind, la, lb, a_lower = near
+            key = (la, lb, a, b) if a_lower else (lb, la, b, a)
+            self.near[key][kind] += value
 
     def total(self, net: str) -> float:
         return sum(v for k, v in self.c.items() if net in k)
@@ -85,25 +95,25 @@ class Couplings:
 
 def _below(geo, stack, i):
     """Conductors under layer ``i``, nearest first: [Plane] at their tops, the surface (diffusions, wells) last."""
-    out = [Plane(c.top, geo.wires[c.name]) for c in reversed(stack.conductors[:i]) if geo.wires.get(c.name)]
-    return out + ([Plane(0.0, geo.surface)] if geo.surface else [])
+    out = [Plane(c.top, geo.wires[c.name], c.name) for c in reversed(stack.conductors[:i]) if geo.wires.get(c.name)]
+    return out + ([Plane(0.0, geo.surface, "surface")] if geo.surface else [])
 
 
 def _above(geo, stack, i):
     """Conductors over layer ``i``, nearest first: [Plane] at their bottoms."""
-    return [Plane(c.z, geo.wires[c.name]) for c in stack.conductors[i + 1:] if geo.wires.get(c.name)]
+    return [Plane(c.z, geo.wires[c.name], c.name) for c in stack.conductors[i + 1:] if geo.wires.get(c.name)]
 
 
 def _under(region, below, z, device=False):
-    """(net, area dbu2, gap h) of each part of ``region`` (at height z) over the nearest conductor
+    """(net, area dbu2, gap h, its layer) of each part of ``region`` (at height z) over the nearest conductor
     below it; what is over nothing sees the substrate (net 0, h = z). ``device``: the conductor right
     below is a capacitor's bottom plate (the part over it is the device's, counted nowhere)."""
-    for m, part, h in _under_parts(region, below, z, device):
-        yield m, part.area(), h
+    for m, part, h, layer in _under_parts(region, below, z, device):
+        yield m, part.area(), h, layer
 
 
 def _under_parts(region, below, z, device=False):
-    """(net, Region, gap h) of each part of ``region``, as ``_under``."""
+    """(net, Region, gap h, its layer) of each part of ``region``, as ``_under``."""
     rest = region
     for k, plane in enumerate(below):
         union = plane.near(rest)
@@ -116,13 +126,13 @@ def _under_parts(region, below, z, device=False):
         for m, reg in plane.nets_near(hit):
             part = hit & reg
             if not part.is_empty():
-                yield m, part, z - plane.z
+                yield m, part, z - plane.z, plane.name
         rest = rest - union
     if not rest.is_empty():
-        yield GROUND, rest, z
+        yield GROUND, rest, z, "substrate"
 
 
-def _down(cpl, net, pieces, eps, t, per_area, weight, strips=None, areas=None):
+def _down(cpl, net, pieces, eps, t, per_area, weight, strips=None, areas=None, layer=""):
     """The downward fringe of a part of a band (``per_area``: edge length per band area; ``eps(h)`` its
     permittivity down to a plane h below) to what lies under
     it, ``pieces`` (``_under_parts`` of that part). ``strips`` ([(Region, x0, x1)]: the band by distance from
@@ -133,15 +143,15 @@ def _down(cpl, net, pieces, eps, t, per_area, weight, strips=None, areas=None):
     its edge field to the substrate rather than to the bottom plate 0.9 um under it: +57 % against
     FastCap2, +14 % by a / h)."""
     if areas is None:
-        parts = [(m, a, h, a / h) for m, part, h in pieces for a in (part.area(),)]
+        parts = [(m, a, h, a / h, lay) for m, part, h, lay in pieces for a in (part.area(),)]
     else:
-        parts = [(m, a, h, a / (x1 - x0) * landing(h, x0, x1))
-                 for i, (m, _part, h) in enumerate(pieces)
+        parts = [(m, a, h, a / (x1 - x0) * landing(h, x0, x1), lay)
+                 for i, (m, _part, h, lay) in enumerate(pieces)
                  for k, (_strip, x0, x1) in enumerate(strips) for a in (areas.get((i, k), 0),) if a]
     total = sum(p[1] for p in parts)
     conductance = sum(p[3] for p in parts)
-    for m, a, h, w in parts:
-        cpl.add(net, m, fringe(eps(h), t, h) * per_area * total * w / conductance * weight(h))
+    for m, a, h, w, lay in parts:
+        cpl.add(net, m, fringe(eps(h), t, h) * per_area * total * w / conductance * weight(h), ("down", layer, lay, False))
 
 
 def _areas_by_strip(groups, strips) -> list:
@@ -151,7 +161,7 @@ def _areas_by_strip(groups, strips) -> list:
     import klayout.db as kdb
     lab, where = kdb.Region(), []
     for g, pieces in enumerate(groups):
-        for i, (_m, part, _h) in enumerate(pieces):
+        for i, (_m, part, _h, _lay) in enumerate(pieces):
             for p in part.each():
                 lab.insert(kdb.PolygonWithProperties(p, {0: len(where)}))
             where.append((g, i))
@@ -163,7 +173,7 @@ def _areas_by_strip(groups, strips) -> list:
     return out
 
 
-def _fringe_band(cpl, net, band, below, above, stack, t, z, edge_len, band_area, device=False, strips=None):
+def _fringe_band(cpl, net, band, below, above, stack, t, z, edge_len, band_area, device=False, strips=None, layer=""):
     """Share the fringe of ``edge_len`` (m) of a shape by what lies under and over ``band`` (the strip
     beside its edges, by area). Where a conductor of another net lies over the strip (gap h_u), the
     sidewall's field splits between the two planes: the downward fringe keeps h_u / (h_u + h_d)
@@ -181,7 +191,7 @@ def _fringe_band(cpl, net, band, below, above, stack, t, z, edge_len, band_area,
     rest = band
     top_z = z + t
     jobs = []                  # (part of the band, weight of its downward fringe by h_d)
-    for plane in above:
+    for plane in (above if UPFRINGE else ()):
         union = plane.near(rest)
         hit = rest & union
         if hit.is_empty():
@@ -193,7 +203,7 @@ def _fringe_band(cpl, net, band, below, above, stack, t, z, edge_len, band_area,
             if not a:
                 continue
             h_d = z   # the substrate (the nearest plane below decides each part's h_d in _down)
-            cpl.add(net, m, fringe(eps_up(hu), t, hu) * per_area * a * h_d / (hu + h_d))
+            cpl.add(net, m, fringe(eps_up(hu), t, hu) * per_area * a * h_d / (hu + h_d), ("up", layer, plane.name, True))
             jobs.append((part, lambda hd, hu=hu: hu / (hu + hd)))
         rest = rest - union
     jobs.append((rest, lambda hd: 1.0))
@@ -201,7 +211,7 @@ def _fringe_band(cpl, net, band, below, above, stack, t, z, edge_len, band_area,
     weighed = [k for k, ps in enumerate(pieces) if strips and len(ps) > 1]   # one piece takes it all
     areas = dict(zip(weighed, _areas_by_strip([pieces[k] for k in weighed], strips) if weighed else ()))
     for k, (_part, weight) in enumerate(jobs):
-        _down(cpl, net, pieces[k], eps, t, per_area, weight, strips, areas.get(k))
+        _down(cpl, net, pieces[k], eps, t, per_area, weight, strips, areas.get(k), layer)
 
 
 def capacitances(geo, stack) -> Couplings:
@@ -219,8 +229,8 @@ def capacitances(geo, stack) -> Couplings:
         above = _above(geo, stack, i)
         # area, to the nearest conductor below or the substrate
         for net, reg in nets.items():
-            for m, a, h in _under(reg, below, z, cond.device_below):
-                cpl.add(net, m, stack.eps_gap(z - h, z) * a * dbu * dbu / h)
+            for m, a, h, lay in _under(reg, below, z, cond.device_below):
+                cpl.add(net, m, stack.eps_gap(z - h, z) * a * dbu * dbu / h, ("area", cond.name, lay, False))
         eps = stack.eps_band(z, z + t)     # the lateral field: along the layer's band
         # lateral: facing edges of different nets, nearest only (a shielded space check of the layer)
         polys, labels = [], []
@@ -233,6 +243,9 @@ def capacitances(geo, stack) -> Couplings:
             pairs = _facing(polys, labels, halo)
             owners = _nets_of(nets, [e for ep in pairs for e in (ep.first, ep.second)], dbu)
             gaps = _plane_gaps([ep.polygon(0) for ep in pairs], below, above, z, t)
+            section.prepare([(wa, wb, t, ep.distance() * dbu, h_d, h_u)
+                             for ep, (a_net, wa), (b_net, wb), (h_d, h_u) in zip(pairs, owners[0::2], owners[1::2], gaps)
+                             if a_net is not None and b_net is not None and a_net != b_net and ep.distance() > 0])
             for ep, (a_net, wa), (b_net, wb), (h_d, h_u) in zip(pairs, owners[0::2], owners[1::2], gaps):
                 if a_net is None or b_net is None or a_net == b_net:
                     continue
@@ -254,12 +267,18 @@ def capacitances(geo, stack) -> Couplings:
             band = reg.sized(wb) - reg
             perim = reg.perimeter() * dbu
             taken = 0.0
-            for m, lost in covered_top(net, reg, above, z, t, dbu):
-                cpl.add(net, m, fringe(eps_fringe(stack, z, t, h), t, h) * lost)
+            for m, lay, lost in covered_top(net, reg, above, z, t, dbu):
+                cpl.add(net, m, fringe(eps_fringe(stack, z, t, h), t, h) * lost, ("top", cond.name, lay, True))
                 taken += lost
             length = max(0.0, perim - shielded.get(net, 0.0) - spent[(cond.name, net)] - taken)
             strips = _strips(reg, wb, dbu) if STRIPS else None
-            _fringe_band(cpl, net, band, below, above, stack, t, z, length, band.area(), cond.device_below, strips)
+            _fringe_band(cpl, net, band, below, above, stack, t, z, length, band.area(), cond.device_below, strips,
+                         cond.name)
+    for a, b, c in far_couplings(geo, stack, cpl):
+        cpl.add(a, b, c)
+        for n in (a, b):                  # to first order each net's total stays: taken from its ground
+            key = (GROUND, n) if GROUND < n else (n, GROUND)
+            cpl.c[key] = max(0.0, cpl.c.get(key, 0.0) - c)
     float_out(cpl)
     return cpl
 
@@ -284,6 +303,7 @@ def float_out(cpl: Couplings) -> None:
                 cpl.add(a, b, va * vb / total)
 
 
+UPFRINGE = True
 STRIPS = 5    # strips of the fringe band, each twice as wide as the one inside it
 
 

@@ -133,7 +133,7 @@ def corner_couplings(cpl, geo, stack, i, spent) -> None:
             c = corner(eps, cb.thickness, g, d) * f * (ep.first.length() + ep.second.length()) / 2 * dbu
             if c <= 0:
                 continue
-            cpl.add(a_net, b_net, c)
+            cpl.add(a_net, b_net, c, ("corner", cond.name, cb.name, True))
             spent[(cond.name, a_net)] += c / 2 / per_a
             spent[(cb.name, b_net)] += c / 2 / per_b
 

@@ -16,11 +16,11 @@ from __future__ import annotations
 
 class Plane:
     """Conductors at one height: ``z`` (the gap's reference: their top seen from above, their bottom
-    seen from below), ``nets`` ({net: Region}) and ``union`` (their merged Region)."""
+    seen from below), ``nets`` ({net: Region}), ``union`` (their merged Region) and the layer's ``name``."""
 
-    def __init__(self, z: float, nets: dict):
+    def __init__(self, z: float, nets: dict, name: str = ""):
         import klayout.db as kdb
-        self.z, self.nets = z, nets
+        self.z, self.nets, self.name = z, nets, name
         u = kdb.Region()
         for r in nets.values():
             u += r

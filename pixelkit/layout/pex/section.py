@@ -29,19 +29,19 @@ metal1 pair with FastCap2).
 """
 from __future__ import annotations
 
-import functools
 import math
 
-PANELS = 6          # per face of a line (cosine spacing: fine at the corners)
+PANELS = 4          # per face of a line (cosine spacing: fine at the corners)
 
 
 def _ln_integral(px, py, ax, ay, bx, by):
-    """∫ ln|P - X| dX over each segment a -> b for each point P: an array (points x segments)."""
+    """∫ ln|P - X| dX over each segment a -> b for each point P: the points' arrays (..., n) against the
+    segments' (..., m) give (..., n, m)."""
     import numpy as np
     dx, dy = bx - ax, by - ay
     ln = np.hypot(dx, dy)
-    tx, ty = dx / ln, dy / ln
-    rx, ry = px[:, None] - ax[None, :], py[:, None] - ay[None, :]
+    tx, ty = (dx / ln)[..., None, :], (dy / ln)[..., None, :]
+    rx, ry = px[..., :, None] - ax[..., None, :], py[..., :, None] - ay[..., None, :]
     u = rx * tx + ry * ty                     # along the segment from a
     v = -rx * ty + ry * tx                    # across it
     av = np.abs(v)
@@ -51,7 +51,7 @@ def _ln_integral(px, py, ax, ay, bx, by):
         r2 = x * x + v * v
         lg = 0.5 * np.log(np.where(r2 > 0, r2, 1.0))
         return x * lg - x + np.where(av > 0, v * np.arctan(x / safe), 0.0)
-    return f(ln[None, :] - u) - f(-u)
+    return f(ln[..., None, :] - u) - f(-u)
 
 
 def _outline(x0, y0, x1, y1, n):
@@ -83,62 +83,96 @@ def _smooth_part(px, py, qx, qy, d):
 _GAUSS = ((-0.7745966692414834, 5 / 9), (0.0, 8 / 9), (0.7745966692414834, 5 / 9))
 
 
-def _maxwell(rects, above=0.0):
-    """Maxwell capacitance matrix (per length, in units of the permittivity) of rectangles (x0, y0, x1, y1)
-    over a ground plane y = 0 and, with ``above`` > 0, under a second grounded plane at y = ``above``. One
-    plane: each panel's image of opposite charge mirrored in it (closed form). Two: the Green's function
-    of a line charge between two planes (``_smooth_part``): its ln r part closed form, the rest (smooth)
-    by 3-point Gauss quadrature over each panel."""
+def _maxwell(sets, aboves):
+    """Maxwell capacitance matrices (per length, in units of the permittivity) of sets of rectangles (x0, y0,
+    x1, y1; every set as many), each over a ground plane y = 0 and, with its ``above`` > 0, under a second
+    grounded plane at y = ``above``: an array (sets, k, k). One plane: each panel's image of opposite charge
+    mirrored in it (closed form). Two: the Green's function of a line charge between two planes
+    (``_smooth_part``): its ln r part closed form, the rest (smooth) by 3-point Gauss quadrature over each
+    panel. The sets are solved together (one stacked solve)."""
     import numpy as np
-    panels, owner = [], []
-    for k, r in enumerate(rects):
-        p = _outline(*r, PANELS)
-        panels += p
-        owner += [k] * len(p)
-    a = np.array(panels)
-    ax, ay, bx, by = a.T
+    k = len(sets[0])
+    a = np.array([[p for r in rs for p in _outline(*r, PANELS)] for rs in sets], dtype=float)   # (sets, n, 4)
+    ax, ay, bx, by = (a[..., c] for c in range(4))
     px, py = (ax + bx) / 2, (ay + by) / 2
     lengths = np.hypot(bx - ax, by - ay)
+    aboves = np.asarray(aboves, dtype=float)
     # potential at each panel's middle of unit charge density on each panel: -ln r / (2 pi) + the planes'
     m = -_ln_integral(px, py, ax, ay, bx, by) / (2 * math.pi)
-    if above:
+    two = aboves > 0
+    if (~two).any():
+        m[~two] += _ln_integral(px[~two], py[~two], ax[~two], -ay[~two], bx[~two], -by[~two]) / (2 * math.pi)
+    if two.any():
+        d = aboves[two][:, None, None]
         for g, wt in _GAUSS:
-            qx, qy = (ax + bx) / 2 + g * (bx - ax) / 2, (ay + by) / 2 + g * (by - ay) / 2
-            m += _smooth_part(px[:, None], py[:, None], qx[None, :], qy[None, :], above) * (wt * lengths / 2)[None, :]
-    else:
-        m += _ln_integral(px, py, ax, -ay, bx, -by) / (2 * math.pi)
-    owner = np.array(owner)
-    drive = np.stack([(owner == k).astype(float) for k in range(len(rects))], axis=1)
-    sigma = np.linalg.solve(m, drive)
-    charge = sigma * lengths[:, None]
-    return np.stack([charge[owner == j].sum(axis=0) for j in range(len(rects))])
+            qx = (ax + bx)[two] / 2 + g * (bx - ax)[two] / 2
+            qy = (ay + by)[two] / 2 + g * (by - ay)[two] / 2
+            m[two] += (_smooth_part(px[two][:, :, None], py[two][:, :, None], qx[:, None, :], qy[:, None, :], d)
+                       * (wt * lengths[two] / 2)[:, None, :])
+    per = a.shape[1] // k
+    drive = np.repeat(np.eye(k), per, axis=0)                         # (n, k): each rectangle at 1 V in turn
+    sigma = np.linalg.solve(m, np.broadcast_to(drive, (len(sets),) + drive.shape))
+    charge = sigma * lengths[..., None]
+    return charge.reshape(len(sets), k, per, k).sum(axis=2)
 
 
 def _nm(x: float) -> int:
     return int(round(x * 1e9))
 
 
-@functools.lru_cache(maxsize=1 << 14)
-def _pair_nm(w1, w2, t, s, below, above):
-    c = _maxwell([(-w1, below, 0, below + t), (s, below, s + w2, below + t)], below + t + above if above else 0)
-    return -c[0, 1], c[0, 0] + c[0, 1], c[1, 1] + c[1, 0]
+_PAIRS: dict = {}
+_SINGLES: dict = {}
 
 
-@functools.lru_cache(maxsize=1 << 13)
-def _single_nm(w, t, below, above):
-    return _maxwell([(0, below, w, below + t)], below + t + above if above else 0)[0, 0]
+def _solve_pairs(keys) -> None:
+    """Solve the pairs ``keys`` ((w1, w2, t, s, below, above) in nm) not yet known, together."""
+    todo = sorted({k for k in keys if k not in _PAIRS})
+    for i in range(0, len(todo), 256):
+        chunk = todo[i:i + 256]
+        c = _maxwell([[(-w1, b, 0, b + t), (s, b, s + w2, b + t)] for w1, w2, t, s, b, _u in chunk],
+                     [b + t + u if u else 0 for _w1, _w2, t, _s, b, u in chunk])
+        for key, m in zip(chunk, c):
+            _PAIRS[key] = (-m[0, 1], m[0, 0] + m[0, 1], m[1, 1] + m[1, 0])
+
+
+def _solve_singles(keys) -> None:
+    todo = sorted({k for k in keys if k not in _SINGLES})
+    for i in range(0, len(todo), 256):
+        chunk = todo[i:i + 256]
+        c = _maxwell([[(0, b, w, b + t)] for w, t, b, _u in chunk], [b + t + u if u else 0 for _w, t, b, u in chunk])
+        for key, m in zip(chunk, c):
+            _SINGLES[key] = m[0, 0]
+
+
+def _key(w1, w2, t, s, below, above):
+    return (_nm(w1), _nm(w2), _nm(t), _nm(s), _nm(below), _nm(above) if above else 0)
+
+
+def prepare(pairs) -> None:
+    """Solve, together, every pair of ``pairs`` ([(w1, w2, t, s, below, above)]) and the lines alone that
+    ``kept`` asks for them (the extraction hands a layer's pairs over at once: one stacked solve instead of
+    hundreds of small ones)."""
+    keys = [_key(*p) for p in pairs]
+    _solve_pairs(keys)
+    _solve_singles([(w, t, b, u) for w1, w2, t, _s, b, u in keys for w in (w1, w2)])
 
 
 def pair(w1: float, w2: float, t: float, s: float, below: float, above: float | None = None) -> tuple:
     """(coupling, line 1 to ground, line 2 to ground) per length, in units of the permittivity, of two lines
     w1 and w2 wide (m), t thick, s apart, ``below`` over a ground plane and ``above`` under a grounded
     conductor (None: none). Lengths are taken to the nm (a layout's grid is coarser)."""
-    return _pair_nm(_nm(w1), _nm(w2), _nm(t), _nm(s), _nm(below), _nm(above) if above else 0)
+    key = _key(w1, w2, t, s, below, above)
+    if key not in _PAIRS:
+        _solve_pairs([key])
+    return _PAIRS[key]
 
 
 def single(w: float, t: float, below: float, above: float | None = None) -> float:
     """Ground capacitance per length (in units of the permittivity) of one line alone, as ``pair``."""
-    return _single_nm(_nm(w), _nm(t), _nm(below), _nm(above) if above else 0)
+    key = (_nm(w), _nm(t), _nm(below), _nm(above) if above else 0)
+    if key not in _SINGLES:
+        _solve_singles([key])
+    return _SINGLES[key]
 
 
 def kept(w1: float, w2: float, t: float, s: float, below: float, above: float | None = None) -> tuple:

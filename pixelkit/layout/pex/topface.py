@@ -56,7 +56,7 @@ SHARES = [math.log(_u_top(math.pi * (k + 1) / SLICES) / _u_top(math.pi * k / SLI
 
 
 def covered_top(net, reg, above, z, t, dbu):
-    """[(cover net, fringe length m)] the conductors of other nets over the top face of ``net``'s
+    """[(cover net, its layer, fringe length m)] the conductors of other nets over the top face of ``net``'s
     ``reg`` (at height z, t thick; ``above``: ``capacitance._above``) take from its edges' fringe."""
     width = max(SLICES, int(round(z / dbu)))     # the fringe strip's width h, in dbu
     out = {}
@@ -77,9 +77,9 @@ def covered_top(net, reg, above, z, t, dbu):
                     continue
                 area = (hit & cover).area()
                 if area:
-                    out[m] = out.get(m, 0.0) + area / (a1 - a0) * dbu * share * z / (g + z)
+                    out[(m, plane.name)] = out.get((m, plane.name), 0.0) + area / (a1 - a0) * dbu * share * z / (g + z)
             rest = rest - union
-    return sorted(out.items())
+    return [(m, lay, v) for (m, lay), v in sorted(out.items())]
 
 
 @functools.lru_cache(maxsize=1 << 14)    # a layer's edges ask the same few gaps

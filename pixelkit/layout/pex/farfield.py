@@ -1,0 +1,379 @@
+"""The far field between conductors of different layers: what a conductor picks up of another's potential
+beyond the reach of the 2.5D terms (a line crossing another, a line beside another a few um away in plan).
+
+The 2.5D terms of ``capacitance.py`` couple two conductors of different layers where one lies over the
+other or over the band beside its edges (area, fringe landing, the edge's field up to a conductor over
+its band, corner fields): within a fringe strip of each edge, about its height over the substrate. A
+line at 1 V over the substrate keeps a potential around it well beyond that: in its cross-section the
+line and its image in the substrate are a line dipole, whose potential falls as 1 / d^2 only past the
+heights. A grounded conductor crossing it picks up a charge from that potential all along its length.
+Two metal1 / metal2 lines 0.5 um wide crossing at right angles (0.6 um apart in height): FastCap2 0.309
+fF between them, the 2.5D terms 0.131 fF (the overlap's plate term 0.015 fF); half of FastCap2's figure
+comes from the upper line more than 2.6 um from the lower one.
+
+**First order** (derived here; no constant). With conductor A at 1 V and everything else grounded,
+a conductor B that barely disturbs A's field (narrow beside their distance) gets, on each piece of its
+surface, the charge ``-c phi_A``: c is the piece's own capacitance (what it would carry at 1 V, its
+field ending on the grounded surroundings), phi_A the potential A's field has there without B (Green's
+reciprocity, to first order in the pieces' coupling). So ``C_AB = sum c_b phi_A(b)`` over B's pieces,
+and symmetrically ``sum c_a phi_B(a)`` over A's; the two are estimates of one number (on the crossing
+above: 0.303 and 0.310 fF, with phi from each line's exact 2D cross-section, against FastCap2's 0.309).
+
+How the kit evaluates it:
+
+- *pieces*: each net's shapes on a layer sampled on a grid of PITCH (area pieces, at the conductor's
+  bottom, carrying the plate term ``eps A / z`` to the substrate) and along its edges (edge pieces, at
+  its mid-height, carrying the edge's fringe ``fringe.fringe`` per length): the isolated conductor's
+  charge at 1 V in the 2.5D model's own decomposition;
+- *phi_A*: the potential of A's pieces at 1 V as point charges with their images in the substrate
+  (``(q / 4 pi eps)(1 / r - 1 / r*)``), in the permittivity of the band between the two layers;
+- *what the 2.5D terms already hold is left out* (each piece of B sums only the charge no 2.5D term gave
+  to A): a piece of B within A's fringe strip (A's height over the substrate, in plan) of A, and an edge
+  piece of B whose own strip (outward from its edge, B's height wide) reaches A; the same for A's pieces
+  against B;
+- *shielding*: a piece of B is left out where the plan segment from it to the nearest point of A
+  crosses a conductor of another net on A's layer, B's layer or a layer between (a grounded conductor
+  between them takes A's field there), looked up on a raster of RASTER;
+- the coupling is the mean of the two estimates, taken from the two nets' ground couplings (to first
+  order the field lines that now end on B ended on the substrate before: each net's total stays).
+
+Reach: pieces within REACH_HALOS x the stack's halo of the other net.
+"""
+from __future__ import annotations
+
+import math
+
+PITCH = 0.5e-6        # m: the sampling of the pieces
+RASTER = 0.1e-6       # m: the blocking raster's pixel
+REACH_HALOS = 2.0     # pieces farther than this many halos from the other net are not coupled
+
+
+def _samples(region, dbu, pitch):
+    """Area pieces (x, y, area) and edge pieces (x, y, length, nx, ny outward) of a klayout Region (m)."""
+    import klayout.db as kdb
+    import numpy as np
+    p = pitch / dbu
+    ax, ay, aw = [], [], []
+    for poly in region.merged().each():
+        for t in poly.decompose_trapezoids(kdb.Polygon.TD_htrapezoids):
+            pts = [(q.x, q.y) for q in t.each_point()]
+            y0, y1 = min(q[1] for q in pts), max(q[1] for q in pts)
+            lo = sorted(x for x, y in pts if y == y0)
+            hi = sorted(x for x, y in pts if y == y1)
+            n = max(1, int(math.ceil((y1 - y0) / p)))
+            for k in range(n):
+                ya, yb = y0 + (y1 - y0) * k / n, y0 + (y1 - y0) * (k + 1) / n
+                ym = (ya + yb) / 2
+                f = (ym - y0) / (y1 - y0)
+                xl = lo[0] + (hi[0] - lo[0]) * f
+                xr = lo[-1] + (hi[-1] - lo[-1]) * f
+                m = max(1, int(math.ceil((xr - xl) / p)))
+                xs = xl + (np.arange(m) + 0.5) * (xr - xl) / m
+                ax.append(xs)
+                ay.append(np.full(m, ym))
+                aw.append(np.full(m, (xr - xl) / m * (yb - ya)))
+    ex, ey, el, enx, eny = [], [], [], [], []
+    for poly in region.merged().each():
+        for hole in range(-1, poly.holes()):
+            pts = list(poly.each_point_hull()) if hole < 0 else list(poly.each_point_hole(hole))
+            for a, b in zip(pts, pts[1:] + pts[:1]):
+                dx, dy = b.x - a.x, b.y - a.y
+                ln = math.hypot(dx, dy)
+                if ln == 0:
+                    continue
+                m = max(1, int(math.ceil(ln / p)))
+                t = (np.arange(m) + 0.5) / m
+                ex.append(a.x + dx * t)
+                ey.append(a.y + dy * t)
+                el.append(np.full(m, ln / m))
+                # hulls run clockwise in KLayout, holes anticlockwise: the outward normal is (dy, -dx) either way
+                enx.append(np.full(m, dy / ln))
+                eny.append(np.full(m, -dx / ln))
+    cat = (lambda v: np.concatenate(v) * dbu if v else np.zeros(0))
+    area = (cat(ax), cat(ay), (np.concatenate(aw) * dbu * dbu) if aw else np.zeros(0))
+    edge = (cat(ex), cat(ey), cat(el), np.concatenate(enx) if enx else np.zeros(0),
+            np.concatenate(eny) if eny else np.zeros(0))
+    return area, edge
+
+
+class _Pieces:
+    """A layer's pieces with their nets and charges at 1 V: rows x, y, z (m), q (F, per volt), net index,
+    and for edge pieces the outward normal (0 for area pieces)."""
+
+    def __init__(self, nets, names, dbu, z, t, eps_area, fringe_len):
+        import numpy as np
+        rows = []
+        for k, name in enumerate(names):
+            reg = nets.get(name)
+            if reg is None or reg.is_empty():
+                continue
+            (ax, ay, aw), (ex, ey, el, nx, ny) = _samples(reg, dbu, PITCH)
+            zero = np.zeros(len(ax))
+            rows.append((ax, ay, np.full(len(ax), z), eps_area * aw, np.full(len(ax), k), zero, zero,
+                         np.zeros(len(ax), dtype=bool)))
+            rows.append((ex, ey, np.full(len(ex), z + t / 2), fringe_len * el, np.full(len(ex), k), nx, ny,
+                         np.ones(len(ex), dtype=bool)))
+        keys = ("x", "y", "z", "q", "net", "nx", "ny", "edge")
+        for c, key in enumerate(keys):
+            setattr(self, key, np.concatenate([r[c] for r in rows]) if rows else np.zeros(0))
+        self.net = self.net.astype(int)
+        self.edge = self.edge.astype(bool)
+
+
+def _segments(region, dbu):
+    """The edges of a Region as an array of rows (x1, y1, x2, y2), m."""
+    import numpy as np
+    out = [(e.p1.x, e.p1.y, e.p2.x, e.p2.y) for e in region.merged().edges().each()]
+    return np.array(out, dtype=float).reshape(-1, 4) * dbu
+
+
+def _distance(px, py, seg):
+    """Plan distance of each point to the nearest of the segments ``seg`` and that nearest point: (d, qx, qy)."""
+    import numpy as np
+    x1, y1, x2, y2 = (seg[:, k][None, :] for k in range(4))
+    dx, dy = x2 - x1, y2 - y1
+    ll = dx * dx + dy * dy
+    t = np.clip(((px[:, None] - x1) * dx + (py[:, None] - y1) * dy) / np.where(ll > 0, ll, 1.0), 0.0, 1.0)
+    qx, qy = x1 + t * dx, y1 + t * dy
+    d2 = (px[:, None] - qx) ** 2 + (py[:, None] - qy) ** 2
+    j = np.argmin(d2, axis=1)
+    rows = np.arange(len(px))
+    return np.sqrt(d2[rows, j]), qx[rows, j], qy[rows, j]
+
+
+def _inside(px, py, seg):
+    """Whether each point lies inside the region whose edges are ``seg`` (even-odd crossings of a ray to +x)."""
+    import numpy as np
+    x1, y1, x2, y2 = (seg[:, k][None, :] for k in range(4))
+    cross = (y1 > py[:, None]) != (y2 > py[:, None])
+    xi = x1 + (py[:, None] - y1) * (x2 - x1) / np.where(y2 != y1, y2 - y1, 1.0)
+    return (cross & (px[:, None] < xi)).sum(axis=1) % 2 == 1
+
+
+def _ray_hits(px, py, nx, ny, length, seg):
+    """Whether the segment from each point along its normal for ``length`` meets the region of edges ``seg``."""
+    import numpy as np
+    ex, ey = px + nx * length, py + ny * length
+    hit = _inside(ex, ey, seg) if len(seg) else np.zeros(len(px), dtype=bool)
+    if not len(seg):
+        return hit
+    x1, y1, x2, y2 = (seg[:, k][None, :] for k in range(4))
+    ax, ay, bx, by = px[:, None], py[:, None], ex[:, None], ey[:, None]
+
+    def orient(ux, uy, vx, vy, wx, wy):
+        return (vx - ux) * (wy - uy) - (vy - uy) * (wx - ux)
+    d1, d2 = orient(x1, y1, x2, y2, ax, ay), orient(x1, y1, x2, y2, bx, by)
+    d3, d4 = orient(ax, ay, bx, by, x1, y1), orient(ax, ay, bx, by, x2, y2)
+    return hit | (((d1 > 0) != (d2 > 0)) & ((d3 > 0) != (d4 > 0))).any(axis=1)
+
+
+class _Raster:
+    """Conductors on a raster of RASTER over ``bbox`` (m): ``paint`` marks a net's shapes; per pixel the
+    first two nets found there and whether a third is (nets by index; -1: none)."""
+
+    def __init__(self, bbox):
+        import numpy as np
+        x0, y0, x1, y1 = bbox
+        self.x0, self.y0 = x0, y0
+        self.nx = max(1, int(math.ceil((x1 - x0) / RASTER)))
+        self.ny = max(1, int(math.ceil((y1 - y0) / RASTER)))
+        self.a = np.full((self.ny, self.nx), -1, dtype=np.int32)
+        self.b = np.full((self.ny, self.nx), -1, dtype=np.int32)
+        self.more = np.zeros((self.ny, self.nx), dtype=bool)
+
+    def cells(self, x, y):
+        import numpy as np
+        i = ((y - self.y0) * (1 / RASTER)).astype(np.int32)
+        j = ((x - self.x0) * (1 / RASTER)).astype(np.int32)
+        np.clip(i, 0, self.ny - 1, out=i)
+        np.clip(j, 0, self.nx - 1, out=j)
+        return i, j
+
+    def _mark(self, sel, k):
+        """Add net ``k`` to the pixels ``sel`` (an index into the arrays)."""
+        a, b = self.a[sel], self.b[sel]
+        new_a = a == -1
+        rest = ~new_a & (a != k)
+        new_b = rest & (b == -1)
+        third = rest & ~new_b & (b != k)
+        a[new_a] = k
+        b[new_b] = k
+        self.a[sel], self.b[sel] = a, b
+        self.more[sel] |= third
+
+    def paint(self, reg, k, dbu):
+        """Mark the pixels whose centres lie in ``reg`` (a Region, dbu) with net ``k``."""
+        import klayout.db as kdb
+        import numpy as np
+        for poly in reg.merged().each():
+            for t in poly.decompose_trapezoids(kdb.Polygon.TD_htrapezoids):
+                b = t.bbox()
+                if t.area() == b.area():      # a box: the pixels whose centres it holds
+                    i0, i1 = (int(math.ceil((v * dbu - self.y0) / RASTER - 0.5)) for v in (b.bottom, b.top))
+                    j0, j1 = (int(math.ceil((v * dbu - self.x0) / RASTER - 0.5)) for v in (b.left, b.right))
+                    i0, j0 = max(i0, 0), max(j0, 0)
+                    i1, j1 = min(i1, self.ny), min(j1, self.nx)
+                    if i1 > i0 and j1 > j0:
+                        self._mark((slice(i0, i1), slice(j0, j1)), k)
+                    continue
+                (ax, ay, _aw), _ = _samples(kdb.Region(t), dbu, RASTER / 2)
+                i, j = self.cells(ax, ay)
+                cells = np.unique(i.astype(np.int64) * self.nx + j)
+                self._mark((cells // self.nx, cells % self.nx), k)
+
+    def covered(self, x, y):
+        i, j = self.cells(x, y)
+        return self.a[i, j] >= 0
+
+
+def _same_layer_blocked(raster, px, py, qx, qy, own):
+    """Whether the plan segment from each piece (px, py) to the source's nearest point (qx, qy) crosses a
+    conductor of the piece's own layer (``raster``) of a net other than its own ``own``: marched out from the
+    piece, 16 pixels at a time."""
+    import numpy as np
+    n = len(px)
+    out = np.zeros(n, dtype=bool)
+    if not n:
+        return out
+    steps = np.maximum(1, np.ceil(np.hypot(qx - px, qy - py) / RASTER)).astype(int)
+    live = np.arange(n)
+    for s0 in range(1, int(steps.max()) + 1, 16):
+        live = live[~out[live] & (steps[live] >= s0)]
+        if not len(live):
+            break
+        t = np.minimum(np.arange(s0, s0 + 16)[None, :] / steps[live][:, None], 1.0)
+        i, j = raster.cells(px[live][:, None] + (qx - px)[live][:, None] * t,
+                            py[live][:, None] + (qy - py)[live][:, None] * t)
+        a, b, more = raster.a[i, j], raster.b[i, j], raster.more[i, j]
+        mine = own[live][:, None]
+        bad = more | ((a >= 0) & (a != mine)) | ((b >= 0) & (b != mine))
+        out[live[bad.any(axis=1)]] = True
+    return out
+
+
+NEAR_KINDS = ("area", "top", "down", "up", "corner")
+
+
+def far_couplings(geo, stack, cpl) -> list:
+    """[(net a, net b, C)] the far field adds between the conductors of every two layers of ``geo``, over the
+    2.5D terms of ``cpl`` (a ``Couplings``: its ``near`` record between them, and every net's couplings, by
+    which the far field is screened)."""
+    import numpy as np
+    from scipy.ndimage import distance_transform_edt
+    from .fringe import fringe
+    from .nets import FLOATING, GROUND
+    from .topface import eps_fringe
+    dbu = geo.dbu
+    conds = [c for c in stack.conductors if geo.wires.get(c.name) and not c.device_below]
+    if len(conds) < 2:
+        return []
+    names = sorted({n for c in stack.conductors for n in geo.wires.get(c.name, {})})
+    index = {n: k for k, n in enumerate(names)}
+    boxes = [r.bbox() for c in stack.conductors for r in geo.wires.get(c.name, {}).values()]
+    pad = 2 * RASTER
+    bbox = (min(b.left for b in boxes) * dbu - pad, min(b.bottom for b in boxes) * dbu - pad,
+            max(b.right for b in boxes) * dbu + pad, max(b.top for b in boxes) * dbu + pad)
+    rasters, pieces = {}, {}
+    for c in stack.conductors:
+        if geo.wires.get(c.name):
+            rasters[c.name] = _Raster(bbox)
+            for n, r in geo.wires[c.name].items():
+                rasters[c.name].paint(r, index[n], dbu)
+    for c in conds:
+        nets = geo.wires[c.name]
+        # ground (the shield, unjoined rails) and floating fill end no coupling here: they shield (the rasters)
+        pc = _Pieces({n: r for n, r in nets.items() if n != GROUND and not n.startswith(FLOATING)}, names, dbu,
+                     c.z, c.thickness, stack.eps_gap(0.0, c.z) / c.z,
+                     fringe(eps_fringe(stack, c.z, c.thickness, c.z), c.thickness, c.z))
+        # each piece's field images in the top of the nearest conductor under it (the substrate where none is)
+        pc.image = np.zeros(len(pc.x))
+        for low in reversed([x for x in stack.conductors if x.top <= c.z and x.name in rasters]):
+            hit = (pc.image == 0) & rasters[low.name].covered(pc.x, pc.y)
+            pc.image[hit] = low.top
+        pieces[c.name] = pc
+    reach = REACH_HALOS * stack.halo
+    fo = {}                     # (lower layer, upper layer, lower net, upper net, view, zone) -> F
+    for i, ca in enumerate(conds):
+        for cb in conds[i + 1:]:
+            eps = stack.eps_band(ca.z, cb.top)
+            for view, sense, src in (("B", cb, ca), ("A", ca, cb)):     # the upper layer's pieces in the lower's field, and back
+                ps, pa = pieces[sense.name], pieces[src.name]
+                if not len(ps.x) or not len(pa.x):
+                    continue
+                # the conductors between (the sensing layer's own aside), the nearer painted last: each piece sees
+                # the source only where the source's net is the nearest of them in plan (a disc free of the others)
+                between = [c for c in stack.conductors if min(ca.z, cb.z) <= c.z <= max(ca.z, cb.z)
+                           and c.name in rasters and c is not sense]
+                if src is cb:
+                    between = between[::-1]
+                label = np.full(rasters[src.name].a.shape, -1, dtype=np.int32)
+                for c in between:
+                    r = rasters[c.name]
+                    label = np.where(r.a >= 0, r.a, label)
+                    label = np.where(r.b >= 0, r.b, label)
+                empty = label < 0
+                if empty.all():
+                    continue
+                dist, (ii, jj) = distance_transform_edt(empty, sampling=RASTER, return_indices=True)
+                pi, pj = rasters[src.name].cells(ps.x, ps.y)
+                nearest = label[ii[pi, pj], jj[pi, pj]]
+                d = dist[pi, pj]
+                src_nets = np.unique(pa.net)
+                k = np.flatnonzero(np.isin(nearest, src_nets) & (nearest != ps.net) & (d > 0) & (d <= reach))
+                if not len(k):
+                    continue
+                qx = rasters[src.name].x0 + (jj[pi[k], pj[k]] + 0.5) * RASTER
+                qy = rasters[src.name].y0 + (ii[pi[k], pj[k]] + 0.5) * RASTER
+                keep = ~_same_layer_blocked(rasters[sense.name], ps.x[k], ps.y[k], qx, qy, ps.net[k])
+                k = k[keep]
+                for ka in np.unique(nearest[k]):
+                    kk = k[nearest[k] == ka]
+                    a_net = names[ka]
+                    e = ps.edge[kk]
+                    if e.any():              # an edge piece whose own fringe strip reaches A: the 2.5D terms'
+                        seg_a = _segments(geo.wires[src.name][a_net], dbu)
+                        hits = _ray_hits(ps.x[kk[e]], ps.y[kk[e]], ps.nx[kk[e]], ps.ny[kk[e]], sense.z, seg_a)
+                        drop = np.zeros(len(kk), dtype=bool)
+                        drop[np.flatnonzero(e)[hits]] = True
+                        kk = kk[~drop]
+                    if not len(kk):
+                        continue
+                    m = pa.net == ka
+                    sx, sy, sz, sq, si = pa.x[m], pa.y[m], pa.z[m], pa.q[m], pa.image[m]
+                    px, py, pz = ps.x[kk][:, None], ps.y[kk][:, None], ps.z[kk][:, None]
+                    rxy = (px - sx[None, :]) ** 2 + (py - sy[None, :]) ** 2
+                    g = np.where(pz > si[None, :], 1 / np.sqrt(rxy + (pz - sz[None, :]) ** 2)
+                                 - 1 / np.sqrt(rxy + (pz + sz[None, :] - 2 * si[None, :]) ** 2), 0.0)
+                    c = ps.q[kk] * (g @ sq) / (4 * math.pi * eps)
+                    band = d[kk] <= src.z
+                    for kb in np.unique(ps.net[kk]):
+                        b_net = names[kb]
+                        lower, upper = (a_net, b_net) if view == "B" else (b_net, a_net)
+                        own = ps.net[kk] == kb
+                        for zone, sel in (("band", own & band), ("far", own & ~band)):
+                            if sel.any():
+                                key = (ca.name, cb.name, lower, upper, view, zone)
+                                fo[key] = fo.get(key, 0.0) + float(c[sel].sum())
+    total = {}
+    for (x, y), v in cpl.c.items():
+        total[x] = total.get(x, 0.0) + v
+        total[y] = total.get(y, 0.0) + v
+
+    def free(n, m):
+        """The share of net n's charge (at 1 V, the 2.5D terms) that ends on ground or on m, not on a third net."""
+        t = total.get(n, 0.0)
+        return (cpl.to_ground(n) + cpl.pair(n, m)) / t if t > 0 else 1.0
+    out = {}
+    for key in {k[:4] for k in fo}:
+        _la, _lb, a, b = key
+        n = cpl.near.get(key, {})
+        v = {x: n.get(x, 0.0) for x in NEAR_KINDS}
+        screen = free(a, b) * free(b, a)
+        f = {(vw, z): screen * fo.get((*key, vw, z), 0.0) for vw in "AB" for z in ("band", "far")}
+        c_b = v["area"] + v["top"] + v["down"] + max(v["up"] + v["corner"], f[("B", "band")]) + f[("B", "far")]
+        c_a = v["area"] + v["top"] + v["up"] + max(v["down"] + v["corner"], f[("A", "band")]) + f[("A", "far")]
+        extra = (c_a + c_b) / 2 - sum(v.values())
+        if extra > 0:
+            pair = (a, b) if a < b else (b, a)
+            out[pair] = out.get(pair, 0.0) + extra
+    return [(a, b, c) for (a, b), c in sorted(out.items())]
