@@ -4,10 +4,12 @@ FastCap2 on the technology's layered stack, and with the PDK's own extraction co
 
 Independent references: FastCap2 (a 3D boundary-element field solver) on the same shapes and the same
 dielectric layers (GF180MCU's published table: STI, nitride liner, oxides, passivation nitride, air),
-stored in tests/data/extraction_structures.json by
-``python -m pixelkit.layout.pex.structures tests/data/extraction_structures.json`` (~2 min; the slow test
-re-solves it); the GF180MCU open PDK's area coefficients (aF/um2, as klayout-pex carries them). None of the
-structures is a geometry a constant of the model was set on (docs/post-layout.md lists those).
+stored in tests/data/extraction_structures[_SET].json by
+``python -m pixelkit.layout.pex.structures SET OUT.json`` (the slow test re-solves the first set); the
+GF180MCU open PDK's area coefficients (aF/um2, as klayout-pex carries them). Three sets
+(docs/post-layout.md): ``first`` (the issue's eleven) and ``development`` were looked at while the lateral
+and far-field terms were written; ``validation`` was held out, solved once and first compared after the
+model was fixed. None is a geometry a constant of the model was set on (docs/post-layout.md lists those).
 """
 import json
 from dataclasses import replace
@@ -17,13 +19,24 @@ import pytest
 from conftest import ROOT
 from pixelkit.layout.pex import capacitance
 from pixelkit.layout.pex.capacitance import Couplings, float_out
-from pixelkit.layout.pex.structures import kit_terms, structures, term
+from pixelkit.layout.pex.structures import REFERENCE, kit_terms, structures, term
 
-REF = json.loads((ROOT / "tests" / "data" / "extraction_structures.json").read_text())["terms_F"]
-#: outside 10 % of FastCap2, documented (docs/post-layout.md): the lateral formula past S / H ~ 1.5, and
-#: the crossing, whose coupling is mostly 3D (field along the lower line, away from the overlap)
-KNOWN_MISSES = {"lateral_2": 0.126, "lateral_3p2": 0.294, "crossing": -0.573}
-HELD = [n for n in REF if n not in KNOWN_MISSES]
+
+def _ref(which):
+    return json.loads((ROOT / "tests" / "data" / REFERENCE[which]).read_text())["terms_F"]
+
+
+REF = _ref("first")
+REFS = {w: _ref(w) for w in ("development", "validation")}
+#: outside 10 % of FastCap2, documented (docs/post-layout.md, "what the validation set says"): the figure
+#: written there (kit / FastCap2 - 1)
+KNOWN_MISSES = {
+    "development": {"d_cross_m3m4": -0.189, "d_cross_m1m2_45": 0.293, "d_tee_m1m2": -0.153,
+                    "d_parallel_m1m3": -0.143, "d_plate_m3_sub": -0.179},
+    "validation": {"v_cross_m3m4_45": 0.437, "v_plate_m2_sub": -0.159, "v_parallel_m2m4": -0.178,
+                   "v_via_stack_m3": 0.273, "v_tee_m2m3": -0.100},
+}
+HELD = list(REF)
 
 
 @pytest.fixture(scope="module")
@@ -54,17 +67,29 @@ def geo(tmp_path_factory, gf):
     return geometry(gf, tmp_path_factory.mktemp("geo"))
 
 
+@pytest.fixture(scope="module")
+def other_sets(tmp_path_factory, gf):
+    """{set: {structure: F}}: the development and validation sets by the kit's model on FastCap2's windows."""
+    from pixelkit.layout.pex.structures import geometry
+    return {w: kit_terms(gf, geometry(gf, tmp_path_factory.mktemp(w), w), which=w) for w in REFS}
+
+
 @pytest.mark.parametrize("name", HELD)
 def test_structure_within_10_percent_of_fastcap_on_the_layered_stack(signed, name):
     assert signed[name] == pytest.approx(REF[name], rel=0.10, abs=0), f"{name}: {signed[name] / REF[name] - 1:+.1%}"
 
 
-@pytest.mark.parametrize("name", sorted(KNOWN_MISSES))
-def test_documented_misses_stay_as_documented(signed, name):
-    """Outside 10 %, said so in docs/post-layout.md: held within 3 points of the figure written there, so a
-    change of the model that moves them is seen (and the docs re-measured)."""
-    err = signed[name] / REF[name] - 1
-    assert abs(err) > 0.10 and err == pytest.approx(KNOWN_MISSES[name], abs=0.03), f"{name}: {err:+.1%}"
+@pytest.mark.parametrize("which", sorted(REFS))
+def test_development_and_validation_sets_against_fastcap(other_sets, which):
+    """Every structure of the set within 10 % of FastCap2 but the documented misses, each held within 3
+    points of the figure docs/post-layout.md gives (a change of the model that moves one is seen)."""
+    kit, ref, misses = other_sets[which], REFS[which], KNOWN_MISSES[which]
+    assert set(kit) == set(ref)
+    err = {n: kit[n] / ref[n] - 1 for n in ref}
+    bad = {n: f"{e:+.1%}" for n, e in err.items() if n not in misses and abs(e) > 0.10}
+    moved = {n: f"{err[n]:+.1%} (documented {m:+.1%})" for n, m in misses.items()
+             if not (abs(err[n]) > 0.10 and err[n] == pytest.approx(m, abs=0.03))}
+    assert not bad and not moved, (bad, moved)
 
 
 def test_the_stack_gives_the_pdks_area_coefficients(gf):
@@ -87,7 +112,9 @@ def test_the_stack_gives_the_pdks_area_coefficients(gf):
 
 def _parallel_plate_only(mp):
     mp.setattr(capacitance, "fringe", lambda eps, t, h: 0.0)
-    mp.setattr(capacitance, "lateral", lambda *a: 0.0)
+    mp.setattr(capacitance.section, "pair", lambda *a: (0.0, 0.0, 0.0))
+    mp.setattr(capacitance.section, "kept", lambda *a: (1.0, 1.0))
+    mp.setattr(capacitance, "far_couplings", lambda *a: [])
     mp.setattr(capacitance, "corner_couplings", lambda *a: None)
     mp.setattr(capacitance, "wedge_couplings", lambda *a: None)
     mp.setattr(capacitance, "covered_top", lambda *a: [])

@@ -14,9 +14,9 @@ each net on it:
   at that part's gap sends to it at its distance from the edge (below): the single-line fringe of T. Sakurai and K. Tamaru,
   "Simple formulas for two- and three-dimensional capacitances", IEEE Trans. Electron Devices
   30(2), 1983 (their isolated-line formula less its plate term). A neighbour of another net on
-  the same layer at a spacing S keeps ``S / (S + 0.7 h)`` of that edge's fringe (the rest ends
-  on the neighbour, counted below); the 0.7 was set with FastCap2 on a pair of metal1 lines
-  (docs/post-layout.md, the fit structure; the checks use other geometries). That fringe is an
+  the same layer keeps of that edge's fringe what the cross-section's 2D solve says it keeps
+  (``section.kept``: the pair's ground against the line alone; no constant; it replaced the law
+  ``S / (S + 0.7 h)`` whose 0.7 was set with FastCap2 on a metal1 pair). That fringe is an
   isolated edge's, its top face's field wrapping round the edge: where a conductor of another net
   lies over the top face within h of the edge (a MIM capacitor's top plate over its bottom plate, a
   line crossing over another) it takes the top face's share from under it (``topface.py``, derived
@@ -32,10 +32,11 @@ each net on it:
   kit 187 so, 132 now; TG's metal2 line to FD +31 / +21 % -> +10 / +12 %. Over one gap (lines over
   the substrate alone) the total is unchanged; only its spread moves.
 - **lateral**: facing edges of two nets on the same layer, S apart over a projected length l
-  (nearest only: a shape between them shields), couple by the coupling formula of J.-H. Chern
-  et al., "Multilevel metal capacitance models for CAD design synthesis systems", IEEE Electron
-  Device Letters 13(1), 1992: ``eps [1.144 (T/S) (H/(H+2.059 S))^0.0944 + 0.7428 (W/(W+1.592
-  S))^1.144 + 1.158 (W/(W+1.874 S))^0.1612 (H/(H+0.9801 S))^1.179] l``.
+  (nearest only: a shape between them shields), couple by the coupling per length of their
+  cross-section, solved in 2D (``section.py``: the two lines, w1 and w2 wide, over the nearest
+  conductor under the space between them and under the nearest one over it, by boundary elements;
+  no constant) times l. It replaced the formula of J.-H. Chern et al. (IEEE Electron Device Letters
+  13(1), 1992), +12.6 / +29.4 % against FastCap2 at S / H = 1.6 / 2.6 (docs/post-layout.md).
 - **corner fields** (``cornerfield.py``, its derivation there): an edge and a conductor of another net
   on a higher layer beside it in plan (B's sidewall to A's top face and A's sidewall to B's underside,
   by quarter-circle field lines; one constant, set with FastCap2 on a metal1 / metal2 line pair; a
@@ -44,6 +45,10 @@ each net on it:
   faces: the quarter plane between them opened to a half plane by ``w = z^2``, half circles there;
   flush faces end to end: half circles; no constant). Each takes half its charge from the fringe of
   each of its two edges.
+- **far field** (``farfield.py``, its derivation there): between conductors of two layers beyond
+  the reach of the terms above (a line crossing another: most of their coupling lies along the lines
+  away from the overlap; lines side by side a few um apart in plan), to first order by Green's
+  reciprocity over the conductors' sampled charge, taken from the two nets' ground. No constant.
 
 Every coupling is between two named nets; ``0`` is ground (substrate, and the shield).
 """
@@ -191,7 +196,7 @@ def _fringe_band(cpl, net, band, below, above, stack, t, z, edge_len, band_area,
     rest = band
     top_z = z + t
     jobs = []                  # (part of the band, weight of its downward fringe by h_d)
-    for plane in (above if UPFRINGE else ()):
+    for plane in above:
         union = plane.near(rest)
         hit = rest & union
         if hit.is_empty():
@@ -303,7 +308,6 @@ def float_out(cpl: Couplings) -> None:
                 cpl.add(a, b, va * vb / total)
 
 
-UPFRINGE = True
 STRIPS = 5    # strips of the fringe band, each twice as wide as the one inside it
 
 

@@ -3,7 +3,7 @@ higher layer beside it (offset in plan); the same-layer field round a corner is 
 
 The 2.5D terms send an edge's field down (the fringe, to what lies under the strip beside it), up
 only where another net's conductor lies over that strip (shared by area), and sideways only to a
-same-layer edge facing it in projection (Chern et al.'s lateral term). Against FastCap2 that misses
+same-layer edge facing it in projection (the lateral term, ``section.py``). Against FastCap2 that misses
 most of the coupling of conductors whose edges face each other a short way apart in plan on
 different layers: a metal1 line 0.23 um wide and a metal2 line 0.38 um wide beside it (6 um long,
 over the substrate) couple by 48.0 / 43.6 / 37.8 / 28.2 aF/um with their facing edges 0 / 0.23 /

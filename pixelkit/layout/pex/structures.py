@@ -133,7 +133,9 @@ def _development(tech) -> list:
 
 
 def _validation(tech) -> list:
-    """Structures held out: drawn once, solved by FastCap2 once, never looked at while the model changed."""
+    """Structures held out: drawn once, solved by FastCap2 once, never looked at while the model changed (a
+    metal1 / metal2 crossing at 60 degrees was dropped unseen: FastCap2 gave no answer in 20 min, its
+    dielectric interfaces holed by slanted outlines)."""
     return [_pair("v_lat_m1_narrow", "metal1", 0.23, 0.23, 0.8, 30, "va1"),
             _pair("v_lat_m2_close", "metal2", 0.8, 0.8, 0.4, 30, "va2"),
             _pair("v_lat_m2_far", "metal2", 0.8, 0.8, 2.8, 30, "va3"),
@@ -146,7 +148,6 @@ def _validation(tech) -> list:
             _cross("v_cross_m2m3_wide", "metal2", 1.5, "metal3", 1.5, 90, "vc2"),
             _cross("v_cross_m1m4", "metal1", 0.4, "metal4", 0.6, 90, "vc3"),
             _cross("v_cross_m3m4_45", "metal3", 0.5, "metal4", 1.0, 45, "vc4"),
-            _cross("v_cross_m1m2_60", "metal1", 0.6, "metal2", 0.4, 60, "vc5"),
             _cross("v_tee_m2m3", "metal2", 1.0, "metal3", 0.5, 90, "vc6", offset=9.0),
             Structure("v_plate_m2_sub", ("vps", "0"), "metal2 plate to substrate", (("metal2", 0, 0, 8, 12, "vps"),)),
             Structure("v_plate_m3_m2", ("vpl", "vpu"), "metal3 plate over a metal2 plate",
