@@ -160,7 +160,32 @@ def _validation(tech) -> list:
                       tuple(_vias(tech, 0, 0, "vva", "metal3", 1.5) + _vias(tech, 3.5, 0, "vvb", "metal3", 1.5)))]
 
 
-SETS = {"first": _first, "development": _development, "validation": _validation}
+def _holdout(tech) -> list:
+    """A second held-out set, drawn and solved by FastCap2 after the validation set had been looked at and
+    before any change the validation set's misses prompted: never looked at while the model changed."""
+    return [_pair("h_lat_m1_wide", "metal1", 1.2, 0.4, 1.6, 30, "ha1"),
+            _pair("h_lat_m4_close", "metal4", 0.6, 0.6, 0.35, 30, "ha2"),
+            _pair("h_lat_m2_under_plate", "metal2", 0.5, 0.5, 0.9, 30, "ha3", over="metal4"),
+            _cross("h_cross_m2m4", "metal2", 0.6, "metal4", 0.8, 90, "hc1"),
+            _cross("h_cross_m1m3_wide", "metal1", 2.5, "metal3", 0.4, 90, "hc2"),
+            _cross("h_cross_m2m3_30", "metal2", 0.5, "metal3", 0.5, 135, "hc3"),
+            _cross("h_tee_m1m3", "metal1", 0.6, "metal3", 0.6, 90, "hc4", offset=9.2),
+            Structure("h_plate_m4_sub", ("hps", "0"), "metal4 plate to substrate", (("metal4", 0, 0, 14, 9, "hps"),)),
+            Structure("h_plate_m1_sub_small", ("hpm", "0"), "metal1 plate to substrate",
+                      (("metal1", 0, 0, 5, 5, "hpm"),)),
+            Structure("h_plate_m5_m3", ("hpl", "hpu"), "metal5 plate over a metal3 plate",
+                      (("metal3", 0, 0, 14, 14, "hpl"), ("metal5", 2, 2, 12, 12, "hpu"))),
+            Structure("h_parallel_m1m2", ("hpa", "hpb"), "metal1 and metal2 lines side by side, 1 um apart in plan",
+                      (("metal1", 0, 0, 30, 0.5, "hpa"), ("metal2", 0, 1.5, 30, 2.0, "hpb"))),
+            Structure("h_parallel_m3m5", ("hqa", "hqb"), "metal3 and metal5 lines side by side, 2 um apart in plan",
+                      (("metal3", 0, 0, 30, 0.6, "hqa"), ("metal5", 0, 2.6, 30, 3.6, "hqb"))),
+            Structure("h_fringe_m2", ("hfl", "hfp"), "metal2 line over a metal1 plate (the fringe to a plane)",
+                      (("metal1", 0, 0, 36, 14, "hfp"), ("metal2", 3, 6.7, 33, 7.3, "hfl"))),
+            Structure("h_via_stack_m2", ("hva", "hvb"), "metal1 - metal2 pad stacks 1 um wide, 1.5 um apart",
+                      tuple(_vias(tech, 0, 0, "hva", "metal2", 1.0) + _vias(tech, 2.5, 0, "hvb", "metal2", 1.0)))]
+
+
+SETS = {"first": _first, "development": _development, "validation": _validation, "holdout": _holdout}
 
 
 def _bounds(shape):
@@ -270,7 +295,7 @@ def kit_terms(tech, geo, stack=None, which: str = "first") -> dict:
 
 
 REFERENCE = {"first": "extraction_structures.json", "development": "extraction_structures_development.json",
-             "validation": "extraction_structures_validation.json"}
+             "validation": "extraction_structures_validation.json", "holdout": "extraction_structures_holdout.json"}
 
 
 if __name__ == "__main__":      # python -m pixelkit.layout.pex.structures SET OUT.json: the FastCap2 reference
