@@ -59,7 +59,7 @@ from collections import defaultdict
 from . import section
 from .cornerfield import corner_couplings
 from .farfield import far_couplings
-from .fringe import fringe, landing
+from .fringe import fringe, landing, wide, width_of
 from .nets import GROUND
 from .plane import Plane
 from .topface import covered_top, eps_fringe
@@ -137,7 +137,7 @@ def _under_parts(region, below, z, device=False):
         yield GROUND, rest, z, "substrate"
 
 
-def _down(cpl, net, pieces, eps, t, per_area, weight, strips=None, areas=None, layer=""):
+def _down(cpl, net, pieces, eps, t, per_area, weight, strips=None, areas=None, layer="", widen=None):
     """The downward fringe of a part of a band (``per_area``: edge length per band area; ``eps(h)`` its
     permittivity down to a plane h below) to what lies under
     it, ``pieces`` (``_under_parts`` of that part). ``strips`` ([(Region, x0, x1)]: the band by distance from
@@ -156,7 +156,8 @@ def _down(cpl, net, pieces, eps, t, per_area, weight, strips=None, areas=None, l
     total = sum(p[1] for p in parts)
     conductance = sum(p[3] for p in parts)
     for m, a, h, w, lay in parts:
-        cpl.add(net, m, fringe(eps(h), t, h) * per_area * total * w / conductance * weight(h), ("down", layer, lay, False))
+        f = fringe(eps(h), t, h) * (widen(h) if widen and lay == "substrate" else 1.0)
+        cpl.add(net, m, f * per_area * total * w / conductance * weight(h), ("down", layer, lay, False))
 
 
 def _areas_by_strip(groups, strips) -> list:
@@ -178,7 +179,8 @@ def _areas_by_strip(groups, strips) -> list:
     return out
 
 
-def _fringe_band(cpl, net, band, below, above, stack, t, z, edge_len, band_area, device=False, strips=None, layer=""):
+def _fringe_band(cpl, net, band, below, above, stack, t, z, edge_len, band_area, device=False, strips=None, layer="",
+                 widen=None):
     """Share the fringe of ``edge_len`` (m) of a shape by what lies under and over ``band`` (the strip
     beside its edges, by area). Where a conductor of another net lies over the strip (gap h_u), the
     sidewall's field splits between the two planes: the downward fringe keeps h_u / (h_u + h_d)
@@ -216,7 +218,7 @@ def _fringe_band(cpl, net, band, below, above, stack, t, z, edge_len, band_area,
     weighed = [k for k, ps in enumerate(pieces) if strips and len(ps) > 1]   # one piece takes it all
     areas = dict(zip(weighed, _areas_by_strip([pieces[k] for k in weighed], strips) if weighed else ()))
     for k, (_part, weight) in enumerate(jobs):
-        _down(cpl, net, pieces[k], eps, t, per_area, weight, strips, areas.get(k), layer)
+        _down(cpl, net, pieces[k], eps, t, per_area, weight, strips, areas.get(k), layer, widen)
 
 
 def capacitances(geo, stack) -> Couplings:
@@ -278,7 +280,7 @@ def capacitances(geo, stack) -> Couplings:
             length = max(0.0, perim - shielded.get(net, 0.0) - spent[(cond.name, net)] - taken)
             strips = _strips(reg, wb, dbu) if STRIPS else None
             _fringe_band(cpl, net, band, below, above, stack, t, z, length, band.area(), cond.device_below, strips,
-                         cond.name)
+                         cond.name, _widen(reg, above, below, t, dbu))
     for a, b, c in far_couplings(geo, stack, cpl):
         cpl.add(a, b, c)
         for n in (a, b):                  # to first order each net's total stays: taken from its ground
@@ -286,6 +288,34 @@ def capacitances(geo, stack) -> Couplings:
             cpl.c[key] = max(0.0, cpl.c.get(key, 0.0) - c)
     float_out(cpl)
     return cpl
+
+
+def _widen(reg, above, below, t, dbu):
+    """``h -> `` the fringe of ``reg``'s edges over ``fringe.fringe``'s for a plane h below (``fringe.wide``), each
+    polygon at its own width (``fringe.width_of``) or, where that is narrower, the width of its part that
+    faces the substrate alone: no conductor above it (the wide conductor's extra fringe is its top face's
+    charge) nor below it (over a nearer conductor its field ends there); weighed by its perimeter, never
+    below 1 (a narrow line keeps Sakurai and Tamaru's edge, on which the kit's narrow lines were checked with
+    FastCap2: 4 - 10 % above the solve at 0.23 um)."""
+    import klayout.db as kdb
+    cover = kdb.Region()
+    for plane in list(above) + [pl for pl in below if pl.name != "surface"]:
+        cover += plane.union
+    polys = []
+    for p in reg.each():
+        w = width_of(p.area() * dbu * dbu, p.perimeter() * dbu)
+        if not cover.is_empty():
+            free = kdb.Region(p) - cover
+            w = min(w, width_of(free.area() * dbu * dbu, free.perimeter() * dbu)) if not free.is_empty() else None
+        polys.append((p.perimeter() * dbu, w))
+    total = sum(pp for pp, _w in polys)
+    known = {}
+
+    def at(h):
+        if h not in known:
+            known[h] = sum(pp * (max(1.0, wide(w, t, h)) if w else 1.0) for pp, w in polys) / total if total > 0 else 1.0
+        return known[h]
+    return at
 
 
 def float_out(cpl: Couplings) -> None:

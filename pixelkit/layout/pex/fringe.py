@@ -23,6 +23,24 @@ def fringe(eps: float, t: float, h: float) -> float:
     return eps * 1.40 * (t / h) ** 0.222
 
 
+def wide(w: float, t: float, h: float) -> float:
+    """How much more fringe an edge of a conductor w wide has than ``fringe`` gives: the cross-section's 2D
+    solve (``section.single``: the line alone over the plane, less its plate term w / h, halved) over
+    Sakurai and Tamaru's edge. Their formula is a narrow line's: on GF180's metals it is 4 - 10 % above the
+    solve at 0.23 um, within 2 - 7 % from 0.5 to 1 um, then low as the edge's field reaches further over the
+    plane under a wider conductor (a metal3 plate 10 um wide, 3.5 um up: 1.30 against 0.93 eps per edge, the
+    plate -14 %). No constant."""
+    from . import section
+    return (section.single(w, t, h) - w / h) / 2 / (1.40 * (t / h) ** 0.222)
+
+
+def width_of(area: float, perimeter: float) -> float:
+    """The width of a polygon for its edges' fringe: the short side of the rectangle of the same area and
+    perimeter (a rectangle's own short side; a line's width; a square's side)."""
+    q = perimeter / 4
+    return q - math.sqrt(max(0.0, q * q - area))
+
+
 @lru_cache(maxsize=4096)
 def _u(s: float) -> float:
     """u > 0 with 1 + u + ln u = s (the ground plane's point s h / pi beyond the edge, ``landing``)."""
