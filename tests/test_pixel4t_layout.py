@@ -69,3 +69,11 @@ def test_the_foundry_lvs_deck_matches_the_4t_cell(drawn, cli, tmp_path):
                          "--skip", "drc,lvs,pex,lightmap", "--json")
     assert code == 0, err
     assert json.loads(out)["foundry_lvs"]["match"]
+
+
+@pytest.mark.parametrize("args", [("report", "--quick"), ("netlist",), ("verify",)])
+def test_post_layout_is_refused_for_a_pixel_read_by_role(cli, tmp_path, args):
+    """The 4T's extraction is not fed back into its benches: --post-layout is refused, never ignored."""
+    code, _out, err = cli(args[0], P4T, *args[1:], "--post-layout", "--out", tmp_path / ("r.cir" if args[0] == "netlist"
+                                                                                         else "r"))
+    assert code == 2 and "--post-layout" in err and "pixel4t" in err

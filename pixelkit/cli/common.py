@@ -194,6 +194,18 @@ def load(design_path: str, drawable: bool = True, afe: bool = True):
     return view(load_design(design_path, warn=warn, drawable=drawable), afe)
 
 
+def refuse_post_layout(command: str, family: str) -> None:
+    """A pixel read by role has no post-layout view (its layout's extraction is not fed back into its benches):
+    ``--post-layout`` is refused (exit 2) rather than ignored."""
+    ctx = click.get_current_context(silent=True)
+    if ctx is not None and ctx.meta.get("pixelkit.post_layout"):
+        from ..errors import ConfigError
+        why = ("its extraction is not fed back into its benches, docs/pixel4t.md" if family == "pixel4t" else
+               "sign off your own GDS with pixelkit signoff: its post-layout netlist is <top>.post.spice")
+        raise ConfigError(command, "--post-layout", True, f"a dual-pixel design (a {family} design has no "
+                          f"post-layout view yet: {why})")
+
+
 def view(design, afe: bool = True):
     """``design`` as the command asked: its post-layout view with ``--post-layout`` (with the AFEs'
     extraction unless ``afe`` is False), else as loaded."""

@@ -38,6 +38,8 @@ def netlist(design, bench_name, out, models_mode, schematic, as_json):
     if fam in ROLE_FAMILIES:   # a pixel read by role: its own benches (rolepix.export)
         from ..errors import ConfigError
         from ..rolepix.export import export_benches
+        from .common import refuse_post_layout
+        refuse_post_layout("netlist", fam)
         d = load_family_design(design, fam)
         benches = export_benches(d)
         name = "cds" if bench_name == "bench_dual_pixel" else bench_name

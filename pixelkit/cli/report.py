@@ -8,7 +8,8 @@ import click
 
 from .types import FilePath
 
-from .common import design_arg, emit, finishing, json_opt, main, out_checked, post_layout_opt, quiet_opt, view
+from .common import (design_arg, emit, finishing, json_opt, main, out_checked, post_layout_opt, quiet_opt,
+                     refuse_post_layout, view)
 
 
 @main.command("report")
@@ -48,7 +49,8 @@ def report(design, out, baseline, measured, quick, exhaustive, waves, no_cache, 
         if measured is not None:
             raise ConfigError(design, "--measured", str(measured), f"no --measured for a {fam} design (the gap "
                               "diagnosis of a pixel read by role is not written yet)")
-        d, registry = view(load_family_design(design, fam)), ROLE_REGISTRY
+        refuse_post_layout("report", fam)
+        d, registry = load_family_design(design, fam), ROLE_REGISTRY
     else:
         d = view(load_design(design))
     out = Path(out) if out else Path("reports") / d.name

@@ -62,9 +62,8 @@ def verify_cmd(design, corners, temperatures, supplies, mc, seed, mc_full, sched
     from ..family import ROLE_FAMILIES, family_of, load_family_design
     fam = family_of(design)
     if fam in ROLE_FAMILIES:   # a pixel read by role: its own figures, verify's run (rolepix.suite)
-        if click.get_current_context().meta.get("pixelkit.post_layout"):
-            raise ConfigError("verify", "--post-layout", True, f"a design with a layout view (the {fam} family has "
-                              "no extracted view yet: docs/pixel4t.md)")
+        from .common import refuse_post_layout
+        refuse_post_layout("verify", fam)
         d = load_family_design(design, fam)
     elif fam == "ratio":   # its own figures (docs/verify.md); a WDR design is refused by load
         from ..families.ratio.design import load_ratio_design
