@@ -110,6 +110,26 @@ def test_column_load_is_named_with_its_conductance_and_the_setup_gain(thesis_rea
         assert top["setup"][f"gain_{probe}"] == pytest.approx(t["setup_gain"], abs=0.004)
 
 
+def test_a_chain_gain_is_placed_by_the_pixel_probe_and_its_absence_is_said(thesis_read_design, nominal):
+    """A conductance on each column (SPICE, case of sf_gain) moves the pixel probe and, through the chain, the AFE
+    probe: with both probes it is sf_gain, placed in the column, and not confused with an AFE gain. With the AFE
+    probe alone the two act alike: the verdict says they are indistinguishable here and the plan names the
+    pixel probe as the measurement that separates them (issue 46, item 1)."""
+    from pixelkit.gap.diagnose import diagnose
+    from pixelkit.gap.plan import plan
+    cid = gapcases.ids("sf_gain")[0]
+    d = diagnose(thesis_read_design, _table(thesis_read_design, cid), nominal)
+    assert d["best"] == "sf_gain" and "afe_gain" not in d["indistinguishable"], d["verdict"]
+    assert d["position"] == "sf_gain: column" and d["probes"]["pixel"]["moved"] is True
+    rows = [r for r in gapcases.rows(cid) if r["probe"] == "afe"]
+    table = silicon.table_of(thesis_read_design, rows, cid)
+    d = diagnose(thesis_read_design, table, nominal)
+    assert {"sf_gain", "afe_gain"} <= {d["best"], *d["indistinguishable"]}, d["verdict"]
+    assert "indistinguishable on these data" in d["verdict"]
+    p = plan(thesis_read_design, table, nominal, d)
+    assert p["measurements"][0].startswith("the pixel probe"), p["measurements"]
+
+
 def test_afe_gain_and_charge_injection_are_separated(thesis_read_design, nominal, cli, tmp_path):
     """A capacitor across C13 (SPICE) is afe_gain, not an injection offset; `gap plan` runs on it."""
     from pixelkit.gap.diagnose import diagnose

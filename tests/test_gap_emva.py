@@ -137,3 +137,21 @@ def test_broken_dataset_gives_one_line(tmp_path, cli, how):
     assert code == 2 and "Traceback" not in err, err
     lines = err.strip().splitlines()
     assert len(lines) == 1 and needle in lines[0], lines
+
+
+def test_diagnose_of_a_camera_dataset_says_what_gap_emva_says(kit, cli):
+    """`gap diagnose DESIGN --measured <EMVA folder>` diagnoses the camera at camera level with the verdict of
+    `gap emva`, in the words of a circuit-level diagnosis (``diagnose.verdict_text``). This camera's mean leaves
+    the linear model beyond its steps' noise near saturation: a candidate beats the linear model on the held-out
+    steps but leaves a remainder, which is said."""
+    from conftest import REF
+    code, out, err = cli("gap", "diagnose", REF, "--measured", EMVA, "--json")
+    assert code == 0, err
+    r = json.loads(out)
+    assert r["verdict"] == kit["verdict"] and r["best"] == kit["best"] and "design_note" in r
+    assert kit["verdict"].startswith(f"not explained: the best partial candidate is {kit['best']}")
+    assert kit["explained"] is False and kit["fit_p_value"] < 1e-3
+    beats = [c["effect"] for c in kit["ranking"] if c["beats_none"]]
+    assert kit["best"] in beats and "none" not in beats
+    code, out, err = cli("gap", "emva", EMVA)
+    assert code == 0 and out.splitlines()[0] == f"verdict: {kit['verdict']}", out

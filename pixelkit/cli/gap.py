@@ -75,7 +75,8 @@ def _prepare(design, measured, backend):
 
 @gap.command()
 @design_arg
-@click.option("--measured", type=FilePath(dir_okay=False), required=True)
+@click.option("--measured", type=FilePath(), required=True,
+              help="a gap table (CSV) or an EMVA 1288 dataset (folder, or its EMVA1288_Data.txt)")
 @out_opt("write an HTML section in this folder", folder=True)
 @click.option("--seed", type=int, default=0, show_default=True, help="train / held-out split")
 @setup_opts
@@ -83,8 +84,20 @@ def _prepare(design, measured, backend):
 @post_layout_opt
 @json_opt
 def diagnose(design, measured, out, seed, gain_tol, offset_tol, gain_sd, offset_sd, backend, jobs, as_json):
-    """Where the data leave the simulation, which effect explains it, whether the gap is explained."""
+    """Where the data leave the simulation, which effect explains it, whether the gap is explained.
+
+    MEASURED is a gap table (CSV, docs/howto-measurements.md) or an EMVA 1288 dataset (its folder or its
+    EMVA1288_Data.txt): a camera's is diagnosed at camera level against the standard's linear model, as
+    ``gap emva`` does, in the same verdict words."""
     from ..gap.diagnose import analyse
+    if _is_emva(measured):
+        from ..gap.emva import analyse as camera
+        load(design)   # a bad design file is still refused by name
+        r = camera(measured)
+        r["design_note"] = ("an EMVA 1288 dataset is a camera's: diagnosed against the standard's linear model of its "
+                            "own photon transfer; the design's surrogate does not enter")
+        emit(r, as_json, _emva_text)
+        return
     d, table, nom = _prepare(design, measured, backend)
     r, X, resid = analyse(d, table, nom, seed=seed, setup=_setup(gain_tol, offset_tol, gain_sd, offset_sd))
     if out:
@@ -93,9 +106,18 @@ def diagnose(design, measured, out, seed, gain_tol, offset_tol, gain_sd, offset_
     emit(r, as_json, _text)
 
 
+def _is_emva(path) -> bool:
+    """A dataset folder holding EMVA1288_Data.txt, or that descriptor itself."""
+    p = Path(path)
+    return (p.is_dir() and (p / "EMVA1288_Data.txt").is_file()) or p.name == "EMVA1288_Data.txt"
+
+
 def _text(r):
     noise = f"{r['noise_rms_V'] * 1e3:.2f} mV" if r["noise_rms_V"] else "unknown"
+    moved = [p for p, v in r.get("probes", {}).items() if v["moved"]]
     lines = [f"verdict: {r['verdict']}",
+             f"where: {r['position']}" + (f"; the probes that moved beyond their noise: {', '.join(moved)}"
+                                          if r.get("probes") else ""),
              f"best: {r['best']}   held-out gap {r['gap_before_rms_V'] * 1e3:.2f} -> "
              f"{r['gap_after_rms_V'] * 1e3:.2f} mV rms (shrink {r['shrink_frac'] * 100:.0f} %); noise {noise} "
              f"({r['noise_source']}); held-out chi2/row {r['heldout_chi2_per_row']:.2f}"]
@@ -146,6 +168,7 @@ def plan(design, measured, top, gain_tol, offset_tol, gain_sd, offset_sd, backen
         "best operating points:",
         *(f"  {pt['separation_sigma']:7.1f} sigma  " + ", ".join(f"{k}={v}" for k, v in pt["point"].items())
           for pt in x["points"]),
+        *(["what these data lack:"] + [f"  {m}" for m in x["measurements"]] if x.get("measurements") else []),
         "the measurement that separates each pair:",
         *(f"  {pair}: {v['separation_sigma']:.1f} sigma at " + ", ".join(f"{k}={w}" for k, w in v["point"].items())
           for pair, v in x["pairs"].items())]))
@@ -194,6 +217,8 @@ def _selftest_text(kind, x):
         f"  'not explained' on out-of-library {_pct(x['not_explained_on_out_of_library'])}, "
         f"none on effect-free {_pct(x['none_on_clean'])}",
         "  per effect: " + ", ".join(f"{k} {_pct(v)}" for k, v in x["per_effect_top1"].items())]
+    if x.get("per_kind_explained"):
+        lines.append("  explained per mechanism: " + ", ".join(f"{k} {_pct(v)}" for k, v in x["per_kind_explained"].items()))
     for k in ("uniform_named_uniform", "uniform_named_right", "uniform_visible_named_right", "mc_named_per_column",
               "two_effects_both_named", "dark_current_hot_named"):
         if x.get(k):
@@ -255,7 +280,10 @@ def _g(v, fmt):
 
 def _emva_text(x):
     f = x["figures"]
-    lines = [f"EMVA 1288 ({f['bits']} bit, exposure in {f['exposure_unit']}): K = {f['K_DN_per_e']:.5g} DN/e-, "
+    lines = [f"verdict: {x['verdict']}"]
+    if x.get("design_note"):
+        lines.append(f"  ({x['design_note']})")
+    lines += [f"EMVA 1288 ({f['bits']} bit, exposure in {f['exposure_unit']}): K = {f['K_DN_per_e']:.5g} DN/e-, "
              f"QE = {f['QE_percent']:.1f} %, sigma_d = {f['sigma_d_e']:.3g} e-, saturation {f['u_e_sat']:.0f} e-, "
              f"SNR_max {f['SNR_max_dB']:.1f} dB, DR {f['DR_dB']:.1f} dB, LE {f['LE_min_percent']:+.2f} / "
              f"{f['LE_max_percent']:+.2f} %",
@@ -266,7 +294,8 @@ def _emva_text(x):
         lines.append(f"  {x['dark_noise']['effect']}: {x['dark_noise']['text']}")
     lines += [f"  {w['region']:<26} n={w['n']:<3} mean residual {w['mean_resid_DN']:+.3f} DN, "
               f"variance {w['var_resid_rel'] * 100:+.1f} % vs PTC" for w in x["where"]]
-    lines += [f"  {c['effect']:<16} held-out rms {c['heldout_rms_DN']:.3f} DN" for c in x["ranking"]]
+    lines += [f"  {c['effect']:<16} held-out rms {c['heldout_rms_DN']:.3f} DN, chi2/step {c['heldout_chi2_per_row']:9.1f}"
+              f"{'   beats none' if c['beats_none'] else ''}" for c in x["ranking"]]
     lines.append(f"best: {x['best']} (held-out gap {x['gap_before_rms_DN']:.3f} -> {x['gap_after_rms_DN']:.3f} DN, "
-                 f"shrink {x['shrink_frac'] * 100:.0f} %)")
+                 f"shrink {x['shrink_frac'] * 100:.0f} %; noise {x['noise_rms_DN']:.3f} DN: {x['noise_source']})")
     return "\n".join(lines)

@@ -127,11 +127,13 @@ def vm_current(design, array: str, value: float) -> Element:
 DIODE = Model("dfault", "d", (("is", 1e-15), ("n", 1.0)))
 
 
-def column_conductance(net: Netlist, design, col: str, v_pivot: float, g: float, tag: str = "sf") -> Netlist:
+def column_conductance(net: Netlist, design, col: str, v_pivot: float, g: float, tag: str = "sf",
+                       gate: str | None = None) -> Netlist:
     """A conductance ``g`` (S) from column line ``col`` to a source at ``v_pivot``, switched in with the
-    row select of the column's array (connected while a row is read): a load on the column."""
+    row select ``gate`` of the column's array (default: the dual-pixel bench's, by the column's name;
+    connected while a row is read): a load on the column."""
     from ..circuits.devices import mosfet
-    gate = "rs_p" if col == "col_p" else "rs_s"
+    gate = gate or ("rs_p" if col == "col_p" else "rs_s")
     return add_top(net, Element(f"Vpiv_{col}", (f"piv_{col}", "0"), v_pivot),
                    mosfet(f"sw_{col}", col, gate, f"m_{col}", "0", 1e-6, 0.35e-6, design.tech),
                    Element(f"R{tag}_{col}", (f"m_{col}", f"piv_{col}"), 1.0 / g))

@@ -213,8 +213,9 @@ def check_degenerate(table: Table, X, nom, candidates) -> None:
     problems = []
     y = table.num("v_V")
     n = len(y)
-    from .effects import EFFECTS
-    k_max = 2 + max([len(EFFECTS[c][0]) for c in candidates if EFFECTS[c][1] is not None] or [0])
+    from .effects import CORE, EFFECTS
+    k_max = 2 + max([len(CORE[c][0]) if c in CORE else len(EFFECTS[c][0]) for c in candidates
+                     if EFFECTS[c][1] is not None] or [0])
     need = max(12, 4 * k_max)
     if n < need:
         problems.append(f"{n} rows: too few for the candidates' parameters (need at least {need})")

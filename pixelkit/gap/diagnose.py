@@ -42,7 +42,7 @@ from __future__ import annotations
 import numpy as np
 
 from .data import check_degenerate
-from .effects import COLUMN_EFFECTS, applicable
+from .effects import COLUMN_EFFECTS, CORE, CORE_SUFFIX, applicable
 from .fit import N_SETUP, SetupBounds, calibration_terms, column_keys, evaluate, fit
 from .nominal import features
 from .pvalue import chi2_isf, chi2_sf
@@ -76,6 +76,10 @@ def _rms(x):
 def noise(table, X, nom) -> tuple[np.ndarray, str]:
     """Per-row standard deviation of the measured value, and where it came from."""
     sur = np.where(X["afe"], nom.error["afe_rms_V"], nom.error["pixel_rms_V"])
+    if nom.temp is not None and "temp_pixel_rms_V" in nom.error:   # rows off the design temperature: the table's
+        hot = np.asarray(X["dT"]) != 0                                 # own error too
+        sur = np.where(hot, np.hypot(sur, np.where(X["afe"], nom.error["temp_afe_rms_V"],
+                                                   nom.error["temp_pixel_rms_V"])), sur)
     std = table.columns.get("v_std_V")
     if std is not None and np.all(np.isfinite(std)):
         n_avg = table.columns.get("n_avg")
@@ -115,6 +119,10 @@ def analyse(design, table, nom, seed: int = 0, candidates=None, setup: SetupBoun
     spread = {}
     for name in names:
         fits[name] = fit(name, nom, Xtr, y[train], w[train], cols, setup)
+        if name in CORE:   # the core law unless the full one earns its parameters: its BIC (training rows) lower
+            core = fit(name + CORE_SUFFIX, nom, Xtr, y[train], w[train], cols, setup)   # by the margin an effect
+            if core["bic"] <= fits[name]["bic"] + BIC_MARGIN:                             # needs to beat none
+                fits[name] = core
         if name in COLUMN_EFFECTS:   # is the column-to-column spread significant? (nested likelihood ratio)
             uni = fit(name, nom, Xtr, y[train], w[train], cols, setup, uniform=True)
             dof = (len(fits[name]["specs"]) - len(uni["specs"]))
@@ -127,7 +135,7 @@ def analyse(design, table, nom, seed: int = 0, candidates=None, setup: SetupBoun
     none = fits["none"]
     for name, fr in fits.items():
         gain = none["heldout_chi2"] - fr["heldout_chi2"]
-        ranking.append({"effect": name, "heldout_rms_V": fr["heldout_rms_V"], "bic": fr["bic"],
+        ranking.append({"effect": name, "model": fr["model"], "heldout_rms_V": fr["heldout_rms_V"], "bic": fr["bic"],
                         "heldout_chi2_per_row": fr["heldout_chi2"] / max(int(test.sum()), 1),
                         "train_rms_V": _rms(evaluate(name, nom, Xtr, fr, cols) - y[train]),
                         "n_params": fr["k"] - N_SETUP, "params": _params(name, fr), "setup": fr["setup"],
@@ -140,7 +148,9 @@ def analyse(design, table, nom, seed: int = 0, candidates=None, setup: SetupBoun
     winners = [r for r in ranking if r["beats_none"]]
     if winners:
         lowest = min(fits[r["effect"]]["heldout_chi2"] for r in winners)
-        named = next(r for r in winners if fits[r["effect"]]["heldout_chi2"] - lowest < AMBIGUOUS_DCHI2)
+        near = [r for r in winners if fits[r["effect"]]["heldout_chi2"] - lowest < AMBIGUOUS_DCHI2]
+        # of the look-alikes, one that needs the set-up at its tolerance's bound is the weaker reading
+        named = next((r for r in near if not r["setup_at_bound"]), near[0])
         winners.remove(named)
         winners.insert(0, named)
     best = winners[0]["effect"] if winners else "none"
@@ -200,10 +210,12 @@ def analyse(design, table, nom, seed: int = 0, candidates=None, setup: SetupBoun
         "setup_at_bound": setup_flag,
         "ranking": ranking,
         "regions": _regions(Xte, y[test], y[test] + resid_te["none"], y[test] + resid_te[model]),
+        "probes": probes_moved(Xte, resid_te["none"], resid_te[model], w[test] if known else None),
+        "position": position(model),
         "where": breakdown(X, resid_none),
         "remainder_where": _remainder(X, resid_best) if explained is False else [],
         "surrogate_error": nom.error,
-        "verdict": _verdict(model.replace("+", " and "), explained, ambiguous, setup_flag, top)
+        "verdict": verdict_text(model.replace("+", " and "), explained, ambiguous, setup_flag, top)
         + ("; these data cannot show " + ", ".join(e for e, _ in blind) + " (one value of the conditions they scale "
            "with)" if blind else "")
         + ("; the bench's calibration is not stated (--gain-sd / --offset-sd): a gain and offset of one probe's path "
@@ -258,7 +270,7 @@ def _second_effect(best, names, fits, nom, Xtr, Xte, ytr, yte, wtr, wte, cols, s
         if c in (best, "none") or c in COLUMN_EFFECTS:
             continue
         name = f"{best}+{c}"
-        fr = fit(name, nom, Xtr, ytr, wtr, cols, setup)
+        fr = fit(f"{fits[best]['model']}+{fits[c]['model']}", nom, Xtr, ytr, wtr, cols, setup)
         r = evaluate(name, nom, Xte, fr, cols) - yte
         fr["heldout_rms_V"], fr["heldout_chi2"] = _rms(r), float(np.sum((r / wte) ** 2)) + fr["calibration_chi2"]
         gain = fits[best]["heldout_chi2"] - fr["heldout_chi2"]
@@ -300,7 +312,10 @@ def _shrink(before, after, noise_rms):
     return float(1.0 - a / b) if b > 0 else 0.0
 
 
-def _verdict(best, explained, ambiguous, setup_flag, top):
+def verdict_text(best, explained, ambiguous, setup_flag=False, top="none"):
+    """The verdict's words (``gap diagnose``, ``gap emva``): '<effect> explains the gap', 'not explained: the
+    best partial candidate is <effect>, a significant remainder stays', 'no effect needed: ...', with the
+    candidates the data cannot tell apart."""
     if explained is False:
         name = best if best != "none" else top
         s = f"not explained: the best partial candidate is {name}, a significant remainder stays"
@@ -322,6 +337,38 @@ def _params(name, fr):
         out = {f"{k}_rms": float(np.std(vals[[j == k for j in kinds]])) for k in dict.fromkeys(kinds)}
         return out | {"n_columns": kinds.count(kinds[0])}
     return {spec[0]: iv for spec, iv in zip(fr["specs"], fr["intervals"])}
+
+
+# where in the chain each effect acts (the probes it can move: a pixel-side effect moves the pixel probe and,
+# through the chain, the AFE probe; an AFE-side one the AFE probe alone; the set-up each probe on its own)
+POSITION = {"gse": "pixel (storage node)", "fd_leakage": "pixel (storage node)", "dark_current": "pixel (photodiode)",
+            "crosstalk": "pixel (photodiode)", "lag": "pixel (photodiode)", "sf_strength": "pixel (source follower)",
+            "charge_injection": "pixel (reset switch) and AFE (vm switch)", "sf_gain": "column", "column_load": "column",
+            "column_pixel": "column", "settling": "column", "afe_gain": "AFE", "column_afe": "AFE",
+            "readout_light": "AFE (and the output stage)", "readout_light_idle": "column sampling node and AFE",
+            "supply": "supply", "none": "set-up (each probe's gain and offset)"}
+
+
+def position(model: str) -> str:
+    """Where in the chain the named model's effects act."""
+    from .effects import base_name
+    return "; ".join(f"{e}: {POSITION.get(e, '?')}" for e in base_name(model).split("+"))
+
+
+def probes_moved(X, before, after, sigma) -> dict:
+    """Per probe on the held-out rows: the gap the nominal model leaves (rms), what the named model leaves, and
+    whether the probe moved beyond its noise (the nominal's held-out chi-square there, p < P_EXPLAINED): the
+    evidence that places an effect (a chain gain seen at the pixel probe is upstream of the AFE)."""
+    out = {}
+    for label, m in (("pixel", ~X["afe"]), ("afe", X["afe"])):
+        if not m.any():
+            continue
+        moved = None
+        if sigma is not None:
+            moved = bool(chi2_sf(float(np.sum((before[m] / sigma[m]) ** 2)), int(m.sum())) < P_EXPLAINED)
+        out[label] = {"n": int(m.sum()), "gap_before_rms_V": _rms(before[m]), "gap_after_rms_V": _rms(after[m]),
+                      "moved": moved}
+    return out
 
 
 def _regions(X, y, before, after):

@@ -7,8 +7,11 @@ Domains (the term each effect feeds):
 - storage-node charge ``fd`` (on the FD during its hold; the measured response
   of the FD site, ``responses``): ``gse`` (stray light on the FD),
   ``fd_leakage`` (droop with its T law);
-- a load on the column during the read (``col_g``, measured): ``sf_gain``;
-  the source follower's current factor (``sf_w``, measured): ``sf_strength``;
+- a load on the column during the read (``col_g``, measured, and the load current for a pivot
+  elsewhere than the reset level: a load's output conductance pivots near its bias's V_DS): ``sf_gain``;
+  the source follower's size (``sf_w``, measured: its current factor; ``c_fd``, measured: the gate
+  capacitance an L change puts on FD beyond the width's; its threshold: a level shift of the pixel
+  probe, which double sampling cancels): ``sf_strength``;
   the column load's current (``load``, measured): ``column_load`` (the same
   on every column) and ``column_pixel`` (per column: mismatch);
 - AFE: ``afe_gain``, the SC stage's gain: C13 larger (``deps``, pivots at the
@@ -68,35 +71,61 @@ class Param:
     starts: tuple = ()     # extra starting values, where the response is not monotone in the parameter
 
 
+K_B_EV = 8.617333262e-5    # eV/K
+T_REF_K = 298.15           # the T laws' reference, 25 degC
+# the junction law's free parameters (``_junction``): the diffusion share at 25 degC, the generation's trap offset
+# of its activation energy (eV: mid-gap 0; a level off mid-gap raises it), and the voltage dependence of a
+# junction current (1/V of the column signal: the depletion width, ~ (V_R + V_bi)^m, m 1/3 .. 1/2)
+DIFF_SHARE = Param("diff_share", 0.0, 1.0, 0.1, 0.2)
+DEA = Param("dea_eV", -0.15, 0.25, 0.05, 0.0)
+BETA = Param("beta_per_V", 0.0, 0.6, 0.1, 0.0)
+# the floating diffusion's capacitance off the design (F; the ``c_fd`` site's range)
+C_FD = Param("c_fd_F", -0.4e-15, 1.0e-15, 1e-16, 0.0)
 # the readout-light area's scan (fit._scan): 12 values a decade, both signs, over the bounds
 AREA_SCAN = tuple(float(s * v) for s in (-1, 1) for v in np.geomspace(1e-12, 3e-9, 42))
 # the idle readout's open area (idlelight): 10 a decade from 0.01 to 1000 um2
 IDLE_SCAN = tuple(float(v) for v in np.geomspace(1e-14, 1e-9, 51))
 
 
-def _t_law(X, td):
-    return 2.0 ** ((X["T"] - 25.0) / td)
+def _junction(X, diff_share, dea):
+    """I(T) / I(25 degC) of a reverse-biased junction at each row's temperature: generation (~ n_i, its
+    activation energy moved by ``dea`` eV when the trap level lies off mid-gap) and diffusion (~ n_i^2) in the
+    share ``diff_share`` at 25 degC; n_i of silicon (``X["ni_rel"]``, ``nominal.features``)."""
+    n = X["ni_rel"]
+    gen = n * np.exp(-dea / K_B_EV * (1.0 / (X["T"] + 273.15) - 1.0 / T_REF_K))
+    return (1.0 - diff_share) * gen + diff_share * n * n
 
 
-def _gse(X, p):            # light reaching the FD while it holds: 1/GSE of the PD's response
-    return {"fd": p[0] * X["J"] * X["a_ref"] * X["t_wait"]}
+def _self_limited(a, beta, s, k):
+    """The charge a junction current collects when it falls with the junction's voltage: ``a`` (C) at the
+    reset voltage, less ``beta`` (1/V) per volt the node has fallen - by the signal ``s`` it holds and by half
+    the charge's own swing (``k``: V per C): a (1 - beta s) / (1 + beta a k / 2)."""
+    return a * (1.0 - beta * s) / (1.0 + beta * a * k / 2.0)
 
 
-def _fd_leakage(X, p):     # FD droop in the dark while it holds; T-doubling
-    return {"fd": p[0] * _t_law(X, p[1]) * X["t_wait"]}
+def _gse(X, p):            # light reaching the FD while it holds: 1/GSE of the PD's response, each array's own
+    pls = np.where(X["arr"] == 0, p[0], p[1])
+    return {"fd": _self_limited(pls * X["J"] * X["a_ref"] * X["t_wait"], p[2], X["signal"], X["fd_k"])}
 
 
-def _dark_current(X, p):   # PD dark current over the integration; T-doubling; perimeter-scaled
-    per = np.where(X["arr"] == 0, 1.0, X["perimeter_ratio"])
-    return {"dq": p[0] * per * _t_law(X, p[1]) * X["t_int"]}
+def _fd_leakage(X, p):     # FD junction leakage while it holds: the junction's T law, voltage dependent
+    return {"fd": _self_limited(p[0] * _junction(X, p[1], p[2]) * X["t_wait"], p[3], X["signal"], X["fd_k"])}
 
 
-def _charge_injection(X, p):  # clock coupling onto FD (RST) and onto the AFE's virtual ground (p1)
-    return {"rst_fd": p[0], "p1_vm": p[1]}
+def _dark_current(X, p):   # PD dark current over the integration: area and perimeter, the junction's T law
+    geo = np.where(X["arr"] == 0, 1.0, p[1] * X["perimeter_ratio"] + (1.0 - p[1]) * X["area_ratio"])
+    a = p[0] * geo * _junction(X, p[2], p[3]) * X["t_int"]
+    return {"dq": _self_limited(a, p[4], X["signal"] / 2.0, X["dsdq"])}
 
 
-def _sf_gain(X, p):        # a load on the column during the read (a conductance to the reset level)
-    return {"col_g": p[0]}
+def _charge_injection(X, p):  # clock coupling onto FD (RST) and onto the AFE's virtual ground (p1); a larger
+    return {"rst_fd": p[0], "p1_vm": p[1], "c_fd": p[2]}   # switch also puts its junction on FD
+
+
+def _sf_gain(X, p):        # a conductance loading the column during the read, to a pivot dv from the reset level
+    # (the measured col_g site pivots at the reset level; the rest of its current, g (v_rst - V_pivot), is a
+    # change of the column's pull-down current: the load site, relative to the bias current)
+    return {"col_g": p[0], "load": -p[0] * p[1] / X["i_bias"]}
 
 
 def _column_load(X, p):    # the column load's current, the same on every column
@@ -107,8 +136,10 @@ def _afe_gain(X, p):       # SC stage gain: C13 larger (extra eps), C11 (also th
     return {"deps": p[0], "c11": p[1], "a_ol": p[2]}
 
 
-def _sf_strength(X, p):    # the source follower's current factor (its W / L, mobility), the same in every pixel
-    return {"sf_w": p[0]}
+def _sf_strength(X, p):    # the source follower's size: current factor (W / L, mobility), gate capacitance on FD
+    # beyond the width's own, threshold (a level shift), and its temperature coefficient off the model's (the
+    # levels' measured temperature shift, scaled)
+    return {"sf_w": p[0], "c_fd": p[1], "dv_col": -p[2], "temp_scale": p[3]}
 
 
 def _readout_light(X, p):  # junction photocurrent on the AFE's vm (area x irradiance) and the output stage
@@ -123,8 +154,9 @@ def _crosstalk(X, p):      # light under the secondary's mask: irradiance x the 
     return {"dq": p[0] * X["J"] * X["a_sub"] * X["t_int"] * (X["arr"] == 1)}
 
 
-def _lag(X, p):            # image lag: a fraction of the previous frame's charge stays
-    return {"dq": p[0] * X["i_prev"] * X["t_int"]}
+def _lag(X, p):            # image lag: a fraction of the previous frame's charge, its traps saturating
+    q_sat = p[1] * X["q_max"]
+    return {"dq": p[0] * q_sat * -np.expm1(-X["i_prev"] * X["t_int"] / q_sat)}
 
 
 def _supply(X, p):         # supply coupling: each probe moves with vdd
@@ -155,18 +187,19 @@ COLUMN_EFFECTS = {
 
 
 EFFECTS = {
-    "gse": ((Param("pls", 0.0, 0.1, 1e-3, 1e-4),), _gse),
-    "fd_leakage": ((Param("i_fd_A", 0.0, 1e-11, 1e-14, 1e-15), Param("t_double_K", 3.0, 15.0, 1.0, 7.0)),
-                   _fd_leakage),
-    "dark_current": ((Param("i_d_A", 0.0, 1e-11, 1e-14, 1e-15), Param("t_double_K", 3.0, 15.0, 1.0, 7.0)),
-                     _dark_current),
+    "gse": ((Param("pls_primary", 0.0, 0.1, 1e-3, 1e-4), Param("pls_secondary", 0.0, 0.1, 1e-3, 1e-4),
+             BETA), _gse),
+    "fd_leakage": ((Param("i_fd_A", 0.0, 1e-11, 1e-14, 1e-15), DIFF_SHARE, DEA, BETA), _fd_leakage),
+    "dark_current": ((Param("i_d_A", 0.0, 1e-11, 1e-14, 1e-15), Param("perimeter_share", 0.0, 1.0, 0.1, 0.5),
+                      DIFF_SHARE, DEA, BETA), _dark_current),
     "charge_injection": ((Param("c_rst_fd_F", 0.0, 4.5e-17, 1e-17, 1e-17),
-                          Param("c_p1_vm_F", -3e-15, 3e-15, 1e-15, 0.0)), _charge_injection),
-    "sf_gain": ((Param("g_col_S", 0.0, 2.5e-7, 1e-7, 5e-8),), _sf_gain),
+                          Param("c_p1_vm_F", -3e-15, 3e-15, 1e-15, 0.0), C_FD), _charge_injection),
+    "sf_gain": ((Param("g_col_S", 0.0, 2.5e-7, 1e-7, 5e-8), Param("pivot_dv_V", -1.5, 1.5, 0.1, 0.0)), _sf_gain),
     "column_load": ((Param("load_rel", -0.3, 0.3, 1e-2, 0.0),), _column_load),
     "afe_gain": ((Param("eps_extra", -0.05, 1.0, 1e-2, 0.0), Param("c11_rel", -0.075, 0.075, 1e-2, 0.0),
                   Param("opamp_gain_loss", 0.0, 45.0, 1.0, 0.0)), _afe_gain),
-    "sf_strength": ((Param("sf_w_rel", -0.6, 0.9, 0.1, 0.0),), _sf_strength),
+    "sf_strength": ((Param("sf_w_rel", -0.6, 0.9, 0.1, 0.0), C_FD, Param("dvt_V", -0.2, 0.2, 1e-2, 0.0),
+                     Param("tc_rel", -0.5, 0.5, 0.05, 0.0)), _sf_strength),
     # the vm response has the op-amp clamp's steps in the current: the fit scans AREA_SCAN for its starts
     "readout_light": ((Param("a_junction_m2", -3e-9, 3e-9, 1e-11, 0.0, AREA_SCAN),
                        Param("out_V_per_A_m2", -1.0, 1.0, 1e-5, 0.0)), _readout_light),
@@ -174,13 +207,45 @@ EFFECTS = {
     "crosstalk": ((Param("k_xt", 0.0, 0.5, 1e-3, 1e-4),), _crosstalk),
     "column_pixel": ((), None),   # per-column terms: COLUMN_EFFECTS
     "column_afe": ((), None),
-    "lag": ((Param("lag", 0.0, 0.5, 1e-2, 1e-3),), _lag),
+    "lag": ((Param("lag", 0.0, 0.5, 1e-2, 1e-3), Param("q_sat_rel", 0.2, 20.0, 1.0, 10.0)), _lag),
     "supply": ((Param("pixel_V_per_V", -1.0, 1.0, 1e-2, 0.0), Param("afe_V_per_V", -1.0, 1.0, 1e-2, 0.0)), _supply),
     "settling": ((Param("tau_s", 1e-9, 1e-5, 1e-7, 5e-8),), _settling),
 }
 
 
 NAMES = tuple(EFFECTS)
+
+# Each effect's *core*: its parameters with the physical ones silicon may vary held at the textbook value
+# (one PLS for both storage nodes and no voltage dependence; a generation-limited junction law with its
+# activation energy free, the PD's dark current scaled by its perimeter; lag linear). The diagnosis fits the
+# core and the full effect and keeps the one with the lower BIC (training rows), so a law's extra freedom is
+# used only where the data ask for it (``diagnose``). core name -> (its parameters, the full parameter vector)
+CORE = {
+    "gse": ((Param("pls", 0.0, 0.1, 1e-3, 1e-4),), lambda p: [p[0], p[0], 0.0]),
+    "fd_leakage": ((Param("i_fd_A", 0.0, 1e-11, 1e-14, 1e-15), DEA), lambda p: [p[0], 0.0, p[1], 0.0]),
+    "dark_current": ((Param("i_d_A", 0.0, 1e-11, 1e-14, 1e-15), DEA), lambda p: [p[0], 1.0, 0.0, p[1], 0.0]),
+    "lag": ((Param("lag", 0.0, 0.5, 1e-2, 1e-3),), lambda p: [p[0], 1e6]),
+    "sf_gain": ((Param("g_col_S", 0.0, 2.5e-7, 1e-7, 5e-8),), lambda p: [p[0], 0.0]),
+    "sf_strength": ((Param("sf_w_rel", -0.6, 0.9, 0.1, 0.0),), lambda p: [p[0], 0.0, 0.0, 0.0]),
+    "charge_injection": ((Param("c_rst_fd_F", 0.0, 4.5e-17, 1e-17, 1e-17), Param("c_p1_vm_F", -3e-15, 3e-15, 1e-15, 0.0)),
+                         lambda p: [p[0], p[1], 0.0]),
+}
+CORE_SUFFIX = ":core"
+
+
+def effect(name: str):
+    """(parameters, terms function) of a library effect or of its core (``<name>:core``)."""
+    if name.endswith(CORE_SUFFIX):
+        base = name[:-len(CORE_SUFFIX)]
+        params, expand = CORE[base]
+        fn = EFFECTS[base][1]
+        return params, lambda X, p: fn(X, expand(p))
+    return EFFECTS[name]
+
+
+def base_name(model: str) -> str:
+    """The effect a fitted model (``gse:core``, ``gse:core+lag``) names."""
+    return "+".join(m.split(":")[0] for m in model.split("+"))
 
 
 def applicable(X) -> tuple:

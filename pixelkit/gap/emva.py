@@ -26,7 +26,11 @@ Camera-level gap (``analyse``). Nominal model (EMVA 1288 Linear): mu_y =
 mu_y.dark + R mu_p, sigma_y^2 = sigma_y.dark^2 + K (mu_y - mu_y.dark), clipped
 at the ADC's full scale. Where: residuals of the mean and of the variance by
 fraction of saturation. Which: candidate camera-level augmentations, each
-fitted on the even exposure steps and judged on the odd (held-out) ones:
+fitted on the even exposure steps and judged on the odd (held-out) ones, with the
+statistics and verdict words of ``gap diagnose`` (``camera_verdict``): each step's
+mean is known to its own noise (the pair's temporal variance over its pixels, and the
+quantisation's), a candidate must beat the linear model on the held-out steps, and
+"explained" means the held-out steps are then within that noise:
 
 - ``nonlinearity``: response compression mu = mu_d + R mu_p (1 - b R mu_p)
   (the pixel-level ``sf_gain`` / C(V) signature);
@@ -491,20 +495,63 @@ def _analyse(desc: dict, tp: dict) -> dict:
                           "mean_resid_DN": float(resid[sel].mean()),
                           "rms_resid_DN": float(np.sqrt(np.mean(resid[sel] ** 2))),
                           "var_resid_rel": float(np.mean(var[sel] / k_pred - 1))})
-    ranking = [{"effect": "none", "heldout_rms_DN": float(np.sqrt(np.mean(resid[test & keep] ** 2))), "params": {}}]
+    n_pix = 2.0 * desc["width"] * desc["height"]
+    sigma = np.sqrt((np.maximum(var, 0.0) + S2Q) / n_pix)
+    fits = {"none": ((), pred0)}
     for name, (x0, lo, hi) in CANDIDATES.items():
-        f = (lambda p, name=name: _mean_model(mu_p[train & keep], t[train & keep], nom, name, p) - mu[train & keep])
+        f = (lambda p, name=name: (_mean_model(mu_p[train & keep], t[train & keep], nom, name, p)
+                                   - mu[train & keep]) / sigma[train & keep])
         r = least_squares(f, x0, bounds=(lo, hi))
-        pred = _mean_model(mu_p, t, nom, name, r.x)
-        ranking.append({"effect": name, "params": dict(zip(["value"], r.x.tolist())),
-                        "heldout_rms_DN": float(np.sqrt(np.mean((pred - mu)[test & keep] ** 2))),
-                        "heldout_max_DN": float(np.max(np.abs(pred - mu)[test & keep]))})
-    ranking.sort(key=lambda x: x["heldout_rms_DN"])
-    before = ranking[[x["effect"] for x in ranking].index("none")]["heldout_rms_DN"]
-    best = ranking[0]
+        fits[name] = (tuple(r.x), _mean_model(mu_p, t, nom, name, r.x))
+    verdict = camera_verdict(fits, mu, sigma, train & keep, test & keep)
+    ranking = [{"effect": name, "params": dict(zip(["value"], [float(x) for x in p])),
+                "heldout_rms_DN": float(np.sqrt(np.mean((pred - mu)[test & keep] ** 2))),
+                "heldout_max_DN": float(np.max(np.abs(pred - mu)[test & keep])),
+                **verdict["per_model"][name]} for name, (p, pred) in fits.items()]
+    ranking.sort(key=lambda x: x["heldout_chi2"])
+    rms = {x["effect"]: x["heldout_rms_DN"] for x in ranking}
+    shown = verdict["best"] if verdict["best"] != "none" else (verdict["best_partial"] or "none")
     dark_noise = _dark_noise_verdict(fig)
-    return {"figures": fig, "dark_noise": dark_noise, "dataset": desc["source"], "n_bright_steps": int(mu.size), "n_dark_steps": int(m["d"].shape[0]),
-            "nominal": nom, "where": where, "ranking": ranking, "best": best["effect"],
-            "gap_before_rms_DN": before, "gap_after_rms_DN": best["heldout_rms_DN"],
-            "shrink_frac": 1 - best["heldout_rms_DN"] / before,
+    text = verdict["verdict"] + (f"; in the dark frames: {dark_noise['effect']}" if dark_noise else "")
+    return {"figures": fig, "dark_noise": dark_noise, "dataset": desc["source"], "n_bright_steps": int(mu.size),
+            "n_dark_steps": int(m["d"].shape[0]), "nominal": nom, "where": where, "ranking": ranking,
+            "best": verdict["best"], "explained": verdict["explained"], "best_partial": verdict["best_partial"],
+            "indistinguishable": verdict["indistinguishable"], "verdict": text,
+            "fit_p_value": verdict["per_model"][shown]["heldout_p"],
+            "noise_rms_DN": float(np.sqrt(np.mean(sigma[test & keep] ** 2))),
+            "noise_source": "each step's mean: its pair's temporal variance and the quantisation over its pixels",
+            "gap_before_rms_DN": rms["none"], "gap_after_rms_DN": rms[shown],
+            "shrink_frac": 1 - rms[shown] / rms["none"] if rms["none"] > 0 else 0.0,
             "dark_level_spread_DN": float(np.ptp(m["d"][:, 2]))}
+
+
+def camera_verdict(fits: dict, mu, sigma, train, test) -> dict:
+    """The camera-level answer in the statistics and words of ``gap diagnose`` (``diagnose``): a candidate beats
+    the linear model when its held-out chi-square is lower by more than the (1 - P_BEAT) point of chi-square(k)
+    and its training chi-square + k ln n (BIC) by ``BIC_MARGIN``; the lowest held-out chi-square of those is
+    named, those within ``AMBIGUOUS_DCHI2`` of it are listed as indistinguishable; explained when the named
+    model's held-out chi-square is consistent with the steps' noise (p >= P_EXPLAINED)."""
+    from .diagnose import AMBIGUOUS_DCHI2, BIC_MARGIN, P_BEAT, P_EXPLAINED, verdict_text
+    from .pvalue import chi2_isf, chi2_sf
+    n_tr, n_te = int(train.sum()), int(test.sum())
+    per = {}
+    for name, (p, pred) in fits.items():
+        r = (pred - mu) / sigma
+        c_te, c_tr = float(np.sum(r[test] ** 2)), float(np.sum(r[train] ** 2))
+        per[name] = {"heldout_chi2": c_te, "heldout_chi2_per_row": c_te / max(n_te, 1), "n_params": len(p),
+                     "bic": c_tr + len(p) * float(np.log(max(n_tr, 1))), "heldout_p": float(chi2_sf(c_te, n_te))}
+    none = per["none"]
+    for name, x in per.items():
+        x["beats_none"] = bool(name != "none"
+                               and none["heldout_chi2"] - x["heldout_chi2"] > chi2_isf(P_BEAT, max(x["n_params"], 1))
+                               and none["bic"] - x["bic"] > BIC_MARGIN)
+    winners = sorted((n for n, x in per.items() if x["beats_none"]), key=lambda n: per[n]["heldout_chi2"])
+    best = winners[0] if winners else "none"
+    ambiguous = [n for n in winners[1:] if per[n]["heldout_chi2"] - per[best]["heldout_chi2"] < AMBIGUOUS_DCHI2]
+    explained = bool(per[best]["heldout_p"] >= P_EXPLAINED)
+    top = min((n for n in per if n != "none"), key=lambda n: per[n]["heldout_chi2"])
+    return {"best": best, "explained": explained, "indistinguishable": ambiguous,
+            "best_partial": (best if best != "none" else top) if not explained else None,
+            "verdict": verdict_text(best, explained, ambiguous, top=top), "per_model": per}
+
+

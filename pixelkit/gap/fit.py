@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
-from .effects import COLUMN_EFFECTS, EFFECTS
+from .effects import COLUMN_EFFECTS, effect
 from .nominal import predict
 
 
@@ -124,8 +124,8 @@ def plain_effect(name):
     concatenated, terms added where both act on the same quantity)."""
     parts = name.split("+")
     if len(parts) == 1:
-        return EFFECTS[name]
-    (pa, fa), (pb, fb) = EFFECTS[parts[0]], EFFECTS[parts[1]]
+        return effect(name)
+    (pa, fa), (pb, fb) = effect(parts[0]), effect(parts[1])
     k = len(pa)
 
     def fn(X, p):
@@ -197,7 +197,7 @@ def fit(name, nom, X_train, y_train, sigma, cols=None, setup: SetupBounds = Setu
     info = _intervals(best, scales, n, k, lo * scales, hi * scales, theta)
     at = [bool(np.isclose(abs(theta[i] - 1), setup.gain_tol, rtol=1e-3)) for i in (1, 3)] + \
          [bool(np.isclose(abs(theta[i]), setup.offset_V, rtol=1e-3)) for i in (0, 2)]
-    return {"theta": theta, "chi2": chi2, "k": k, "n": n,
+    return {"theta": theta, "chi2": chi2, "k": k, "n": n, "model": name,
             "bic": chi2 + cal_chi2 + k * math.log(n), "calibration_chi2": cal_chi2,
             "specs": specs, "intervals": info, "setup_at_bound": any(at),
             "setup": dict(zip(SETUP, map(float, theta[:N_SETUP]))), "uniform": uniform}
@@ -250,5 +250,5 @@ def _intervals(res, scales, n, k, lo, hi, theta):
 
 
 def evaluate(name, nom, X, fitres, cols=None):
-    f, _ = model_fn(name, nom, X, cols, fitres.get("uniform", False))
+    f, _ = model_fn(fitres.get("model", name), nom, X, cols, fitres.get("uniform", False))
     return f(fitres["theta"])

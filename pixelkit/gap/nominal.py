@@ -66,22 +66,12 @@ import numpy as np
 
 from scipy.interpolate import CubicSpline
 
-from ..circuits.testbench import dual_pixel_bench, timings
+from ..constants import K_B, Q
 from ..measure.afe import eps, finite_gain_output
-from ..measure.pixel import levels
-from ..physics.dark import dark_current
+from ..physics.dark import bandgap, dark_current
 from ..physics.subpixel import pd_node
-from .exact import simulate_exact
 
 ARRAYS = ("primary", "secondary")
-N_GRID = 22
-# readout-light response decks: grid charges, and per deck the vm current of the primary's AFE and of the
-# three secondary AFEs (A); both signs, over the range a 3e-11 - 3e-10 m^2 junction sees in a lab campaign
-LIGHT_Q_PICK = (2, 5, 7, 9, 10, 11, 12, 13, 15, 17, 20)
-LIGHT_I = ((0.5e-9, (0.7e-9, -0.7e-9, 2e-9)), (-0.5e-9, (-2e-9, 4e-9, -4e-9)),
-           (5e-9, (8e-9, -8e-9, 20e-9)), (-5e-9, (-20e-9, 50e-9, -50e-9)),
-           (1.5e-9, (1.2e-9, -30e-9, 30e-9)), (-1.5e-9, (2.8e-9, -40e-9, -65e-9)),
-           (0.3e-9, (-10e-9, -13e-9, -16e-9)), (-0.3e-9, (0.35e-9, 1.6e-9, -25e-9)))
 
 
 @dataclass
@@ -100,11 +90,15 @@ class Nominal:
     c13: float = 0.0
     sites: dict = None     # site -> ``responses.Response`` (measured response to a perturbation there)
     idle_light: dict = None  # array -> ``idlelight`` table (light on the sampling node while the readout idles)
+    temp: dict = None      # the levels' temperature table (``TempTable.as_dict``); None: none measured
+    t_design_C: float = 27.0
+    pivots: dict = None    # array -> the col_g site's pivot (V): the reset level its decks used
 
     def __post_init__(self):
         self._sig = {a: CubicSpline(self.q_grid[a], self.v_sig[a]) for a in ARRAYS}
         self._rst = {a: CubicSpline(self.q_grid[a], self.v_rst[a]) for a in ARRAYS}
         self._res = {a: CubicSpline(*self.afe_resid[a]) for a in ARRAYS}
+        self._temp = None if self.temp is None else TempTable.from_dict(self.temp)
 
     def _each(self, arr_idx, x, fns, clip):
         x = np.asarray(x, float)
@@ -140,7 +134,9 @@ class Nominal:
                 "light": {a: [arr(x) for x in v] for a, v in self.light.items()}, "c13": self.c13,
                 "sites": {k: r.as_dict() for k, r in self.sites.items()},
                 **({} if self.idle_light is None else
-                   {"idle_light": {a: [arr(x) for x in v] for a, v in self.idle_light.items()}})}
+                   {"idle_light": {a: [arr(x) for x in v] for a, v in self.idle_light.items()}}),
+                **({} if self.temp is None else {"temp": self.temp, "t_design_C": self.t_design_C}),
+                **({} if self.pivots is None else {"pivots": self.pivots})}
 
     @classmethod
     def from_dict(cls, d: dict, pd) -> "Nominal":
@@ -153,7 +149,22 @@ class Nominal:
                    {a: tuple(np.array(x) for x in v) for a, v in d["light"].items()}, d["c13"],
                    {k: Response.from_dict(r) for k, r in d["sites"].items()},
                    None if "idle_light" not in d else
-                   {a: tuple(np.array(x) for x in v) for a, v in d["idle_light"].items()})
+                   {a: tuple(np.array(x) for x in v) for a, v in d["idle_light"].items()},
+                   d.get("temp"), d.get("t_design_C", 27.0), d.get("pivots"))
+
+    def dsig_dq(self, arr_idx, q):
+        """d(reset level - signal level) / dq at each row's charge (V/C; at the grid's end beyond it)."""
+        fns = self.__dict__.setdefault("_dsig", {a: (lambda s, r: (lambda x: r(x, 1) - s(x, 1)))(self._sig[a], self._rst[a])
+                                                 for a in ARRAYS})
+        return self._each(arr_idx, q, fns, self._qclip())
+
+    def fd_ratio_at(self, arr_idx, q):
+        """Equivalent PD charge per unit FD charge at each row's charge (the ``fd`` site's small amplitude)."""
+        out = np.empty(np.shape(q))
+        for k, (a, (qg, r)) in enumerate(self.fd_ratio.items()):
+            m = np.asarray(arr_idx) == k
+            out[m] = np.interp(np.asarray(q)[m], qg[:-1], r[:-1])   # the top charge: the swing's end, no room left
+        return out
 
     def vsig_of(self, arr_idx, q):
         # beyond the grid (the swing's end): the column stays at its last level (saturated)
@@ -173,6 +184,27 @@ class Nominal:
     def site(self, name, key, arr_idx, q, amp):
         """The measured response ``key`` of site ``name`` (``responses``) at each row."""
         return self.sites[name].at(key, arr_idx, q, amp)
+
+    def at_design_temperature(self) -> "Nominal":
+        """This surrogate with its levels held at the design temperature (no temperature table): for data whose
+        devices were simulated there while ``temp_C`` varied (the committed ``silicon`` cases)."""
+        from dataclasses import replace
+        return replace(self, temp=None)
+
+    def temp_shift(self, arr_idx, q, dT):
+        """(pixel-probe shift, AFE shift) of the nominal levels at ``dT`` (K) from the design's temperature
+        and charge ``q`` (zero where the surrogate has no temperature table)."""
+        if self._temp is None:
+            z = np.zeros(np.shape(q))
+            return z, z
+        q, dT = np.asarray(q, float), np.broadcast_to(np.asarray(dT, float), np.shape(q))
+        ck = ("T", q.tobytes(), dT.tobytes(), np.asarray(arr_idx).tobytes())
+        cache = self.__dict__.setdefault("_cache", {})
+        if ck not in cache:
+            if len(cache) > 256:
+                cache.clear()
+            cache[ck] = self._temp.at(arr_idx, q, dT)
+        return cache[ck]
 
     def dark_q(self, arr_idx, temp_C, t_int):
         out = np.empty_like(t_int)
@@ -230,41 +262,94 @@ def t_float(design, f_read, arr):
     return np.where(np.asarray(arr) == 0, span("primary"), span("secondary")) + design.afe.nonoverlap
 
 
-def _light_deck(design, qp, qs, i_p, i_s, title):
-    """The nominal deck with a vm current on every AFE (``i_p`` on the primary's, ``i_s`` per secondary)."""
-    from .circuit_edits import add_to_subckt, specialise, vm_current
-    t_w = design.experiment.t_window
-    net = specialise(dual_pixel_bench(design, qp / t_w, qs / t_w, with_afe=True, title=title),
-                     design.secondary_per_pixel)
-    net = add_to_subckt(net, "scafe_col_p", vm_current(design, "primary", i_p))
-    for k, i in enumerate(i_s):
-        net = add_to_subckt(net, f"scafe_col_s{k}", vm_current(design, "secondary", i))
-    return net
-
-
-def _light_table(design, tm, sweep, res, sig):
+def _light_table(design, got, sig):
     """Per array: (signal grid, current grid incl. 0, pixel shift, AFE shift beyond the charge-balance term)."""
+    from .buildplan import LIGHT_Q_PICK
     out = {}
-    for arr, cols in (("primary", ("col_p",)), ("secondary", tuple(f"col_s{k}" for k in range(3)))):
-        t = tm[arr]
-        tf = t_float(design, 1.0 / t.t_row, arr)
+    e = eps(design.afe.c11, design.afe.c13, design.afe.gain)
+    for arr in ARRAYS:
+        tf = t_float(design, getattr(design, arr).f_read, arr)
         pts = {}
-        for n, k in enumerate(LIGHT_Q_PICK):
-            base_pix, _ = levels(sweep[k], "col_s0" if arr == "secondary" else "col_p", t)
-            base_out = float(sweep[k].at("out_" + ("col_s0" if arr == "secondary" else "col_p"), t.t_reset_level(0)))
-            for j, (i_p, i_s) in enumerate(LIGHT_I):
-                r = res[n * len(LIGHT_I) + j]
-                for c, i in zip(cols, (i_p,) if arr == "primary" else i_s):
-                    dpix = levels(r, c, t)[0] - base_pix
-                    dout = float(r.at(f"out_{c}", t.t_reset_level(0))) - base_out
-                    lin = i * tf / design.afe.c13 / (1 + eps(design.afe.c11, design.afe.c13, design.afe.gain))
-                    pts[(k, i)] = (dpix, dout - lin)
+        for u, (s_lvl, _r, o) in got.items():
+            if u.kind == "light" and u.array == arr:
+                base = got[_sweep_unit(arr, u.k)]
+                lin = u.amp * tf / design.afe.c13 / (1 + e)
+                pts[(u.k, u.amp)] = (s_lvl - base[0], o - base[2] - lin)
         ig = np.array(sorted({i for _, i in pts} | {0.0}))
         sg = np.array([sig[arr][k] for k in LIGHT_Q_PICK])
         tp = np.array([[pts.get((k, i), (0.0, 0.0))[0] for i in ig] for k in LIGHT_Q_PICK])
         ta = np.array([[pts.get((k, i), (0.0, 0.0))[1] for i in ig] for k in LIGHT_Q_PICK])
         out[arr] = (sg, ig, tp, ta)
     return out
+
+
+def _sweep_unit(arr, k):
+    from .buildplan import Unit
+    return Unit(arr, "sweep", k)
+
+
+class TempTable:
+    """The nominal levels' shift with the die temperature: per array, the pixel probe's and the AFE
+    probe's level at the table's temperatures minus the design temperature's, at a few charges.
+    Cubic splines in the charge; in the temperature a cubic spline through the table's temperatures
+    (the design's included, where the shift is zero), straight on beyond them from its end slopes."""
+
+    def __init__(self, dT, q, pix, afe):
+        self.dT, self.q, self.pix, self.afe = (np.asarray(dT, float), {a: np.asarray(v, float) for a, v in q.items()},
+                                               {a: np.asarray(v, float) for a, v in pix.items()},
+                                               {a: np.asarray(v, float) for a, v in afe.items()})
+        self._spl = {(a, key): [CubicSpline(self.q[a], row) for row in tab[a]]
+                     for key, tab in (("pix", self.pix), ("afe", self.afe)) for a in ARRAYS}
+
+    def as_dict(self) -> dict:
+        return {"dT_K": self.dT.tolist(), "q": {a: v.tolist() for a, v in self.q.items()},
+                "pix": {a: v.tolist() for a, v in self.pix.items()}, "afe": {a: v.tolist() for a, v in self.afe.items()}}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "TempTable":
+        return cls(d["dT_K"], d["q"], d["pix"], d["afe"])
+
+    def _in_t(self, rows, dT):
+        """``rows`` [n_T, n]: each column's value at its own ``dT``."""
+        t = self.dT
+        spl = CubicSpline(t, rows, axis=0)
+        i = np.clip(np.searchsorted(t, dT) - 1, 0, t.size - 2)
+        x = np.clip(dT, t[0], t[-1]) - t[i]
+        cols = np.arange(rows.shape[1])
+        c = spl.c[:, i, cols]                      # [4, n]: this column's cubic on its interval
+        out = ((c[0] * x + c[1]) * x + c[2]) * x + c[3]
+        slope = np.where(dT < t[0], spl(t[0], 1)[cols], spl(t[-1], 1)[cols])
+        beyond = np.where(dT < t[0], dT - t[0], np.maximum(dT - t[-1], 0.0))
+        return out + slope * beyond
+
+    def at(self, arr_idx, q, dT):
+        pix, afe = np.zeros(np.shape(q)), np.zeros(np.shape(q))
+        dT = np.broadcast_to(np.asarray(dT, float), np.shape(q))
+        for k, a in enumerate(ARRAYS):
+            m = (arr_idx == k) & (dT != 0)
+            if not m.any():
+                continue
+            qq = np.clip(q[m], self.q[a][0], self.q[a][-1])
+            for key, dst in (("pix", pix), ("afe", afe)):
+                rows = np.array([f(qq) for f in self._spl[(a, key)]])
+                dst[m] = self._in_t(rows, dT[m])
+        return pix, afe
+
+
+def _temp_table(design, got):
+    from .buildplan import TEMP_OFFSETS_K, TEMP_Q_PICK, Unit
+    dT = sorted(set(TEMP_OFFSETS_K) | {0.0})
+    q = grids(design)
+    pix, afe = {}, {}
+    for a in ARRAYS:
+        rows_p, rows_a = [], []
+        for t in dT:
+            vals = [got[_sweep_unit(a, k)] if t == 0 else got[Unit(a, "temp", k, dT=t)] for k in TEMP_Q_PICK]
+            base = [got[_sweep_unit(a, k)] for k in TEMP_Q_PICK]
+            rows_p.append([v[0] - b[0] for v, b in zip(vals, base)])
+            rows_a.append([v[2] - b[2] for v, b in zip(vals, base)])
+        pix[a], afe[a] = rows_p, rows_a
+    return TempTable(dT, {a: q[a][list(TEMP_Q_PICK)] for a in ARRAYS}, pix, afe).as_dict()
 
 
 def _q_max(design, which):
@@ -283,86 +368,74 @@ def _invert(q, v_sig):
     return inv
 
 
-VAL_PICK = (3, 9, 12, 15, 18)
-
-
 def grids(design) -> dict:
     """The sweep's charges per array (denser at low charge)."""
+    from .buildplan import N_GRID
     u = np.linspace(0.0, 1.0, N_GRID) ** 1.5
     return {"primary": u * _q_max(design, "primary"), "secondary": u * _q_max(design, "secondary")}
 
 
-def stage_one(design, ends_only: bool = False) -> list:
-    """The sweep, the validation decks between its charges and the readout-light decks (``ends_only``: of
-    each kind only those at the first and last of its charges, ``store.deck_key``'s sample)."""
-    t_w = design.experiment.t_window
-    g = grids(design)
-    qp, qs = g["primary"], g["secondary"]
-
-    def ends(ks):
-        return (ks[0], ks[-1]) if ends_only else ks
-    nets = [dual_pixel_bench(design, qp[k] / t_w, qs[k] / t_w, with_afe=True, title=f"gapnom{k}")
-            for k in ends(range(len(qp)))]
-    mid_p, mid_s = (qp[1:] + qp[:-1]) / 2, (qs[1:] + qs[:-1]) / 2
-    nets += [dual_pixel_bench(design, mid_p[k] / t_w, mid_s[k] / t_w, with_afe=True, title=f"gapval{k}")
-             for k in ends(VAL_PICK)]
-    nets += [_light_deck(design, qp[k], qs[k], i_p, i_s, f"gaplt{k}_{j}") for k in ends(LIGHT_Q_PICK)
-             for j, (i_p, i_s) in enumerate(LIGHT_I)]
-    return nets
-
-
 def build_nominal(design, backend: str = "batch") -> Nominal:
-    """The surrogate from SPICE (``store.load_nominal`` uses a shipped one when its decks are these)."""
-    from . import idlelight, responses
-    t_w = design.experiment.t_window
-    tm = timings(design, t_w)
+    """The surrogate from SPICE (``buildplan``: the units and their decks; ``store.load_nominal`` uses a shipped
+    one when its decks are these)."""
+    from . import buildplan, idlelight, responses
+    from .buildplan import N_GRID, VAL_T_OFFSET_K, Unit
     g = grids(design)
-    qp, qs = g["primary"], g["secondary"]
     a = design.afe
-    mid_p, mid_s = (qp[1:] + qp[:-1]) / 2, (qs[1:] + qs[:-1]) / 2
-    pick = VAL_PICK
-    nets = stage_one(design)
-    res = simulate_exact(nets, backend=backend)
-    n0 = N_GRID + len(pick)
-    sweep, val, lt = res[:N_GRID], res[N_GRID:n0], res[n0:]
-    v_sig, v_rst, resid, sig_grid, outs, lvls, inv = {}, {}, {}, {}, {}, {}, {}
-    for arr, col, q in (("primary", "col_p", qp), ("secondary", "col_s0", qs)):
-        lv = np.array([levels(r, col, tm[arr]) for r in sweep])
-        lvls[arr] = lv
+    got, pivots, loose = buildplan.run(design, g, backend)
+    v_sig, v_rst, resid, sig_grid, sweep, inv = {}, {}, {}, {}, {}, {}
+    for arr in ARRAYS:
+        lv = np.array([got[_sweep_unit(arr, k)] for k in range(N_GRID)])
+        sweep[arr] = lv
         v_sig[arr], v_rst[arr] = lv[:, 0], lv[:, 1]
-        sig_grid[arr] = lv[:, 1] - lv[:, 0]
-        out = np.array([float(r.at(f"out_{col}", tm[arr].t_reset_level(0))) for r in sweep])
-        outs[arr] = out
         sig = lv[:, 1] - lv[:, 0]
+        sig_grid[arr] = sig
         order = np.argsort(sig)
-        resid[arr] = (sig[order], (out - finite_gain_output(a.vref, a.c11, a.c13, a.gain, sig))[order])
-        inv[arr] = _invert(q, lv[:, 0])
-    q_grid = g
-    pivots = {arr: float(v_rst[arr].mean()) for arr in ARRAYS}
-    plan = responses.decks(design, q_grid, pivots)
-    site_res = simulate_exact([p[3] for p in plan], backend=backend)
-    sites = responses.tables(design, plan, site_res, q_grid, lvls, outs, lambda arr, lv: inv[arr](lv))
-    nom = Nominal(q_grid, v_sig, v_rst, a.vref, a.c11 / a.c13,
-                  eps(a.c11, a.c13, a.gain), resid,
+        resid[arr] = (sig[order], (lv[:, 2] - finite_gain_output(a.vref, a.c11, a.c13, a.gain, sig))[order])
+        inv[arr] = _invert(g[arr], lv[:, 0])
+    sites = responses.tables(design, g, got, sweep, lambda arr, lv: inv[arr](lv))
+    nom = Nominal(g, v_sig, v_rst, a.vref, a.c11 / a.c13, eps(a.c11, a.c13, a.gain), resid,
                   {w: (getattr(design, w).area, getattr(design, w).perimeter) for w in ARRAYS},
-                  design.tech.photodiode, {}, _light_table(design, tm, sweep, lt, sig_grid), a.c13, sites,
-                  idlelight.build(design, q_grid, backend))
-    errs_pix, errs_afe = [], []
-    for k, r in zip(pick, val):
-        for arr, col, q in (("primary", "col_p", mid_p[k]), ("secondary", "col_s0", mid_s[k])):
-            idx = np.array([ARRAYS.index(arr)])
-            s_lvl, r_lvl = levels(r, col, tm[arr])
-            qq = np.array([q])
-            pred = nom.vsig_of(idx, qq)[0]
-            errs_pix.append(pred - s_lvl)
-            sig = nom.vrst_of(idx, qq) - np.array([pred])
-            errs_afe.append(nom.afe(idx, sig)[0] - float(r.at(f"out_{col}", tm[arr].t_reset_level(0))))
-    nom.error = {"pixel_max_V": float(np.max(np.abs(errs_pix))), "afe_max_V": float(np.max(np.abs(errs_afe))),
-                 "pixel_rms_V": float(np.sqrt(np.mean(np.square(errs_pix)))),
-                 "afe_rms_V": float(np.sqrt(np.mean(np.square(errs_afe)))), "n_validation": len(errs_pix),
-                 "loose_decks": [r.meta["title"] for r in list(res) + list(site_res) if r.meta.get("retried")],
-                 "fd_ratio": {k: [float(x) for x in v[1]] for k, v in nom.fd_ratio.items()}}
+                  design.tech.photodiode, {}, _light_table(design, got, sig_grid), a.c13, sites,
+                  idlelight.build(design, g, backend), _temp_table(design, got), design.temperature - 273.15, pivots)
+    errs = {(kind, hot): [] for kind in ("pixel", "afe") for hot in (False, True)}
+    for u, (s_lvl, _r, o) in got.items():
+        if u.kind != "val":
+            continue
+        idx = np.array([ARRAYS.index(u.array)])
+        qq = np.array([(g[u.array][u.k] + g[u.array][u.k + 1]) / 2])
+        X = {"arr": idx, "q": qq, "afe": np.array([False]), "dT": np.array([u.dT])}
+        errs[("pixel", u.dT != 0)].append(predict(nom, X)[0] - s_lvl)
+        X["afe"] = np.array([True])
+        errs[("afe", u.dT != 0)].append(predict(nom, X)[0] - o)
+    nom.error = {**_error_stats(errs, False, ""), "n_validation": len(errs[("pixel", False)]),
+                 "loose_decks": loose, "fd_ratio": {k: [float(x) for x in v[1]] for k, v in nom.fd_ratio.items()}}
+    if errs[("pixel", True)]:
+        nom.error.update(_error_stats(errs, True, "temp_"))
+        worst = max(nom.error["temp_pixel_max_V"], nom.error["temp_afe_max_V"])
+        if worst > TEMP_TOL_V:   # the levels' temperature law is not smooth enough to tabulate: said, not used
+            nom.temp = None
+            nom._temp = None
+            nom.error["temp_table"] = (f"dropped: {worst * 1e3:.1f} mV off fresh SPICE at {VAL_T_OFFSET_K:+g} K "
+                                       f"(limit {TEMP_TOL_V * 1e3:g} mV); levels held at the design temperature")
+        else:
+            nom.error["temp_table"] = "kept"
     return nom
+
+
+#: the temperature table is kept when its held-out error (the validation decks at ``VAL_T_OFFSET_K``) stays
+#: within this; a read whose levels change regime with the temperature (the thesis's unsettled 400 nA read:
+#: its column settles less as the load slows) is beyond what four temperatures tabulate
+TEMP_TOL_V = 1.0e-3
+
+
+def _error_stats(errs, hot, prefix) -> dict:
+    out = {}
+    for kind in ("pixel", "afe"):
+        e = np.asarray(errs[(kind, hot)])
+        out[f"{prefix}{kind}_max_V"] = float(np.max(np.abs(e)))
+        out[f"{prefix}{kind}_rms_V"] = float(np.sqrt(np.mean(np.square(e))))
+    return out
 
 
 def features(table, nom: Nominal, design) -> dict:
@@ -391,17 +464,24 @@ def features(table, nom: Nominal, design) -> dict:
          "i_prev": i.copy() if prev is None else np.where(np.isfinite(prev), prev, i),
          "has_prev": prev is not None,
          "perimeter_ratio": design.secondary.perimeter / design.primary.perimeter,
+         "area_ratio": design.secondary.area / design.primary.area, "i_bias": design.pixel.sf_bias,
          "J": i / a_pa, "a_ref": design.primary.photoactive_area,
          "a_sub": np.where(arr == 0, design.primary.area, design.secondary.area),
          "f_read": f_read, "f_design": f_design, "t_hold": 1.0 / f_read, "t_float": t_float(design, f_read, arr),
          "vdd": vdd, "dvdd": vdd - design.tech.supply, "has_idle_light": nom.idle_light is not None}
+    X["dT"] = X["T"] - nom.t_design_C
     q = i * X["t_int"] + nom.dark_q(X["arr"], X["T"], X["t_int"])
     X["q"] = q
     X["signal"] = nom.vrst_of(arr, q) - nom.vsig_of(arr, q)
+    X["dsdq"] = nom.dsig_dq(arr, q)
+    X["fd_k"] = nom.fd_ratio_at(arr, q) * X["dsdq"]
+    X["q_max"] = np.where(arr == 0, nom.q_grid["primary"][-1], nom.q_grid["secondary"][-1])
+    t, t0 = X["T"] + 273.15, 298.15
+    X["ni_rel"] = (t / t0) ** 1.5 * np.exp((bandgap(t0) / t0 - bandgap(t) / t) / (2.0 * K_B / Q))
     return X
 
 
-LEVEL_SITES = ("col_g", "load", "rst_fd", "p1_vm", "sf_w", "c11", "a_ol")
+LEVEL_SITES = ("col_g", "load", "rst_fd", "p1_vm", "sf_w", "c11", "a_ol", "c_fd")
 
 
 def predict(nom: Nominal, X: dict, terms: dict | None = None) -> np.ndarray:
@@ -417,7 +497,8 @@ def predict(nom: Nominal, X: dict, terms: dict | None = None) -> np.ndarray:
     (junction current on the sampling node while the readout idles, A: ``idlelight``), and the
     amplitude of a measured site response (``responses``): ``col_g`` (S),
     ``load`` (relative), ``rst_fd`` (F), ``p1_vm`` (F, signed), ``sf_w`` and ``c11`` (relative),
-    ``a_ol`` (A_design / A - 1 of the op-amp).
+    ``a_ol`` (A_design / A - 1 of the op-amp), ``c_fd`` (F on FD); ``temp_scale``: the levels' temperature
+    shift (``temp_shift``) off by this fraction (a device's temperature coefficient off the model's).
     """
     t = terms or {}
     q = X["q"] + t.get("dq", 0.0)
@@ -429,7 +510,7 @@ def predict(nom: Nominal, X: dict, terms: dict | None = None) -> np.ndarray:
     v_pix = vr - signal + t.get("dv_col", 0.0)
     v_afe = nom.afe(X["arr"], signal, t.get("deps", 0.0)) + t.get("dv_afe", 0.0)
     for name in LEVEL_SITES:
-        if name in t:
+        if name in t and name in nom.sites:
             v_pix = v_pix + nom.site(name, "pix", X["arr"], q, t[name])
             v_afe = v_afe + nom.site(name, "afe", X["arr"], q, t[name])
     if "i_vm" in t:
@@ -439,4 +520,8 @@ def predict(nom: Nominal, X: dict, terms: dict | None = None) -> np.ndarray:
         from .idlelight import response
         lp, la = response(nom.idle_light, X["arr"], signal, np.broadcast_to(t["i_idle"], signal.shape).astype(float))
         v_pix, v_afe = v_pix + lp, v_afe + la
+    if "dT" in X:
+        tp, ta = nom.temp_shift(X["arr"], q, X["dT"])
+        k = 1.0 + t.get("temp_scale", 0.0)
+        v_pix, v_afe = v_pix + k * tp, v_afe + k * ta
     return np.where(X["afe"], v_afe, v_pix) + t.get("dv_out", 0.0)

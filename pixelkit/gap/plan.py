@@ -97,4 +97,26 @@ def plan(design, table, nom, result: dict, setup: SetupBounds = SetupBounds(), t
             levers.append({"factor": f, "value": points[k][f], "separation_sigma": float(sep[k])})
     levers.sort(key=lambda r: -r["separation_sigma"])
     return {"candidates": names, "noise_V": s0, "points": best_points, "levers": levers, "pairs": pair_best,
-            "separable": bool(best_points and best_points[0]["separation_sigma"] > 3.0)}
+            "separable": bool(best_points and best_points[0]["separation_sigma"] > 3.0),
+            "measurements": measurements(result, X, names)}
+
+
+def measurements(result: dict, X, names) -> list:
+    """What the file lacks that would separate the candidates, beyond its operating points: a probe it does
+    not have, the bench's calibration, a condition it holds at one value."""
+    from .diagnose import POSITION
+    out = []
+    probes = {"pixel": bool((~X["afe"]).any()), "afe": bool(X["afe"].any())}
+    sides = {POSITION.get(n.split("+")[0], "") for n in names}
+    if not all(probes.values()) and len(sides) > 1:
+        miss = next(p for p, v in probes.items() if not v)
+        out.append(f"the {miss} probe: these data have only the {'afe' if miss == 'pixel' else 'pixel'} probe, so an "
+                   f"effect before the AFE and one in it move what they show alike (the candidates act at: "
+                   + "; ".join(f"{n} {POSITION.get(n.split('+')[0], '?')}" for n in names) + ")")
+    if not result.get("calibration", {}).get("stated"):
+        out.append("the bench's calibration: a known voltage read through each probe's path, stated with "
+                   "--gain-sd / --offset-sd; without it a gain and offset of the chain within the set-up's "
+                   "tolerance is the set-up's own (a chain gain at the pixel probe cannot be told from the probe's "
+                   "gain)")
+    out += [f"vary the {f}" for f in result.get("fixed_conditions", [])]
+    return out

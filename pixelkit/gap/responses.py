@@ -26,11 +26,15 @@ two amplitudes per site:
   puts on the slewing column while S1X / S2X are closed);
 - ``a_ol``: the op-amp's DC gain divided by 1 + a (a >= 0; the closed-loop gain
   error, ~ 1 / A, is linear in a; and how far the output runs in the open-loop
-  non-overlap gap).
+  non-overlap gap);
+- ``c_fd``: a capacitance a (F, either sign: -0.4 .. 1 fF against the reference's ~2 fF) from FD
+  to ground: the floating diffusion's capacitance off the design (its junctions, the follower's
+  gate, wiring), so the charge sharing at the transfer and every kick on FD.
 
 Kind ``level``: the table holds the shift of the pixel probe and of the AFE
 probe. Between the charges, cubic splines; in the amplitude, the polynomial
-through zero and two measured amplitudes (quadratic), or piecewise linear
+through zero and two or three measured amplitudes (quadratic, cubic: ``fd`` up to
+6 % of the full well, where a lab's 25 % of the storage node's swing lies), or piecewise linear
 through zero and four or six (``p1_vm``, ``sf_w``, ``a_ol``: steps from the
 op-amp's clamp, a log-like response; ``load``: the +-20 % a campaign draws, where a
 quadratic through +-15 % missed a 20 % change by 1 mV); beyond the largest amplitude the same, so the
@@ -47,66 +51,60 @@ from scipy.interpolate import CubicSpline
 
 from . import circuit_edits as ce
 
-SUBS = ("primary", "s0", "s1", "s2")
 ARRAYS = ("primary", "secondary")
 Q_PICK = (0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 21)
 EXTRAPOLATE = 1.5
 
 
-def _arr(which):
-    return "primary" if which == "primary" else "secondary"
+def _fd(net, design, chain, amp, v_rst):
+    return ce.add_to_subckt(net, chain.pixel, ce.fd_current(design, chain.array, amp, chain.col, "site"))
 
 
-def _col(which):
-    return "col_p" if which == "primary" else f"col_{which}"
+def _col_g(net, design, chain, amp, v_rst):
+    return ce.column_conductance(net, design, chain.col, v_rst[chain.array], amp, "site", gate=chain.rs)
 
 
-def _fd(net, design, which, amp, v_rst):
-    return ce.add_to_subckt(net, ce.pixel_subckt(which), ce.fd_current(design, _arr(which), amp, which, "site"))
+def _load(net, design, chain, amp, v_rst):
+    return ce.scale_load(net, chain.col, 1.0 + amp)
 
 
-def _col_g(net, design, which, amp, v_rst):
-    return ce.column_conductance(net, design, _col(which), v_rst[_arr(which)], amp, "site")
-
-
-def _load(net, design, which, amp, v_rst):
-    return ce.scale_load(net, _col(which), 1.0 + amp)
-
-
-def _rst_fd(net, design, which, amp, v_rst):
+def _rst_fd(net, design, chain, amp, v_rst):
     from ..spice.netlist import Element
-    return ce.add_to_subckt(net, ce.pixel_subckt(which), Element("Csite", ("rst", "fd"), amp))
+    return ce.add_to_subckt(net, chain.pixel, Element("Csite", ("rst", "fd"), amp))
 
 
-def _p1_vm(net, design, which, amp, v_rst):
-    return ce.add_to_subckt(net, f"scafe_{_col(which)}", ce.afe_coupling(amp, "Csite"))
+def _p1_vm(net, design, chain, amp, v_rst):
+    return ce.add_to_subckt(net, chain.afe, ce.afe_coupling(amp, "Csite"))
 
 
-def _sf_w(net, design, which, amp, v_rst):
-    return ce.scale_in_subckt(net, ce.pixel_subckt(which), "Xsf", "w", 1.0 + amp)
+def _sf_w(net, design, chain, amp, v_rst):
+    return ce.scale_in_subckt(net, chain.pixel, "Xsf", "w", 1.0 + amp)
 
 
-def _c11(net, design, which, amp, v_rst):
-    return ce.scale_caps(net, f"scafe_{_col(which)}", {"C11": 1.0 + amp})
+def _c11(net, design, chain, amp, v_rst):
+    return ce.scale_caps(net, chain.afe, {"C11": 1.0 + amp})
 
 
-def _a_ol(net, design, which, amp, v_rst):
-    """The op-amp's DC gain divided by 1 + amp (the macromodel's R, shared by every AFE of the deck: edited
-    once, so every chain of a deck carries the same amplitude)."""
-    if which != "primary":
-        return net
-    return ce.scale_value_in_subckt(net, "opamp_macro", "R1", 1.0 / (1.0 + amp))
+def _c_fd(net, design, chain, amp, v_rst):
+    from ..spice.netlist import Element
+    return ce.add_to_subckt(net, chain.pixel, Element("Csite", ("fd", "0"), amp))
+
+
+def _a_ol(net, design, chain, amp, v_rst):
+    """The op-amp's DC gain divided by 1 + amp (the macromodel's R): the chain's own op-amp on a packed
+    deck; on the dual-pixel bench one macromodel serves every AFE (the caller edits it once)."""
+    return ce.scale_value_in_subckt(net, chain.opamp or "opamp_macro", "R1", 1.0 / (1.0 + amp))
 
 
 @dataclass(frozen=True)
 class Site:
     kind: str            # "charge" (equivalent PD charge) or "level" (probe shifts)
-    edit: object         # (net, design, which, amplitude, reset levels) -> net
-    amps: object         # (array, q_max) -> two amplitudes
+    edit: object         # (net, design, chain, amplitude, reset levels) -> net
+    amps: object         # (array, q_max) -> amplitudes
 
 
 SITES = {
-    "fd": Site("charge", _fd, lambda arr, q_max: (0.005 * q_max, 0.015 * q_max)),
+    "fd": Site("charge", _fd, lambda arr, q_max: (0.005 * q_max, 0.02 * q_max, 0.06 * q_max)),
     "col_g": Site("level", _col_g, lambda arr, q_max: (1 / 16e6, 1 / 6e6)),
     "load": Site("level", _load, lambda arr, q_max: (-0.25, -0.16, -0.07, 0.07, 0.16, 0.25)),
     "rst_fd": Site("level", _rst_fd, lambda arr, q_max: (1e-17, 3e-17)),
@@ -114,26 +112,8 @@ SITES = {
     "sf_w": Site("level", _sf_w, lambda arr, q_max: (-0.4, -0.15, 0.15, 0.6)),
     "c11": Site("level", _c11, lambda arr, q_max: (-0.05, 0.05)),
     "a_ol": Site("level", _a_ol, lambda arr, q_max: (1.0, 3.0, 10.0, 30.0)),
+    "c_fd": Site("level", _c_fd, lambda arr, q_max: (-0.4e-15, 0.4e-15, 1.0e-15)),
 }
-
-
-def decks(design, q_grid: dict, v_rst: dict, sites=tuple(SITES), q_pick=Q_PICK) -> list:
-    """(site, amplitude index, grid index, netlist) of every response deck (at the grid indices ``q_pick``)."""
-    from ..circuits.testbench import dual_pixel_bench
-    t_w = design.experiment.t_window
-    n = design.secondary_per_pixel
-    out = []
-    for name in sites:
-        s = SITES[name]
-        amps = {a: s.amps(a, q_grid[a][-1]) for a in ARRAYS}
-        for j in range(len(amps["primary"])):
-            for k in q_pick:
-                net = ce.specialise(dual_pixel_bench(design, q_grid["primary"][k] / t_w, q_grid["secondary"][k] / t_w,
-                                                     with_afe=True, title=f"gapsite_{name}{j}_{k}"), n)
-                for which in ("primary",) + tuple(f"s{i}" for i in range(n)):
-                    net = s.edit(net, design, which, amps[_arr(which)][j], v_rst)
-                out.append((name, j, k, net))
-    return out
 
 
 @dataclass
@@ -148,8 +128,8 @@ class Response:
         self._coef, self._spl = {}, {}
         for a in ARRAYS:
             amps = np.asarray(self.amps[a], float)
-            if amps.size == 2:   # quadratic through zero
-                inv = np.linalg.inv(np.array([amps, amps ** 2]).T)
+            if amps.size in (2, 3):   # quadratic (cubic) through zero
+                inv = np.linalg.inv(np.array([amps ** (j + 1) for j in range(amps.size)]).T)
                 self._coef[a] = {key: [CubicSpline(self.q[a], c) for c in (np.asarray(tab) @ inv.T).T]
                                  for key, tab in self.tables[a].items()}
             else:                # piecewise linear through zero and the amplitudes (sorted)
@@ -187,7 +167,7 @@ class Response:
             qq = np.clip(q[m], self.q[a][0], self.q[a][-1])
             cols = self._columns(key, a, qq)
             if a in self._coef:
-                out[m] = cols[0] * amp[m] + cols[1] * amp[m] ** 2
+                out[m] = sum(c * amp[m] ** (j + 1) for j, c in enumerate(cols))
                 continue
             xs, ys = cols
             x = amp[m]
@@ -208,34 +188,28 @@ class Response:
                    {a: {k: np.array(v) for k, v in t.items()} for a, t in d["tables"].items()})
 
 
-def tables(design, plan: list, results: list, q_grid: dict, sweep_levels: dict, sweep_out: dict,
-           invert) -> dict:
-    """Site -> ``Response`` from the decks of ``decks`` and their results.
+def tables(design, q_grid: dict, got: dict, sweep: dict, invert) -> dict:
+    """Site -> ``Response`` from the measured units ``got`` (``buildplan.measure``).
 
-    ``sweep_levels[arr]``: (signal level, reset level) of the nominal sweep at every grid charge;
-    ``sweep_out[arr]``: its AFE output; ``invert(arr, level)``: the grid charge giving a signal level.
+    ``sweep[arr]``: (signal level, reset level, AFE output) of the nominal sweep at every grid charge
+    (an array [N_GRID, 3]); ``invert(arr, level)``: the grid charge giving a signal level.
     """
-    from ..circuits.testbench import timings
-    from ..measure.pixel import levels
-    tm = timings(design, design.experiment.t_window)
     out = {}
-    for name in dict.fromkeys(p[0] for p in plan):
-        s = SITES[name]
-        tabs = {}
-        for a, col in (("primary", "col_p"), ("secondary", "col_s0")):
+    for name, s in SITES.items():
+        tabs, amps = {}, {}
+        for a in ARRAYS:
+            amps[a] = s.amps(a, q_grid[a][-1])
             key = ("dq",) if s.kind == "charge" else ("pix", "afe")
-            tab = {k: np.zeros((len(Q_PICK), len(s.amps(a, q_grid[a][-1])))) for k in key}
-            for (site, j, k, _), r in zip(plan, results):
-                if site != name:
+            tab = {k: np.zeros((len(Q_PICK), len(amps[a]))) for k in key}
+            for u, (sig, _rst, o) in got.items():
+                if u.kind != "site" or u.site != name or u.array != a:
                     continue
-                i = Q_PICK.index(k)
-                sig, _rst = levels(r, col, tm[a])
+                i = Q_PICK.index(u.k)
                 if s.kind == "charge":
-                    tab["dq"][i, j] = invert(a, sig) - q_grid[a][k]
+                    tab["dq"][i, u.j] = invert(a, sig) - q_grid[a][u.k]
                 else:
-                    tab["pix"][i, j] = sig - sweep_levels[a][k, 0]
-                    tab["afe"][i, j] = float(r.at(f"out_{col}", tm[a].t_reset_level(0))) - sweep_out[a][k]
+                    tab["pix"][i, u.j] = sig - sweep[a][u.k, 0]
+                    tab["afe"][i, u.j] = o - sweep[a][u.k, 2]
             tabs[a] = tab
-        amps = {a: SITES[name].amps(a, q_grid[a][-1]) for a in ARRAYS}
         out[name] = Response(s.kind, {a: np.asarray(q_grid[a])[list(Q_PICK)] for a in ARRAYS}, amps, tabs)
     return out

@@ -32,19 +32,22 @@ def _u(g, lo, hi):
 
 # effect -> function(rng) -> parameter vector (SI), drawn from physical ranges (typical 0.35 um magnitudes)
 RANGES = {
-    "gse": lambda g: [1.0 / _u(g, 300, 10000)],                             # GSE 300:1 .. 1e4:1
-    "fd_leakage": lambda g: [_u(g, 5e-17, 5e-16), _u(g, 6.0, 8.0)],          # ~10 - 100 mV/s on C_FD at 25 C
-    "dark_current": lambda g: [_u(g, 2e-16, 2e-15), _u(g, 5.0, 9.0)],        # 1.3 - 13 ke-/s (primary)
-    "charge_injection": lambda g: [_u(g, 3e-18, 3e-17), g.choice([-1, 1]) * _u(g, 0.3e-15, 3e-15)],  # RST-FD, p1-vm
-    "sf_gain": lambda g: [1.0 / _u(g, 6e6, 2.5e7)],                           # 3 - 10 % chain gain loss
+    "gse": lambda g: [1.0 / _u(g, 300, 10000), 1.0 / _u(g, 300, 10000), _u(g, 0.0, 0.3)],   # GSE 300:1 .. 1e4:1
+    "fd_leakage": lambda g: [_u(g, 5e-17, 5e-16), _u(g, 0.0, 0.6), _u(g, -0.05, 0.1), _u(g, 0.0, 0.4)],  # 10 - 100 mV/s
+    "dark_current": lambda g: [_u(g, 2e-16, 2e-15), _u(g, 0.0, 1.0), _u(g, 0.0, 0.6), _u(g, -0.05, 0.1),
+                               _u(g, 0.0, 0.4)],                              # 1.3 - 13 ke-/s (primary)
+    "charge_injection": lambda g: [_u(g, 3e-18, 3e-17), g.choice([-1, 1]) * _u(g, 0.3e-15, 3e-15),
+                                   _u(g, 0.0, 0.3e-15)],                      # RST-FD, p1-vm, the switch on FD
+    "sf_gain": lambda g: [1.0 / _u(g, 6e6, 2.5e7), _u(g, -0.3, 0.3)],         # 3 - 10 % chain gain loss
     "column_load": lambda g: [g.choice([-1, 1]) * _u(g, 0.05, 0.2)],          # load current 5 - 20 % off
-    "sf_strength": lambda g: [float(np.exp(_u(g, np.log(0.6), np.log(1.6)))) - 1],   # SF W x 0.6 - 1.6
+    "sf_strength": lambda g: [float(np.exp(_u(g, np.log(0.6), np.log(1.6)))) - 1, _u(g, -0.3e-15, 0.8e-15),
+                              _u(g, -0.03, 0.03), _u(g, -0.2, 0.2)],          # SF W x 0.6 - 1.6, L
     "afe_gain": lambda g: [_u(g, 0.01, 0.05), 0.0, 0.0],                      # C13 larger
     "readout_light": None,                                                   # scaled to the campaign (below)
     "crosstalk": lambda g: [_u(g, 0.003, 0.03)],
     "column_pixel": lambda g: [_u(g, 0.02, 0.08)],                            # load current mismatch (sd)
     "column_afe": lambda g: [_u(g, 0.003, 0.01), _u(g, 0.3e-15, 1.5e-15)],    # C11 and p1 coupling (sd)
-    "lag": lambda g: [_u(g, 0.01, 0.05)],
+    "lag": lambda g: [_u(g, 0.01, 0.05), _u(g, 0.5, 20.0)],
     "supply": lambda g: [g.choice([-1, 1]) * _u(g, 0.01, 0.05), g.choice([-1, 1]) * _u(g, 0.01, 0.05)],
     "settling": None,                                                        # scaled to the design's read rate
 }

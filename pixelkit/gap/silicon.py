@@ -77,8 +77,10 @@ def _sign(g):
 # effect -> function(rng) -> dict of circuit-element parameters (SI)
 RANGES = {
     "gse": lambda g: {"pls": 1.0 / g.uniform(300, 10000)},
-    "fd_leakage": lambda g: {"i_fd_A": g.uniform(5e-17, 5e-16), "t_double_K": g.uniform(6.0, 8.0)},
-    "dark_current": lambda g: {"i_d_A": g.uniform(2e-16, 2e-15), "t_double_K": g.uniform(5.0, 9.0)},
+    "fd_leakage": lambda g: {"i_fd_A": g.uniform(5e-17, 5e-16), "diff_share": g.uniform(0.0, 0.6),
+                             "dea_eV": g.uniform(-0.05, 0.1)},
+    "dark_current": lambda g: {"i_d_A": g.uniform(2e-16, 2e-15), "diff_share": g.uniform(0.0, 0.6),
+                               "dea_eV": g.uniform(-0.05, 0.1)},
     "charge_injection": lambda g: {"c_rst_fd_F": g.uniform(3e-18, 3e-17), "c_p1_vm_F": g.uniform(0.3e-15, 3e-15)},
     "sf_gain": lambda g: {"r_col_ohm": g.uniform(6e6, 2.5e7)},           # 3 - 10 % chain gain loss
     "afe_gain": lambda g: {"dc13_F": g.uniform(0.01, 0.05) * 500e-15},
@@ -97,6 +99,22 @@ RANGES = {
     "col_bridge": lambda g: {"r_bridge_ohm": g.uniform(1e5, 4e5)},
     "fd_pullup": lambda g: {"r_pullup_ohm": g.uniform(2e14, 1e15)},
 }
+
+
+def junction_law(p: dict, temp_C: float) -> float:
+    """The leakage laws of the cases' dark current and FD leakage: I(T) / I(25 degC) of a junction whose
+    generation current (~ n_i, its activation energy moved by ``dea_eV``) and diffusion current (~ n_i^2, the
+    share ``diff_share`` at 25 degC) add, n_i of silicon with the BSIM4 band gap - the law the effect library
+    fits (``effects._junction``): these cases are in its distribution by construction. (Until the effect
+    library carried the junction's law, they doubled every 5 - 9 K at any temperature: 1.4 eV near 85 degC,
+    beyond silicon's band gap.)"""
+    from ..constants import K_B, Q
+    from ..physics.dark import bandgap
+    t, t0 = temp_C + 273.15, 298.15
+    kq = K_B / Q
+    ni = (t / t0) ** 1.5 * np.exp((bandgap(t0) / t0 - bandgap(t) / t) / (2 * kq))
+    gen = ni * np.exp(-p["dea_eV"] / kq * (1 / t - 1 / t0))
+    return float((1 - p["diff_share"]) * gen + p["diff_share"] * ni * ni)
 
 
 def operating_points(design, nom, g, campaign: str = "lab") -> list[dict]:
@@ -157,7 +175,7 @@ def limit_waits(design, nom, ops, effect, p) -> None:
                 if effect == "gse":
                     q = p["pls"] * op["i"][s] / getattr(design, arr).photoactive_area * design.primary.photoactive_area * tw
                 else:
-                    q = p["i_fd_A"] * 2.0 ** ((op["temp"] - 25.0) / p["t_double_K"]) * tw
+                    q = p["i_fd_A"] * junction_law(p, op["temp"]) * tw
                 ok &= q * max(nom.fd_ratio[arr][1]) < FD_LIMIT * nom.q_grid[arr][-1]
             if ok:
                 break
@@ -174,7 +192,7 @@ def limit_exposures(design, nom, ops, effect, p) -> None:
     from ..physics.dark import dark_current
     for op in ops:
         for _ in range(12):
-            law = 2.0 ** ((op["temp"] - 25.0) / p["t_double_K"])
+            law = junction_law(p, op["temp"])
             worst = max((op["i"][s] + dark_current(*nom.dark[_arr(s)], op["temp"] + 273.15, nom.pd)
                          + p["i_d_A"] * law * (1.0 if s == "primary" else
                                                design.secondary.perimeter / design.primary.perimeter))
@@ -254,7 +272,9 @@ def deck(design, nom, op, effect, p, colp, title):
         arr = _arr(s)
         area, per = nom.dark[arr]
         q[s] = (op["i"][s] + dark_current(area, per, op["temp"] + 273.15, nom.pd)) * op["t_int"]
-    net = dual_pixel_bench(_variant(design, parts), q["primary"] / t_w, tuple(q[s] / t_w for s in SUBS[1:]),
+    from dataclasses import replace
+    at = replace(design, temperature=op["temp"] + 273.15) if op.get("device_temperature") else design
+    net = dual_pixel_bench(_variant(at, parts), q["primary"] / t_w, tuple(q[s] / t_w for s in SUBS[1:]),
                            with_afe=True, title=title)
     net = ce.specialise(net, design.secondary_per_pixel)
     for name, pe in parts:
@@ -272,7 +292,7 @@ def _parts(effect, p) -> list:
 def _insert(net, design, nom, op, effect, p, colp):
     """``effect`` as circuit elements in every chain of ``net``."""
     t_w = design.experiment.t_window
-    law = 2.0 ** ((op["temp"] - 25.0) / p["t_double_K"]) if "t_double_K" in p else 1.0
+    law = junction_law(p, op["temp"]) if "diff_share" in p else 1.0
     for s in SUBS:
         arr, sub = _arr(s), ce.pixel_subckt(s)
         J = op["i"][s] / getattr(design, arr).photoactive_area
@@ -342,16 +362,21 @@ def _set_vos(net, afe, vos):
 
 
 def simulate_case(design, nom, effect: str | None, seed: int, backend="batch", jobs=None,
-                  campaign: str | None = None, edit=None) -> tuple[list, dict]:
+                  campaign: str | None = None, edit=None, device_temperature: bool = False) -> tuple[list, dict]:
     """(rows as dicts, truth) of one case: its decks, noise and set-up added.
 
     ``campaign`` None: the committed set's first cases (campaign "lab", one set-up gain and offset for
     both probes, uniform +-2 % / +-20 mV). Otherwise (cases added later): that campaign and a set-up per
     probe, gain N(1, 0.3 %) and offset N(0, 2 mV), as a real bench. ``edit(net, op) -> net``: a further
-    change of each deck (``layout.pex.lightsilicon``'s light on the layout's open junctions)."""
+    change of each deck (``layout.pex.lightsilicon``'s light on the layout's open junctions).
+    ``device_temperature``: every deck at its operating point's temperature (the committed cases ran at the
+    design temperature, the effects' laws alone following ``temp_C``: ``run_committed`` diagnoses them with
+    the surrogate's levels at the design temperature, ``Nominal.at_design_temperature``)."""
     from ..spice import simulate_many
     g = np.random.default_rng(seed)
     ops = operating_points(design, nom, g, campaign or "lab")
+    for op in ops:
+        op["device_temperature"] = device_temperature
     parts = [e for e in effect.split("+")] if effect else []
     p = RANGES[effect](g) if effect and len(parts) == 1 else {e: RANGES[e](g) for e in parts}
     for name, pe in _parts(effect, p):
@@ -461,12 +486,14 @@ def _fmt(v):
 
 
 def write_cases(design, nom, folder: Path = CASES_DIR, plan=None, progress=None, jobs=None,
-                keep: bool = False) -> dict:
+                keep: bool = False, simulate=None) -> dict:
     """Simulate every planned case; write ``cases.csv`` (all rows, ``case`` column) and ``truth.json``.
 
     Both files are rewritten (atomically) after every case, so an interrupted run
     leaves the cases done so far, consistent. ``keep``: the folder's cases stay as
     they are and only planned cases it does not hold are simulated and added.
+    ``simulate(design, nom, kind, seed, jobs) -> (rows, truth)``: another generator's case
+    (``ood.simulate_case``); default this module's.
     """
     plan = plan or plan_cases()
     buf = io.StringIO()
@@ -484,7 +511,10 @@ def write_cases(design, nom, folder: Path = CASES_DIR, plan=None, progress=None,
         cid = f"c{seed}"
         if cid in truths:
             continue
-        rows, truth = simulate_case(design, nom, effect, seed, jobs=jobs, campaign=(campaign or [None])[0])
+        if simulate is None:
+            rows, truth = simulate_case(design, nom, effect, seed, jobs=jobs, campaign=(campaign or [None])[0])
+        else:
+            rows, truth = simulate(design, nom, effect, seed, jobs)
         truths[cid] = truth
         for r in rows:
             w.writerow([cid] + [_fmt(r[h]) for h in HEADER[1:]])
@@ -527,10 +557,12 @@ def stated_setup(truth: dict):
 
 def run_committed(design, nom, folder: Path = CASES_DIR, only=None, only_ids=None) -> dict:
     """Diagnose every committed SPICE case (blind; ``only``: these kinds, ``only_ids``: these cases), each with
-    the set-up its bench states (``stated_setup``); score."""
+    the set-up its bench states (``stated_setup``), against the surrogate's levels at the design temperature
+    (the decks' own, ``simulate_case``); score."""
     from .diagnose import diagnose
     from .selftest import bench, score
     cases, truths = load_cases(folder)
+    nom = nom.at_design_temperature()      # the committed decks ran at the design temperature
     out = []
     for cid, rows in cases.items():
         t = truths[cid]
