@@ -70,6 +70,29 @@ def corner(eps: float, t_b: float, g: float, d: float) -> float:
     return KAPPA * eps * (2 / math.pi) * math.log(1 + math.pi * t_b / (2 * g)) * ang
 
 
+SAMPLES = 8     # points along an edge that is not parallel to its partner, where their distance is taken
+
+
+def _parallel(ep) -> bool:
+    """Whether the two edges of an edge pair run parallel (their distance the same all along)."""
+    a, b = ep.first, ep.second
+    return (a.dx() * b.dy() - a.dy() * b.dx()) == 0
+
+
+def _spread(ep) -> list:
+    """The distances (dbu) from SAMPLES points spread along the pair's first edge to its second edge: two edges
+    that are not parallel (a line crossing another off the axes) face each other at a distance that changes
+    along them, and the corner field is a cross-section's, taken where each point is."""
+    import klayout.db as kdb
+    a, b = ep.first, ep.second
+    out = []
+    for k in range(SAMPLES):
+        t = (k + 0.5) / SAMPLES
+        p = kdb.Point(round(a.p1.x + (a.p2.x - a.p1.x) * t), round(a.p1.y + (a.p2.y - a.p1.y) * t))
+        out.append(b.distance_abs(p))         # to the line through the second edge (the pair is its projection)
+    return out
+
+
 def corner_couplings(cpl, geo, stack, i, spent) -> None:
     """Add the corner field of layer ``i``'s edges to every higher layer's conductors of other nets to
     ``cpl``, and the fringe length (m) it takes from each edge to ``spent[(layer, net)]``. The edge pairs
@@ -130,7 +153,9 @@ def corner_couplings(cpl, geo, stack, i, spent) -> None:
         eps = stack.eps_band(cond.z, cb.top)      # the corner field: between A's and B's levels
         for (ep, fl), a_net, b_net, f in zip(pairs, a_nets, b_nets, free.tolist()):
             d = 0.0 if fl else ep.distance() * dbu
-            c = corner(eps, cb.thickness, g, d) * f * (ep.first.length() + ep.second.length()) / 2 * dbu
+            per = corner(eps, cb.thickness, g, d) if _parallel(ep) else \
+                sum(corner(eps, cb.thickness, g, x * dbu) for x in _spread(ep)) / SAMPLES
+            c = per * f * (ep.first.length() + ep.second.length()) / 2 * dbu
             if c <= 0:
                 continue
             cpl.add(a_net, b_net, c, ("corner", cond.name, cb.name, True))
