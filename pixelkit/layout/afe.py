@@ -22,7 +22,10 @@ the capacitor's plate is as wide as the pitch allows and as long as its value as
 model card's area and perimeter capacitance), the resistor's body as long as its value asks
 at the technology's sheet resistance. The capacitors' plates leave on planned top-metal leads
 to metal4 landings (:mod:`.mimstack`); every net is then routed by :mod:`.gridroute` on metal2 -
-metal4, keeping metal4 1.2 um (the MIM rule) off every capacitor's bottom plate.
+metal4, keeping metal4 1.2 um (the MIM rule) off every capacitor's bottom plate. The SC stage's
+floating nodes (``GUARDED``: the op-amp input ``x``, the shared node ``vm``) are routed first, and
+the grid points beside, over and under their routes are filled with vss metal tied to vss
+(``GridRouter.guards``): no node that moves between the phases runs next to them.
 """
 from __future__ import annotations
 
@@ -43,6 +46,10 @@ PINS_BOTTOM = ("nb", "out", "nbias")
 GROUP_GAP = 1200        # nm between device groups (wells, implants, resistor rules all kept)
 STRIP_GAP = 800         # nm between strips of one group (their implants merge or keep NP.2 / PP.2)
 CAP_GAP = 2500          # nm of routing room between the capacitors and the devices (MIM: metal4 1.2 um off)
+#: the SC stage's floating nodes (the op-amp's input x and the capacitors' shared node vm hold their
+#: charge while C13 transfers it): routed first and shielded by vss, so no node that moves between the
+#: phases (in, out, c) couples to them (docs/revisions.md: the GF180 revision B's post-layout gain error)
+GUARDED = {"x": "vss", "vm": "vss"}
 
 
 @dataclass(frozen=True)
@@ -314,10 +321,10 @@ def afe_layout(design, lt, which: str, width: int, x_in: int, x_pass: int, name:
     cv.add("boundary", box(0, 0, width, height), "")
     # route every net with two or more terminals
     area = box(half, half, width - half, height - half)
-    r = GridRouter(cv, lt, ("metal2", "metal3", "metal4"), area, router_pitch)
+    r = GridRouter(cv, lt, ("metal2", "metal3", "metal4"), area, router_pitch, guards=GUARDED)
     for net, ts in st.terms.items():
         r.add_net(net, ts)
-    r.route(sorted(st.terms, key=lambda n: -len(st.terms[n])))   # the busiest first
+    r.route(sorted(st.terms, key=lambda n: (n not in GUARDED, -len(st.terms[n]))))   # guarded, then the busiest
     cv.ports = {"width": width, "height": height, "lines": line_y, "bottom": bottom_x,
                 "top": {"in": x_in, "nbias": x_pass}}
     return cv

@@ -11,8 +11,13 @@ landing to a free grid point, checked with :meth:`Canvas.free`.
 
 Each net is a tree grown terminal by terminal with A* (a step costs one pitch, more against
 a layer's preferred direction, a via more); what one net draws blocks the next. A net that
-finds no path is moved to the front and all are routed again; then :class:`RouteError`
-names it.
+finds no path is moved to the front (behind the guarded nets) and all are routed again; then
+:class:`RouteError` names it.
+
+A guarded net (``guards``: net -> shield net) takes the free grid points beside, over and under its
+route as soon as it is routed, so no later net runs next to it; after every net, those still free
+are drawn as the shield net's metal, each piece routed to the shield net (a piece that cannot reach
+it is left empty).
 """
 from __future__ import annotations
 
@@ -44,6 +49,9 @@ class GridRouter:
     area: Box                          # where the grid lies (grid pads stay inside)
     pitch: int = 0
     nets: dict = field(default_factory=dict)   # net -> [Terminal]
+    #: guarded net -> its shield's net: the grid points around a guarded net's route are kept from every
+    #: other net and filled with the shield's metal, tied to the shield's net (``_shield``)
+    guards: dict = field(default_factory=dict)
 
     def __post_init__(self):
         lt = self.lt
@@ -271,10 +279,13 @@ class GridRouter:
             except RouteError as exc:
                 last = exc
                 self.cv.restore(snap)
-                if order[0] == exc.net:
+                first = sum(1 for n in order if n in self.guards and n != exc.net)   # guarded nets stay first
+                if exc.net in self.guards:
+                    first = 0
+                if order.index(exc.net) == first:
                     break
                 order.remove(exc.net)
-                order.insert(0, exc.net)
+                order.insert(first, exc.net)
         raise last
 
     def _route_all(self, order) -> None:
@@ -282,8 +293,57 @@ class GridRouter:
         for net in order:   # every device pad gets its landing first
             terms[net] = [self._landing(net, t) if t.layer == "metal1" else t for t in self.nets[net]]
         self._build()
+        self.done = {}
+        reserved = {}
         for net in order:
             self._route_net(net, terms[net])
+            if net in self.guards:
+                reserved[net] = self._reserve(net, self.guards[net])
+        for net, nodes in reserved.items():
+            self._shield(self.guards[net], nodes)
+
+    def _reserve(self, net: str, shield: str) -> set:
+        """The free grid points beside ``net``'s route (the eight around each of its points on its layer,
+        the one over and the one under it), taken for ``shield``: no later net runs beside, over or under
+        the guarded one."""
+        out = set()
+        for k, i, j in self.done.get(net, ()):
+            near = [(k, i + di, j + dj) for di in (-1, 0, 1) for dj in (-1, 0, 1) if di or dj]
+            near += [(kk, i, j) for kk in (k - 1, k + 1) if 0 <= kk < len(self.layers)]
+            for kk, ii, jj in near:
+                if 0 <= ii < self.nx and 0 <= jj < self.ny and self.owner[kk].get((ii, jj)) is None:
+                    self.owner[kk][(ii, jj)] = shield
+                    out.add((kk, ii, jj))
+        return out
+
+    def _shield(self, shield: str, nodes: set) -> None:
+        """Metal of ``shield`` on the reserved ``nodes`` still free for it: each piece (points joined
+        along the grid) drawn and routed to ``shield``'s tree; a piece that cannot reach it is left out
+        (its points stay empty: the guarded net then keeps two pitches from its neighbours there)."""
+        nodes = {n for n in nodes if self.free_for(n[0], n[1:], shield)}
+        tree = {n: 0 for n in self.done.get(shield, ())}
+        while nodes:
+            piece, todo = set(), [nodes.pop()]
+            while todo:
+                k, i, j = todo.pop()
+                piece.add((k, i, j))
+                for n in ((k, i + 1, j), (k, i - 1, j), (k, i, j + 1), (k, i, j - 1)):
+                    if n in nodes:
+                        nodes.discard(n)
+                        todo.append(n)
+            snap = self.cv.snapshot()
+            for k, i, j in piece:
+                for n in ((k, i + 1, j), (k, i, j + 1)):
+                    if n in piece:
+                        self._seg(k, [self.xy(i, j), self.xy(*n[1:])], shield)
+                self._put(self.layers[k], self.pad(k, i, j), shield)
+            path = self._astar(shield, {n: 0 for n in piece}, tree) if tree else None
+            if path is None:
+                self.cv.restore(snap)
+                self._build()
+                continue
+            self._draw(shield, path)
+            tree.update({n: 0 for n in (*path, *piece)})
 
     def _route_net(self, net: str, terms: list) -> None:
         if len(terms) < 2:
@@ -336,6 +396,7 @@ class GridRouter:
             self._draw(net, path)
             for n in path:
                 tree[n] = 0
+        self.done[net] = {n for n, c in tree.items() if c == 0}
 
     def _on_net(self, net: str, t: Terminal) -> list:
         """Grid nodes on the terminal's layer whose pad touches the terminal."""

@@ -11,7 +11,9 @@ metal on a grid, each plate gets one lead, planned here:
   straight down;
 - each bottom plate's via sits on the right of its plate, except the middle capacitor's, on the
   left: the lowest capacitor's lead runs down on the right, the middle one's down a lane along
-  the left edge (past the lowest), the highest one's up on the right;
+  the left edge (past the lowest) and, mirrored, up the lane past the highest as far (so the
+  middle's bottom node faces the lowest and the highest bottom plates alike), the highest one's up
+  on the right;
 - a lone capacitor (the op-amp's Cc) leaves both plates upwards.
 
 A lead ends on a landing - a via down to a metal4 pad - outside the MIM's metal4 keep-out
@@ -120,6 +122,14 @@ def draw_stack(cv: Canvas, lt, col: Column, caps: list, y: int) -> Stack:
         elif side == "left":                                    # the middle: down the left lane
             cv.add("metal5", box(col.lane[0], pad.y0, pad.x1, pad.y1), bottom)   # as tall as the pad: no notch
             _lead(cv, lt, st, bottom, (col.lane[0] + col.lane[1]) // 2, pad.cy, y_down)
+            # and mirrored up the same lane past the highest plate, as far beyond it as the lead reaches
+            # below the lowest: the middle's bottom node then faces the lowest and the highest bottom
+            # plates alike (the AFE's op-amp input x between c and in: docs/revisions.md)
+            wt = lt.width("metal5")
+            reach = lt.cut("via4") // 2 + lt.nm("metal5.enclosure.via4")
+            top_end = made[-1][0]["plate"].y1 + (low["plate"].y0 - (y_down - reach))
+            cv.add("metal5", box(col.lane[0], pad.cy, col.lane[0] + wt, top_end), bottom)
+            st.y1 = max(st.y1, top_end)
         else:                                                   # the lowest: down on the right
             _lead(cv, lt, st, bottom, pad.cx, pad.cy, y_down)
     return st
