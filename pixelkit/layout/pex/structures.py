@@ -203,8 +203,25 @@ def _holdout2(tech) -> list:
                       tuple(_vias(tech, 0, 0, "kva", "metal4", 1.2) + _vias(tech, 2.4, 0, "kvb", "metal4", 1.2)))]
 
 
+def _holdout3(tech) -> list:
+    """A fourth held-out set, drawn and solved by FastCap2 after holdout2 had been compared, the model not
+    changed since: never looked at while the model changed."""
+    return [_cross("q_cross_m3m4_row", "metal3", 0.4, "metal4", 0.6, 90, "qc1"),
+            _cross("q_cross_m2m4_wide", "metal2", 1.2, "metal4", 0.4, 90, "qc2"),
+            _cross("q_cross_m1m4", "metal1", 0.8, "metal4", 0.8, 90, "qc3"),
+            _cross("q_tee_m3m4", "metal3", 0.5, "metal4", 0.5, 90, "qc4", offset=9.3),
+            _cross("q_tee_m1m2", "metal1", 0.8, "metal2", 0.4, 90, "qc5", offset=9.0),
+            _cross("q_cross_m2m3_45", "metal2", 0.8, "metal3", 0.8, 45, "qc6"),
+            Structure("q_parallel_m2m3", ("qpa", "qpb"), "metal2 and metal3 lines side by side, 1.2 um apart in plan",
+                      (("metal2", 0, 0, 30, 0.5, "qpa"), ("metal3", 0, 1.7, 30, 2.2, "qpb"))),
+            Structure("q_parallel_m2m5", ("qqa", "qqb"), "metal2 and metal5 lines side by side, 3 um apart in plan",
+                      (("metal2", 0, 0, 30, 0.5, "qqa"), ("metal5", 0, 3.5, 30, 4.5, "qqb"))),
+            _pair("q_lat_m5", "metal5", 1.0, 1.0, 1.0, 30, "qa1"),
+            Structure("q_plate_m3_sub", ("qps", "0"), "metal3 plate to substrate", (("metal3", 0, 0, 7, 15, "qps"),))]
+
+
 SETS = {"first": _first, "development": _development, "validation": _validation, "holdout": _holdout,
-        "holdout2": _holdout2}
+        "holdout2": _holdout2, "holdout3": _holdout3}
 
 
 def _bounds(shape):
@@ -315,7 +332,7 @@ def kit_terms(tech, geo, stack=None, which: str = "first") -> dict:
 
 REFERENCE = {"first": "extraction_structures.json", "development": "extraction_structures_development.json",
              "validation": "extraction_structures_validation.json", "holdout": "extraction_structures_holdout.json",
-             "holdout2": "extraction_structures_holdout2.json"}
+             "holdout2": "extraction_structures_holdout2.json", "holdout3": "extraction_structures_holdout3.json"}
 
 
 if __name__ == "__main__":      # python -m pixelkit.layout.pex.structures SET OUT.json: the FastCap2 reference
