@@ -1,5 +1,5 @@
 """The benchmark suite runs to the end on the reference design: ``benchmarks/run.py --quick``; the
-main job's runs merge only when they measured the same code (``benchmarks/main_job.py``).
+main job's figures on the pages are those of its stored run (``benchmarks/main_job.py``).
 
 Only that it completes and gives every figure, finite and of its kind, is checked here: the
 figures themselves are times on a shared machine, measured as ratios by the script and quoted
@@ -41,12 +41,33 @@ def _main_job():
     return mod
 
 
+def test_main_job_figures_on_the_pages_are_the_stored_runs():
+    """docs/benchmarks.md's main-job tables and the README's sentence on the first command's time
+    are exactly what benchmarks/main_job.py renders from the stored run (no figure typed by hand;
+    a page edited by hand, or a run stored without rewriting the pages, fails here). The stored run
+    is a real one: parts of the main job, the report among them with its raw-ngspice replay, every
+    part's SPICE runs accounted for by its figure groups."""
+    mj = _main_job()
+    res = json.loads(mj.RECORD.read_text())
+    assert "report" in res["parts"] and set(res["parts"]) <= set(mj.PARTS), sorted(res["parts"])
+    report = res["parts"]["report"]
+    assert {"current", "raw"} <= set(report)
+    for sides in res["parts"].values():
+        c = sides["current"]
+        assert c["spice_runs"] > 0 and c["cpu_s"] > 0 and c["wall_s"] > 0 and sum(
+            g["runs"] for g in c["groups"].values()) == c["spice_runs"]
+        assert "log" not in c and "stderr_tail" not in c          # the record keeps no scratch paths
+    assert mj.blocks(mj.DOCS_PAGE.read_text(), mj.DOCS_BEGIN, mj.DOCS_END) == mj.docs_block(res).strip()
+    assert mj.blocks(mj.README.read_text(), mj.README_BEGIN, mj.README_END) == mj.readme_sentence(res).strip()
+
+
 def test_main_job_merges_side_by_side_runs_of_the_same_code_only():
     mj = _main_job()
     a = {"head": "h1", "baseline": "b", "date": "2", "cores": 2, "jobs": 2, "parts": {"report": {}}}
     b = {"head": "h1", "baseline": None, "date": "1", "cores": 2, "jobs": 2, "parts": {"chip": {}}}
-    m = mj.merged([a, b])
+    m = mj.merged([a, b], code=lambda rev: rev)
     assert list(m["parts"]) == ["report", "chip"] and m["baseline"] == "b" and m["date"] == "1"
     assert m["side_by_side"] == 2
     with pytest.raises(SystemExit, match="different code"):
-        mj.merged([a, dict(b, head="h2")])
+        mj.merged([a, dict(b, head="h2")], code=lambda rev: rev)
+    assert mj.code_commit("HEAD") == subprocess.run(["git", "-C", str(ROOT), "log", "-1", "--format=%h", "--", *mj.CODE], capture_output=True, text=True).stdout.strip()
