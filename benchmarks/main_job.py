@@ -85,7 +85,8 @@ PARTS = {
 GROUPS = [(r"^vfy_(dark|small|sat|mid_lo|mid_hi)$", "pixel"), (r"^vfy_lag_", "lag"), (r"^vfy_gse_", "gse"),
           (r"^vfy_sf_", "noise"), (r"^vfy_dark_[ps]$", "dark"), (r"^vfy_afe", "afe"), (r"^vfy_power_", "power"),
           (r"^frame_2x1_", "settling"), (r"^frame_", "frames"), (r"^gap", "gap surrogate"),
-          (r"^(coarse|refine)\d", "experiment (fig. A.1 - A.3)")]
+          (r"^(coarse|refine)\d", "experiment (fig. A.1 - A.3)"), (r"^vfy_sto_", "storage light"),
+          (r"^bright_", "bright source"), (r"^transfer", "transfer curves"), (r"^(sf_|ekv_fit)", "model fits")]
 
 
 def group_of(title: str) -> str:
@@ -286,10 +287,23 @@ def text(res: dict) -> str:
     return "\n".join(lines)
 
 
+def regrouped(groups: dict) -> dict:
+    """A run's figure groups with ``GROUPS`` applied again to those it left as ``other: title`` (a group
+    named since the run)."""
+    out: dict = {}
+    for name, g in groups.items():
+        name = group_of(name[len("other: "):]) if name.startswith("other: ") else name
+        acc = out.setdefault(name, {k: 0 for k in g})
+        for k, v in g.items():
+            acc[k] = acc.get(k, 0) + v
+    return out
+
+
 def trimmed(res: dict) -> dict:
     """A run's figures without its scratch paths and logs (what benchmarks/results/main_job.json keeps)."""
     out = {k: v for k, v in res.items() if k != "parts"}
-    out["parts"] = {name: {side: {k: v for k, v in r.items() if k not in ("log", "stderr_tail")}
+    out["parts"] = {name: {side: {k: (regrouped(v) if k == "groups" else v) for k, v in r.items()
+                                  if k not in ("log", "stderr_tail")}
                            for side, r in sides.items()} for name, sides in res["parts"].items()}
     return out
 
