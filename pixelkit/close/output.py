@@ -99,6 +99,8 @@ STATUS = {
                "objective may improve further",
     "infeasible": "no revision within the knobs' bounds passes: the smallest margin cannot be raised further",
     "not closed": "no passing revision found within max_iterations",
+    "stalled": "no passing revision found: the trust region collapsed on candidates the linear models did not "
+               "predict (a figure not smooth in the knobs), also when reopened; not a proof that none exists",
     "yield not met": "the revision passes every condition but its Monte Carlo yield does not reach min_yield",
     "not measured": "not every spec was measured at every condition of the closed revision",
 }

@@ -56,6 +56,14 @@ CUSHION = 0.002
 PROMISE = 1e-5
 #: Refresh every gradient by finite differences after this many accepted steps on secants alone.
 REFRESH_EVERY = 3
+#: While restoring, a trust region that collapsed below the tolerance (candidates the models did not
+#: predict: a figure not smooth in the knobs) is reopened this many times with fresh sensitivities.
+RESTARTS = 2
+#: A collapsed region is a max-min point (infeasible) when the models, within the first region, see less
+#: than this share of the shortfall recoverable (rows that balance); else the candidates broke the models.
+BALANCED = 0.5
+#: A max-min point is a proof of infeasibility (for the linear models) only at a trust region this large.
+PROOF_RADIUS = 0.05
 #: The key of the objective's gradient (a figure at the nominal condition).
 OBJECTIVE = ("objective", None)
 #: Rounds of "raise the nominal targets to the Monte Carlo spread" before close gives up on yield.
@@ -304,7 +312,25 @@ class Closer:
         self.f_scale = abs(p.f) if p.f else 1.0
         self.record(p, accepted=True, mode="start", radius=None, where="grid")
         radius, forced, first, status, last, shrunk, on_secants = RADIUS0, set(), True, None, None, False, 0
-        anchor = p
+        anchor, restarts = p, RESTARTS
+
+        def stall():
+            """Restoring, the trust region collapsed: reopen it on fresh sensitivities (at most RESTARTS
+            times), then ``stalled``: no passing revision found, which is not a proof that none exists."""
+            nonlocal radius, restarts, last
+            now = float(model.m.min()) if len(model.m) else 0.0
+            wide = restore(model, u0, lo, hi, RADIUS0, CUSHION)   # what the models see within the first region
+            if wide.t - now < BALANCED * max(-now, CUSHION):   # they see no way up either: a max-min point
+                last = (wide, model, RADIUS0)
+                return "infeasible"
+            if not restarts:
+                return "stalled"
+            restarts -= 1
+            radius = RADIUS0
+            self.grads.clear()
+            self.say(f"close{self.label}: the trust region collapsed while restoring; reopened at {RADIUS0} on "
+                     f"fresh sensitivities ({restarts} more)")
+            return None
         yield_rounds, yield_result = 0, None
         if not self.space.n:   # nothing numeric to move (a circuit choice alone): the start is the answer
             status = "converged" if self.smallest(p.margins) >= 0 else "infeasible"
@@ -332,13 +358,15 @@ class Closer:
                 if (feasible and (np.array_equal(xc, p.x) or promise <= PROMISE or small)
                         or not feasible and st.t < CUSHION and small):
                     if fresh:   # the model's next move is below the tolerance: passing, or a max-min point
-                        status = "converged" if feasible else "infeasible"
+                        status = ("converged" if feasible else "infeasible" if radius >= PROOF_RADIUS else stall())
                     else:       # on secants: sure of it only with fresh sensitivities
                         self.grads.clear()
                     break
                 if not feasible and (np.array_equal(xc, p.x) or promise <= PROMISE):
-                    if fresh or radius <= s.tolerance:     # no step raises the smallest margin: a max-min point
+                    if fresh and radius >= PROOF_RADIUS:   # no step raises the smallest margin: a max-min point
                         status = "infeasible"
+                    elif fresh or radius <= s.tolerance:   # within a collapsed region: reopen it first
+                        status = stall()
                     else:                                  # else: fresh sensitivities at this point
                         self.grads.clear()
                     break
@@ -346,7 +374,9 @@ class Closer:
                     radius /= 2
                     shrunk = True
                     if radius < s.tolerance:
-                        status = "converged" if feasible else "infeasible"
+                        status = "converged" if feasible else stall()
+                        if status is None:
+                            break
                     continue
                 sconds, sgroups, screen = self.screen(p, conds, groups)
                 targets = np.array([self.target(r) for r in model.keys])
@@ -374,7 +404,9 @@ class Closer:
                     radius = min(radius, float(np.abs(st.d).max())) / 2   # below the step that failed
                     shrunk = True     # no growth on the next success: the radius just failed
                     if radius < s.tolerance:
-                        status = "converged" if feasible else "infeasible"
+                        status = "converged" if feasible else stall()
+                        if status is None:
+                            break
                     if bad:
                         break         # a spec nothing modelled broke: model it (its sensitivities) first
                     continue
@@ -404,7 +436,9 @@ class Closer:
                 new = set() if on_screen else {k for k, m in pc.margins.items()
                                                if (m is None or m - self.target(k) < 0) and k not in pairs}
                 if radius < s.tolerance:
-                    status = "converged" if feasible else "infeasible"
+                    status = "converged" if feasible else stall()
+                    if status is None:
+                        break
                 elif new:     # it failed where nothing was modelled: model the worst of those from now on
                     forced |= set(sorted(new, key=lambda k: -math.inf if pc.margins[k] is None else pc.margins[k])[:3])
                     break
@@ -544,7 +578,7 @@ class Closer:
             unmeasured = sorted({k[0] for k, m in p.margins.items() if m is None})
         yield_ok = yield_result is None or yield_result["ok"]
         if short:
-            status = "infeasible" if status == "infeasible" else "not closed"
+            status = status if status in ("infeasible", "stalled") else "not closed"
         elif not yield_ok:
             status = "yield not met"
         elif unmeasured:
@@ -574,7 +608,7 @@ class Closer:
                "spice_cached": sum(i["spice_cached"] for i in self.iterations),
                "wall_s": time.perf_counter() - self.t0, "unmeasured": unmeasured, "idle": list(self.idle),
                "design_obj": p.design}
-        if short and last is not None:
+        if short and last is not None and status == "infeasible":   # a stall's last step proves no conflict
             out["conflict"] = conflicts(self, p, last)
         return out
 
