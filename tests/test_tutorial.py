@@ -10,7 +10,11 @@ on a failing specification, which the tutorial explains); ``<!-- creates: PATH .
 must leave; ``<!-- expect: REGEX -->`` what its output (stdout and stderr) must hold (the how-to's diagnosis names
 the effect the example's virtual silicon was made with); ``<!-- slow -->`` a block that takes
 minutes (DRC, sign-off, the reports); ``<!-- parse-only -->`` a block never run (it starts
-servers). Every page's whole walk is ``slow`` (``python -m pytest -m slow tests/test_tutorial.py``:
+servers). A ```text block right after a block is what the page says it prints: every line of it
+must be printed, in order, with the same numbers at the digits quoted (``docsite/outputs.py``;
+``<!-- vary: REGEX -->`` above the text block names a line whose numbers change from run to run);
+with ``PIXELKIT_DOCS_REWRITE=1`` the lines whose numbers moved are rewritten into the page from
+the output instead of failing. Every page's whole walk is ``slow`` (``python -m pytest -m slow tests/test_tutorial.py``:
 the tutorial 64 s, the how-tos 130 s on a warm cache); by default the quick blocks run and the slow blocks'
 ``pixelkit`` command lines are parsed by the real click commands in the folder the quick blocks
 left (a renamed command or option, a bad value or a design file the page never made fails),
@@ -33,11 +37,15 @@ import pytest
 
 from conftest import ROOT
 
-BLOCK = re.compile(r"((?:<!--[^\n]*-->\n)*)```sh\n(.*?)\n```", re.S)
+sys.path.insert(0, str(ROOT))
+from docsite import outputs  # noqa: E402
+
+BLOCK = re.compile(r"((?:<!--[^\n]*-->\n)*)```sh\n(.*?)\n```(?:\n\n((?:<!--[^\n]*-->\n)*)```text\n(.*?)\n```)?", re.S)
 
 
 def sh_blocks(text: str) -> list[dict]:
-    """[{code, exit: set of allowed statuses, creates: [paths], slow, parse_only, expect: [regex]}]
+    """[{code, exit: set of allowed statuses, creates: [paths], slow, parse_only, expect: [regex],
+    output: the ```text block right after it or None, output_span: its place in ``text``, vary: [regex]}]
     of the page's ```sh blocks."""
     out = []
     for m in BLOCK.finditer(text):
@@ -48,7 +56,9 @@ def sh_blocks(text: str) -> list[dict]:
                     "creates": creates.group(1).split() if creates else [],
                     "slow": bool(re.search(r"<!--\s*slow\s*-->", notes)),
                     "parse_only": bool(re.search(r"<!--\s*parse-only\s*-->", notes)),
-                    "expect": re.findall(r"<!--\s*expect:\s*(.+?)\s*-->", notes)})
+                    "expect": re.findall(r"<!--\s*expect:\s*(.+?)\s*-->", notes),
+                    "output": m.group(4), "output_span": m.span(4),
+                    "vary": re.findall(r"<!--\s*vary:\s*(.+?)\s*-->", m.group(3) or "")})
     return out
 
 
@@ -84,10 +94,14 @@ def parse_command(args: list[str]) -> None:
         parent = ctx
 
 
-def run_blocks(blocks, folder, parse_slow=False):
+def run_blocks(blocks, folder, parse_slow=False, page=None):
     """Run the blocks in order in ``folder``; with ``parse_slow``, a slow block's commands are
     parsed instead of run and the files it promises are stood in for by empty ones, so that a later
-    command naming them parses."""
+    command naming them parses. A block's output is held against the page's text block after it
+    (``docsite/outputs.py``); with ``PIXELKIT_DOCS_REWRITE=1`` the text blocks of ``page`` (the
+    file the blocks were read from) are rewritten from the output instead."""
+    rewrite = os.environ.get("PIXELKIT_DOCS_REWRITE") == "1" and page is not None
+    fixes = []
     prelude = (f'pixelkit() {{ "{sys.executable}" -m pixelkit "$@"; }}\n'
                f'python() {{ "{sys.executable}" "$@"; }}\n')
     env = {**os.environ, "PIXELKIT_PROGRESS": "0"}
@@ -113,6 +127,19 @@ def run_blocks(blocks, folder, parse_slow=False):
         assert not missing, f"block {n} did not create {missing}:\n{b['code']}"
         for rx in b["expect"]:
             assert re.search(rx, p.stdout + p.stderr), f"block {n} did not print {rx!r}:\n{output}"
+        if b.get("output") is not None:
+            problems, fixed = outputs.compare(b["output"], p.stdout + p.stderr, b["vary"])
+            if problems and rewrite:
+                fixes.append((b["output_span"], fixed))
+            elif problems:
+                raise AssertionError(f"block {n}'s output is not what the page shows "
+                                     "(PIXELKIT_DOCS_REWRITE=1 rewrites the numbers):\n  "
+                                     + "\n  ".join(problems) + f"\n--- printed:\n{(p.stdout + p.stderr)[-3000:]}")
+    if fixes:
+        text = page.read_text()
+        for (a, z), fixed in sorted(fixes, reverse=True):
+            text = text[:a] + fixed + text[z:]
+        page.write_text(text)
 
 
 @pytest.fixture
@@ -132,12 +159,12 @@ HOWTOS = sorted(p.name for p in (ROOT / "docs").glob("howto-*.md") if sh_blocks(
 @pytest.mark.slow
 @pytest.mark.parametrize("page", HOWTOS)
 def test_howto_runs_as_written(page, clone):
-    run_blocks(sh_blocks((ROOT / "docs" / page).read_text()), clone)
+    run_blocks(sh_blocks((ROOT / "docs" / page).read_text()), clone, page=ROOT / "docs" / page)
 
 
 @pytest.mark.parametrize("page", HOWTOS)
 def test_howto_quick_blocks_run_and_slow_commands_parse(page, clone):
-    run_blocks(sh_blocks((ROOT / "docs" / page).read_text()), clone, parse_slow=True)
+    run_blocks(sh_blocks((ROOT / "docs" / page).read_text()), clone, parse_slow=True, page=ROOT / "docs" / page)
 
 
 def test_example_measurements_are_silicon_case_c1001_unchanged():
@@ -160,20 +187,20 @@ def tutorial_blocks():
 
 @pytest.mark.slow
 def test_tutorial_runs_as_written(clone):
-    run_blocks(tutorial_blocks(), clone)
+    run_blocks(tutorial_blocks(), clone, page=ROOT / "docs" / "tutorial.md")
 
 
 def test_tutorial_quick_blocks_run_and_slow_commands_parse(clone):
     blocks = tutorial_blocks()
     assert any(b["slow"] for b in blocks) and not all(b["slow"] for b in blocks)
-    run_blocks(blocks, clone, parse_slow=True)
+    run_blocks(blocks, clone, parse_slow=True, page=ROOT / "docs" / "tutorial.md")
 
 
 def test_readme_tour_runs_as_written(clone):
     """The README's blocks after its two set-up commands (the tour; the set-up itself is tests/test_setup.py's)."""
     blocks = sh_blocks((ROOT / "README.md").read_text())[2:]
     assert blocks, "the README lost its tour"
-    run_blocks(blocks, clone)
+    run_blocks(blocks, clone, page=ROOT / "README.md")
 
 
 def test_the_runner_catches_a_stale_command(clone):
@@ -194,6 +221,25 @@ def test_the_runner_catches_a_stale_command(clone):
         run_blocks(sh_blocks("<!-- expect: fd_leakage -->\n```sh\necho dark_current\n```"), clone)
     with pytest.raises(AssertionError, match="No such command"):
         run_blocks(sh_blocks("<!-- slow -->\n```sh\npixelkit reprot x\n```"), clone, parse_slow=True)
+
+
+def test_the_runner_holds_a_pages_output_against_the_printed_one(clone, monkeypatch):
+    """A text block after a command is what it prints: a number that moved beyond the digits
+    quoted fails naming it, a line no longer printed fails, a ``vary`` line's numbers and the
+    cut lines pass; with PIXELKIT_DOCS_REWRITE=1 the page is rewritten from the output."""
+    printed = "printf 'CG (uV/e-)   4.036   11.41\\nread noise 408.9 e-\\n16 SPICE runs (0 from cache) in 13.4 s\\n'"
+    page = "```sh\n" + printed + "\n```\n\n<!-- vary: read noise -->\n```text\n{}\n```\n"
+    ok = "CG (uV/e-) 4.04 11.41\n...\nread noise 401.0 e-\n16 SPICE runs (16 from cache) in 2.0 s"
+    run_blocks(sh_blocks(page.format(ok)), clone)
+    with pytest.raises(AssertionError, match=r"4\.112 -> 4\.036"):
+        run_blocks(sh_blocks(page.format("CG (uV/e-)   4.112   11.41")), clone)
+    with pytest.raises(AssertionError, match="not printed"):
+        run_blocks(sh_blocks(page.format("CG_out(0) (uV/e-)   4.036   11.41")), clone)
+    doc = clone / "page.md"
+    doc.write_text("intro\n" + page.format("CG (uV/e-)   4.112   11.41\nread noise 1 e-") + "outro\n")
+    monkeypatch.setenv("PIXELKIT_DOCS_REWRITE", "1")
+    run_blocks(sh_blocks(doc.read_text()), clone, page=doc)
+    assert doc.read_text() == "intro\n" + page.format("CG (uV/e-)   4.036   11.41\nread noise 1 e-") + "outro\n"
 
 
 
