@@ -236,8 +236,14 @@ class Light:
                                doc="the bright source of the storage-light figures (verify storage_light_*): its "
                                    "photocurrent in each subpixel over the background's (the sizing's), lit while the "
                                    "frame is read out only (an LED headlight's PWM off during the exposure)")
+    max_readout_error: str = text("1x", doc="the light map's limit (pixelkit lightmap, the report's light-map "
+                                            "section, the datasheet): each column's AFE output error from the light "
+                                            "on the readout's open junctions, as a multiple of the read noise there "
+                                            "(\"1x\": visible in a single frame beyond it) or a voltage (\"2 mV\")")
 
     def validate(self, path, source, raw):
+        from .verify.light import parse_limit
+        parse_limit(self.max_readout_error, source, f"{path}.max_readout_error")
         if self.wavelength_max <= self.wavelength_min:
             raise ConfigError(source, f"{path}.wavelength_max", as_written(raw, "wavelength_max", self.wavelength_max),
                               f"a wavelength above wavelength_min ({as_written(raw, 'wavelength_min', '')})")

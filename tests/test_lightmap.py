@@ -155,11 +155,19 @@ def test_light_during_the_row_is_the_charge_on_c13(gf, geos):
         assert v == pytest.approx(want, rel=0.05), (c, v, want)
 
 
-def test_lightmap_command_and_a_technology_without_stack():
-    code, out, err = run_cli("lightmap", GF, "--shield", "full", "--json", "--quiet", timeout=300)
+def test_lightmap_command_and_a_technology_without_stack(tmp_path):
+    """The command judges against the design's own limit ([light] max_readout_error, default 1x; a bad
+    one refused at load naming the field, before any run), and says what a technology lacks."""
+    assert load_design(GF).light.max_readout_error == "1x"
+    text = GF.read_text().replace("\n[verify]", '\n[light]\nmax_readout_error = "0.5x"\n\n[verify]', 1)
+    (tmp_path / "gf.toml").write_text(text)   # the technology by name: the copy loads from anywhere
+    code, out, err = run_cli("lightmap", tmp_path / "gf.toml", "--shield", "full", "--json", "--quiet", timeout=300)
     assert code == 0, err
-    v = json.loads(out)["verdict"]   # a full shield keeps the light out of the readout: PASS at 1x the read noise
-    assert v["verdict"] == "PASS" and v["limit"] == "1x" and not v["failed"]
+    v = json.loads(out)["verdict"]   # a full shield keeps the light out of the readout: PASS at the design's 0.5x
+    assert v["verdict"] == "PASS" and v["limit"] == "0.5x" and not v["failed"]
+    (tmp_path / "bad.toml").write_text(text.replace('"0.5x"', '"3 uA"'))
+    code, out, err = run_cli("lightmap", tmp_path / "bad.toml", timeout=120)
+    assert code == 2 and "light.max_readout_error = '3 uA'" in err, err
     code, out, err = run_cli("lightmap", ROOT / "designs" / "dual_pixel_revA.toml", timeout=120)
     assert code == 2 and "[stack]" in err and "docs/technology-file.md" in err   # what it lacks, how to add it
 

@@ -101,7 +101,7 @@ def run_blocks(blocks, folder, parse_slow=False, page=None):
     (``docsite/outputs.py``); with ``PIXELKIT_DOCS_REWRITE=1`` the text blocks of ``page`` (the
     file the blocks were read from) are rewritten from the output instead."""
     rewrite = os.environ.get("PIXELKIT_DOCS_REWRITE") == "1" and page is not None
-    fixes = []
+    fixes, unfixed = [], []
     prelude = (f'pixelkit() {{ "{sys.executable}" -m pixelkit "$@"; }}\n'
                f'python() {{ "{sys.executable}" "$@"; }}\n')
     env = {**os.environ, "PIXELKIT_PROGRESS": "0"}
@@ -131,6 +131,7 @@ def run_blocks(blocks, folder, parse_slow=False, page=None):
             problems, fixed = outputs.compare(b["output"], p.stdout + p.stderr, b["vary"])
             if problems and rewrite:
                 fixes.append((b["output_span"], fixed))
+                unfixed += [f"block {n}: {s}" for s in problems if s.startswith("not printed")]
             elif problems:
                 raise AssertionError(f"block {n}'s output is not what the page shows "
                                      "(PIXELKIT_DOCS_REWRITE=1 rewrites the numbers):\n  "
@@ -140,6 +141,7 @@ def run_blocks(blocks, folder, parse_slow=False, page=None):
         for (a, z), fixed in sorted(fixes, reverse=True):
             text = text[:a] + fixed + text[z:]
         page.write_text(text)
+    assert not unfixed, "lines to rewrite by hand:\n  " + "\n  ".join(unfixed)
 
 
 @pytest.fixture

@@ -30,23 +30,26 @@ def _text(r: dict) -> str:
 @click.option("--shield", type=click.Choice(["pixels", "full"]), default="pixels", show_default=True,
               help="pixels: the shield as drawn over the subpixels, the readout open ([Thesis2019]'s chip); "
                    "full: only the pixels' light openings see light")
-@click.option("--max-error", default="1x", show_default=True, metavar="KX|VOLTAGE",
+@click.option("--max-error", default=None, metavar="KX|VOLTAGE",
               help="the limit of each column's AFE output error: a multiple of the read noise there ('1x') or a "
-                   "voltage ('2 mV'); exit 1 beyond it")
+                   "voltage ('2 mV'); exit 1 beyond it [default: the design's light.max_readout_error, '1x' "
+                   "unless it says otherwise]")
 @spice_opts
 @json_opt
 def lightmap_cmd(design, shield, max_error, backend, jobs, as_json):
     """Exposed junctions of the drawn dual pixel and its column circuits, their photocurrent at the
     scene's headlight irradiance, and the AFE output error each array's column sees (SPICE), judged
-    against --max-error: exit 1 when a column's error is beyond it."""
+    against the design's limit ([light] max_readout_error) or --max-error: exit 1 when a column's error
+    is beyond it."""
     from ..layout.pex.light import light_map
     from ..tech.stack import require_stack
     from ..verify.light import judge, parse_limit
-    parse_limit(max_error)   # refused before any run
+    if max_error is not None:
+        parse_limit(max_error)   # refused before any run
     d = load(design)
     require_stack(d.tech, "the light map")
     r = light_map(d, shield, backend)
-    r["verdict"] = judge(r["columns"], max_error)
+    r["verdict"] = judge(r["columns"], max_error if max_error is not None else d.light.max_readout_error)
     emit(r, as_json, _text)
     if r["verdict"]["exit"]:
         raise SystemExit(r["verdict"]["exit"])

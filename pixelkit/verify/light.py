@@ -7,7 +7,10 @@ issue 48): a change there changes the numbers judged, not the rule.
 
 The limit is either a multiple of the read noise at the AFE (``"1x"``, the default: light that
 reaches the readout may add no more to a frame than one read noise, the level at which it is
-visible in a single frame) or a voltage (``"2 mV"``). Exit as every verdict command
+visible in a single frame) or a voltage (``"2 mV"``). It is the design's, as a spec's limit is:
+``[light] max_readout_error`` of the revision's file (default ``"1x"``), which ``pixelkit
+lightmap``, the report's light-map section and the datasheet judge against; ``lightmap
+--max-error`` overrides it for one run. Exit as every verdict command
 (``errors.verdict_exit``): 1 when a column's error is beyond the limit, 0 when every column is
 within it.
 """
@@ -20,8 +23,9 @@ from ..errors import ConfigError, verdict_exit
 DEFAULT = "1x"
 
 
-def parse_limit(text: str) -> tuple[str, float]:
-    """("noise", k) for ``"k x"``, ("V", volts) for a voltage; ConfigError naming ``--max-error``."""
+def parse_limit(text: str, source: str = "lightmap", field: str = "--max-error") -> tuple[str, float]:
+    """("noise", k) for ``"k x"``, ("V", volts) for a voltage; ConfigError naming ``field`` of ``source``
+    (the option, or the design's ``light.max_readout_error``)."""
     from ..units import quantity
     t = str(text).strip()
     m = re.fullmatch(r"([0-9.eE+-]+)\s*x", t)
@@ -30,11 +34,11 @@ def parse_limit(text: str) -> tuple[str, float]:
             k = float(m.group(1))
             kind, value = "noise", k
         else:
-            kind, value = "V", quantity(t, "V", "--max-error", "lightmap")
+            kind, value = "V", quantity(t, "V", field, source)
     except (ValueError, ConfigError):
         kind, value = None, None
     if kind is None or not (0 < value < (1e4 if kind == "noise" else 10.0)):
-        raise ConfigError("lightmap", "--max-error", text, "a multiple of the read noise at the AFE ('1x', "
+        raise ConfigError(source, field, text, "a multiple of the read noise at the AFE ('1x', "
                           "'0.5x': above 0, below 1e4) or a voltage ('2 mV': above 0, below 10 V)")
     return kind, value
 

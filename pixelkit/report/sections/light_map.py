@@ -83,9 +83,12 @@ def build(ctx) -> Section:
             "gathered while idle, and the charge its island collects after the reset is microvolts on C13. Constant light "
             "sources would start the bench at its lit operating point, the floating nodes at their junctions' "
             "clamp: hundreds of millivolts that a readout reset every frame never reaches."]
-    from ...verify.light import DEFAULT, judge
-    verdicts = {s: judge(m["columns"], DEFAULT) for s, m in maps.items()}
-    text.insert(0, "Verdict (pixelkit lightmap's, each column's AFE output error against the read noise there): "
+    from ...verify.light import judge
+    limit = ctx.design.light.max_readout_error
+    verdicts = {s: judge(m["columns"], limit) for s, m in maps.items()}
+    against = f"{limit} the read noise there" if limit.strip().endswith("x") else limit
+    text.insert(0, f"Verdict (pixelkit lightmap's, each column's AFE output error against the design's limit, "
+                f"light.max_readout_error = {against}): "
                 + "; ".join(f"shield '{s}' {v['verdict']}" for s, v in verdicts.items()) + ".")
     data = {**maps, "verdict": {s: {k: v[k] for k in ("verdict", "limit", "failed")} for s, v in verdicts.items()}}
     return Section(TITLE, text=text, tables=tables,
