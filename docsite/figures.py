@@ -29,7 +29,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
-MARK = re.compile(r"(?P<num>" + NUMBER + r")<!--fig (?P<src>[a-z_][a-z0-9_]*):(?P<key>.+?)(?:\s+~(?P<tol>[0-9.]+)%)?-->")
+MARK = re.compile(r"(?P<num>" + NUMBER + r")<!--fig (?P<src>[a-z_][a-z0-9_]*):(?P<key>.+?)(?:\s*~(?P<tol>[0-9.]+)%)?-->")
 #: a marker alone (the hook removes them from the site's pages)
 ANY_MARK = re.compile(r"<!--fig [^>]*-->")
 

@@ -25,6 +25,8 @@ from __future__ import annotations
 
 import re
 
+from docsite.figures import _digits as _half_unit
+
 NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
 #: lines whose numbers differ from run to run on every page: the cache's share and wall times
 VARY = (r"SPICE runs? \(\d+ from cache\)", r"\bin \d+(?:\.\d+)? (?:s|min)\b", r"\b\d+(?:\.\d+)? (?:s|min)$")
@@ -34,13 +36,6 @@ CUT = {"...", "…"}
 def skeleton(line: str) -> str:
     """The line's words: numbers taken out, runs of white space as one."""
     return " ".join(NUMBER.sub("#", line).split())
-
-
-def _half_unit(text: str) -> float:
-    """Half a unit of the last digit ``text`` is printed to."""
-    mant, _, exp = text.lower().lstrip("+-").partition("e")
-    decimals = len(mant.split(".")[1]) if "." in mant else 0
-    return 0.5 * 10.0 ** (-decimals + (int(exp) if exp else 0))
 
 
 def numbers_agree(quoted: str, printed: str) -> bool:
