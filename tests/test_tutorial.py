@@ -21,7 +21,7 @@ left (a renamed command or option, a bad value or a design file the page never m
 without running them. Independent of the code under test: what is checked is what the page
 promises the reader, parsed from the page itself. The simulation cache is the test session's, so
 blocks that repeat another test's work are served from it. The other pages' ```sh commands are
-parsed, and every inline `pixelkit ...` mention in the docs and the README must name a command
+parsed (and run when marked ``<!-- run -->``: a quick command whose output a reference page reads), and every inline `pixelkit ...` mention in the docs and the README must name a command
 and options the kit has.
 """
 import os
@@ -56,6 +56,7 @@ def sh_blocks(text: str) -> list[dict]:
                     "creates": creates.group(1).split() if creates else [],
                     "slow": bool(re.search(r"<!--\s*slow\s*-->", notes)),
                     "parse_only": bool(re.search(r"<!--\s*parse-only\s*-->", notes)),
+                    "run": bool(re.search(r"<!--\s*run\s*-->", notes)),
                     "expect": re.findall(r"<!--\s*expect:\s*(.+?)\s*-->", notes),
                     "output": m.group(4), "output_span": m.span(4),
                     "vary": re.findall(r"<!--\s*vary:\s*(.+?)\s*-->", m.group(3) or "")})
@@ -243,6 +244,21 @@ def test_the_runner_holds_a_pages_output_against_the_printed_one(clone, monkeypa
     run_blocks(sh_blocks(doc.read_text()), clone, page=doc)
     assert doc.read_text() == "intro\n" + page.format("CG (uV/e-)   4.036   11.41\nread noise 1 e-") + "outro\n"
 
+
+
+def test_other_pages_blocks_marked_run_run_as_written(clone):
+    """A reference page's block marked ``<!-- run -->`` (a quick command whose output the page shows and
+    reads: docs/emva1288.md) is run like the tutorial's, its output held against the page's."""
+    ran = {"tutorial.md", *HOWTOS}
+    n = 0
+    for page in sorted((ROOT / "docs").glob("*.md")):
+        blocks = [b for b in sh_blocks(page.read_text()) if b["run"]] if page.name not in ran else []
+        n += len(blocks)
+        try:
+            run_blocks(blocks, clone, page=page)
+        except AssertionError as e:
+            raise AssertionError(f"docs/{page.name}: {e}") from None
+    assert n >= 1, "no block marked run: the marker parser lost them"
 
 
 def test_every_other_pages_commands_parse():
