@@ -21,7 +21,8 @@ left (a renamed command or option, a bad value or a design file the page never m
 without running them. Independent of the code under test: what is checked is what the page
 promises the reader, parsed from the page itself. The simulation cache is the test session's, so
 blocks that repeat another test's work are served from it. The other pages' ```sh commands are
-parsed (and run when marked ``<!-- run -->``: a quick command whose output a reference page reads), and every inline `pixelkit ...` mention in the docs and the README must name a command
+parsed (and run when marked ``<!-- run -->``: a quick command whose output a reference page
+reads), and every inline `pixelkit ...` mention in the docs and the README must name a command
 and options the kit has.
 """
 import os
@@ -107,41 +108,44 @@ def run_blocks(blocks, folder, parse_slow=False, page=None):
                f'python() {{ "{sys.executable}" "$@"; }}\n')
     env = {**os.environ, "PIXELKIT_PROGRESS": "0"}
     env.pop("PIXELKIT_REPORTS", None)
-    for n, b in enumerate(blocks, 1):
-        if b["parse_only"] or (parse_slow and b["slow"]):
-            with pytest.MonkeyPatch.context() as mp:
-                mp.chdir(folder)
-                for args in pixelkit_commands(b["code"]):
-                    try:
-                        parse_command(args)
-                    except click.ClickException as e:
-                        raise AssertionError(f"block {n}: pixelkit {' '.join(args)}: {e.format_message()}") from e
-            for f in b["creates"]:
-                (folder / f).parent.mkdir(parents=True, exist_ok=True)
-                (folder / f).touch()
-            continue
-        p = subprocess.run(["bash", "-e", "-o", "pipefail", "-c", prelude + b["code"]], cwd=folder, env=env,
-                           capture_output=True, text=True, timeout=1800)
-        output = f"{b['code']}\n--- stderr:\n{p.stderr[-3000:]}\n--- stdout:\n{p.stdout[-2000:]}"
-        assert p.returncode in b["exit"], f"block {n} exited {p.returncode} (page: {sorted(b['exit'])}):\n{output}"
-        missing = [f for f in b["creates"] if not (folder / f).exists()]
-        assert not missing, f"block {n} did not create {missing}:\n{b['code']}"
-        for rx in b["expect"]:
-            assert re.search(rx, p.stdout + p.stderr), f"block {n} did not print {rx!r}:\n{output}"
-        if b.get("output") is not None:
-            problems, fixed = outputs.compare(b["output"], p.stdout + p.stderr, b["vary"])
-            if problems and rewrite:
-                fixes.append((b["output_span"], fixed))
-                unfixed += [f"block {n}: {s}" for s in problems if s.startswith("not printed")]
-            elif problems:
-                raise AssertionError(f"block {n}'s output is not what the page shows "
-                                     "(PIXELKIT_DOCS_REWRITE=1 rewrites the numbers):\n  "
-                                     + "\n  ".join(problems) + f"\n--- printed:\n{(p.stdout + p.stderr)[-3000:]}")
-    if fixes:
-        text = page.read_text()
-        for (a, z), fixed in sorted(fixes, reverse=True):
-            text = text[:a] + fixed + text[z:]
-        page.write_text(text)
+    try:
+        for n, b in enumerate(blocks, 1):
+            if b["parse_only"] or (parse_slow and b["slow"]):
+                with pytest.MonkeyPatch.context() as mp:
+                    mp.chdir(folder)
+                    for args in pixelkit_commands(b["code"]):
+                        try:
+                            parse_command(args)
+                        except click.ClickException as e:
+                            raise AssertionError(f"block {n}: pixelkit {' '.join(args)}: {e.format_message()}") from e
+                for f in b["creates"]:
+                    (folder / f).parent.mkdir(parents=True, exist_ok=True)
+                    (folder / f).touch()
+                continue
+            p = subprocess.run(["bash", "-e", "-o", "pipefail", "-c", prelude + b["code"]], cwd=folder, env=env,
+                               capture_output=True, text=True, timeout=1800)
+            output = f"{b['code']}\n--- stderr:\n{p.stderr[-3000:]}\n--- stdout:\n{p.stdout[-2000:]}"
+            assert p.returncode in b["exit"], f"block {n} exited {p.returncode} (page: {sorted(b['exit'])}):\n{output}"
+            missing = [f for f in b["creates"] if not (folder / f).exists()]
+            assert not missing, f"block {n} did not create {missing}:\n{b['code']}"
+            for rx in b["expect"]:
+                assert re.search(rx, p.stdout + p.stderr), f"block {n} did not print {rx!r}:\n{output}"
+            if b.get("output") is not None:
+                problems, fixed = outputs.compare(b["output"], p.stdout + p.stderr, b["vary"])
+                if problems and rewrite:
+                    fixes.append((b["output_span"], fixed))
+                    hand = [f"block {n}: {s}" for s in problems if s.startswith("not printed")]
+                    unfixed += hand + ([f"--- block {n} printed:\n{(p.stdout + p.stderr)[-6000:]}"] if hand else [])
+                elif problems:
+                    raise AssertionError(f"block {n}'s output is not what the page shows "
+                                         "(PIXELKIT_DOCS_REWRITE=1 rewrites the numbers):\n  "
+                                         + "\n  ".join(problems) + f"\n--- printed:\n{(p.stdout + p.stderr)[-3000:]}")
+    finally:
+        if fixes:
+            text = page.read_text()
+            for (a, z), fixed in sorted(fixes, reverse=True):
+                text = text[:a] + fixed + text[z:]
+            page.write_text(text)
     assert not unfixed, "lines to rewrite by hand:\n  " + "\n  ".join(unfixed)
 
 
