@@ -8,7 +8,7 @@ on the site, where the hook removes it, and on a repository host):
 ``quick:`` is the quick report of the reference design (``pixelkit report
 designs/dual_pixel_revA.toml --quick``): ``TABLE::ROW::COLUMN`` a cell of its ``tables.json``
 (the row by its first cell, the column by its heading), or ``checked::NAME`` a checked figure of
-its ``summary.json``. A key may end with ``*SCALE`` (``*1e3``: V quoted in mV). The quoted
+its ``summary.json``, or ``verdict::FIELD`` a number of its verdict (``passing``, ``specs``). A key may end with ``*SCALE`` (``*1e3``: V quoted in mV). The quoted
 number must be the current value as printed to the same digits (401.9 stands for 401.85 -
 401.95); ``~2%`` after the key allows a band instead (a figure that scatters).
 
@@ -50,12 +50,15 @@ def pages() -> list[Path]:
 def quick_source(report: Path):
     """The value of a ``quick:`` key in the report folder ``report``."""
     tables = json.loads((Path(report) / "tables.json").read_text())
-    checked = json.loads((Path(report) / "summary.json").read_text())["checked"]
+    summary = json.loads((Path(report) / "summary.json").read_text())
+    checked, verdict = summary["checked"], summary.get("verdict", {})
 
     def value(key: str) -> float:
         parts = key.split("::")
         if parts[0] == "checked":
             return float(checked[parts[1]]["value"])
+        if parts[0] == "verdict":
+            return float(verdict[parts[1]])
         table, row, col = parts
         t = tables[table]
         r = next(r for r in t["rows"] if str(r[0]) == row)
