@@ -46,7 +46,7 @@ BLOCK = re.compile(r"((?:<!--[^\n]*-->\n)*)```sh\n(.*?)\n```(?:\n\n((?:<!--[^\n]
 
 def sh_blocks(text: str) -> list[dict]:
     """[{code, exit: set of allowed statuses, creates: [paths], slow, parse_only, expect: [regex],
-    output: the ```text block right after it or None, output_span: its place in ``text``, vary: [regex]}]
+    output: the ```text block right after it or None, vary: [regex]}]
     of the page's ```sh blocks."""
     out = []
     for m in BLOCK.finditer(text):
@@ -59,7 +59,7 @@ def sh_blocks(text: str) -> list[dict]:
                     "parse_only": bool(re.search(r"<!--\s*parse-only\s*-->", notes)),
                     "run": bool(re.search(r"<!--\s*run\s*-->", notes)),
                     "expect": re.findall(r"<!--\s*expect:\s*(.+?)\s*-->", notes),
-                    "output": m.group(4), "output_span": m.span(4),
+                    "output": m.group(4),
                     "vary": re.findall(r"<!--\s*vary:\s*(.+?)\s*-->", m.group(3) or "")})
     return out
 
@@ -133,7 +133,7 @@ def run_blocks(blocks, folder, parse_slow=False, page=None):
             if b.get("output") is not None:
                 problems, fixed = outputs.compare(b["output"], p.stdout + p.stderr, b["vary"])
                 if problems and rewrite:
-                    fixes.append((b["output_span"], fixed))
+                    fixes.append((b["output"], fixed))
                     hand = [f"block {n}: {s}" for s in problems if s.startswith("not printed")]
                     unfixed += hand + ([f"--- block {n} printed:\n{(p.stdout + p.stderr)[-6000:]}"] if hand else [])
                 elif problems:
@@ -141,10 +141,13 @@ def run_blocks(blocks, folder, parse_slow=False, page=None):
                                          "(PIXELKIT_DOCS_REWRITE=1 rewrites the numbers):\n  "
                                          + "\n  ".join(problems) + f"\n--- printed:\n{(p.stdout + p.stderr)[-3000:]}")
     finally:
-        if fixes:
+        if fixes:   # by the block's text, not its place: the page may have changed during the walk
             text = page.read_text()
-            for (a, z), fixed in sorted(fixes, reverse=True):
-                text = text[:a] + fixed + text[z:]
+            for old, fixed in fixes:
+                if text.count(f"```text\n{old}\n```") == 1:
+                    text = text.replace(f"```text\n{old}\n```", f"```text\n{fixed}\n```")
+                else:
+                    unfixed.append(f"a block to rewrite is no longer on the page once:\n{old}")
             page.write_text(text)
     assert not unfixed, "lines to rewrite by hand:\n  " + "\n  ".join(unfixed)
 
