@@ -179,7 +179,8 @@ def test_knob_no_spec_depends_on_exits_2(tmp_path, cli):
 def test_one_choice_is_the_designers_circuit_and_absent_knobs_start_mid_bounds():
     """The reference's own [close] table: ``afe.opamp = { choices = ["ota"] }`` is one circuit, the
     designer's (close solves under it, never the macromodel); under ``gate_drive = "boosted"`` the rail
-    revA leaves absent starts at the middle of its bounds, under ``"supply"`` it is left out."""
+    revA leaves absent starts at the middle of its bounds (as do the OTA's keys its file does not write),
+    under ``"supply"`` it is left out."""
     from pixelkit.close.revision import _under
     d = load_design(REF)
     by = {k.name: k for k in d.close.knobs}
@@ -188,5 +189,9 @@ def test_one_choice_is_the_designers_circuit_and_absent_knobs_start_mid_bounds()
     base, active, left = _under(d, {"pixel.gate_drive": "boosted", "afe.opamp": "ota"}, numeric)
     assert base.afe.opamp == "ota" and base.pixel.gate_drive == "boosted" and left == []
     assert base.pixel.v_gate == pytest.approx((3.3 + 3.63) / 2)
+    # the OTA's keys revA's file does not write (it uses the macromodel) start mid-bounds too, not at
+    # the schema's defaults (10 uA, 1 pF: outside the bounds or at one); those it writes start as written
+    assert base.afe.ota_bias == pytest.approx(1.26491e-6, rel=1e-5) and base.afe.ota_cc == pytest.approx(
+        math.sqrt(0.15e-12 * 1e-12), rel=1e-5) and base.afe.c11 == pytest.approx(500e-15)
     base, active, left = _under(d, {"pixel.gate_drive": "supply", "afe.opamp": "ota"}, numeric)
     assert left == ["pixel.v_gate"] and base.pixel.v_gate is None and base.afe.opamp == "ota"

@@ -30,6 +30,19 @@ def text(x: float, dim: str, unit_required: bool = False, digits: int = 6) -> st
     return si_text(x, dim, digits)
 
 
+def written(design, key: str) -> bool:
+    """Whether the design's file writes ``key`` (a default the file leaves is not the designer's value: the
+    reference's transistor OTA, which revA does not use, has no bias of its own)."""
+    raw = getattr(design, "raw", None)
+    if raw is None:
+        return True
+    for part in key.split("."):
+        if not isinstance(raw, dict) or part not in raw:
+            return False
+        raw = raw[part]
+    return True
+
+
 def at_bound(k, x: float) -> str | None:
     """``"min"`` / ``"max"`` when ``x`` sits on that bound of knob ``k``."""
     if abs(x - k.lo) <= 1e-9 * max(abs(k.lo), 1e-30):
@@ -67,8 +80,8 @@ class Space:
         """The design's own knob values, each clipped into its bounds, and a note per clipped one."""
         x, notes = [], []
         for k in self.knobs:
-            v = value_of(design, k.name)
-            if v is None:   # absent in the design: the middle of its bounds
+            v = value_of(design, k.name) if written(design, k.name) else None
+            if v is None:   # absent in the design (its file does not write it: a default is no choice): the middle
                 v = math.sqrt(k.lo * k.hi) if k.log else (k.lo + k.hi) / 2
                 notes.append(f"{k.name} starts at {self.texts([v], [k])[0]}, the middle of its bounds (the design "
                              "leaves it absent)")

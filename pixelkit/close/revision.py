@@ -76,7 +76,8 @@ def _choose(design, backend, jobs, scheduler, tell, say) -> dict:
         best = max(runs, key=lambda r: -1e300 if r["smallest_margin_pct"] is None else r["smallest_margin_pct"])
     out = dict(best)
     out["overrides"] = {**best["setting"], **best["overrides"], **{k: None for k in best["left_out"]}}
-    absent = {k.name for k in numeric if _value(design, k.name) is None}
+    from .knobs import written
+    absent = {k.name for k in numeric if _value(design, k.name) is None or not written(design, k.name)}
     out["knobs"] = ([{"key": k.name, "choices": list(k.choices), "start": str(_value(design, k.name)),
                       "value": best["setting"][k.name]} for k in choice]
                     + [dict(k, start="(absent)") if k["key"] in absent else k for k in best["knobs"]]
