@@ -109,6 +109,16 @@ def test_portable_rewrites_paths_under_the_stage_cache_and_home(tmp_path, monkey
     roots = _roots(stage)
     x = {"a": [f"{stage}/lvs/X.lvsdb", f"deck {tmp_path}/cache/decks/gf.drc", f"{Path.home()}/d.drc"]}
     assert portable(x, roots) == {"a": ["lvs/X.lvsdb", "deck $PIXELKIT_CACHE/decks/gf.drc", "~/d.drc"]}
+    # KLayout's DRC database names the kit's deck runner by its absolute path (seen in a full report's
+    # layout_signoff/drc/CHIP_2X2_AFE.lyrdb): the file is rewritten like the section's text
+    from pixelkit.report.portable import portable_section
+    from pixelkit.report.sections import Section
+    kit = ROOT / "pixelkit" / "layout" / "signoff" / "deck_runner.drc"
+    (stage / "drc").mkdir(parents=True)
+    (stage / "drc" / "C.lyrdb").write_text(f"<generator>klayout -r '{kit.resolve()}'</generator>")
+    s = Section("t", files=["drc/C.lyrdb"])
+    portable_section(s, stage)
+    assert (stage / "drc" / "C.lyrdb").read_text() == "<generator>klayout -r 'pixelkit/layout/signoff/deck_runner.drc'</generator>"
 
 
 def test_power_at_the_nominal_condition_and_fractions_in_percent(quick_report, ref_design):

@@ -1,7 +1,9 @@
 """No absolute path of the user's machine in a report: a report is sent to others, diffed against
 the next revision's and kept for years, so the places it names are relative to the report
 (``layout_signoff/lvs/CHIP.lvsdb``), to the kit's cache (``$PIXELKIT_CACHE/decks/...``) or to the
-home folder (``~/...``) or to the folder the command ran in (``designs/x.toml``). Applied to every section's text, tables, figures, checked notes and data
+home folder (``~/...``), to the folder the command ran in (``designs/x.toml``) or to the kit
+(``pixelkit/layout/signoff/deck_runner.drc``). Applied to every section's text, tables, figures,
+checked notes and data, and to the text files it wrote (KLayout's report databases among them),
 before anything is written (``build.build_report``), cached sections included.
 """
 from __future__ import annotations
@@ -12,7 +14,8 @@ from pathlib import Path
 def _roots(stage: Path) -> list[tuple[str, str]]:
     from ..cachestore import cache_root
     roots = [(str(Path(stage).resolve()), "."), (str(Path(stage)), "."), (str(cache_root()), "$PIXELKIT_CACHE"),
-             (str(Path.home()), "~"), (str(Path.cwd()), ".")]   # the design named from where the command ran
+             (str(Path.home()), "~"), (str(Path.cwd()), "."),   # the design named from where the command ran
+             (str(Path(__file__).resolve().parents[1]), "pixelkit")]   # the kit's own files (a deck's runner)
     import os
     if os.environ.get("PIXELKIT_DECKS"):   # the foundry decks' folder (layout.signoff.decks)
         roots.append((str(Path(os.environ["PIXELKIT_DECKS"])), "$PIXELKIT_DECKS"))
@@ -36,8 +39,9 @@ def portable(x, roots):
     return x
 
 
-#: files a section writes beside the HTML whose text is rewritten too (the sized design's header)
-TEXT_FILES = (".toml", ".cir", ".csv", ".json", ".txt", ".log")
+#: files a section writes beside the HTML whose text is rewritten too (the sized design's header,
+#: KLayout's DRC / LVS databases, which name the deck that wrote them)
+TEXT_FILES = (".toml", ".cir", ".csv", ".json", ".txt", ".log", ".lyrdb", ".lvsdb")
 
 
 def portable_section(s, stage: Path) -> None:
