@@ -31,6 +31,8 @@ from .route import RouteError
 #: preferred direction of each routing metal ("v" / "h"): a step across it costs more
 PREFERRED = {"metal2": "v", "metal3": "h", "metal4": "v", "metal5": "h"}
 STEP, CROSS, VIA = 10, 16, 24
+#: a guarded net's extra cost per neighbour another net holds (0 on the retry when the cell does not route with it)
+BESIDE = 8
 BLOCKED = "*"
 
 
@@ -52,6 +54,7 @@ class GridRouter:
     #: guarded net -> its shield's net: the grid points around a guarded net's route are kept from every
     #: other net and filled with the shield's metal, tied to the shield's net (``_shield``)
     guards: dict = field(default_factory=dict)
+    beside: int = 0
 
     def __post_init__(self):
         lt = self.lt
@@ -217,7 +220,7 @@ class GridRouter:
                 ii, jj = i + di, j + dj
                 if 0 <= ii < self.nx and 0 <= jj < self.ny and self.free_for(k, (ii, jj), net):
                     along = (d == "h") == (di != 0)
-                    steps.append(((k, ii, jj), STEP if along or not d else CROSS))
+                    steps.append(((k, ii, jj), (STEP if along or not d else CROSS) + self._beside(net, k, ii, jj)))
             for kk in (k - 1, k + 1):
                 if 0 <= kk < nl and self.free_for(kk, (i, j), net) and self.via_free(min(k, kk), (i, j), net):
                     steps.append(((kk, i, j), VIA))
@@ -227,6 +230,16 @@ class GridRouter:
                     best[n2] = g2
                     heapq.heappush(heap, (g2 + h(n2), g2, n2, node))
         return None
+
+    def _beside(self, net: str, k: int, i: int, j: int) -> int:
+        """Extra cost of a guarded net's step onto (k, i, j): ``beside`` for each neighbouring point
+        another net holds (the landings and access wires drawn before any route: the guard keeps
+        only later nets away)."""
+        if not self.beside or net not in self.guards:
+            return 0
+        mine = (None, net, self.guards[net], BLOCKED)
+        return self.beside * sum(1 for n in ((i + 1, j), (i - 1, j), (i, j + 1), (i, j - 1))
+                                 if self.owner[k].get(n) not in mine)
 
     # drawing ---------------------------------------------------------------------------------
     def _draw(self, net: str, path: list) -> None:
@@ -269,7 +282,19 @@ class GridRouter:
 
     # the whole job -----------------------------------------------------------------------------
     def route(self, order=None, attempts: int = 6) -> None:
-        order = list(order or self.nets)
+        """Route every net; with guarded nets, first with their detour cost ``BESIDE`` and, where the
+        cell does not route so, again without it."""
+        if self.guards:
+            snap = self.cv.snapshot()
+            self.beside = BESIDE
+            try:
+                return self._route_tries(list(order or self.nets), attempts)
+            except RouteError:
+                self.cv.restore(snap)
+        self.beside = 0
+        self._route_tries(list(order or self.nets), attempts)
+
+    def _route_tries(self, order, attempts: int) -> None:
         snap = self.cv.snapshot()
         last = None
         for _ in range(attempts):
