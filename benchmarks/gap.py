@@ -3,7 +3,7 @@
     python benchmarks/gap.py [--design D] [--rows N] [--build]      (also a module of benchmarks/run.py)
 
 - ``cold_cli_s``: ``pixelkit gap diagnose`` of one measured CSV (a committed virtual-silicon case of the
-  design: the thesis read's ``silicon_cases``) in a
+  design: the thesis read's ``silicon_cases``, the reference's out-of-distribution development set) in a
   fresh process with an EMPTY simulation cache: importing the kit, reading the shipped surrogate, its key
   and its check against 4 fresh full-chain SPICE decks, fitting every candidate, printing the answer.
   Limit 10 s on 2 cores.
@@ -30,7 +30,8 @@ from common import ROOT, child_cpu_s, reference_design
 from pixelkit.experiments.thesis import run_experiment
 
 #: a committed case of each design with one: (cases folder, case id)
-CASES = {"dual_pixel_revA_thesis_read": (ROOT / "pixelkit" / "gap" / "silicon_cases", "c1004")}
+CASES = {"dual_pixel_revA_thesis_read": (ROOT / "pixelkit" / "gap" / "silicon_cases", "c1004"),
+         "dual_pixel_revA": (ROOT / "tests" / "data" / "gap_ood" / "dev", "c50004")}
 
 
 def _case_csv(folder, design) -> str:
@@ -107,7 +108,7 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--rows", type=int, default=2000)
     ap.add_argument("--build", action="store_true")
-    ap.add_argument("--design", default=str(ROOT / "designs" / "dual_pixel_revA_thesis_read.toml"))
+    ap.add_argument("--design", default=str(ROOT / "designs" / "dual_pixel_revA.toml"))
     a = ap.parse_args()
     r = measure(reference_design(a.design), a.rows, a.build)
     base = r["spice_s"]

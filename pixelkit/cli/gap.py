@@ -184,14 +184,31 @@ def plan(design, measured, top, gain_tol, offset_tol, gain_sd, offset_sd, backen
 @click.option("--spice-cases", type=FilePath(file_okay=False), default=None,
               help="folder of committed SPICE cases (default: the kit's pixelkit/gap/silicon_cases)")
 @click.option("--kind", type=click.Choice(["both", "surrogate", "spice"]), default="both", show_default=True)
+@click.option("--ood", type=click.Choice(["dev", "heldout", "both"]), default=None,
+              help="instead: the out-of-distribution virtual silicon (tests/data/gap_ood, of the reference design, "
+                   "which it diagnoses whatever DESIGN is): "
+                   "its development set, its held-out set or both")
 @spice_opts
 @json_opt
-def selftest(design, per_effect, clean, rows, seed, spice_cases, kind, backend, jobs, as_json):
-    """Blind diagnosis: surrogate-generated cases and SPICE-generated cases, reported separately."""
+def selftest(design, per_effect, clean, rows, seed, spice_cases, kind, ood, backend, jobs, as_json):
+    """Blind diagnosis: surrogate-generated cases and SPICE-generated cases, reported separately; or (--ood) the
+    out-of-distribution virtual silicon."""
     from ..gap import silicon
     from ..gap.store import load_nominal
     from ..gap.selftest import run
     from ..progress import step
+    if ood:
+        from ..gap import ood as ood_mod
+        sets = ("dev", "heldout") if ood == "both" else (ood,)
+        for s in sets:
+            if not (ood_mod.OOD_DIR / s / "truth.json").is_file():
+                raise click.UsageError(f"--ood {ood}: the {s} set is not in {ood_mod.OOD_DIR} (not generated yet)")
+        d = load(ood_mod.DESIGN)   # the sets are of the reference design, whatever DESIGN says
+        with step("loading the SPICE-calibrated surrogate"):
+            nom = load_nominal(d, backend=backend)
+        r = {f"ood_{s}": ood_mod.run_set(d, nom, s) for s in sets}
+        emit(r, as_json, lambda x: "\n".join(_selftest_text(k, v) for k, v in x.items()))
+        return
     d = load(design)
     with step("building the SPICE-calibrated surrogate (first run only)"):
         nom = load_nominal(d, backend=backend)

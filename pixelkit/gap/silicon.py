@@ -156,6 +156,11 @@ CAMPAIGNS = {"lab": {"points": N_OP, "t_int": (50e-6, 2e-3), "temps": (25.0, 45.
 FD_LIMIT = 0.25     # storage-node charge kept below this fraction of the FD's own swing
 
 
+def wait_steps(op) -> list:
+    """The extra waits a lab tries when the storage node overflows, longest first, none above the point's own."""
+    return [w for w in (op["extra_wait"], 10e-3, 2e-3, 0.0) if w <= op["extra_wait"]]
+
+
 def limit_waits(design, nom, ops, effect, p) -> None:
     """Shorten an operating point's extra wait until the storage-node charge stays in range.
 
@@ -164,9 +169,7 @@ def limit_waits(design, nom, ops, effect, p) -> None:
     if effect not in ("gse", "fd_leakage"):
         return
     for op in ops:
-        for extra in (op["extra_wait"], 10e-3, 2e-3, 0.0):
-            if extra > op["extra_wait"]:
-                continue
+        for extra in wait_steps(op):
             op["extra_wait"] = extra
             ok = True
             for s in SUBS:

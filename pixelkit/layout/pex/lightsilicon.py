@@ -20,7 +20,6 @@ from __future__ import annotations
 from dataclasses import replace
 
 
-
 def exposed_signal_area(geos, shield: str = "pixels") -> dict:
     """Exposed junction area (m2) of one column's readout on the nodes where light leaves charge:
     its sampler node and column line (``DUALPIX_COL``, the primary's) and the AFE's signal nodes
@@ -106,3 +105,25 @@ def check(design, shield: str = "pixels", seed: int = 7, backend: str = "batch",
             "a_junction_fit_m2": fitted("readout_light", "a_junction_m2"),
             "a_open_fit_m2": fitted("readout_light_idle", "a_open_m2"),
             "exposed": exposed_signal_area(geos, shield)}
+
+
+
+def light_pattern(gf180) -> tuple:
+    """(((node, kind, share of the open area), ...), open area m^2): the open junctions of one column's readout
+    in the kit's drawn GF180 dual pixel and AFE (``gf180``: ``designs/dual_pixel_gf180.toml`` loaded;
+    ``light.exposed`` under a pixel-only shield), on the nodes the reference design's macromodel AFE has (the column line, the sampling node, vm, x, c),
+    averaged over the primary's and the secondary's AFE (the reference's C35 stand-in has no layer stack, so no
+    light map of its own). A case scales the area by 0.5 - 4 (another shield's openings); stored with it."""
+    from . import chip_geometry
+    from .light import exposed
+    geos = chip_geometry(gf180, ("DUALPIX_COL", "AFE_P", "AFE_S"))
+    js = [(("col" if j.net == "col_p" else "in_col"), j.kind, j.area_m2)
+          for j in exposed(geos["DUALPIX_COL"], "pixels") if j.net in ("col_p", "out_p")]
+    js += [(j.net, j.kind, j.area_m2 / 2) for c in ("AFE_P", "AFE_S") for j in exposed(geos[c], "pixels")
+           if j.net in ("vm", "x", "c")]
+    acc = {}
+    for node, kind, a in js:
+        k = (node, "psd" if kind == "psd" else "nsd")
+        acc[k] = acc.get(k, 0.0) + a
+    tot = sum(acc.values())
+    return tuple((n, k, a / tot) for (n, k), a in sorted(acc.items())), tot

@@ -1,0 +1,80 @@
+"""The diagnosis on out-of-distribution virtual silicon: effects made by mechanisms the surrogate never tabulates.
+
+Independent path: ``tests/data/gap_ood`` holds lab data of the reference design made by ngspice with each
+effect inserted by its physical mechanism (``pixelkit/gap/ood.py``: the source follower's W and L, the load's
+length, the AFE's capacitors as the layout leaves them, junction leakage by generation and diffusion with
+silicon's band gap, a switched voltage-dependent leak on FD, wider channel charge, the GF180 layout's open
+junctions...), every deck at its operating point's die temperature, under one irradiance for both arrays, with
+an uncalibrated bench's gain, offset and noise. None of the surrogate's site elements, none of the effect
+library's functions enter. The development set (``dev``) is what the diagnosis was looked at on; the held-out
+set (``heldout``, other seeds, ``ood.plan_set``) is to be scored against the issue's targets and never tuned on
+(not generated yet: docs/gap-diagnosis.md). Cost: the reference surrogate's check (4 decks) and one case
+(10 decks), ~30 s on 2 cores.
+"""
+import numpy as np
+import pytest
+
+from pixelkit.gap import ood, silicon
+
+
+@pytest.fixture(scope="module")
+def reference_nominal(ref_design):
+    from pixelkit.gap.store import load_nominal
+    return load_nominal(ref_design)
+
+
+def test_development_set_is_complete_and_its_seeds_are_its_own():
+    """Every kind in the development set, effect-free chips and outside effects included; the held-out set's
+    planned seeds share none with it."""
+    _, truths = silicon.load_cases(ood.OOD_DIR / "dev")
+    assert {t["circuit"] for t in truths.values()} == set(ood.KINDS)
+    assert sum(t["effect"] == "out_of_library" for t in truths.values()) >= 8
+    assert sum(t["effect"] == "none" for t in truths.values()) >= 6
+    assert {t["seed"] for t in truths.values()} == {s for _, s in ood.plan_set("dev")}
+    assert not {s for _, s in ood.plan_set("dev")} & {s for _, s in ood.plan_set("heldout")}
+
+
+def test_generator_never_uses_the_surrogates_edits(ref_design, reference_nominal):
+    """Every kind's deck holds none of the elements the surrogate's site tables are measured with (``responses``:
+    Csite / Isite / Rsite ...) and no vm current source (``circuit_edits.vm_current``)."""
+    g = np.random.default_rng(3)
+    for kind, k in ood.KINDS.items():
+        p = k.draw(g, ref_design)
+        ops = ood.operating_points(ref_design, reference_nominal, g, k.campaign)
+        colp = ood.column_draws(ref_design, g, kind, p, ops)
+        pattern = ((("vm", "psd", 1.0),), 1e-12) if kind == "layout_light" else ()
+        op = next(o for o in ops if o["J"] > 0)
+        net, _ = ood.deck(ref_design, reference_nominal, op, kind, p, colp, pattern, f"t{kind}")
+        text = net.text().lower()
+        assert "site" not in text and "\nilt " not in text, kind
+        assert f".temp {op['temp']:g}" in text      # the devices at the die's temperature
+
+
+def _flat(d, prefix=""):
+    out = {}
+    for k, v in d.items():
+        out.update(_flat(v, f"{prefix}{k}.") if isinstance(v, dict) else {f"{prefix}{k}": v})
+    return out
+
+
+def test_one_case_is_reproduced_by_spice(ref_design, reference_nominal):
+    """The committed rows are ngspice's: one case re-simulated from its seed (10 decks) gives them again."""
+    cases, truths = silicon.load_cases(ood.OOD_DIR / "dev")
+    cid = next(c for c, t in truths.items() if t["circuit"] == "fd_junction")
+    rows, truth = ood.simulate_case(ref_design, reference_nominal, "fd_junction", truths[cid]["seed"])
+    assert _flat(truth["params"]) == pytest.approx(_flat(truths[cid]["params"]))
+    got = np.array([r["v_V"] for r in rows])
+    want = np.array([float(r["v_V"]) for r in cases[cid]])
+    assert np.max(np.abs(got - want)) < 0.2e-3
+
+
+@pytest.mark.slow
+def test_development_set_score_holds(ref_design, reference_nominal):
+    """The development set's score as measured when it landed (62 cases, ~4 min of CPU: slow):
+    top-1 46 / 48, explained when right 37 / 46, every outside effect "not explained", none on every
+    effect-free chip. A guard against regressions on data the diagnosis was looked at on; the issue's targets
+    (90 % / 90 %) are for the held-out set (docs/gap-diagnosis.md)."""
+    r = ood.run_set(ref_design, reference_nominal, "dev")
+    assert r["top1_accuracy"] >= 46 / 48 - 1e-9, r["per_effect_top1"]
+    assert r["explained_when_right"] >= 37 / 46 - 1e-9, r["per_kind_explained"]
+    assert r["not_explained_on_out_of_library"] == 1.0 and r["none_on_clean"] == 1.0
