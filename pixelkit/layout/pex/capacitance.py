@@ -269,6 +269,12 @@ def capacitances(geo, stack) -> Couplings:
         wedge_couplings(cpl, geo, stack, i, spent)
         # fringe downwards, less what neighbours, the corner field and covers over its top face take (a
         # capacitor's top plate has none: its bottom plate, which encloses it, takes its sidewalls' field)
+        made = {}
+
+        def covers(above=above, below=below, made=made):
+            if "cover" not in made:
+                made["cover"] = _covers(above, below)
+            return made["cover"]
         for net, reg in (nets.items() if not cond.device_below else ()):
             h = z
             wb = max(1, int(round(h / dbu)))
@@ -281,7 +287,7 @@ def capacitances(geo, stack) -> Couplings:
             length = max(0.0, perim - shielded.get(net, 0.0) - spent[(cond.name, net)] - taken)
             strips = _strips(reg, wb, dbu) if STRIPS else None
             _fringe_band(cpl, net, band, below, above, stack, t, z, length, band.area(), cond.device_below, strips,
-                         cond.name, _widen(reg, above, below, t, z, dbu))
+                         cond.name, _widen(reg, covers, t, z, dbu))
     for a, b, c in far_couplings(geo, stack, cpl):
         cpl.add(a, b, c)
         for n in (a, b):                  # to first order each net's total stays: taken from its ground
@@ -291,25 +297,32 @@ def capacitances(geo, stack) -> Couplings:
     return cpl
 
 
-def _widen(reg, above, below, t, z, dbu) -> float:
+def _covers(above, below):
+    """The conductors over and under a layer (the surface's diffusions aside), merged: what ``_widen`` takes off a
+    polygon's top face (built once per layer, on first use)."""
+    import klayout.db as kdb
+    cover = kdb.Region()
+    for plane in list(above) + [pl for pl in below if pl.name != "surface"]:
+        cover += plane.union
+    return cover
+
+
+def _widen(reg, cover, t, z, dbu) -> float:
     """The fringe of ``reg``'s edges to the substrate (z below) over ``fringe.fringe``'s (``fringe.wide``), each
     polygon at its own width (``fringe.width_of``) or, where that is narrower, the width of its part that
     faces the substrate alone: no conductor above it (the wide conductor's extra fringe is its top face's
     charge) nor below it (over a nearer conductor its field ends there); weighed by its perimeter, never
     below 1 (a narrow line keeps Sakurai and Tamaru's edge, on which the kit's narrow lines were checked with
-    FastCap2: 4 - 10 % above the solve at 0.23 um)."""
+    FastCap2: 4 - 10 % above the solve at 0.23 um). ``cover``: ``_covers``' Region, or a function giving it."""
     import klayout.db as kdb
-    cover = None
     num = den = 0.0
     for p in reg.each():
         perim = p.perimeter() * dbu
         den += perim
         k = wide(width_of(p.area() * dbu * dbu, perim), t, z)
         if k > 1.0:                       # only a wide polygon asks what covers it (wide grows with the width)
-            if cover is None:
-                cover = kdb.Region()
-                for plane in list(above) + [pl for pl in below if pl.name != "surface"]:
-                    cover += plane.union
+            if not isinstance(cover, kdb.Region):
+                cover = cover()
             free = kdb.Region(p) - cover.interacting(kdb.Region(p))
             k = max(1.0, wide(width_of(free.area() * dbu * dbu, free.perimeter() * dbu), t, z)) \
                 if not free.is_empty() else 1.0
