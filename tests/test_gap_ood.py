@@ -7,9 +7,9 @@ silicon's band gap, a switched voltage-dependent leak on FD, wider channel charg
 junctions...), every deck at its operating point's die temperature, under one irradiance for both arrays, with
 an uncalibrated bench's gain, offset and noise. None of the surrogate's site elements, none of the effect
 library's functions enter. The development set (``dev``) is what the diagnosis was looked at on; the held-out
-set (``heldout``, other seeds, ``ood.plan_set``) is to be scored against the issue's targets and never tuned on
-(not generated yet: docs/gap-diagnosis.md). Cost: the reference surrogate's check (4 decks) and one case
-(10 decks), ~30 s on 2 cores.
+set (``heldout``, other seeds, ``ood.plan_set``) is scored against the issue's targets and never tuned on
+(the scores: the two slow tests, docs/gap-diagnosis.md). Cost of the default tests: the reference surrogate's
+check (4 decks) and one case (10 decks), ~30 s on 2 cores.
 """
 import numpy as np
 import pytest
@@ -23,14 +23,15 @@ def reference_nominal(ref_design):
     return load_nominal(ref_design)
 
 
-def test_development_set_is_complete_and_its_seeds_are_its_own():
-    """Every kind in the development set, effect-free chips and outside effects included; the held-out set's
-    planned seeds share none with it."""
-    _, truths = silicon.load_cases(ood.OOD_DIR / "dev")
+@pytest.mark.parametrize("name", ["dev", "heldout"])
+def test_sets_are_complete_and_their_seeds_their_own(name):
+    """Every kind in each set, effect-free chips and outside effects included, each set exactly its planned
+    seeds (so the two share none)."""
+    _, truths = silicon.load_cases(ood.OOD_DIR / name)
     assert {t["circuit"] for t in truths.values()} == set(ood.KINDS)
     assert sum(t["effect"] == "out_of_library" for t in truths.values()) >= 8
     assert sum(t["effect"] == "none" for t in truths.values()) >= 6
-    assert {t["seed"] for t in truths.values()} == {s for _, s in ood.plan_set("dev")}
+    assert {t["seed"] for t in truths.values()} == {s for _, s in ood.plan_set(name)}
     assert not {s for _, s in ood.plan_set("dev")} & {s for _, s in ood.plan_set("heldout")}
 
 
@@ -78,3 +79,15 @@ def test_development_set_score_holds(ref_design, reference_nominal):
     assert r["top1_accuracy"] >= 46 / 48 - 1e-9, r["per_effect_top1"]
     assert r["explained_when_right"] >= 37 / 46 - 1e-9, r["per_kind_explained"]
     assert r["not_explained_on_out_of_library"] == 1.0 and r["none_on_clean"] == 1.0
+
+
+@pytest.mark.slow
+def test_heldout_set_score_as_measured(ref_design, reference_nominal):
+    """The held-out set, blind (62 cases, ~6 min at a load of 4-9: slow), as measured when it landed: top-1 43 / 48,
+    explained when right 36 / 43, 7 of 8 outside effects "not explained", none on every effect-free chip.
+    Issue 46's targets (top-1 and explained-when-right >= 90 %, no outside effect explained) are NOT met yet
+    (docs/gap-diagnosis.md lists the misses); this guards what is reached and fails if it drops."""
+    r = ood.run_set(ref_design, reference_nominal, "heldout")
+    assert r["top1_accuracy"] >= 43 / 48 - 1e-9, r["per_effect_top1"]
+    assert r["explained_when_right"] >= 36 / 43 - 1e-9, r["per_kind_explained"]
+    assert r["not_explained_on_out_of_library"] >= 7 / 8 - 1e-9 and r["none_on_clean"] == 1.0
