@@ -144,6 +144,16 @@ class Closer:
             nominal_figs = out["figures"]
         return self.objective.value(design, nominal_figs)
 
+    def cm(self, key, m) -> float:
+        """The margin ``m`` less its target as the models see it: itself when passing, -ln(1 - x) when short
+        by x (a figure orders of magnitude outside its limit - an op-amp that slews, a gain error of 80 % -
+        is modelled on its logarithm, where one linear step does not promise to undo it all; same sign,
+        same slope at the limit)."""
+        if m is None or not np.isfinite(m):
+            return np.nan
+        x = m - self.target(key)
+        return x if x >= 0 else -math.log1p(-x)
+
     def fnorm(self, f: float | None) -> float | None:
         """The objective as minimised: normalised by its start value, negated for max."""
         if f is None:
@@ -210,9 +220,9 @@ class Closer:
             self.tell(f"sensitivities: {self.space.n} knobs x {len(fd_conds)} conditions")
             figs = self.at(designs, fd_conds, {c: groups[c] for c in fd_conds}, "sensitivities")
             fd_rows = [r for r in self.rows({c: groups[c] for c in fd_conds}) if r in set(rows)]
-            m_base = self.row_margins(fd_rows, figs[0])
+            m_base = [self.cm(r, m) for r, m in zip(fd_rows, self.row_margins(fd_rows, figs[0]))]
             for i, r in enumerate(fd_rows):
-                self.grads[r] = np.array([_slope(self.row_margins([r], figs[j + 1])[0], m_base[i], du[j])
+                self.grads[r] = np.array([_slope(self.cm(r, self.row_margins([r], figs[j + 1])[0]), m_base[i], du[j])
                                           for j in range(self.space.n)])
             if obj and self.nominal in need:
                 f_base = self.fnorm(figs[0].get(self.nominal, {}).get(self.objective.figure))
@@ -223,7 +233,7 @@ class Closer:
         elif first:    # nothing modelled yet: the dependence check on every spec's groups alone
             self._refuse_idle_knobs([], [{}] * len(designs), designs)
         fresh = first or all(r[1] in need for r in rows)
-        m0 = np.array([p.margins[r] - self.target(r) for r in rows])
+        m0 = np.array([self.cm(r, p.margins[r]) for r in rows])
         g = np.array([self.grads.get(r, np.zeros(self.space.n)) for r in rows]).reshape(len(rows), self.space.n)
         f0 = self.fnorm(p.f)
         if obj:
@@ -386,7 +396,7 @@ class Closer:
                     # the objective improved but a modelled constraint curved away: a second-order
                     # correction, back onto the passing side, before giving the step up
                     self.record_partial(xc, cf, model.keys + screen, fc, mode, radius)
-                    m_at = self.row_margins(model.keys, cf) - targets
+                    m_at = np.array([self.cm(k, m) for k, m in zip(model.keys, self.row_margins(model.keys, cf))])
                     d2 = correct(model, m_at, st.d, u0, lo, hi, radius, CUSHION)
                     x2 = self.space.snap(self.space.to_x(u0 + d2))
                     mode = "optimise, corrected"
@@ -496,7 +506,7 @@ class Closer:
         self.tried.append(xc)
         dc = self.space.design(self.base, xc)
         cf = self.at([dc], conds, groups, "candidate")[0]
-        m_rows = self.row_margins(model.keys, cf) - targets
+        m_rows = np.array([self.cm(k, m) for k, m in zip(model.keys, self.row_margins(model.keys, cf))])
         fc = self.fnorm(self.objective_value(dc, cf.get(self.nominal)))
         local = _local_gain(model, m_rows, feasible, fc, st)
         _secant(model, st.d, m_rows, fc)
