@@ -3,7 +3,7 @@
     python benchmarks/gap.py [--design D] [--rows N] [--build]      (also a module of benchmarks/run.py)
 
 - ``cold_cli_s``: ``pixelkit gap diagnose`` of one measured CSV (a committed virtual-silicon case of the
-  design: the thesis read's ``silicon_cases``, the reference's out-of-distribution development set) in a
+  design: the thesis [Thesis2019] read's ``silicon_cases``, the reference's out-of-distribution development set) in a
   fresh process with an EMPTY simulation cache: importing the kit, reading the shipped surrogate, its key
   and its check against 4 fresh full-chain SPICE decks, fitting every candidate, printing the answer.
   Limit 10 s on 2 cores.

@@ -61,7 +61,7 @@ def test_temperature_table_predicts_a_fresh_bench_at_another_temperature(ref_des
 
 
 def test_a_read_that_changes_regime_with_temperature_drops_its_table(thesis_read_design):
-    """The thesis's 400 nA read settles less as it warms: its levels are beyond the temperature table, which its
+    """The 400 nA read of [Thesis2019] settles less as it warms: its levels are beyond the temperature table, which its
     shipped surrogate says it dropped (and the diagnosis then holds the levels at the design temperature)."""
     from pixelkit.gap import store
     nom = store.read(thesis_read_design)

@@ -424,7 +424,7 @@ def build_nominal(design, backend: str = "batch") -> Nominal:
 
 
 #: the temperature table is kept when its held-out error (the validation decks at ``VAL_T_OFFSET_K``) stays
-#: within this; a read whose levels change regime with the temperature (the thesis's unsettled 400 nA read:
+#: within this; a read whose levels change regime with the temperature (the unsettled 400 nA read of [Thesis2019]:
 #: its column settles less as the load slows) is beyond what four temperatures tabulate
 TEMP_TOL_V = 1.0e-3
 

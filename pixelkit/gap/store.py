@@ -19,7 +19,7 @@ would run for the design, and only after a check against fresh SPICE runs:
 Otherwise (no file, another key, a failed check: said on stderr) the surrogate
 is built from SPICE; the engine's cache keeps its decks. ``pixelkit gap
 surrogate DESIGN`` rebuilds and writes the file. The kit ships the reference design's
-(``dual_pixel_revA``) and the thesis read's.
+(``dual_pixel_revA``) and the thesis [Thesis2019] read's.
 """
 from __future__ import annotations
 
