@@ -8,7 +8,7 @@ from dataclasses import replace
 
 from ..constants import Q
 from ..errors import ConfigError
-from ..verify.figures import ROLE_FIGURES
+from ..verify.figures import ROLE_FIGURES, groups_of
 from .dark import dark
 from .noise import noise
 from .power import power
@@ -23,13 +23,22 @@ def run_group(group: str, design, draw=None, backend: str = "batch") -> dict:
     return GROUPS[group](design, draw, backend)
 
 
+#: the groups a role pixel's ``simulate`` experiment reports (PRNU is verify's: a Monte Carlo)
+EXPERIMENT_GROUPS = ("signal", "lag", "noise", "dark", "power")
+
+
+def run_experiment_groups(design, label: str, backend: str = "batch") -> dict:
+    """The raw measurements of ``EXPERIMENT_GROUPS``, each under a progress step named ``label: group``."""
+    from ..progress import step
+    raw = {}
+    for g in EXPERIMENT_GROUPS:
+        with step(f"{label}: {g}"):
+            raw[g] = run_group(g, design, None, backend)
+    return raw
+
+
 def groups_for(figure_names) -> list[str]:
-    out = []
-    for name in figure_names:
-        for g in FIGURES[name].group.split("+"):
-            if g not in out:
-                out.append(g)
-    return out
+    return groups_of(figure_names, FIGURES)
 
 
 def figures(raw: dict) -> dict:

@@ -35,6 +35,17 @@ class Figure:
     plausible: tuple = (0.0, math.inf)
 
 
+def groups_of(figure_names, table: dict) -> list[str]:
+    """The measurement groups the figures ``figure_names`` of ``table`` need (a figure's ``group`` may
+    join several with '+'), each once, in the order first needed."""
+    out = []
+    for name in figure_names:
+        for g in table[name].group.split("+"):
+            if g not in out:
+                out.append(g)
+    return out
+
+
 _Q = 1.602176634e-19   # C per electron
 #: the range of each figure's values (SI, open interval); see Figure.plausible
 PLAUSIBLE = {"conversion_gain": (1e-3 * 1e-6 / _Q, 1e4 * 1e-6 / _Q),     # 0.001 - 10,000 uV/e-

@@ -328,13 +328,8 @@ def run_group(group: str, design, draw=None, backend: str = "batch") -> dict:
 
 
 def groups_for(figure_names) -> list[str]:
-    from .figures import FIGURES
-    out = []
-    for name in figure_names:
-        for g in FIGURES[name].group.split("+"):
-            if g not in out:
-                out.append(g)
-    return out
+    from .figures import FIGURES, groups_of
+    return groups_of(figure_names, FIGURES)
 
 
 def figures(raw: dict) -> dict:

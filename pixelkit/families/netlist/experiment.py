@@ -5,16 +5,12 @@ from __future__ import annotations
 import time
 
 from ...constants import Q
-from ...progress import step
 
 
 def run_netlist_experiment(design, backend: str = "batch", jobs: int | None = None) -> dict:
     from ...rolepix import suite
     t0 = time.perf_counter()
-    raw = {}
-    for g in ("signal", "lag", "noise", "dark", "power"):
-        with step(f"{design.name}: {g}"):
-            raw[g] = suite.run_group(g, design, None, backend)
+    raw = suite.run_experiment_groups(design, design.name, backend)
     f = suite.figures(raw)
     return {"design": design.name, "family": "netlist", "backend": backend,
             "conversion_gain_uV_per_e": f["conversion_gain"] * Q * 1e6, "full_well_e": f["full_well"] / Q,

@@ -119,10 +119,7 @@ def run_pixel4t_experiment(design, backend: str = "batch", jobs: int | None = No
     from ...rolepix.noise import read_point
     from .design import tg_channel
     t0 = time.perf_counter()
-    raw = {}
-    for g in ("signal", "lag", "noise", "dark", "power"):
-        with step(f"4T pixel: {g}"):
-            raw[g] = suite.run_group(g, design, None, backend)
+    raw = suite.run_experiment_groups(design, "4T pixel", backend)
     figs = suite.figures(raw)
     op = read_point(design, backend)
     cg = model.conversion_gain(design, op["v_fd"], backend)
