@@ -14,15 +14,32 @@ number must be the current value as printed to the same digits (401.9 stands for
 
     python -m docsite.figures REPORT_DIR            # list every quoted figure that moved (exit 1)
     python -m docsite.figures REPORT_DIR --update   # rewrite them from the report, same digits
+    python -m docsite.figures                       # the marks that need no run (block, record, calc)
 
 ``tests/test_docs_figures.py`` runs the check on the session's quick report, so a figure that
 moves fails the suite and names the page, the line and the command that rewrites it. New sources
 (another design's report, a command's ``--json``) are one entry of ``SOURCES``.
+
+Three sources need no run and are checked wherever the marks are (``LOCAL``):
+
+- ``block:TEXT`` (``block:TEXT#N``): a number of a ```text block of the same page, the first (N-th)
+  number after ``TEXT`` on the first block line holding it. The blocks of the pages the suite runs
+  are checked against the command's output (``docsite/outputs.py``), so prose that reads a block is
+  checked through it; on a page whose block is a dated record, the prose is held to the record.
+- ``record:PATH::KEY``: a stored results file of the repository (JSON, ``KEY`` dotted, list items
+  by index), which must say when and on what it was measured (``date`` and ``commit`` or ``head``
+  at its top): a measurement a test cannot repeat (a benchmark, a full-grid sign-off).
+- ``calc:EXPR``: a figure the sentence derives (a ratio, a difference), ``EXPR`` arithmetic
+  (``+ - * / **``, ``abs min max``) over ``{SOURCE:KEY}`` references.
+
+A key may not hold ``>`` (the site's hook removes ``<!--fig ...-->`` up to the first one).
 """
 from __future__ import annotations
 
+import ast
 import json
 import math
+import operator
 import re
 import sys
 from pathlib import Path
@@ -67,6 +84,81 @@ def quick_source(report: Path):
 
 
 SOURCES = {"quick": quick_source}
+
+#: fenced blocks of command output on a page
+TEXT_BLOCK = re.compile(r"^```text\n(.*?)\n```", re.S | re.M)
+NUMBER_RE = re.compile(NUMBER)
+
+
+def block_source(page_text: str):
+    """The value of a ``block:`` key on the page whose text is ``page_text``."""
+    lines = [" ".join(line.split()) for b in TEXT_BLOCK.findall(page_text) for line in b.splitlines()]
+
+    def value(key: str) -> float:
+        text, _, nth = key.rpartition("#") if re.search(r"#\d+$", key) else (key, "", "1")
+        text = " ".join(text.split())
+        line = next(line for line in lines if text in line)
+        after = line[line.index(text) + len(text):]
+        return float(NUMBER_RE.findall(after)[int(nth) - 1])
+    return value
+
+
+def record_value(key: str) -> float:
+    """The value of a ``record:`` key (``PATH::dotted.key``) in a stored results file."""
+    path, _, dotted = key.partition("::")
+    f = (ROOT / path).resolve()
+    if ROOT not in f.parents:
+        raise KeyError(path)
+    data = json.loads(f.read_text())
+    if "date" not in data or not ({"commit", "head"} & set(data)):
+        raise ValueError(f"{path} does not say when and on what it was measured (date, commit)")
+    for part in dotted.split("."):
+        data = data[int(part)] if isinstance(data, list) else data[part]
+    return float(data)
+
+
+_OPS = {ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul, ast.Div: operator.truediv,
+        ast.Pow: operator.pow, ast.USub: operator.neg, ast.UAdd: operator.pos}
+_FUNCS = {"abs": abs, "min": min, "max": max}
+REF = re.compile(r"\{([a-z_][a-z0-9_]*):([^{}]+)\}")
+
+
+def calc_source(getters):
+    """The value of a ``calc:`` key: arithmetic over ``{SOURCE:KEY}`` references to ``getters``."""
+    def value(key: str) -> float:
+        refs = []
+
+        def ref(m):
+            refs.append(getters[m[1]](m[2]))
+            return f"_{len(refs) - 1}"
+
+        def ev(n):
+            if isinstance(n, ast.Expression):
+                return ev(n.body)
+            if isinstance(n, ast.Constant) and isinstance(n.value, (int, float)):
+                return n.value
+            if isinstance(n, ast.Name) and n.id.startswith("_"):
+                return refs[int(n.id[1:])]
+            if isinstance(n, ast.BinOp) and type(n.op) in _OPS:
+                return _OPS[type(n.op)](ev(n.left), ev(n.right))
+            if isinstance(n, ast.UnaryOp) and type(n.op) in _OPS:
+                return _OPS[type(n.op)](ev(n.operand))
+            if isinstance(n, ast.Call) and isinstance(n.func, ast.Name) and n.func.id in _FUNCS:
+                return _FUNCS[n.func.id](*[ev(a) for a in n.args])
+            raise ValueError(f"not arithmetic: {ast.dump(n)[:60]}")
+        return float(ev(ast.parse(REF.sub(ref, key), mode="eval")))
+    return value
+
+
+def _with_local(getters: dict, page_text: str) -> dict:
+    """``getters`` plus the sources that need no run: this page's blocks, stored records, calc."""
+    out = {**getters, "block": block_source(page_text), "record": record_value}
+    out["calc"] = calc_source(out)
+    return out
+
+
+#: the sources every check has (no run needed)
+LOCAL = ("block", "record", "calc")
 #: sources checked by their own tests, not from the quick report: ``p4t`` (``pixelkit simulate
 #: designs/pixel4t_gf180.toml --json``, dotted keys into its JSON; tests/test_pixel4t.py); ``closed``
 #: (the reference's close record, designs/dual_pixel_revB.close.json, dotted keys; tests/test_close_table.py)
@@ -100,18 +192,19 @@ def check(report: Path, files=None, getters=None) -> tuple[list[dict], int]:
     getters = getters if getters is not None else {name: make(report) for name, make in SOURCES.items()}
     bad, n = [], 0
     for page in files or pages():
+        here = _with_local(getters, page.read_text())
         for lineno, line in enumerate(page.read_text().splitlines(), 1):
             for m in _outside_code(line):
-                if m["src"] not in getters and m["src"] in OTHER_SOURCES:
+                if _elsewhere(m, getters):
                     continue
                 n += 1
                 key, src, quoted = m["key"], m["src"], m["num"]
-                base, _, scale = key.partition("*")
                 try:
-                    value = getters[src](base) * (float(scale) if scale else 1.0)
-                except (KeyError, StopIteration, ValueError, IndexError) as exc:
+                    value = _value(here, src, key)
+                except (KeyError, StopIteration, ValueError, IndexError, TypeError, ZeroDivisionError,
+                        SyntaxError, FileNotFoundError, json.JSONDecodeError) as exc:
                     bad.append({"page": page.name, "line": lineno, "key": f"{src}:{key}", "quoted": quoted,
-                                "value": None, "why": f"no such figure ({type(exc).__name__})"})
+                                "value": None, "why": f"no such figure ({type(exc).__name__}{': ' + str(exc) if isinstance(exc, ValueError) else ''})"})
                     continue
                 tol = abs(value) * float(m["tol"]) / 100 if m["tol"] else _digits(quoted) * (1 + 1e-9)
                 if not math.isfinite(value) or abs(float(quoted) - value) > tol:
@@ -124,6 +217,21 @@ def check(report: Path, files=None, getters=None) -> tuple[list[dict], int]:
                         "why": f"{unmarked} marker(s) not right after a number or not of the form "
                                "NUMBER<!--fig SOURCE:KEY-->"})
     return bad, n
+
+
+SCALE = re.compile(r"\*(" + NUMBER + r")$")
+
+
+def _value(getters, src: str, key: str) -> float:
+    """The current value of ``SRC:KEY`` (``KEY*SCALE``: times SCALE)."""
+    m = SCALE.search(key)
+    return getters[src](key[:m.start()] if m else key) * (float(m[1]) if m else 1.0)
+
+
+def _elsewhere(m, getters) -> bool:
+    """A mark (or a calc over a mark) of a source another test checks, absent from ``getters``."""
+    srcs = [r[0] for r in REF.findall(m["key"])] if m["src"] == "calc" else [m["src"]]
+    return any(s not in getters and (s in OTHER_SOURCES or s in SOURCES) for s in srcs)
 
 
 def _sub_outside_code(line: str, fix) -> str:
@@ -140,13 +248,13 @@ def update(report: Path, files=None, getters=None) -> int:
     changed = 0
     for page in files or pages():
         text = page.read_text()
+        here = _with_local(getters, text)
 
         def fix(m):
             nonlocal changed
-            if m["src"] not in getters:
+            if m["src"] not in here or _elsewhere(m, getters):
                 return m.group(0)
-            base, _, scale = m["key"].partition("*")
-            value = getters[m["src"]](base) * (float(scale) if scale else 1.0)
+            value = _value(here, m["src"], m["key"])
             tol = abs(value) * float(m["tol"]) / 100 if m["tol"] else _digits(m["num"]) * (1 + 1e-9)
             if abs(float(m["num"]) - value) <= tol:
                 return m.group(0)
@@ -159,11 +267,13 @@ def update(report: Path, files=None, getters=None) -> int:
 
 
 if __name__ == "__main__":
-    rep = Path(sys.argv[1])
-    if "--update" in sys.argv[2:]:
-        print(f"{update(rep)} quoted figure(s) rewritten")
+    args = [a for a in sys.argv[1:] if not a.startswith("--")]
+    rep = Path(args[0]) if args else None          # no report: the marks that need no run only
+    got = None if rep else {}
+    if "--update" in sys.argv[1:]:
+        print(f"{update(rep, getters=got)} quoted figure(s) rewritten")
     else:
-        found, count = check(rep)
+        found, count = check(rep, getters=got)
         for b in found:
             print(f"{b['page']}:{b['line']}: {b['key']}: quoted {b['quoted']}, now {b.get('now') or b.get('why')}")
         print(f"{count} quoted figure(s), {len(found)} stale")

@@ -33,3 +33,47 @@ def test_the_checker_fails_on_stale_unknown_and_stray_marks_and_update_fixes(qui
     assert figures.update(quick_report["out"], [page]) == 2
     assert figures.check(quick_report["out"], [page])[0] == []
     assert page.read_text().startswith("stale 408.9<!--fig")
+
+
+def test_prose_marks_of_blocks_records_and_derived_figures_fail_when_stale(tmp_path):
+    """``block:`` (a number of a text block of the page), ``record:`` (a stored results file that says
+    when and on what it was measured) and ``calc:`` (arithmetic over marks) need no run: a stale one
+    names page, line, the quoted and the current value, and ``--update`` rewrites it."""
+    rec = tmp_path / "rec.json"
+    page = tmp_path / "p.md"
+    page.write_text("```text\n  C_PD,node (fF)   44.86   45.53\n```\n\n"
+                    "grew 0.67<!--fig calc:{block:C_PD,node (fF)#2}-{block:C_PD,node (fF)}--> fF to "
+                    "45.5<!--fig block:C_PD,node (fF)#2--> fF\n"
+                    "stale 44.00<!--fig block:C_PD,node (fF)--> and -3<!--fig calc:{block:C_PD,node (fF)}*2--> fF\n"
+                    "1467<!--fig record:benchmarks/results/main_job.json::parts.report.current.spice_runs--> runs, "
+                    f"1<!--fig record:{rec}::x-->\n"
+                    "2<!--fig calc:__import__('os')--> 3<!--fig block:no such line-->\n")
+    rec.write_text('{"x": 1}')
+    bad, n = figures.check(None, [page], getters={})
+    assert n == 8
+    assert [(b["line"], b["quoted"], b.get("now")) for b in bad[:2]] == [(6, "44.00", "44.86"), (6, "-3", "90")]
+    assert "no such figure" in bad[2]["why"]                       # outside the repository
+    assert "not arithmetic" in bad[3]["why"] and "StopIteration" in bad[4]["why"]
+    page.write_text(page.read_text().replace(f"1<!--fig record:{rec}::x-->", "")
+                    .replace("2<!--fig calc:__import__('os')--> 3<!--fig block:no such line-->", ""))
+    assert figures.update(None, [page], getters={}) == 2
+    assert figures.check(None, [page], getters={})[0] == []
+    assert "stale 44.86<!--fig" in page.read_text()
+
+
+def test_a_record_must_say_when_and_on_what_it_was_measured(tmp_path, monkeypatch):
+    monkeypatch.setattr(figures, "ROOT", tmp_path)
+    (tmp_path / "r.json").write_text('{"date": "2026-11-28", "wall_s": 12.5}')
+    page = tmp_path / "p.md"
+    page.write_text("took 12.5<!--fig record:r.json::wall_s--> s\n")
+    bad, _ = figures.check(None, [page], getters={})
+    assert "date, commit" in bad[0]["why"]
+    (tmp_path / "r.json").write_text('{"date": "2026-11-28", "commit": "abc1234", "wall_s": 12.5}')
+    assert figures.check(None, [page], getters={})[0] == []
+
+
+def test_every_page_s_block_record_and_calc_marks_are_current():
+    """The marks that need no run, on every page and the README (under a second, no quick report)."""
+    bad, n = figures.check(None, getters={})
+    assert not bad, "; ".join(f"{b['page']}:{b['line']} {b['key']} quoted {b['quoted']} now "
+                              f"{b.get('now') or b.get('why')}" for b in bad)
