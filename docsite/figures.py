@@ -20,7 +20,7 @@ number must be the current value as printed to the same digits (401.9 stands for
 moves fails the suite and names the page, the line and the command that rewrites it. New sources
 (another design's report, a command's ``--json``) are one entry of ``SOURCES``.
 
-Three sources need no run and are checked wherever the marks are (``LOCAL``):
+Four sources need no run and are checked wherever the marks are (``LOCAL``):
 
 - ``block:TEXT`` (``block:TEXT#N``): a number of a ```text block of the same page, the first (N-th)
   number after ``TEXT`` on the first block line holding it. The blocks of the pages the suite runs
@@ -29,6 +29,8 @@ Three sources need no run and are checked wherever the marks are (``LOCAL``):
 - ``record:PATH::KEY``: a stored results file of the repository (JSON, ``KEY`` dotted, list items
   by index), which must say when and on what it was measured (``date`` and ``commit`` or ``head``
   at its top): a measurement a test cannot repeat (a benchmark, a full-grid sign-off).
+- ``file:PATH::KEY``: a JSON data file of the repository that is an input, not a measurement (the
+  truth a virtual chip was made with).
 - ``calc:EXPR``: a figure the sentence derives (a ratio, a difference), ``EXPR`` arithmetic
   (``+ - * / **``, ``abs min max``) over ``{SOURCE:KEY}`` references.
 
@@ -103,18 +105,28 @@ def block_source(page_text: str):
     return value
 
 
-def record_value(key: str) -> float:
-    """The value of a ``record:`` key (``PATH::dotted.key``) in a stored results file."""
+def _json_value(key: str, dated: bool) -> float:
     path, _, dotted = key.partition("::")
     f = (ROOT / path).resolve()
     if ROOT not in f.parents:
         raise KeyError(path)
     data = json.loads(f.read_text())
-    if "date" not in data or not ({"commit", "head"} & set(data)):
+    if dated and ("date" not in data or not ({"commit", "head"} & set(data))):
         raise ValueError(f"{path} does not say when and on what it was measured (date, commit)")
     for part in dotted.split("."):
         data = data[int(part)] if isinstance(data, list) else data[part]
     return float(data)
+
+
+def record_value(key: str) -> float:
+    """The value of a ``record:`` key (``PATH::dotted.key``) in a stored results file (dated)."""
+    return _json_value(key, dated=True)
+
+
+def file_value(key: str) -> float:
+    """The value of a ``file:`` key (``PATH::dotted.key``) in a data file of the repository (an input:
+    the truth a virtual chip was made with, a close record)."""
+    return _json_value(key, dated=False)
 
 
 _OPS = {ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul, ast.Div: operator.truediv,
@@ -152,13 +164,13 @@ def calc_source(getters):
 
 def _with_local(getters: dict, page_text: str) -> dict:
     """``getters`` plus the sources that need no run: this page's blocks, stored records, calc."""
-    out = {**getters, "block": block_source(page_text), "record": record_value}
+    out = {**getters, "block": block_source(page_text), "record": record_value, "file": file_value}
     out["calc"] = calc_source(out)
     return out
 
 
 #: the sources every check has (no run needed)
-LOCAL = ("block", "record", "calc")
+LOCAL = ("block", "record", "file", "calc")
 #: sources checked by their own tests, not from the quick report: ``p4t`` (``pixelkit simulate
 #: designs/pixel4t_gf180.toml --json``, dotted keys into its JSON; tests/test_pixel4t.py); ``closed``
 #: (the reference's close record, designs/dual_pixel_revB.close.json, dotted keys; tests/test_close_table.py)

@@ -1,0 +1,95 @@
+"""Dated measurement records: a run no test repeats (a full-grid sign-off, a post-layout grid), stored
+with what it printed and when, on what, so a page can quote it and a test can hold the page to it.
+
+    python -m docsite.records run NAME -- pixelkit verify designs/dual_pixel_revB.toml
+
+runs the command from the repository's root (``pixelkit`` and ``python`` are this interpreter) and
+writes ``docs/records/NAME.json``: the command, the commit it ran on (``+dirty`` when the tree had
+changes), the date, the exit status, wall and CPU time (the command and every process it waited for),
+the 1-minute load average before and after, and everything it printed (stdout then stderr).
+
+A page quotes it with a ```text block preceded by ``<!-- record: NAME -->``: every line of the
+block must be a line of the record's output, in order, numbers at the digits quoted (the same
+check as a command's output, ``docsite/outputs.py``), and the page must name the record's commit.
+Sentences that read the block mark their numbers ``block:`` (``docsite/figures.py``), figures of the
+record's own fields ``record:docs/records/NAME.json::KEY``. ``tests/test_docs_figures.py`` checks
+every such block; a record is right for its commit, and the page says which.
+"""
+from __future__ import annotations
+
+import json
+import os
+import re
+import resource
+import subprocess
+import sys
+import time
+from datetime import datetime, timezone
+from pathlib import Path
+
+from docsite import outputs
+
+ROOT = Path(__file__).resolve().parents[1]
+FOLDER = ROOT / "docs" / "records"
+#: ``<!-- record: NAME -->`` (and other notes) right above a ```text block
+BLOCK = re.compile(r"((?:<!--[^\n]*-->\n)+)```text\n(.*?)\n```", re.S)
+NOTE = re.compile(r"<!--\s*record:\s*([A-Za-z0-9_.-]+)\s*-->")
+
+
+def _commit() -> str:
+    git = ["git", "-C", str(ROOT)]
+    head = subprocess.run(git + ["rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
+    dirty = subprocess.run(git + ["status", "--porcelain", "--untracked-files=no"], capture_output=True,
+                           text=True).stdout.strip()
+    return head + ("+dirty" if dirty else "")
+
+
+def run(name: str, command: list[str]) -> dict:
+    """Run ``command`` and store its record as ``docs/records/NAME.json``."""
+    prelude = (f'pixelkit() {{ "{sys.executable}" -m pixelkit "$@"; }}\n'
+               f'python() {{ "{sys.executable}" "$@"; }}\n')
+    line, commit = " ".join(command), _commit()
+    before, t0, c0 = os.getloadavg()[0], time.monotonic(), resource.getrusage(resource.RUSAGE_CHILDREN)
+    p = subprocess.run(["bash", "-c", prelude + line], cwd=ROOT, capture_output=True, text=True,
+                       env={**os.environ, "PIXELKIT_PROGRESS": "0"})
+    c1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    rec = {"command": line, "commit": commit,
+           "date": datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M UTC"), "exit": p.returncode,
+           "wall_s": round(time.monotonic() - t0, 1),
+           "cpu_s": round(c1.ru_utime + c1.ru_stime - c0.ru_utime - c0.ru_stime, 1),
+           "load": [round(before, 1), round(os.getloadavg()[0], 1)], "cores": os.cpu_count(),
+           "output": p.stdout + p.stderr}
+    FOLDER.mkdir(parents=True, exist_ok=True)
+    (FOLDER / f"{name}.json").write_text(json.dumps(rec, indent=1) + "\n")
+    return rec
+
+
+def check(files) -> tuple[list[str], int]:
+    """([every problem: page, record, line], how many record blocks were checked) of ``files``."""
+    bad, n = [], 0
+    for page in files:
+        text = page.read_text()
+        for m in BLOCK.finditer(text):
+            note = NOTE.search(m.group(1))
+            if not note:
+                continue
+            n += 1
+            where = f"{page.name}:{text[:m.start(2)].count(chr(10)) + 1}"
+            f = FOLDER / f"{note[1]}.json"
+            if not f.is_file():
+                bad.append(f"{where}: no record {f.relative_to(ROOT)} (python -m docsite.records run {note[1]} -- CMD)")
+                continue
+            rec = json.loads(f.read_text())
+            problems, _ = outputs.compare(m.group(2), rec["output"], [])
+            bad += [f"{where}: record {note[1]} ({rec['commit']}, {rec['date']}): {p}" for p in problems]
+            if rec["commit"].split("+")[0] not in text:
+                bad.append(f"{where}: the page does not name the record's commit {rec['commit']}")
+    return bad, n
+
+
+if __name__ == "__main__":
+    if len(sys.argv) < 4 or sys.argv[1] != "run" or sys.argv[3] != "--":
+        sys.exit("usage: python -m docsite.records run NAME -- COMMAND ...")
+    r = run(sys.argv[2], sys.argv[4:])
+    print(f"docs/records/{sys.argv[2]}.json: exit {r['exit']}, {r['wall_s']} s wall, {r['cpu_s']} s CPU, "
+          f"at {r['commit']}, load {r['load'][0]} - {r['load'][1]}")
