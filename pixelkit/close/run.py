@@ -123,6 +123,7 @@ class Closer:
         self.f_scale = None
         self.tried: list = []            # every candidate's knob values
         self.grads: dict = {}            # (spec, condition) or OBJECTIVE -> gradient in u (kept across steps)
+        self.explored: dict = {}         # the global stage's record (close.explore)
 
     # --- evaluation ---------------------------------------------------------------------------
     def target(self, key) -> float:
@@ -321,6 +322,16 @@ class Closer:
         p = self.full(x0)
         self.f_scale = abs(p.f) if p.f else 1.0
         self.record(p, accepted=True, mode="start", radius=None, where="grid")
+        if self.smallest(p.margins) < 0:   # failing: the global stage over a cheap bench's knobs first
+            from .explore import explore
+            xg, self.explored = explore(self, p)
+            if xg is not None:
+                self.tell("verifying the global stage's choice on the whole grid")
+                pg = self.full(xg)
+                better = self.smallest(pg.margins) > self.smallest(p.margins)
+                self.record(pg, accepted=better, mode="global", radius=None, where="grid")
+                if better:
+                    p = pg
         radius, forced, first, status, last, shrunk, on_secants = RADIUS0, set(), True, None, None, False, 0
         anchor, restarts = p, RESTARTS
 
@@ -617,6 +628,7 @@ class Closer:
                "spice_runs": sum(i["spice_runs"] for i in self.iterations),
                "spice_cached": sum(i["spice_cached"] for i in self.iterations),
                "wall_s": time.perf_counter() - self.t0, "unmeasured": unmeasured, "idle": list(self.idle),
+               "global": self.explored,
                "design_obj": p.design}
         if short and last is not None and status == "infeasible":   # a stall's last step proves no conflict
             out["conflict"] = conflicts(self, p, last)

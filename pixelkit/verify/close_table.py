@@ -111,6 +111,10 @@ class CloseSettings:
     tolerance: float = num(0.01, gt=0.0, le=0.2, plausible=(1e-6, 0.2), doc="the search ends when the trust region is below this (of "
                                                      "a lin knob's span, of a log knob's value)")
     max_iterations: int = integer(15, ge=1, le=200, doc="most candidates re-verified before close gives up")
+    global_samples: int = integer(-1, ge=-1, le=1000,
+                                  doc="Latin-hypercube points of the global stage over the knobs a cheap bench "
+                                      "reads alone (the AFE's), run when the start fails: -1 (default) 8 per "
+                                      "such knob, at least 24; 0: no global stage (the local method alone)")
 
     @property
     def goal(self) -> tuple[str, str]:
