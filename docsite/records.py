@@ -77,7 +77,7 @@ def check(files) -> tuple[list[str], int]:
             where = f"{page.name}:{text[:m.start(2)].count(chr(10)) + 1}"
             f = FOLDER / f"{note[1]}.json"
             if not f.is_file():
-                bad.append(f"{where}: no record {f.relative_to(ROOT)} (python -m docsite.records run {note[1]} -- CMD)")
+                bad.append(f"{where}: no record docs/records/{note[1]}.json (python -m docsite.records run {note[1]} -- CMD)")
                 continue
             rec = json.loads(f.read_text())
             problems, _ = outputs.compare(m.group(2), rec["output"], [])

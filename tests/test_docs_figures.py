@@ -3,6 +3,7 @@ current output at the digits quoted: the session's quick report of the reference
 reference (the kit's own output, which is what the page claims to quote). The checker is shown to
 fail on a planted stale figure, on a key that names nothing and on a marker not after a number,
 and ``--update`` to rewrite a stale figure with the same digits."""
+import json
 import sys
 
 from conftest import ROOT
@@ -77,3 +78,24 @@ def test_every_page_s_block_record_and_calc_marks_are_current():
     bad, n = figures.check(None, getters={})
     assert not bad, "; ".join(f"{b['page']}:{b['line']} {b['key']} quoted {b['quoted']} now "
                               f"{b.get('now') or b.get('why')}" for b in bad)
+
+
+def test_a_block_quoting_a_dated_record_is_held_to_it(tmp_path, monkeypatch):
+    """A ```text block under ``<!-- record: NAME -->`` is checked line by line against the stored run
+    (``docsite/records.py``), and the page must name the record's commit; every page's record blocks
+    hold (no run: the records are files)."""
+    from docsite import records
+    bad, n = records.check(figures.pages())
+    assert not bad, "\n".join(bad)
+    monkeypatch.setattr(records, "FOLDER", tmp_path)
+    (tmp_path / "r.json").write_text(json.dumps({"command": "pixelkit verify X", "commit": "abc1234",
+                                                 "date": "2026-11-28 23:40 UTC", "exit": 0,
+                                                 "output": "spec  value\npower_chip  8.616 mW  PASS\n"}))
+    page = tmp_path / "p.md"
+    page.write_text("Measured at abc1234:\n\n<!-- record: r -->\n```text\npower_chip  8.62 mW  PASS\n```\n")
+    assert records.check([page]) == ([], 1)
+    page.write_text("Measured:\n\n<!-- record: r -->\n```text\npower_chip  8.60 mW  PASS\n```\n"
+                    "<!-- record: gone -->\n```text\nx\n```\n")
+    bad, n = records.check([page])
+    assert n == 2 and "8.60" in bad[0] and "8.616" in bad[0] and bad[0].startswith("p.md:5")
+    assert "does not name the record's commit abc1234" in bad[1] and "no record" in bad[2]
