@@ -17,6 +17,7 @@ from pixelkit.layout.pex import cell_geometry
 from pixelkit.layout.pex.capacitance import capacitances
 from pixelkit.layout.pex.overlay import place, post_layout_view
 from pixelkit.physics import fd
+from pixelkit.physics.nodes import line_cap
 from pixelkit.techfit.ekv import models_for
 
 GF = ROOT / "designs" / "dual_pixel_gf180.toml"
@@ -231,3 +232,29 @@ def test_the_afes_floating_nodes_are_shielded_from_the_nodes_that_move(views):
     assert 3 * cpl.get(frozenset(("out", "x")), 0.0) + cpl.get(frozenset(("out", "vm")), 0.0) < 4e-15
     moving = max(cpl.get(frozenset((n, "x")), 0.0) for n in ("out", "c", "in"))
     assert cpl[frozenset(("0", "x"))] > 3 * moving
+
+
+def test_post_layout_page_quotes_the_current_views(views):
+    """docs/post-layout.md marks the figures of its post-layout-view table (``pl:VIEW.ARRAY.FIGURE``,
+    docsite/figures.py): each is the current schematic / post-layout figure at the digits quoted (the
+    SPICE charge steps are the first test's decks, served from the session's cache)."""
+    import sys
+    sys.path.insert(0, str(ROOT))
+    from docsite import figures
+    now = {}
+    for name, v in zip(("sch", "post"), views):
+        a, spice = sf_gain(v), output_cg(v)
+        for w in ("primary", "secondary"):
+            r = fd.response(v, w, a, models_for(v))
+            now[f"{name}.{w}"] = {"c_fd_F": r["c_fd_F"], "c_pd_node_F": r["c_pd_node_F"],
+                                  "cg_out_V_per_e": r["cg_out_V_per_e"], "cg_out_spice_V_per_e": spice[w],
+                                  "model_vs_spice": r["cg_out_V_per_e"] / spice[w] - 1,
+                                  "line_cap_F": line_cap(v, "col_p0" if w == "primary" else "col_s0")}
+
+    def value(key):
+        view, w, fig = key.split(".")
+        return now[f"{view}.{w}"][fig]
+    bad, n = figures.check(None, [ROOT / "docs" / "post-layout.md"], getters={"pl": value})
+    assert n >= 24, n
+    assert not bad, "; ".join(f"{b['page']}:{b['line']} {b['key']} quoted {b['quoted']} now "
+                              f"{b.get('now') or b.get('why')}" for b in bad)
