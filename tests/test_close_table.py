@@ -90,6 +90,19 @@ BAD = [  # (what, [close] table, field named, words of what is allowed)
      "close.knobs.afe.gain", "a list of two values"),
     ("a bad key", {"objective": "min power", "knobs": {"afe..gain": ["100 V/V", "1000 V/V"]}}, "close.knobs.afe..gain",
      "a dotted key"),
+    ("tied to itself", knob("afe.c11", "150 fF", "600 fF", tied=["afe.c11"]), "close.knobs.afe.c11.tied[0]",
+     "another design key"),
+    ("tied to another unit", knob("afe.c11", "150 fF", "600 fF", tied=["afe.ota_bias"]),
+     "close.knobs.afe.c11.tied[0]", "same unit as afe.c11"),
+    ("tied to no key", knob("afe.c11", "150 fF", "600 fF", tied=["afe.c99"]), "close.knobs.afe.c11.tied[0]",
+     "a numeric key of the design file"),
+    ("tied to a knob", {"objective": "min power", "knobs": {"afe.c11": {"min": "150 fF", "max": "600 fF",
+                                                                        "tied": ["afe.c13"]},
+                                                            "afe.c13": ["150 fF", "600 fF"]}},
+     "close.knobs.afe.c11.tied[0]", "no other knob"),
+    ("tied on a choice", {"objective": "min power", "knobs": {"pixel.gate_drive": {
+        "choices": ["supply", "boosted"], "tied": ["afe.opamp"]}}}, "close.knobs.pixel.gate_drive.tied",
+     "no bounds on a knob with choices"),
 ]
 
 
@@ -195,3 +208,18 @@ def test_one_choice_is_the_designers_circuit_and_absent_knobs_start_mid_bounds()
         math.sqrt(0.15e-12 * 1e-12), rel=1e-5) and base.afe.c11 == pytest.approx(500e-15)
     base, active, left = _under(d, {"pixel.gate_drive": "supply", "afe.opamp": "ota"}, numeric)
     assert left == ["pixel.v_gate"] and base.pixel.v_gate is None and base.afe.opamp == "ota"
+
+
+def test_a_tied_key_takes_its_knobs_value_everywhere_close_writes():
+    """The reference's C13 is tied to C11 (its AFE's gain C11 / C13 stays 1): every design close
+    simulates and the revision it writes carry one value in both keys."""
+    from pixelkit.close.knobs import Space
+    d = load_design(REF)
+    k = next(k for k in d.close.knobs if k.name == "afe.c11")
+    assert k.tied == ("afe.c13",) and "afe.c13" not in {j.name for j in d.close.knobs}
+    space = Space((k,))
+    x = space.snap([320e-15])
+    o = space.overrides(x)
+    assert o == {"afe.c11": "320 fF", "afe.c13": "320 fF"}
+    moved = space.design(d, x)
+    assert moved.afe.c11 == moved.afe.c13 == pytest.approx(320e-15) and moved.afe.c12 == d.afe.c12

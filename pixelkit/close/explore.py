@@ -20,8 +20,9 @@ settling frame), so it is sampled globally instead of stepped into:
    start's worst condition (the specs the block's knobs may move too: settling through the AFE,
    power through its bias; a deck the block does not change is read from the cache) and the
    objective at the nominal condition.
-4. The choice: among the points meeting every target simulated in stage B, the best objective;
-   else the largest smallest margin. ``close.run`` then verifies it on the whole grid and starts
+4. The choice: judged on the rows of stage B the block moves (a spec equal at every point, as a
+   full well at the pixel the stage holds still, is the local stage's), among the points meeting
+   every target there, the best objective; else the largest smallest margin. ``close.run`` then verifies it on the whole grid and starts
    the trust region there when it beats the start.
 
 Every number is SPICE (``verify.run.measure_at``); nothing is interpolated between samples.
@@ -138,9 +139,12 @@ def explore(closer, p) -> tuple[np.ndarray | None, dict]:
               if name not in specs and c is not None and (m is None or m - closer.target((name, c)) <= mg.ACTIVE)]
     pairs = sorted(set(full) | set(others))
     b = _simulate(closer, [xs[i] for i in keep], pairs, "global stage B", objective=True)
+    # judged on the rows the block moves: a spec it does not (a full well, at a pixel the stage holds
+    # still) is the same at every point and is the local stage's to close
+    moved = [k for k in pairs if len({None if m[k] is None else round(m[k], 12) for m, _f in b}) > 1]
     rows = []
     for i, (m, f) in zip(keep, b):
-        rows.append({"i": i, "short": _short(closer, m), "objective": f,
+        rows.append({"i": i, "short": _short(closer, {k: m[k] for k in moved}), "objective": f,
                      "knobs": {k: v for k, v in closer.space.overrides(xs[i]).items() if k in names}})
     passing = [r for r in rows if r["short"] >= 0 and r["objective"] is not None]
     if passing:

@@ -91,6 +91,10 @@ class Space:
                 notes.append(f"{k.name} starts at {self.texts([c], [k])[0]}: the design's "
                              f"{text(v, k.dim, k.unit_required)} is outside its bounds")
             x.append(c)
+            for key in k.tied:
+                w = value_of(design, key) if written(design, key) else None
+                if w is None or abs(float(w) - c) > 1e-9 * max(abs(c), 1e-30):
+                    notes.append(f"{key} starts at {self.texts([c], [k])[0]}, tied to {k.name}")
         return self.snap(np.array(x)), notes
 
     def texts(self, x, knobs=None) -> list[str]:
@@ -115,7 +119,12 @@ class Space:
         return np.array(vals)
 
     def overrides(self, x) -> dict:
-        return dict(zip(self.names, self.texts(x)))
+        """{design key: value as written} of each knob and of the keys it ties (``tied``: the same value)."""
+        out = {}
+        for k, t in zip(self.knobs, self.texts(x)):
+            out[k.name] = t
+            out.update({key: t for key in k.tied})
+        return out
 
     def design(self, base, x):
         """The design at knob values ``x`` (SI, already snapped), loaded as a file would be; in the

@@ -73,6 +73,10 @@ class Knob:
                                "(\"pixel.gate_drive\" = { choices = [\"supply\", \"boosted\"] }): close solves the "
                                "numeric knobs for each and keeps the best; one value: the circuit the revision uses "
                                "(\"afe.opamp\" = { choices = [\"ota\"] }), chosen by the designer, not by close")
+    tied: tuple = items(text(), (), min_len=1, max_len=8,
+                        doc="design keys set to this knob's value too, one knob for both (\"afe.c11\" = { min = "
+                            "\"150 fF\", max = \"600 fF\", tied = [\"afe.c13\"] }: C13 = C11, the AFE's gain "
+                            "C11 / C13 stays 1 while its capacitors move)")
     name: str = field(default="", metadata=dict(kind="skip"))
     lo: float = field(default=0.0, metadata=dict(kind="skip"))
     hi: float = field(default=0.0, metadata=dict(kind="skip"))
@@ -86,7 +90,7 @@ class Knob:
 
     def validate(self, path, source, raw):
         if self.choices:
-            for key in ("min", "max", "step"):
+            for key in ("min", "max", "step", "tied"):
                 if key in raw:
                     raise ConfigError(source, f"{path}.{key}", raw[key], "no bounds on a knob with choices "
                                       "(a circuit choice takes one of its values)")
@@ -149,6 +153,11 @@ def check(close: CloseSettings, design, source: str, raw: dict) -> CloseSettings
                           f"at most {MAX_COMBINATIONS} combinations (close solves the numeric knobs for each)")
     sense, what = close.goal
     keys = {k.name for k in knobs if not k.choices}
+    for k in knobs:
+        for i, key in enumerate(k.tied):
+            if key in {j.name for j in knobs} or any(key in j.tied for j in knobs if j is not k):
+                raise ConfigError(source, f"close.knobs.{k.name}.tied[{i}]", key,
+                                  "a key no other knob moves or ties (one knob per design key)")
     if what not in FIGURES and what != "area" and what not in keys:
         raise ConfigError(source, "close.objective", close.objective,
                           "min or max of power, area, one of the knobs (" + ", ".join(sorted(keys)) + ") or a figure: "
@@ -232,6 +241,18 @@ def _knob(k: Knob, design, source: str) -> Knob:
         if not (hi - lo) * 1e-9 <= grid < hi - lo:   # issue 44: "1e-300 nA" was taken (no grid at all)
             raise ConfigError(source, f"{path}.step", k.step, "a step below the span max - min and at least "
                               "1e-9 of it (a grid of at most a billion points)")
+    for i, key in enumerate(k.tied):
+        tpath = f"{path}.tied[{i}]"
+        if key == k.name:
+            raise ConfigError(source, tpath, key, "another design key than the knob's own")
+        try:
+            tmeta = _field(dataclasses.replace(k, name=key), design, source).metadata
+        except ConfigError as exc:
+            raise ConfigError(source, tpath, key, exc.allowed) from None
+        if tmeta.get("kind") != "qty" or tmeta.get("dim") != dim:
+            raise ConfigError(source, tpath, key, f"a numeric key of the same unit as {k.name}")
+        _bound(k.min, dim, tpath, source, tmeta)
+        _bound(k.max, dim, tpath, source, tmeta)
     return dataclasses.replace(k, lo=lo, hi=hi, grid=grid, dim=dim, unit_required=bool(meta.get("unit_required")))
 
 
