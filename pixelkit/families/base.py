@@ -5,6 +5,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from ..errors import ConfigError
+from ..physics.conversion import rectangle
 from ..schema import ident, load, qty, read_toml, text
 from ..tech import Technology, load_technology
 
@@ -19,6 +20,22 @@ class FamilyDesign:
     temperature: float = qty("K", 300.15, gt=0, lt=500, doc="die temperature of every simulation")
     tech: Technology = field(default=None, metadata=dict(kind="skip"))
     source: str = field(default="", metadata=dict(kind="skip"))
+
+    @property
+    def corner_name(self) -> str:
+        return self.corner or self.tech.models.default_corner
+
+
+class DrawnPd:
+    """Area and perimeter of a table's drawn rectangular photodiode ``pd_width`` x ``pd_height``."""
+
+    @property
+    def area(self) -> float:
+        return rectangle(self.pd_width, self.pd_height)[0]
+
+    @property
+    def perimeter(self) -> float:
+        return rectangle(self.pd_width, self.pd_height)[1]
 
 
 def load_family_design(cls, path: str | Path):

@@ -11,8 +11,8 @@ from dataclasses import dataclass
 
 from ..errors import ConfigError
 from ..schema import integer, named, num, qty, table, text
-from ..verify.spec import RoleSpec, VerifySettings
-from .base import FamilyDesign
+from ..verify.spec import RoleSpec, VerifySettings, check_conditions
+from .base import FamilyDesign, load_family_design
 
 _WL = (0.1e-6, 1e-3)
 
@@ -102,10 +102,6 @@ class RoleDesign(FamilyDesign):
     spec: tuple = named(RoleSpec, doc="specifications on the figures of a pixel read by role (docs/verify.md)")
 
     @property
-    def corner_name(self) -> str:
-        return self.corner or self.tech.models.default_corner
-
-    @property
     def suite(self):
         """What ``pixelkit verify`` measures on this design (``rolepix.suite``)."""
         from ..rolepix import suite
@@ -114,6 +110,17 @@ class RoleDesign(FamilyDesign):
     def cell(self):
         """The pixel as a role cell (``circuits.roles.PixelCell``): each family says how."""
         raise NotImplementedError
+
+
+def load_role_design(cls, path, *checks):
+    """Load a design of role family ``cls``: the family's own ``checks`` (each ``check(design)``), then the
+    levels against the technology and the sign-off grid's conditions."""
+    d = load_family_design(cls, path)
+    for check in checks:
+        check(d)
+    check_levels(d)
+    check_conditions(d, d.tech)
+    return d
 
 
 def check_levels(design) -> None:

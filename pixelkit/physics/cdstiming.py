@@ -45,20 +45,22 @@ class CdsTiming:
     def rst(self) -> tuple:
         return (self.t_settle, self.t_settle + self.t_rst)
 
+    def _after(self, phase: tuple, settle: float, length: float) -> tuple:
+        """A pulse ``length`` long that rises ``settle`` after ``phase`` has fallen (its edge included)."""
+        a = phase[1] + self.edge + settle
+        return (a, a + length)
+
     @property
     def shr(self) -> tuple:
-        a = self.rst[1] + self.edge + self.t_settle
-        return (a, a + self.t_sh)
+        return self._after(self.rst, self.t_settle, self.t_sh)
 
     @property
     def tg(self) -> tuple:
-        a = self.shr[1] + self.edge + self.t_settle / 2
-        return (a, a + self.t_tg)
+        return self._after(self.shr, self.t_settle / 2, self.t_tg)
 
     @property
     def shs(self) -> tuple:
-        a = self.tg[1] + self.edge + self.t_settle
-        return (a, a + self.t_sh)
+        return self._after(self.tg, self.t_settle, self.t_sh)
 
     @property
     def t_row(self) -> float:

@@ -17,9 +17,7 @@ from pathlib import Path
 
 from ...errors import ConfigError
 from ...schema import ident, named, qty, table, text
-from ...verify.spec import check_conditions
-from ..base import load_family_design
-from ..roledesign import RoleDesign, check_levels
+from ..roledesign import RoleDesign, load_role_design
 
 
 def _port(doc: str):
@@ -78,13 +76,14 @@ class NetlistDesign(RoleDesign):
 
 
 def load_netlist_design(path: str | Path) -> NetlistDesign:
-    d = load_family_design(NetlistDesign, path)
+    d = load_role_design(NetlistDesign, path, _netlist_given)
+    return replace(d, pixel_cell=build_cell(d))
+
+
+def _netlist_given(d) -> None:
     if d.netlist is None:
         from ...errors import MISSING
         raise ConfigError(d.source, "netlist", MISSING, "a [netlist] table: file, subckt and [netlist.ports]")
-    check_levels(d)
-    check_conditions(d, d.tech)
-    return replace(d, pixel_cell=build_cell(d))
 
 
 def build_cell(design):

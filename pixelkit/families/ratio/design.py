@@ -5,10 +5,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ...errors import ConfigError
-from ...physics.conversion import rectangle
 from ...schema import ident, integer, named, num, qty, table, text
 from ...verify.spec import Spec, VerifySettings, check_conditions
-from ..base import FamilyDesign, load_family_design
+from ..base import DrawnPd, FamilyDesign, load_family_design
 
 
 @dataclass(frozen=True)
@@ -24,19 +23,11 @@ class Loop:
 
 
 @dataclass(frozen=True)
-class Photodiodes:
+class Photodiodes(DrawnPd):
     pd_width: float = qty("m", 7e-6, gt=0, doc="width of each photodiode of a pair")
     pd_height: float = qty("m", 7e-6, gt=0, doc="height of each photodiode of a pair")
     pd_model: str = ident("diode_pd2nw_03v3",
                           doc="p+/n-well junction: its anode feeds the diode-connected M3/M4")
-
-    @property
-    def area(self) -> float:
-        return rectangle(self.pd_width, self.pd_height)[0]
-
-    @property
-    def perimeter(self) -> float:
-        return rectangle(self.pd_width, self.pd_height)[1]
 
 
 @dataclass(frozen=True)
@@ -88,10 +79,6 @@ class RatioDesign(FamilyDesign):
                                    doc="the sign-off grid of pixelkit verify (no Monte Carlo for this family yet)")
     spec: tuple = named(Spec, doc="specifications: one [spec.<name>] table each; this family measures "
                                   "power_chip only (docs/verify.md)")
-
-    @property
-    def corner_name(self) -> str:
-        return self.corner or self.tech.models.default_corner
 
 
 #: the [spec] figures this family measures

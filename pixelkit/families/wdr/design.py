@@ -5,13 +5,12 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ...errors import ConfigError
-from ...physics.conversion import rectangle
 from ...schema import integer, qty, table, text
-from ..base import FamilyDesign, load_family_design
+from ..base import DrawnPd, FamilyDesign, load_family_design
 
 
 @dataclass(frozen=True)
-class Pixel:
+class Pixel(DrawnPd):
     pd_width: float = qty("m", 10e-6, gt=0, doc="photodiode width")
     pd_height: float = qty("m", 10e-6, gt=0, doc="photodiode height")
     c_int: float = qty("F", 200e-15, gt=0, le=10e-12, doc="integration capacitor")
@@ -20,14 +19,6 @@ class Pixel:
     v_ab: float = qty("V", 0.9, ge=0, doc="reset gate low level: anti-blooming clamp of the PD")
     sw_w: float = qty("m", 0.5e-6, gt=0, doc="reset / integration switches")
     sw_l: float = qty("m", 0.5e-6, gt=0, doc="reset / integration switches: length")
-
-    @property
-    def area(self) -> float:
-        return rectangle(self.pd_width, self.pd_height)[0]
-
-    @property
-    def perimeter(self) -> float:
-        return rectangle(self.pd_width, self.pd_height)[1]
 
     def validate(self, path, source):
         if self.v0 >= self.v_reset:
@@ -83,12 +74,9 @@ class WdrDesign(FamilyDesign):
 
 def load_wdr_design(path: str | Path) -> WdrDesign:
     design = load_family_design(WdrDesign, path)
-    tech, path = design.tech, design.source
-    for f in ("v_reset", "v0"):
-        if getattr(design.pixel, f) >= tech.supply:
-            raise ConfigError(str(path), f"pixel.{f}", getattr(design.pixel, f),
-                              f"a level below the supply ({tech.supply:g} V)")
-    if design.coding.v_high >= tech.supply:
-        raise ConfigError(str(path), "coding.v_high", design.coding.v_high,
-                          f"a level below the supply ({tech.supply:g} V)")
+    supply = design.tech.supply
+    for table_, f in (("pixel", "v_reset"), ("pixel", "v0"), ("coding", "v_high")):
+        v = getattr(getattr(design, table_), f)
+        if v >= supply:
+            raise ConfigError(str(design.source), f"{table_}.{f}", v, f"a level below the supply ({supply:g} V)")
     return design
