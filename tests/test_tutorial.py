@@ -9,8 +9,10 @@ interpreter. HTML comments right above a block (invisible on the site) say what 
 on a failing specification, which the tutorial explains); ``<!-- creates: PATH ... -->`` files it
 must leave; ``<!-- expect: REGEX -->`` what its output (stdout and stderr) must hold (the how-to's diagnosis names
 the effect the example's virtual silicon was made with); ``<!-- slow -->`` a block that takes
-minutes (DRC, sign-off, the reports); ``<!-- parse-only -->`` a block never run (it starts
-servers). A ```text block right after a block is what the page says it prints: every line of it
+minutes (DRC, sign-off, the reports); ``<!-- parse-only -->`` a block never run;
+``<!-- background: HOST:PORT -->`` a block that starts servers (the Dask how-to's scheduler and
+workers): run in the background on a free port in place of the page's, waited for until it accepts
+connections, ended after the page's walk. A ```text block right after a block is what the page says it prints: every line of it
 must be printed, in order, with the same numbers at the digits quoted (``docsite/outputs.py``;
 ``<!-- vary: REGEX -->`` above the text block names a line whose numbers change from run to run);
 with ``PIXELKIT_DOCS_REWRITE=1`` the lines whose numbers moved are rewritten into the page from
@@ -36,7 +38,7 @@ from pathlib import Path
 import click
 import pytest
 
-from conftest import ROOT
+from conftest import ROOT, wait_for
 
 sys.path.insert(0, str(ROOT))
 from docsite import outputs  # noqa: E402
@@ -58,6 +60,7 @@ def sh_blocks(text: str) -> list[dict]:
                     "slow": bool(re.search(r"<!--\s*slow\s*-->", notes)),
                     "parse_only": bool(re.search(r"<!--\s*parse-only\s*-->", notes)),
                     "run": bool(re.search(r"<!--\s*run\s*-->", notes)),
+                    "background": (re.findall(r"<!--\s*background:\s*(\S+)\s*-->", notes) or [None])[0],
                     "expect": re.findall(r"<!--\s*expect:\s*(.+?)\s*-->", notes),
                     "output": m.group(4),
                     "vary": re.findall(r"<!--\s*vary:\s*(.+?)\s*-->", m.group(3) or "")})
@@ -103,13 +106,18 @@ def run_blocks(blocks, folder, parse_slow=False, page=None):
     (``docsite/outputs.py``); with ``PIXELKIT_DOCS_REWRITE=1`` the text blocks of ``page`` (the
     file the blocks were read from) are rewritten from the output instead."""
     rewrite = os.environ.get("PIXELKIT_DOCS_REWRITE") == "1" and page is not None
-    fixes, unfixed = [], []
+    fixes, unfixed, servers, ports = [], [], [], {}
     prelude = (f'pixelkit() {{ "{sys.executable}" -m pixelkit "$@"; }}\n'
                f'python() {{ "{sys.executable}" "$@"; }}\n')
-    env = {**os.environ, "PIXELKIT_PROGRESS": "0"}
+    env = {**os.environ, "PIXELKIT_PROGRESS": "0", "PATH": f"{Path(sys.executable).parent}:{os.environ['PATH']}"}
     env.pop("PIXELKIT_REPORTS", None)
     try:
         for n, b in enumerate(blocks, 1):
+            for old, new in ports.items():      # a server the page started on a port of its own: ours
+                b = {**b, "code": re.sub(rf"\b{old}\b", new, b["code"])}
+            if b["background"] and not (b["parse_only"] or (parse_slow and b["slow"])):
+                servers.append(start_server(b, folder, prelude, env, ports))
+                continue
             if b["parse_only"] or (parse_slow and b["slow"]):
                 with pytest.MonkeyPatch.context() as mp:
                     mp.chdir(folder)
@@ -141,6 +149,8 @@ def run_blocks(blocks, folder, parse_slow=False, page=None):
                                          "(PIXELKIT_DOCS_REWRITE=1 rewrites the numbers):\n  "
                                          + "\n  ".join(problems) + f"\n--- printed:\n{(p.stdout + p.stderr)[-3000:]}")
     finally:
+        for proc in servers:
+            stop_server(proc)
         if fixes:   # by the block's text, not its place: the page may have changed during the walk
             text = page.read_text()
             for old, fixed in fixes:
@@ -150,6 +160,42 @@ def run_blocks(blocks, folder, parse_slow=False, page=None):
                     unfixed.append(f"a block to rewrite is no longer on the page once:\n{old}")
             page.write_text(text)
     assert not unfixed, "lines to rewrite by hand:\n  " + "\n  ".join(unfixed)
+
+
+def start_server(b, folder, prelude, env, ports):
+    """Start a ``<!-- background: HOST:PORT -->`` block (a Dask scheduler and its workers) in a process
+    group of its own, on a free port in place of the page's (the port's number is replaced in this and
+    the later blocks of the page), and wait until it accepts connections."""
+    import socket
+    host, port = b["background"].rsplit("/", 1)[-1].rsplit(":", 1)
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        free = str(s.getsockname()[1])
+    ports[port] = free
+    code = re.sub(rf"\b{port}\b", free, b["code"])
+    log = open(folder / f"server-{free}.log", "w")
+    proc = subprocess.Popen(["bash", "-c", prelude + code + "\nwait"], cwd=folder, env=env, stdout=log,
+                            stderr=subprocess.STDOUT, start_new_session=True)
+
+    def up():
+        assert proc.poll() is None, f"the server block exited {proc.returncode}:\n{(folder / log.name).read_text()}"
+        with socket.socket() as s:
+            return s.connect_ex((host, int(free))) == 0
+    wait_for(up, f"the page's server on {host}:{free}", within=300)
+    return proc
+
+
+def stop_server(proc):
+    """End the server block's process group (its scheduler and workers), ours alone."""
+    import signal
+    try:
+        os.killpg(proc.pid, signal.SIGTERM)
+        proc.wait(timeout=60)
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait()
+    except ProcessLookupError:
+        pass
 
 
 @pytest.fixture
@@ -330,3 +376,17 @@ def test_every_command_mentioned_in_the_docs_and_readme_exists():
                           "`pixelkit ...`") == [
         "`pixelkit reprot D`: no command 'reprot'", "`pixelkit gap diagnoze`: no command gap 'diagnoze'",
         "`pixelkit layout D --drcc`: no option --drcc", "`pixelkit size D [--outt F]`: no option --outt"]
+
+
+def test_the_runner_starts_a_pages_server_on_a_port_of_its_own_and_ends_it(clone, capfd):
+    """A ``<!-- background: HOST:PORT -->`` block (the Dask how-to's scheduler and workers) runs in the
+    background on a free port that replaces the page's in the later blocks, and is ended after the walk."""
+    import socket
+    page = ("<!-- background: 127.0.0.1:8786 -->\n```sh\npython -m http.server --bind 127.0.0.1 8786 &\n```\n\n"
+            "```sh\npython -c 'import urllib.request as u; print(u.urlopen(\"http://127.0.0.1:8786/\").status)' "
+            "&& echo 127.0.0.1:8786 > port.txt\n```\n\n```text\n200\n```\n")
+    run_blocks(sh_blocks(page), clone)
+    port = int((clone / "port.txt").read_text().strip().rsplit(":", 1)[1])
+    assert port != 8786
+    with socket.socket() as s:
+        assert s.connect_ex(("127.0.0.1", port)) != 0, "the page's server is still running"
