@@ -22,8 +22,8 @@ moves fails the suite and names the page, the line and the command that rewrites
 
 Four sources need no run and are checked wherever the marks are (``LOCAL``):
 
-- ``block:TEXT`` (``block:TEXT#N``): a number of a ```text block of the same page, the first (N-th)
-  number after ``TEXT`` on the first block line holding it. The blocks of the pages the suite runs
+- ``block:TEXT`` (``block:TEXT@L#N``): a number of a ```text block of the same page, the first (N-th)
+  number after ``TEXT`` on the first (L-th) block line holding it. The blocks of the pages the suite runs
   are checked against the command's output (``docsite/outputs.py``), so prose that reads a block is
   checked through it; on a page whose block is a dated record, the prose is held to the record.
 - ``record:PATH::KEY``: a stored results file of the repository (JSON, ``KEY`` dotted, list items
@@ -98,8 +98,9 @@ def block_source(page_text: str):
 
     def value(key: str) -> float:
         text, _, nth = key.rpartition("#") if re.search(r"#\d+$", key) else (key, "", "1")
+        text, _, which = text.rpartition("@") if re.search(r"@\d+$", text) else (text, "", "1")
         text = " ".join(text.split())
-        line = next(line for line in lines if text in line)
+        line = [line for line in lines if text in line][int(which) - 1]
         after = line[line.index(text) + len(text):]
         return float(NUMBER_RE.findall(after)[int(nth) - 1])
     return value
