@@ -100,7 +100,10 @@ def block_source(page_text: str):
         text, _, nth = key.rpartition("#") if re.search(r"#\d+$", key) else (key, "", "1")
         text, _, which = text.rpartition("@") if re.search(r"@\d+$", text) else (text, "", "1")
         text = " ".join(text.split())
-        line = [line for line in lines if text in line][int(which) - 1]
+        holding = [line for line in lines if text in line]
+        if len(holding) < int(which):
+            raise LookupError(f"{len(holding)} text block line(s) of the page hold {text!r}")
+        line = holding[int(which) - 1]
         after = line[line.index(text) + len(text):]
         return float(NUMBER_RE.findall(after)[int(nth) - 1])
     return value
@@ -216,10 +219,10 @@ def check(report: Path, files=None, getters=None) -> tuple[list[dict], int]:
                 key, src, quoted = m["key"], m["src"], m["num"]
                 try:
                     value = _value(here, src, key)
-                except (KeyError, StopIteration, ValueError, IndexError, TypeError, ZeroDivisionError,
+                except (LookupError, StopIteration, ValueError, TypeError, ZeroDivisionError,
                         SyntaxError, FileNotFoundError, json.JSONDecodeError) as exc:
                     bad.append({"page": page.name, "line": lineno, "key": f"{src}:{key}", "quoted": quoted,
-                                "value": None, "why": f"no such figure ({type(exc).__name__}{': ' + str(exc) if isinstance(exc, ValueError) else ''})"})
+                                "value": None, "why": f"no such figure ({type(exc).__name__}{': ' + str(exc) if type(exc) in (ValueError, LookupError) else ''})"})
                     continue
                 tol = abs(value) * float(m["tol"]) / 100 if m["tol"] else _digits(quoted) * (1 + 1e-9)
                 if not math.isfinite(value) or abs(float(quoted) - value) > tol:

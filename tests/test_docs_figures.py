@@ -54,7 +54,7 @@ def test_prose_marks_of_blocks_records_and_derived_figures_fail_when_stale(tmp_p
     assert n == 8
     assert [(b["line"], b["quoted"], b.get("now")) for b in bad[:2]] == [(6, "44.00", "44.86"), (6, "-3", "90")]
     assert "no such figure" in bad[2]["why"]                       # outside the repository
-    assert "not arithmetic" in bad[3]["why"] and "StopIteration" in bad[4]["why"]
+    assert "not arithmetic" in bad[3]["why"] and "0 text block line(s) of the page hold 'no such line'" in bad[4]["why"]
     page.write_text(page.read_text().replace(f"1<!--fig record:{rec}::x-->", "")
                     .replace("2<!--fig calc:__import__('os')--> 3<!--fig block:no such line-->", ""))
     assert figures.update(None, [page], getters={}) == 2
