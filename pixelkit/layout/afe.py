@@ -50,6 +50,7 @@ CAP_GAP = 2500          # nm of routing room between the capacitors and the devi
 #: charge while C13 transfers it): routed first and shielded by vss, so no node that moves between the
 #: phases (in, out, c) couples to them (docs/revisions.md: the GF180 revision B's post-layout gain error)
 GUARDED = {"x": "vss", "vm": "vss"}
+TAPS = {"vss", "vdd"}
 
 
 @dataclass(frozen=True)
@@ -199,9 +200,11 @@ class _Stack:
     def term(self, net: str, layer: str, b: Box) -> None:
         self.terms.setdefault(net, []).append(Terminal(layer, b))
 
-    def strip(self, dev: Device, n: int, wf: int, kind: str):
+    def strip(self, dev: Device, n: int, wf: int, kind: str, flip: bool = False):
         lt = self.lt
         devs, nets = _strip_devs(lt, dev, n, wf)
+        if flip:
+            nets = nets[::-1]
         contacted = [True] * (len(devs) + 1)
         e = lt.nm(f"{'nplus' if kind == 'n' else 'pplus'}.enclosure.active")
         y0 = self.y + e
@@ -307,9 +310,10 @@ def afe_layout(design, lt, which: str, width: int, x_in: int, x_pass: int, name:
         line_y[net] = yl
         j += 1
     st.y = gy0 + j * router_pitch + GROUP_GAP
-    _n_group(st, lt, swn, fit)
+    plan_n = _switch_plan(swn, fit, "vss", None)
+    _n_group(st, lt, plan_n, fit)
     st.y += GROUP_GAP
-    _p_group(st, lt, swp, fit)
+    _p_group(st, lt, _switch_plan(swp, fit, _plan_end(plan_n, fit), "vdd"), fit)
     # the input capacitors, their top plates the shared node (C13 lowest)
     y = stack([d for d in caps if shared in d.nodes][::-1], st.y + GROUP_GAP)
     height = lt.snap_up(y + stub + lt.space("metal4"))
@@ -339,26 +343,76 @@ def _shared_node(caps) -> str:
     return best if count[best] > 1 else ""
 
 
-def _n_group(st: _Stack, lt, devs, fit) -> None:
-    if not devs:
+def _pads(dev: Device, fit, flip: bool) -> list:
+    """The source / drain nets of a drawn device, bottom first."""
+    nets = _finger_nets(dev, fit["fingers"][dev.name][0])[::2]
+    return nets[::-1] if flip else nets
+
+
+def _plan_end(plan, fit) -> str | None:
+    return _pads(plan[-1][0], fit, plan[-1][1])[-1] if plan else None
+
+
+def _switch_plan(devs, fit, below: str | None, above: str | None) -> list:
+    """[(device, flipped)] bottom first: the order and orientation of a group of switch strips in which
+    the fewest source / drain pads of two neighbouring strips put a floating node (``GUARDED``) next to
+    a node that moves between the phases (a pad of another net that is neither guarded nor a line
+    every column shares); ``below`` / ``above``: the net beyond the group's ends (a tap, the other
+    group); then the fewest floating-node pads facing a pad of another net rather than a tap. Ties
+    go to the drawn order, so a group with no floating node is drawn as listed."""
+    from itertools import permutations, product
+
+    def harm(a, b) -> int:
+        if a is None or b is None or a == b:
+            return 0
+        quiet = set(GUARDED) | set(LINES)
+        return int((a in GUARDED and b not in quiet) or (b in GUARDED and a not in quiet))
+
+    def cost(plan):
+        seq = [below]
+        for d, f in plan:
+            p = _pads(d, fit, f)
+            seq += [p[0], p[-1]]
+        seq.append(above)
+        pairs = list(zip(seq[::2], seq[1::2]))
+        return (sum(harm(a, b) for a, b in pairs),
+                sum(1 for a, b in pairs if None not in (a, b) and a != b and not {a, b} & TAPS
+                    and (a in GUARDED or b in GUARDED)))
+
+    if len(devs) > 6:    # 6! x 2^6 plans at most
+        return [(d, False) for d in devs]
+    best = None
+    for order in permutations(devs):
+        for flips in product((False, True), repeat=len(devs)):
+            plan = list(zip(order, flips))
+            c = cost(plan)
+            if best is None or c < best[0]:
+                best = (c, plan)
+    return best[1]
+
+
+def _n_group(st: _Stack, lt, plan, fit) -> None:
+    if not plan:
         return
     st.tap("p", "vss")
-    for d in devs:
+    for item in plan:
+        d, flip = item if isinstance(item, tuple) else (item, False)
         st.y += STRIP_GAP
         n, wf = fit["fingers"][d.name]
-        st.strip(d, n, wf, "n")
+        st.strip(d, n, wf, "n", flip)
 
 
-def _p_group(st: _Stack, lt, devs, fit) -> None:
-    if not devs:
+def _p_group(st: _Stack, lt, plan, fit) -> None:
+    if not plan:
         return
     st.y += lt.nm("nwell.enclosure.pcomp") - lt.nm("pplus.enclosure.active")
     comps = []
-    for i, d in enumerate(devs):
+    for i, item in enumerate(plan):
+        d, flip = item if isinstance(item, tuple) else (item, False)
         if i:
             st.y += STRIP_GAP
         n, wf = fit["fingers"][d.name]
-        comps.append(st.strip(d, n, wf, "p").comp)
+        comps.append(st.strip(d, n, wf, "p", flip).comp)
     st.y += STRIP_GAP
     comps.append(st.tap("n", "vdd"))
     nw = well(st.cv, lt, comps, "vdd")
