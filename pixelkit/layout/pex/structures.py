@@ -91,6 +91,45 @@ def _cross(name, lower, wa, upper, wb, degrees, tag, length=20.0, offset=0.0):
                       _line(upper, c + offset * ux, c + offset * uy, length, wb, degrees, f"{tag}b")))
 
 
+def _um(v):
+    """A computed coordinate as the decimal it stands for (um, to 1 pm): the drawn value, no float residue."""
+    return round(v, 6)
+
+
+def _plate(name, layer, w, h, net):
+    """A ``w`` x ``h`` um plate of ``layer`` (net ``net``): its term is the plate to substrate."""
+    return Structure(name, (net, "0"), f"{layer} plate to substrate", ((layer, 0, 0, w, h, net),))
+
+
+def _plates(name, lower, size, upper, inset, tag):
+    """A ``size`` um square ``lower`` plate (net ``<tag>l``) under an ``upper`` one ``inset`` um inside its
+    edges (net ``<tag>u``)."""
+    return Structure(name, (f"{tag}l", f"{tag}u"), f"{upper} plate over a {lower} plate",
+                     ((lower, 0, 0, size, size, f"{tag}l"), (upper, inset, inset, size - inset, size - inset, f"{tag}u")))
+
+
+def _parallel(name, lower, wa, upper, wb, gap, tag, length=30):
+    """A ``lower`` line ``wa`` wide (net ``<tag>a``) and an ``upper`` one ``wb`` wide (net ``<tag>b``) side by
+    side, ``gap`` um apart in plan, ``length`` um long."""
+    y = _um(wa + gap)
+    return Structure(name, (f"{tag}a", f"{tag}b"), f"{lower} and {upper} lines side by side, {gap:g} um apart in plan",
+                     ((lower, 0, 0, length, wa, f"{tag}a"), (upper, 0, y, length, _um(y + wb), f"{tag}b")))
+
+
+def _fringe(name, plate, w, h, line, width, tag):
+    """A ``line`` line ``width`` wide (net ``<tag>l``) along the middle of a ``w`` x ``h`` um ``plate`` plate
+    (net ``<tag>p``), 3 um short of its ends: the fringe to a plane."""
+    return Structure(name, (f"{tag}l", f"{tag}p"), f"{line} line over a {plate} plate (the fringe to a plane)",
+                     ((plate, 0, 0, w, h, f"{tag}p"),
+                      (line, 3, _um(h / 2 - width / 2), w - 3, _um(h / 2 + width / 2), f"{tag}l")))
+
+
+def _pads(tech, name, top, side, gap, tag):
+    """Two metal1 - ``top`` pad stacks ``side`` um wide, ``gap`` um apart (nets ``<tag>a``, ``<tag>b``)."""
+    return Structure(name, (f"{tag}a", f"{tag}b"), f"metal1 - {top} pad stacks {side:g} um wide, {gap:g} um apart",
+                     tuple(_vias(tech, 0, 0, f"{tag}a", top, side) + _vias(tech, _um(side + gap), 0, f"{tag}b", top, side)))
+
+
 def _first(tech) -> list:
     """The first check (the structures of the module's table): set before the lateral term was solved and
     the crossing term added; since then development structures too."""
@@ -125,11 +164,9 @@ def _development(tech) -> list:
             _cross("d_cross_m3m4", "metal3", 0.5, "metal4", 0.5, 90, "dc4"),
             _cross("d_cross_m1m2_45", "metal1", 0.5, "metal2", 0.5, 45, "dc45"),
             _cross("d_tee_m1m2", "metal1", 0.5, "metal2", 0.5, 90, "dct", offset=9.5),
-            Structure("d_parallel_m1m3", ("dpa", "dpb"), "metal1 and metal3 lines side by side, 3 um apart in plan",
-                      (("metal1", 0, 0, 30, 0.5, "dpa"), ("metal3", 0, 3.5, 30, 4.0, "dpb"))),
-            Structure("d_plate_m3_sub", ("dps", "0"), "metal3 plate to substrate", (("metal3", 0, 0, 10, 10, "dps"),)),
-            Structure("d_plate_m4_m2", ("dpl", "dpu"), "metal4 plate over a metal2 plate",
-                      (("metal2", 0, 0, 16, 16, "dpl"), ("metal4", 4, 4, 12, 12, "dpu")))]
+            _parallel("d_parallel_m1m3", "metal1", 0.5, "metal3", 0.5, 3.0, "dp"),
+            _plate("d_plate_m3_sub", "metal3", 10, 10, "dps"),
+            _plates("d_plate_m4_m2", "metal2", 16, "metal4", 4, "dp")]
 
 
 def _validation(tech) -> list:
@@ -149,15 +186,11 @@ def _validation(tech) -> list:
             _cross("v_cross_m1m4", "metal1", 0.4, "metal4", 0.6, 90, "vc3"),
             _cross("v_cross_m3m4_45", "metal3", 0.5, "metal4", 1.0, 45, "vc4"),
             _cross("v_tee_m2m3", "metal2", 1.0, "metal3", 0.5, 90, "vc6", offset=9.0),
-            Structure("v_plate_m2_sub", ("vps", "0"), "metal2 plate to substrate", (("metal2", 0, 0, 8, 12, "vps"),)),
-            Structure("v_plate_m3_m2", ("vpl", "vpu"), "metal3 plate over a metal2 plate",
-                      (("metal2", 0, 0, 12, 12, "vpl"), ("metal3", 3, 3, 9, 9, "vpu"))),
-            Structure("v_fringe_m4", ("vfl", "vfp"), "metal4 line over a metal2 plate (the fringe to a plane)",
-                      (("metal2", 0, 0, 36, 16, "vfp"), ("metal4", 3, 7.7, 33, 8.3, "vfl"))),
-            Structure("v_parallel_m2m4", ("vpa", "vpb"), "metal2 and metal4 lines side by side, 1.5 um apart in plan",
-                      (("metal2", 0, 0, 30, 0.6, "vpa"), ("metal4", 0, 2.1, 30, 2.7, "vpb"))),
-            Structure("v_via_stack_m3", ("vva", "vvb"), "metal1 - metal3 pad stacks 1.5 um wide, 2 um apart",
-                      tuple(_vias(tech, 0, 0, "vva", "metal3", 1.5) + _vias(tech, 3.5, 0, "vvb", "metal3", 1.5)))]
+            _plate("v_plate_m2_sub", "metal2", 8, 12, "vps"),
+            _plates("v_plate_m3_m2", "metal2", 12, "metal3", 3, "vp"),
+            _fringe("v_fringe_m4", "metal2", 36, 16, "metal4", 0.6, "vf"),
+            _parallel("v_parallel_m2m4", "metal2", 0.6, "metal4", 0.6, 1.5, "vp"),
+            _pads(tech, "v_via_stack_m3", "metal3", 1.5, 2.0, "vv")]
 
 
 def _holdout(tech) -> list:
@@ -170,19 +203,13 @@ def _holdout(tech) -> list:
             _cross("h_cross_m1m3_wide", "metal1", 2.5, "metal3", 0.4, 90, "hc2"),
             _cross("h_cross_m2m3_30", "metal2", 0.5, "metal3", 0.5, 135, "hc3"),
             _cross("h_tee_m1m3", "metal1", 0.6, "metal3", 0.6, 90, "hc4", offset=9.2),
-            Structure("h_plate_m4_sub", ("hps", "0"), "metal4 plate to substrate", (("metal4", 0, 0, 14, 9, "hps"),)),
-            Structure("h_plate_m1_sub_small", ("hpm", "0"), "metal1 plate to substrate",
-                      (("metal1", 0, 0, 5, 5, "hpm"),)),
-            Structure("h_plate_m5_m3", ("hpl", "hpu"), "metal5 plate over a metal3 plate",
-                      (("metal3", 0, 0, 14, 14, "hpl"), ("metal5", 2, 2, 12, 12, "hpu"))),
-            Structure("h_parallel_m1m2", ("hpa", "hpb"), "metal1 and metal2 lines side by side, 1 um apart in plan",
-                      (("metal1", 0, 0, 30, 0.5, "hpa"), ("metal2", 0, 1.5, 30, 2.0, "hpb"))),
-            Structure("h_parallel_m3m5", ("hqa", "hqb"), "metal3 and metal5 lines side by side, 2 um apart in plan",
-                      (("metal3", 0, 0, 30, 0.6, "hqa"), ("metal5", 0, 2.6, 30, 3.6, "hqb"))),
-            Structure("h_fringe_m2", ("hfl", "hfp"), "metal2 line over a metal1 plate (the fringe to a plane)",
-                      (("metal1", 0, 0, 36, 14, "hfp"), ("metal2", 3, 6.7, 33, 7.3, "hfl"))),
-            Structure("h_via_stack_m2", ("hva", "hvb"), "metal1 - metal2 pad stacks 1 um wide, 1.5 um apart",
-                      tuple(_vias(tech, 0, 0, "hva", "metal2", 1.0) + _vias(tech, 2.5, 0, "hvb", "metal2", 1.0)))]
+            _plate("h_plate_m4_sub", "metal4", 14, 9, "hps"),
+            _plate("h_plate_m1_sub_small", "metal1", 5, 5, "hpm"),
+            _plates("h_plate_m5_m3", "metal3", 14, "metal5", 2, "hp"),
+            _parallel("h_parallel_m1m2", "metal1", 0.5, "metal2", 0.5, 1.0, "hp"),
+            _parallel("h_parallel_m3m5", "metal3", 0.6, "metal5", 1.0, 2.0, "hq"),
+            _fringe("h_fringe_m2", "metal1", 36, 14, "metal2", 0.6, "hf"),
+            _pads(tech, "h_via_stack_m2", "metal2", 1.0, 1.5, "hv")]
 
 
 def _holdout2(tech) -> list:
@@ -194,13 +221,10 @@ def _holdout2(tech) -> list:
             _cross("k_tee_m2m4", "metal2", 0.8, "metal4", 0.5, 90, "kc4", offset=9.0),
             _pair("k_lat_m3_narrow", "metal3", 0.3, 0.3, 0.6, 30, "ka1"),
             _pair("k_lat_m2_wide_far", "metal2", 3.0, 1.0, 4.0, 30, "ka2"),
-            Structure("k_plate_m2_sub", ("kps", "0"), "metal2 plate to substrate", (("metal2", 0, 0, 20, 6, "kps"),)),
-            Structure("k_parallel_m1m4", ("kpa", "kpb"), "metal1 and metal4 lines side by side, 2 um apart in plan",
-                      (("metal1", 0, 0, 30, 0.5, "kpa"), ("metal4", 0, 2.5, 30, 3.0, "kpb"))),
-            Structure("k_fringe_m3", ("kfl", "kfp"), "metal3 line over a metal1 plate (the fringe to a plane)",
-                      (("metal1", 0, 0, 30, 12, "kfp"), ("metal3", 3, 5.6, 27, 6.4, "kfl"))),
-            Structure("k_via_stack_m4", ("kva", "kvb"), "metal1 - metal4 pad stacks 1.2 um wide, 1.2 um apart",
-                      tuple(_vias(tech, 0, 0, "kva", "metal4", 1.2) + _vias(tech, 2.4, 0, "kvb", "metal4", 1.2)))]
+            _plate("k_plate_m2_sub", "metal2", 20, 6, "kps"),
+            _parallel("k_parallel_m1m4", "metal1", 0.5, "metal4", 0.5, 2.0, "kp"),
+            _fringe("k_fringe_m3", "metal1", 30, 12, "metal3", 0.8, "kf"),
+            _pads(tech, "k_via_stack_m4", "metal4", 1.2, 1.2, "kv")]
 
 
 def _holdout3(tech) -> list:
@@ -212,12 +236,10 @@ def _holdout3(tech) -> list:
             _cross("q_tee_m3m4", "metal3", 0.5, "metal4", 0.5, 90, "qc4", offset=9.3),
             _cross("q_tee_m1m2", "metal1", 0.8, "metal2", 0.4, 90, "qc5", offset=9.0),
             _cross("q_cross_m2m3_45", "metal2", 0.8, "metal3", 0.8, 45, "qc6"),
-            Structure("q_parallel_m2m3", ("qpa", "qpb"), "metal2 and metal3 lines side by side, 1.2 um apart in plan",
-                      (("metal2", 0, 0, 30, 0.5, "qpa"), ("metal3", 0, 1.7, 30, 2.2, "qpb"))),
-            Structure("q_parallel_m2m5", ("qqa", "qqb"), "metal2 and metal5 lines side by side, 3 um apart in plan",
-                      (("metal2", 0, 0, 30, 0.5, "qqa"), ("metal5", 0, 3.5, 30, 4.5, "qqb"))),
+            _parallel("q_parallel_m2m3", "metal2", 0.5, "metal3", 0.5, 1.2, "qp"),
+            _parallel("q_parallel_m2m5", "metal2", 0.5, "metal5", 1.0, 3.0, "qq"),
             _pair("q_lat_m5", "metal5", 1.0, 1.0, 1.0, 30, "qa1"),
-            Structure("q_plate_m3_sub", ("qps", "0"), "metal3 plate to substrate", (("metal3", 0, 0, 7, 15, "qps"),))]
+            _plate("q_plate_m3_sub", "metal3", 7, 15, "qps")]
 
 
 SETS = {"first": _first, "development": _development, "validation": _validation, "holdout": _holdout,
