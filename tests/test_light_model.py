@@ -132,3 +132,24 @@ def test_gse_within_the_published_range_of_fd_storage_pixels(modelled):
     gse_p, gse_s = modelled.primary.modelled["gse"], modelled.secondary.modelled["gse"]
     assert 310 <= gse_p <= 3000
     assert gse_s > gse_p
+
+
+def test_transmissions_are_the_modal_method_s_own_values_kept_in_the_store(monkeypatch):
+    """The sizing table's modal transmissions (``lightfigures.transmissions``: computed once, then read
+    from the light store) are exactly ``lightfield.transmission``'s values, and a second call solves
+    nothing (the store answers: the report's light section no longer pays the modal solves each run)."""
+    from types import SimpleNamespace
+    from pixelkit.layout.pex.lightfigures import transmissions
+    from pixelkit.physics import lightfield as lf
+    o = SimpleNamespace(n_dielectric=1.46, lattice=3e-6, shield_thickness=1.1925e-6)
+    pairs = [(lf.Opening(1e-6, 1e-6, 0.8e-6, 0.8e-6), 650e-9), (lf.Opening(0.0, 0.0, 5e-6, 5e-6), 650e-9)]
+    direct = [lf.transmission(o, op, w) for op, w in pairs]
+    assert 0 < direct[0] < 1 and direct[1] == 1.0       # a modal solve; an opening past modal_max is geometric
+    assert transmissions(o, pairs).tolist() == direct
+
+    def solved(*a, **k):
+        raise AssertionError("solved again")
+    monkeypatch.setattr(lf, "transmission", solved)
+    assert transmissions(o, pairs).tolist() == direct
+    with pytest.raises(AssertionError, match="solved again"):   # another screen is another key
+        transmissions(SimpleNamespace(n_dielectric=1.46, lattice=3e-6, shield_thickness=1e-6), pairs)

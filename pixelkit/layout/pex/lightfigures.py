@@ -115,16 +115,37 @@ def opening_table(design, n: int = 6, say=None) -> dict:
     op0 = o.modal[0]
     a0 = op0.a * op0.b
     wl = parts["wavelength_m"]
-    t0 = np.array([lf.transmission(o, op0, w) for w in wl])
+    t0 = transmissions(o, [(op0, w) for w in wl])
     lo = design.tech.rules.min_opening_side
     sides = np.geomspace(lo, float(np.sqrt(design.secondary.area)), n)
+    ops = [lf.Opening(op0.x0 + op0.a / 2 - side / 2, op0.y0 + op0.b / 2 - side / 2, side, side) for side in sides]
+    ts = transmissions(o, [(op, w) for op in ops for w in wl], MODAL_MAX).reshape(len(ops), len(wl))
     eff = []
-    for side in sides:
-        op = lf.Opening(op0.x0 + op0.a / 2 - side / 2, op0.y0 + op0.b / 2 - side / 2, side, side)
-        t = np.array([lf.transmission(o, op, w, modal_max=MODAL_MAX) for w in wl])
+    for side, t in zip(sides, ts):
         per_wl = parts["primary_per_wl_m2"] + parts["own_per_wl_m2"] * (side * side * t) / (a0 * t0)
         eff.append(_photon_weighted(parts["resp"], per_wl, spectrum))
     return {"side_m": sides, "drawn_m2": sides ** 2, "effective_m2": np.array(eff)}
+
+
+def transmissions(o, pairs: list, modal_max: float | None = None) -> np.ndarray:
+    """``lightfield.transmission(o, opening, wavelength, modal_max=...)`` of each (opening, wavelength)
+    pair (``modal_max`` None: that function's default), kept in the light store beside the
+    collection model's responses: the modal solves are nearly all of the sizing table's cost (tens of
+    seconds of CPU, in every report) and depend only on what the key holds: each opening, each
+    wavelength, the screen (its dielectric, the lattice it is solved in, its thickness), ``modal_max``
+    and the physics' code. The values are the function's own, read back exactly (JSON floats)."""
+    import json
+    from ...physics import lightfield as lf
+    from .collection import _code_hash, _digest, _store
+    kw = {} if modal_max is None else {"modal_max": modal_max}
+    key = _digest("transmission", _code_hash(), o.n_dielectric, o.lattice, o.shield_thickness, modal_max,
+                  [(repr(op), float(w)) for op, w in pairs])
+    files = _store().load(key)
+    if files:
+        return np.array(json.loads(files["transmission.json"].decode()), dtype=float)
+    t = np.array([lf.transmission(o, op, w, **kw) for op, w in pairs], dtype=float)
+    _store().save(key, {"transmission.json": json.dumps(t.tolist()).encode()})
+    return t
 
 
 def _photon_weighted(resp, area_per_wl, spectrum) -> float:
