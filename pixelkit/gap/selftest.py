@@ -34,8 +34,8 @@ def _u(g, lo, hi):
 RANGES = {
     "gse": lambda g: [1.0 / _u(g, 300, 10000), 1.0 / _u(g, 300, 10000), _u(g, 0.0, 0.3)],   # GSE 300:1 .. 1e4:1
     "fd_leakage": lambda g: [_u(g, 5e-17, 5e-16), _u(g, 0.0, 0.6), _u(g, -0.05, 0.1), _u(g, 0.0, 0.4)],  # 10 - 100 mV/s
-    "dark_current": lambda g: [_u(g, 2e-16, 2e-15), _u(g, 0.0, 1.0), _u(g, 0.0, 0.6), _u(g, -0.05, 0.1),
-                               _u(g, 0.0, 0.4)],                              # 1.3 - 13 ke-/s (primary)
+    "dark_current": lambda g: (lambda v: v + v[2:4])(   # 1.3 - 13 ke-/s (primary); the perimeter's law the area's
+        [_u(g, 2e-16, 2e-15), _u(g, 0.0, 1.0), _u(g, 0.0, 0.6), _u(g, -0.05, 0.1), _u(g, 0.0, 0.4)]),
     "charge_injection": lambda g: [_u(g, 3e-18, 3e-17), g.choice([-1, 1]) * _u(g, 0.3e-15, 3e-15),
                                    _u(g, 0.0, 0.3e-15)],                      # RST-FD, p1-vm, the switch on FD
     "sf_gain": lambda g: [1.0 / _u(g, 6e6, 2.5e7), _u(g, -0.3, 0.3)],         # 3 - 10 % chain gain loss
