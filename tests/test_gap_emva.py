@@ -155,3 +155,24 @@ def test_diagnose_of_a_camera_dataset_says_what_gap_emva_says(kit, cli):
     assert kit["best"] in beats and "none" not in beats
     code, out, err = cli("gap", "emva", EMVA)
     assert code == 0 and out.splitlines()[0] == f"verdict: {kit['verdict']}", out
+
+
+def test_a_linear_camera_of_the_emva_generator_needs_no_effect(tmp_path):
+    """Independent path: the EMVA reference package's own camera simulator (``emva1288.camera``: Poisson light and
+    dark electrons, dark current growing with exposure, clipping at full scale, 8-bit rounding), a linear camera,
+    64 x 64, 20 steps over exposure. The nominal model is the standard's mu_y = mu_y.dark(t) + R mu_p with the
+    dark of the step's exposure and each step's mean of the pixels clipped at full scale; with the dark frames'
+    mean and a hard min(x, full scale) instead it left 0.4 DN against 0.04 DN of step noise ("not explained")."""
+    from emva1288.camera.dataset_generator import DatasetGenerator
+    from pixelkit.gap.emva import analyse
+    gen = DatasetGenerator(width=64, height=64, steps=20, L=2, outdir=str(tmp_path), seed=1)
+    lines, seen = [], set()
+    for line in Path(gen.descriptor_path).read_text().splitlines():   # its spatial test repeats temporal steps:
+        if line[:1] in "bd" and line in seen:                          # the temporal steps only
+            break
+        seen.add(line)
+        lines.append(line)
+    (tmp_path / "EMVA1288_Data.txt").write_text("\n".join(lines) + "\n")
+    r = analyse(tmp_path)
+    assert r["best"] == "none" and r["explained"] is True, r["verdict"]
+    assert r["gap_before_rms_DN"] < 2 * r["noise_rms_DN"]

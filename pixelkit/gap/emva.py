@@ -23,8 +23,10 @@ SNR_max, DR, linearity error (weighted fit over 5 - 95 %), dark current from
 the mean AND from the variance, DSNU and PRNU from the spatial stacks.
 
 Camera-level gap (``analyse``). Nominal model (EMVA 1288 Linear): mu_y =
-mu_y.dark + R mu_p, sigma_y^2 = sigma_y.dark^2 + K (mu_y - mu_y.dark), clipped
-at the ADC's full scale. Where: residuals of the mean and of the variance by
+mu_y.dark(t) + R mu_p (the dark frames' line at the step's exposure t, as the
+standard subtracts the dark of the same exposure), sigma_y^2 = sigma_y.dark^2 +
+K (mu_y - mu_y.dark), each step's mean that of its pixels clipped at the ADC's full
+scale (E[min(X, full scale)], X spread by that temporal noise). Where: residuals of the mean and of the variance by
 fraction of saturation. Which: candidate camera-level augmentations, each
 fitted on the even exposure steps and judged on the odd (held-out) ones, with the
 statistics and verdict words of ``gap diagnose`` (``camera_verdict``): each step's
@@ -36,7 +38,7 @@ quantisation's), a candidate must beat the linear model on the held-out steps, a
   (the pixel-level ``sf_gain`` / C(V) signature);
 - ``soft_saturation``: pixels do not all clip at once (a Gaussian spread of
   pixel responses clipped at full scale);
-- ``dark_current``: the dark level grows with exposure (mu += D t).
+- ``dark_current``: the bright steps' level grows with exposure beyond the dark frames' (mu += D t).
 
 And the dark noise: when the dark current from the variance and from the mean
 disagree (ratio outside 1/1.5 .. 1.5, both positive and resolved), the answer
@@ -385,7 +387,7 @@ def nominal_fit(m: dict, full_scale: float, fig: dict) -> dict:
     K, R = fig["K_DN_per_e"], fig["R_DN_per_photon"]
     D = np.polyfit(td, mud, 1)[0] if td.size > 1 else 0.0
     return {"K_DN_per_e": float(K), "R_DN_per_photon": float(R), "eta": float(R / K),
-            "dark_DN": float(mud.mean()), "dark_current_DN_per_s": float(D),
+            "dark_DN": float(mud.mean()), "dark_current_DN_per_s": float(D), "dark_t_mean": float(td.mean()),
             "sigma_dark_DN": float(np.sqrt(vard.mean())),
             "sigma_d_measured_e": float(np.sqrt(max(vard.mean() - 1 / 12, 0)) / K),
             "mu_sat_DN": float(mu_sat), "full_scale_DN": full_scale,
@@ -393,19 +395,24 @@ def nominal_fit(m: dict, full_scale: float, fig: dict) -> dict:
 
 
 def _mean_model(mu_p, t, nom, effect=None, p=()):
-    mu_d, R, fs = nom["dark_DN"], nom["R_DN_per_photon"], nom["full_scale_DN"]
+    # the dark level at the step's exposure (the dark frames' line: mu_y = mu_y.dark(t) + R mu_p, as the standard
+    # subtracts the dark of the same exposure), not their mean
+    mu_d = nom["dark_DN"] + nom["dark_current_DN_per_s"] * (t - nom["dark_t_mean"])
+    R, fs = nom["R_DN_per_photon"], nom["full_scale_DN"]
     sig = R * mu_p
     if effect == "nonlinearity":
         sig = sig * (1 - p[0] * sig)
     if effect == "dark_current":
         mu_d = mu_d + p[0] * t
     x = mu_d + sig
-    if effect == "soft_saturation":
-        s = np.sqrt((p[0] * sig) ** 2 + nom["K_DN_per_e"] * sig + nom["sigma_dark_DN"] ** 2)
-        z = (fs - x) / s
-        # E[min(X, fs)] for X ~ N(x, s^2)
-        return x - s * (norm.pdf(z) - z * (1 - norm.cdf(z)))
-    return np.minimum(x, fs)
+    # a step's mean is E[min(X, fs)] over its pixels' values, X ~ N(x, s^2): a linear camera's own temporal noise
+    # (shot K sig and dark) already loses the tail beyond the full-scale code as a step nears it (the nominal model;
+    # a hard min(x, fs) read that as a gap); soft saturation spreads the pixels further (p[0]: a per-pixel
+    # saturation / gain spread relative to the signal)
+    spread = p[0] if effect == "soft_saturation" else 0.0
+    s = np.sqrt((spread * sig) ** 2 + nom["K_DN_per_e"] * np.maximum(sig, 0.0) + nom["sigma_dark_DN"] ** 2)
+    z = (fs - x) / s
+    return x - s * (norm.pdf(z) - z * norm.sf(z))
 
 
 CANDIDATES = {"nonlinearity": ([1e-4], [0.0], [1e-2]), "soft_saturation": ([0.02], [0.0], [0.5]),
