@@ -35,6 +35,18 @@ def test_sets_are_complete_and_their_seeds_their_own(name):
     assert not {s for _, s in ood.plan_set("dev")} & {s for _, s in ood.plan_set("heldout")}
 
 
+def test_second_heldout_set_is_its_plans_first_cases():
+    """The second held-out set (seeds from 90000, drawn after the first was seen) holds the first cases of its
+    round-robin plan, each of its planned kind (its generation was stopped by the session's time: 27 of 62,
+    every kind once and ten in-library kinds twice), and shares no seed with the other sets."""
+    _, truths = silicon.load_cases(ood.OOD_DIR / "heldout2")
+    plan = ood.plan_set("heldout2")
+    assert len(truths) >= 27
+    assert {t["seed"]: t["circuit"] for t in truths.values()} == {s: k for k, s in plan[:len(truths)]}
+    others = {s for n in ("dev", "heldout") for _, s in ood.plan_set(n)}
+    assert not {s for _, s in plan} & others
+
+
 def test_generator_never_uses_the_surrogates_edits(ref_design, reference_nominal):
     """Every kind's deck holds none of the elements the surrogate's site tables are measured with (``responses``:
     Csite / Isite / Rsite ...) and no vm current source (``circuit_edits.vm_current``)."""

@@ -184,10 +184,10 @@ def plan(design, measured, top, gain_tol, offset_tol, gain_sd, offset_sd, backen
 @click.option("--spice-cases", type=FilePath(file_okay=False), default=None,
               help="folder of committed SPICE cases (default: the kit's pixelkit/gap/silicon_cases)")
 @click.option("--kind", type=click.Choice(["both", "surrogate", "spice"]), default="both", show_default=True)
-@click.option("--ood", type=click.Choice(["dev", "heldout", "both"]), default=None,
+@click.option("--ood", type=click.Choice(["dev", "heldout", "heldout2", "both"]), default=None,
               help="instead: the out-of-distribution virtual silicon (tests/data/gap_ood, of the reference design, "
                    "which it diagnoses whatever DESIGN is): "
-                   "its development set, its held-out set or both")
+                   "its development set, its first held-out set (seen), its second (seeds 90000-) or dev + heldout")
 @spice_opts
 @json_opt
 def selftest(design, per_effect, clean, rows, seed, spice_cases, kind, ood, backend, jobs, as_json):

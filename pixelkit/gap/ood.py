@@ -49,8 +49,9 @@ own gain and cannot be seen, docs/gap-diagnosis.md), and 0.6 mV of temporal nois
 frames (stated in the file). Nothing of the surrogate, the effect
 library or the fitter enters: the data are ngspice's levels of these decks.
 
-Two sets with their own seeds (``SETS``): ``dev`` (what the diagnosis may be looked at on) and
-``heldout`` (scored, never tuned on), in ``tests/data/gap_ood/<set>/``.
+Sets with their own seeds (``SETS``): ``dev`` (what the diagnosis may be looked at on), ``heldout`` (scored
+blind once, then seen: its misses were studied on new development cases) and ``heldout2`` (drawn after that, seeds
+from 90000, scored blind once), in ``tests/data/gap_ood/<set>/``.
 """
 from __future__ import annotations
 
