@@ -4,6 +4,10 @@ from pathlib import Path
 
 import pytest
 
+import strict_approx
+
+strict_approx.install()   # approx without its 1e-12 absolute floor (tests/strict_approx.py)
+
 ROOT = Path(__file__).resolve().parents[1]
 #: The reference design: the chip of [Thesis2019] with a read that settles (issue 27).
 REF = ROOT / "designs" / "dual_pixel_revA.toml"
