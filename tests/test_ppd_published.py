@@ -129,3 +129,13 @@ def test_the_dark_full_well_trend_is_the_fixed_pinning_voltage_one(design):
         p = _ppd(design, c)
         assert p.full_well() == pytest.approx(p.c * (p.v_pin + p.ut * math.log1p(p.i_gen / p.i_dif)), rel=2e-3)
     assert _ppd(design, 85.0).full_well() < _ppd(design, -20.0).full_well()
+
+
+def test_docs_quote_the_dark_full_wells_of_this_sizing(design):
+    """docs/pixel4t.md's "-20 to 85 degC: A to B e-" is the model's, to the electron."""
+    import re
+    from pixelkit.constants import Q
+    page = (ROOT / "docs" / "pixel4t.md").read_text()
+    m = re.search(r"-20 to 85 degC: (\d+) to (\d+) e-", page)
+    assert m, "docs/pixel4t.md no longer quotes the dark full well from -20 to 85 degC"
+    assert [int(m[1]), int(m[2])] == [round(_ppd(design, c).full_well() / Q) for c in (-20.0, 85.0)]
