@@ -153,3 +153,13 @@ def test_transmissions_are_the_modal_method_s_own_values_kept_in_the_store(monke
     assert transmissions(o, pairs).tolist() == direct
     with pytest.raises(AssertionError, match="solved again"):   # another screen is another key
         transmissions(SimpleNamespace(n_dielectric=1.46, lattice=3e-6, shield_thickness=1e-6), pairs)
+
+
+def test_pixel_geometry_is_drawn_once_per_design(modelled, responses):
+    """The light code asks for the drawn pixel several times per report section; it is drawn once per design
+    (the same object back), and another design is drawn anew."""
+    from dataclasses import replace
+    from pixelkit.layout.pex.collection import pixel_geometry
+    geo = pixel_geometry(modelled)
+    assert pixel_geometry(modelled) is geo
+    assert pixel_geometry(replace(modelled, name=modelled.name + "_b")) is not geo
