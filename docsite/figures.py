@@ -176,11 +176,10 @@ def _with_local(getters: dict, page_text: str) -> dict:
 #: the sources every check has (no run needed)
 LOCAL = ("block", "record", "file", "calc")
 #: sources checked by their own tests, not from the quick report: ``p4t`` (``pixelkit simulate
-#: designs/pixel4t_gf180.toml --json``, dotted keys into its JSON; tests/test_pixel4t.py); ``closed``
-#: (the reference's close record, designs/dual_pixel_revB.close.json, dotted keys; tests/test_close_table.py);
+#: designs/pixel4t_gf180.toml --json``, dotted keys into its JSON; tests/test_pixel4t.py);
 #: ``pl`` (the GF180 dual pixel's schematic and post-layout views, ``VIEW.ARRAY.FIGURE``: C_FD, C_PD,node, the
 #: column line, CG_out(0) model and SPICE charge step; tests/test_post_layout.py)
-OTHER_SOURCES = ("p4t", "closed", "pl")
+OTHER_SOURCES = ("p4t", "pl")
 
 
 def _digits(text: str) -> float:
