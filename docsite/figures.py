@@ -241,7 +241,7 @@ SCALE = re.compile(r"\*(" + NUMBER + r")$")
 
 def _value(getters, src: str, key: str) -> float:
     """The current value of ``SRC:KEY`` (``KEY*SCALE``: times SCALE)."""
-    m = SCALE.search(key)
+    m = SCALE.search(key) if src != "calc" else None      # a calc scales in its own arithmetic
     return getters[src](key[:m.start()] if m else key) * (float(m[1]) if m else 1.0)
 
 
