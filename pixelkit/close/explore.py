@@ -160,7 +160,8 @@ def explore(closer, p) -> tuple[np.ndarray | None, dict]:
         r.pop("short")
     closer.say(f"close{closer.label}: global stage over {', '.join(names)}: {len(xs) - 1} samples, "
                f"{record['stage_a_passing']} meet {', '.join(specs)} at its worst start conditions; "
-               f"{len(passing)} of the best {len(rows)} meet every simulated target on the whole grid of the bench "
+               f"{len(passing)} of the best {len(rows)} meet every target they move (the bench's whole grid, the "
+               "other specs at their worst start conditions)"
                + ("; the start is kept" if best["i"] == 0 else
                   "; chosen: " + ", ".join(f"{k} = {v}" for k, v in best["knobs"].items())))
     return (None if best["i"] == 0 else xs[best["i"]]), record
