@@ -23,7 +23,8 @@ moves fails the suite and names the page, the line and the command that rewrites
 Four sources need no run and are checked wherever the marks are (``LOCAL``):
 
 - ``block:TEXT`` (``block:TEXT@L#N``): a number of a ```text block of the same page, the first (N-th)
-  number after ``TEXT`` on the first (L-th) block line holding it. The blocks of the pages the suite runs
+  number after ``TEXT`` on the first (L-th) block line holding it; ``block:[PAGE.md]TEXT`` reads
+  another docs page's blocks. The blocks of the pages the suite runs
   are checked against the command's output (``docsite/outputs.py``), so prose that reads a block is
   checked through it; on a page whose block is a dated record, the prose is held to the record.
 - ``record:PATH::KEY``: a stored results file of the repository (JSON, ``KEY`` dotted, list items
@@ -92,11 +93,20 @@ TEXT_BLOCK = re.compile(r"^```text\n(.*?)\n```", re.S | re.M)
 NUMBER_RE = re.compile(NUMBER)
 
 
+def _block_lines(text: str) -> list[str]:
+    return [" ".join(line.split()) for b in TEXT_BLOCK.findall(text) for line in b.splitlines()]
+
+
 def block_source(page_text: str):
-    """The value of a ``block:`` key on the page whose text is ``page_text``."""
-    lines = [" ".join(line.split()) for b in TEXT_BLOCK.findall(page_text) for line in b.splitlines()]
+    """The value of a ``block:`` key on the page whose text is ``page_text`` (``block:[PAGE.md]TEXT``:
+    a block of another docs page, e.g. the dated record another page shows)."""
+    here = _block_lines(page_text)
 
     def value(key: str) -> float:
+        lines = here
+        other = re.match(r"\[([\w.-]+\.md)\]", key)
+        if other:
+            lines, key = _block_lines((ROOT / "docs" / other[1]).read_text()), key[other.end():]
         text, _, nth = key.rpartition("#") if re.search(r"#\d+$", key) else (key, "", "1")
         text, _, which = text.rpartition("@") if re.search(r"@\d+$", text) else (text, "", "1")
         text = " ".join(text.split())

@@ -5,7 +5,8 @@ with what it printed and when, on what, so a page can quote it and a test can ho
 
 runs the command from the repository's root (``pixelkit`` and ``python`` are this interpreter) and
 writes ``docs/records/NAME.json``: the command, the commit it ran on (``+dirty`` when the tree had
-changes), the date, the exit status, wall and CPU time (the command and every process it waited for),
+changes; run it on a commit that is on main, or say in ``ran_on`` which main commit holds the same
+code, as a rebased branch's id is not main's), the date, the exit status, wall and CPU time (the command and every process it waited for),
 the 1-minute load average before and after, and everything it printed (stdout then stderr).
 
 A page quotes it with a ```text block preceded by ``<!-- record: NAME -->``: every line of the
