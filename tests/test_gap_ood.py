@@ -103,3 +103,14 @@ def test_heldout_set_score_as_measured(ref_design, reference_nominal):
     assert r["top1_accuracy"] >= 43 / 48 - 1e-9, r["per_effect_top1"]
     assert r["explained_when_right"] >= 36 / 43 - 1e-9, r["per_kind_explained"]
     assert r["not_explained_on_out_of_library"] >= 7 / 8 - 1e-9 and r["none_on_clean"] == 1.0
+
+
+@pytest.mark.slow
+def test_second_heldout_set_score_as_measured(ref_design, reference_nominal):
+    """The second held-out set (27 cases, seeds 90000-90026, drawn after the first was seen), scored blind once on the
+    code of 1662c41 (~3 min of CPU: slow): top-1 20 / 22, explained when right 16 / 20 (issue 46's 90 % NOT met), every
+    outside effect "not explained" (4 / 4, each with a visible gap), none on the effect-free chip. Guards the level."""
+    r = ood.run_set(ref_design, reference_nominal, "heldout2")
+    assert r["top1_accuracy"] >= 20 / 22 - 1e-9, r["per_effect_top1"]
+    assert r["explained_when_right"] >= 16 / 20 - 1e-9, r["per_kind_explained"]
+    assert r["not_explained_on_out_of_library"] == 1.0 and r["none_on_clean"] == 1.0
