@@ -242,8 +242,31 @@ def _holdout3(tech) -> list:
             _plate("q_plate_m3_sub", "metal3", 7, 15, "qps")]
 
 
+def _holdout4(tech) -> list:
+    """A fifth held-out set, drawn and solved by FastCap2 at the start of the session that changed the model
+    after holdout3 (before any change): every family the earlier sets missed (upper-metal crossings, tees,
+    lines side by side on two layers, pad stacks) and some they held, at geometries no set had."""
+    return [_cross("r_cross_m3m4_wide", "metal3", 1.0, "metal4", 0.4, 90, "rc1"),
+            _cross("r_cross_m2m5", "metal2", 0.5, "metal5", 1.0, 90, "rc2"),
+            _cross("r_cross_m1m2_narrow", "metal1", 0.3, "metal2", 0.3, 90, "rc3"),
+            _cross("r_cross_m1m3_45", "metal1", 0.6, "metal3", 0.6, 45, "rc4"),
+            _cross("r_tee_m2m3", "metal2", 0.6, "metal3", 0.8, 90, "rc5", offset=9.4),
+            _cross("r_tee_m1m4", "metal1", 0.5, "metal4", 0.6, 90, "rc6", offset=9.0),
+            Structure("r_parallel_m1m3_close", ("rpa", "rpb"), "metal1 and metal3 lines side by side, 1 um apart in plan",
+                      (("metal1", 0, 0, 30, 0.6, "rpa"), ("metal3", 0, 1.6, 30, 2.2, "rpb"))),
+            Structure("r_parallel_m3m4", ("rqa", "rqb"), "metal3 and metal4 lines side by side, 2.5 um apart in plan",
+                      (("metal3", 0, 0, 30, 0.5, "rqa"), ("metal4", 0, 3.0, 30, 3.5, "rqb"))),
+            Structure("r_parallel_m1m5", ("rra", "rrb"), "metal1 and metal5 lines side by side, 4 um apart in plan",
+                      (("metal1", 0, 0, 30, 0.8, "rra"), ("metal5", 0, 4.8, 30, 6.0, "rrb"))),
+            _pair("r_lat_m2_mid", "metal2", 0.4, 0.4, 1.4, 30, "ra1"),
+            Structure("r_via_stack_m3", ("rva", "rvb"), "metal1 - metal3 pad stacks 1 um wide, 1 um apart",
+                      tuple(_vias(tech, 0, 0, "rva", "metal3", 1.0) + _vias(tech, 2.0, 0, "rvb", "metal3", 1.0))),
+            Structure("r_plate_m5_sub", ("rps", "0"), "metal5 plate to substrate", (("metal5", 0, 0, 10, 10, "rps"),))]
+
+
 SETS = {"first": _first, "development": _development, "validation": _validation, "holdout": _holdout,
-        "holdout2": _holdout2, "holdout3": _holdout3}
+        "holdout2": _holdout2, "holdout3": _holdout3,
+        "holdout4": _holdout4}
 
 
 def _bounds(shape):
@@ -354,7 +377,8 @@ def kit_terms(tech, geo, stack=None, which: str = "first") -> dict:
 
 REFERENCE = {"first": "extraction_structures.json", "development": "extraction_structures_development.json",
              "validation": "extraction_structures_validation.json", "holdout": "extraction_structures_holdout.json",
-             "holdout2": "extraction_structures_holdout2.json", "holdout3": "extraction_structures_holdout3.json"}
+             "holdout2": "extraction_structures_holdout2.json", "holdout3": "extraction_structures_holdout3.json",
+             "holdout4": "extraction_structures_holdout4.json"}
 
 
 if __name__ == "__main__":      # python -m pixelkit.layout.pex.structures SET OUT.json: the FastCap2 reference
