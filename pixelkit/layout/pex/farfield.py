@@ -46,6 +46,7 @@ import math
 PITCH = 0.5e-6        # m: the sampling of the pieces
 RASTER = 0.1e-6       # m: the blocking raster's pixel
 REACH_HALOS = 2.0     # pieces farther than this many halos from the other net are not coupled
+LOCAL = 1.5 * PITCH   # m: a piece's neighbours (diagonal ones too), whose potential is its cross-section's (_line_ends)
 
 
 def _samples(region, dbu, pitch):
@@ -257,12 +258,12 @@ TILE = 8e-6            # m: the side of the square a block's pieces lie in
 CUTOFF_REACHES = 2.0   # sources farther in plan than this many reaches from a piece are left out of its potential
 
 
-def _potential(px, py, pz, sx, sy, sz, sq, si, cutoff):
+def _potential(px, py, pz, sx, sy, sz, sq, si, cutoff, inner=0.0):
     """The potential (x 4 pi eps) at each point (px, py, pz) of the point charges sq at (sx, sy, sz), each with its
     image in the plane si under it (none where the point is not above that plane), from the sources within
     ``cutoff`` in plan: a source's image pair falls off as 1 / r^3 past the heights, so beyond twice the reach
     (16 um for GF180's 8 um halo) the sum moves by under 1 % on the test structures, and a chip's long nets do
-    not make an (all pieces x all pieces) matrix. In blocks of at most CHUNK points of one TILE x TILE square,
+    not make an (all pieces x all pieces) matrix; sources within ``inner`` in plan are left out too. In blocks of at most CHUNK points of one TILE x TILE square,
     each against the sources within ``cutoff`` of its square (found in the sources sorted along x)."""
     import numpy as np
     out = np.zeros(len(px))
@@ -286,11 +287,45 @@ def _potential(px, py, pz, sx, sy, sz, sq, si, cutoff):
                 continue
             rxy = (bx[:, None] - sx[near][None, :]) ** 2 + (by[:, None] - sy[near][None, :]) ** 2
             zs, zi = sz[near][None, :], si[near][None, :]
-            g = np.where((bz[:, None] > zi) & (rxy <= cutoff * cutoff),
-                         1 / np.sqrt(rxy + (bz[:, None] - zs) ** 2) - 1 / np.sqrt(rxy + (bz[:, None] + zs - 2 * zi) ** 2),
-                         0.0)
+            with np.errstate(divide="ignore"):          # a piece against itself (left out by ``inner``)
+                g = np.where((bz[:, None] > zi) & (rxy <= cutoff * cutoff) & (rxy > inner * inner),
+                             1 / np.sqrt(rxy + (bz[:, None] - zs) ** 2) - 1 / np.sqrt(rxy + (bz[:, None] + zs - 2 * zi) ** 2),
+                             0.0)
             out[blk] = g @ sq[near]
     return out
+
+
+def _line_ends(layers, stack) -> None:
+    """Raise each piece's charge by what its own net's potential lacks there against the best-held piece of its
+    kind (area / edge) on its layer (the middle of the net's longest run): the 2.5D charges are a cross-section's
+    per length, as if every line went on for ever; a line of finite length holds its ends at 1 V with more charge
+    (its own charge beyond the end is missing, the potential there half an infinite line's), over a length of
+    about its height. One step of the 3D self-consistency: piece i at 1 V takes ``1 - V_i`` from its local
+    charge (what its neighbours within LOCAL give, the cross-section's own, scaling with it) and V_i from the net's
+    pieces beyond LOCAL; with V_ref the best-held piece's, its charge becomes ``q (1 - V_i) / (1 - V_ref)``
+    (never lowered). A 30 um metal1 line beside a metal3 one (3 um apart in plan): the first-order coupling per
+    length was 13 % below the 2D cross-section's at 30 um, 3.5 % at 120 um; FastCap2 is 2 % below at 30 um."""
+    import numpy as np
+    if not layers:
+        return
+    cols = {k: np.concatenate([getattr(p, k) for p in layers]) for k in ("x", "y", "z", "q", "image", "net", "edge")}
+    layer = np.concatenate([np.full(len(p.x), j) for j, p in enumerate(layers)])
+    x, y, z, q, im, net = (cols[k] for k in ("x", "y", "z", "q", "image", "net"))
+    eps = stack.eps_band(min(z), max(z))
+    v = np.zeros(len(x))
+    for k in np.unique(net):
+        i = np.flatnonzero(net == k)
+        v[i] = _potential(x[i], y[i], z[i], x[i], y[i], z[i], q[i], im[i], CUTOFF_REACHES * REACH_HALOS * stack.halo,
+                          LOCAL) / (4 * math.pi * eps)
+    scale = np.ones(len(x))
+    group = (net * len(layers) + layer) * 2 + cols["edge"]
+    for g in np.unique(group):
+        i = np.flatnonzero(group == g)
+        scale[i] = np.maximum(1.0, (1 - v[i]) / max(1 - v[i].max(), 1e-3))
+    n0 = 0
+    for p in layers:
+        p.q = p.q * scale[n0:n0 + len(p.x)]
+        n0 += len(p.x)
 
 
 def far_couplings(geo, stack, cpl) -> list:
@@ -330,6 +365,7 @@ def far_couplings(geo, stack, cpl) -> list:
             hit = (pc.image == 0) & rasters[low.name].covered(pc.x, pc.y)
             pc.image[hit] = low.top
         pieces[c.name] = pc
+    _line_ends([pieces[c.name] for c in conds], stack)
     reach = REACH_HALOS * stack.halo
     fo = {}                     # (lower layer, upper layer, lower net, upper net, view, zone) -> F
     for i, ca in enumerate(conds):
@@ -369,24 +405,21 @@ def far_couplings(geo, stack, cpl) -> list:
                     kk = k[nearest[k] == ka]
                     a_net = names[ka]
                     e = ps.edge[kk]
-                    if e.any():              # an edge piece whose own fringe strip reaches A: the 2.5D terms'
+                    strip = np.zeros(len(kk), dtype=bool)
+                    if e.any():              # an edge piece whose own fringe strip reaches A (the 2.5D terms' fringe)
                         seg_a = _segments(geo.wires[src.name][a_net], dbu)
                         hits = _ray_hits(ps.x[kk[e]], ps.y[kk[e]], ps.nx[kk[e]], ps.ny[kk[e]], sense.z, seg_a)
-                        drop = np.zeros(len(kk), dtype=bool)
-                        drop[np.flatnonzero(e)[hits]] = True
-                        kk = kk[~drop]
-                    if not len(kk):
-                        continue
+                        strip[np.flatnonzero(e)[hits]] = True
                     m = pa.net == ka
                     phi = _potential(ps.x[kk], ps.y[kk], ps.z[kk], pa.x[m], pa.y[m], pa.z[m], pa.q[m], pa.image[m],
                                      CUTOFF_REACHES * reach)
                     c = ps.q[kk] * phi / (4 * math.pi * eps)
-                    band = d[kk] <= src.z
+                    band = (d[kk] <= src.z) & ~strip
                     for kb in np.unique(ps.net[kk]):
                         b_net = names[kb]
                         lower, upper = (a_net, b_net) if view == "B" else (b_net, a_net)
                         own = ps.net[kk] == kb
-                        for zone, sel in (("band", own & band), ("far", own & ~band)):
+                        for zone, sel in (("strip", own & strip), ("band", own & band), ("far", own & ~band & ~strip)):
                             if sel.any():
                                 key = (ca.name, cb.name, lower, upper, view, zone)
                                 fo[key] = fo.get(key, 0.0) + float(c[sel].sum())
@@ -405,9 +438,11 @@ def far_couplings(geo, stack, cpl) -> list:
         n = cpl.near.get(key, {})
         v = {x: n.get(x, 0.0) for x in NEAR_KINDS}
         screen = free(a, b) * free(b, a)
-        f = {(vw, z): screen * fo.get((*key, vw, z), 0.0) for vw in "AB" for z in ("band", "far")}
-        c_b = v["area"] + v["top"] + v["down"] + max(v["up"] + v["corner"], f[("B", "band")]) + f[("B", "far")]
-        c_a = v["area"] + v["top"] + v["up"] + max(v["down"] + v["corner"], f[("A", "band")]) + f[("A", "far")]
+        f = {(vw, z): screen * fo.get((*key, vw, z), 0.0) for vw in "AB" for z in ("strip", "band", "far")}
+        c_b = (v["area"] + v["top"] + max(v["down"], f[("B", "strip")]) + max(v["up"] + v["corner"], f[("B", "band")])
+               + f[("B", "far")])
+        c_a = (v["area"] + v["top"] + max(v["up"], f[("A", "strip")]) + max(v["down"] + v["corner"], f[("A", "band")])
+               + f[("A", "far")])
         extra = (c_a + c_b) / 2 - sum(v.values())
         if extra > 0:
             pair = (a, b) if a < b else (b, a)
