@@ -264,9 +264,31 @@ def _holdout4(tech) -> list:
             Structure("r_plate_m5_sub", ("rps", "0"), "metal5 plate to substrate", (("metal5", 0, 0, 10, 10, "rps"),))]
 
 
+def _holdout5(tech) -> list:
+    """A sixth held-out set, drawn and solved by FastCap2 after holdout4's one look, when the line-end
+    correction had to be bounded (it ran away on the AFE's stacked plates) and before that bound was tried."""
+    return [_cross("s_cross_m2m4_narrow", "metal2", 0.3, "metal4", 0.3, 90, "sc1"),
+            _cross("s_cross_m3m5", "metal3", 0.6, "metal5", 1.2, 90, "sc2"),
+            _cross("s_cross_m1m4_wide", "metal1", 1.5, "metal4", 0.5, 90, "sc3"),
+            _cross("s_cross_m2m3_135", "metal2", 0.4, "metal3", 0.6, 135, "sc4"),
+            _cross("s_tee_m3m5", "metal3", 0.6, "metal5", 1.0, 90, "sc5", offset=9.2),
+            _cross("s_tee_m2m4", "metal2", 0.4, "metal4", 0.8, 90, "sc6", offset=9.5),
+            Structure("s_parallel_m2m4_far", ("spa", "spb"), "metal2 and metal4 lines side by side, 3.5 um apart in plan",
+                      (("metal2", 0, 0, 30, 0.5, "spa"), ("metal4", 0, 4.0, 30, 4.5, "spb"))),
+            Structure("s_parallel_m1m2_wide", ("sqa", "sqb"), "a metal1 line 1.5 um wide and a metal2 line 0.4 um wide "
+                      "side by side, 2 um apart in plan", (("metal1", 0, 0, 30, 1.5, "sqa"), ("metal2", 0, 3.5, 30, 3.9, "sqb"))),
+            Structure("s_parallel_m4m5", ("sra", "srb"), "metal4 and metal5 lines side by side, 1.5 um apart in plan",
+                      (("metal4", 0, 0, 30, 0.6, "sra"), ("metal5", 0, 2.1, 30, 3.1, "srb"))),
+            _pair("s_lat_m3_mid", "metal3", 0.6, 0.6, 0.9, 30, "sa1"),
+            Structure("s_via_stack_m5", ("sva", "svb"), "metal1 - metal5 pad stacks 1.5 um wide, 1.5 um apart",
+                      tuple(_vias(tech, 0, 0, "sva", "metal5", 1.5) + _vias(tech, 3.0, 0, "svb", "metal5", 1.5))),
+            Structure("s_plate_m2_m1", ("spl", "spu"), "metal2 plate over a metal1 plate",
+                      (("metal1", 0, 0, 12, 12, "spl"), ("metal2", 2, 2, 10, 10, "spu")))]
+
+
 SETS = {"first": _first, "development": _development, "validation": _validation, "holdout": _holdout,
         "holdout2": _holdout2, "holdout3": _holdout3,
-        "holdout4": _holdout4}
+        "holdout4": _holdout4, "holdout5": _holdout5}
 
 
 def _bounds(shape):
@@ -378,7 +400,8 @@ def kit_terms(tech, geo, stack=None, which: str = "first") -> dict:
 REFERENCE = {"first": "extraction_structures.json", "development": "extraction_structures_development.json",
              "validation": "extraction_structures_validation.json", "holdout": "extraction_structures_holdout.json",
              "holdout2": "extraction_structures_holdout2.json", "holdout3": "extraction_structures_holdout3.json",
-             "holdout4": "extraction_structures_holdout4.json"}
+             "holdout4": "extraction_structures_holdout4.json",
+             "holdout5": "extraction_structures_holdout5.json"}
 
 
 if __name__ == "__main__":      # python -m pixelkit.layout.pex.structures SET OUT.json: the FastCap2 reference
