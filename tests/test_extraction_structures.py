@@ -6,13 +6,15 @@ Independent references: FastCap2 (a 3D boundary-element field solver) on the sam
 dielectric layers (GF180MCU's published table: STI, nitride liner, oxides, passivation nitride, air),
 stored in tests/data/extraction_structures[_SET].json by
 ``python -m pixelkit.layout.pex.structures SET OUT.json`` (the slow test re-solves the first set); the
-GF180MCU open PDK's area coefficients (aF/um2, as klayout-pex carries them). Six sets
+GF180MCU open PDK's area coefficients (aF/um2, as klayout-pex carries them). Eight sets
 (docs/post-layout.md): ``first`` (the issue's eleven) and ``development`` were looked at while the lateral,
 far-field, wide-fringe and off-axis corner terms were written; ``validation`` was held out until the
-lateral and far-field terms were done, ``holdout`` until the wide fringe was, each then looked at (and a
-later change made); ``holdout2`` and ``holdout3``, drawn after the last change, were compared once, with
-the model as it is.
-None is a geometry a constant of the model was set on (docs/post-layout.md lists those).
+lateral and far-field terms were done, ``holdout`` until the wide fringe was, ``holdout2`` and
+``holdout3`` until the far field's line ends and strip zone, ``holdout4`` until the line ends' first form
+(looked at once, 9 of 12; the correction then bounded by polygon and to edges, which the AFE's plates
+needed), each then looked at; ``holdout5``, drawn and solved before that last change, was compared once,
+with the model as it is. None is a geometry a constant of the model was set on (docs/post-layout.md lists
+those; the far field's LOCAL, 1.5 pitches, was chosen with the first six sets in view).
 """
 import json
 from dataclasses import replace
@@ -30,18 +32,16 @@ def _ref(which):
 
 
 REF = _ref("first")
-REFS = {w: _ref(w) for w in ("development", "validation", "holdout", "holdout2", "holdout3")}
+REFS = {w: _ref(w) for w in ("development", "validation", "holdout", "holdout2", "holdout3", "holdout4")}
 #: outside 10 % of FastCap2, documented (docs/post-layout.md, "what the validation set says"): the figure
 #: written there (kit / FastCap2 - 1)
 KNOWN_MISSES = {
-    "development": {"d_cross_m3m4": -0.189, "d_cross_m1m2_45": 0.139, "d_tee_m1m2": -0.153,
-                    "d_parallel_m1m3": -0.143},
-    "validation": {"v_parallel_m2m4": -0.178, "v_via_stack_m3": 0.273, "v_tee_m2m3": -0.100},
-    "holdout": {"h_cross_m2m4": -0.127, "h_tee_m1m3": -0.103, "h_via_stack_m2": 0.119},
-    "holdout2": {"k_cross_m1m2_45_wide": 0.185, "k_cross_m2m4_135": -0.130, "k_tee_m2m4": -0.208,
-                 "k_parallel_m1m4": -0.216, "k_via_stack_m4": 0.128},
-    "holdout3": {"q_cross_m3m4_row": -0.198, "q_cross_m2m4_wide": -0.166, "q_tee_m3m4": -0.250,
-                 "q_parallel_m2m5": -0.371},
+    "development": {"d_cross_m3m4": -0.109, "d_cross_m1m2_45": 0.176},
+    "validation": {"v_via_stack_m3": 0.273},
+    "holdout": {"h_cross_m2m3_30": 0.126, "h_parallel_m3m5": 0.107, "h_via_stack_m2": 0.119},
+    "holdout2": {"k_cross_m1m2_45_wide": 0.214, "k_via_stack_m4": 0.128},
+    "holdout3": {"q_cross_m3m4_row": -0.105, "q_tee_m3m4": -0.129, "q_parallel_m2m5": -0.154},
+    "holdout4": {"r_cross_m3m4_wide": -0.127, "r_cross_m2m5": -0.148, "r_parallel_m1m5": -0.196},
 }
 HELD = list(REF)
 
@@ -76,7 +76,7 @@ def geo(tmp_path_factory, gf):
 
 @pytest.fixture(scope="module")
 def other_sets(tmp_path_factory, gf):
-    """{set: {structure: F}}: the development, validation and the three holdout sets by the kit's model on
+    """{set: {structure: F}}: the development, validation and the four holdout sets by the kit's model on
     FastCap2's windows."""
     from pixelkit.layout.pex.structures import geometry
     return {w: kit_terms(gf, geometry(gf, tmp_path_factory.mktemp(w), w), which=w) for w in REFS}
