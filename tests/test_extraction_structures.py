@@ -157,6 +157,30 @@ def test_a_wrong_model_leaves_the_band_and_is_not_a_scaling(gf, geo, monkeypatch
     assert max(ratios) / max(min(ratios), 1e-9) > 1.10, ratios
 
 
+def test_line_ends_raise_a_lines_ends_not_its_middle_nor_a_small_pad():
+    """The far field's line ends (``farfield._line_ends``): a metal1 line 0.5 x 30 um keeps the 2.5D charge in
+    its middle (its best-held edge piece) and gains towards its ends, where half its own potential is missing;
+    a 0.5 um pad of the same net 10 um away is a polygon of its own, not the end of the line (unraised); no
+    piece is lowered, and area pieces are left as they are."""
+    import klayout.db as kdb
+    import numpy as np
+    from pixelkit.layout.pex import farfield
+    dbu = 1e-9
+    net = kdb.Region(kdb.Box(0, 0, 30000, 500)) + kdb.Region(kdb.Box(0, 10500, 500, 11000))
+    pc = farfield._Pieces({"a": net}, ["a"], dbu, 1.23e-6, 0.55e-6, 4 * 8.854e-12 / 1.23e-6, 3e-11)
+    pc.image = np.zeros(len(pc.x))
+    q0 = pc.q.copy()
+    farfield._line_ends(pc, 4 * 8.854e-12, 32e-6)
+    k = pc.q / q0
+    line = pc.edge & (pc.y < 1e-6) & (np.abs(pc.ny) > 0.5)          # the line's long edges
+    mid = line & (np.abs(pc.x - 15e-6) < 1e-6)
+    end = line & (pc.x < 0.5e-6)
+    pad = pc.edge & (pc.y > 10e-6)
+    assert np.all(k >= 1.0) and np.all(k[~pc.edge] == 1.0)
+    assert k[mid].max() < 1.02 and k[end].min() > 1.15, (k[mid], k[end])
+    assert k[pad].max() < 1.1, k[pad]
+
+
 def test_floating_fill_is_reduced_as_a_schur_complement():
     """A floating conductor f between a and b (C_af = 2, C_bf = 3, C_f0 = 1 fF): eliminated, a and b gain
     2 x 3 / 6 = 1 fF between them, and their ground 2 x 1 / 6 and 3 x 1 / 6 (the node at V = sum C V / C_f)."""
