@@ -252,16 +252,12 @@ def _holdout4(tech) -> list:
             _cross("r_cross_m1m3_45", "metal1", 0.6, "metal3", 0.6, 45, "rc4"),
             _cross("r_tee_m2m3", "metal2", 0.6, "metal3", 0.8, 90, "rc5", offset=9.4),
             _cross("r_tee_m1m4", "metal1", 0.5, "metal4", 0.6, 90, "rc6", offset=9.0),
-            Structure("r_parallel_m1m3_close", ("rpa", "rpb"), "metal1 and metal3 lines side by side, 1 um apart in plan",
-                      (("metal1", 0, 0, 30, 0.6, "rpa"), ("metal3", 0, 1.6, 30, 2.2, "rpb"))),
-            Structure("r_parallel_m3m4", ("rqa", "rqb"), "metal3 and metal4 lines side by side, 2.5 um apart in plan",
-                      (("metal3", 0, 0, 30, 0.5, "rqa"), ("metal4", 0, 3.0, 30, 3.5, "rqb"))),
-            Structure("r_parallel_m1m5", ("rra", "rrb"), "metal1 and metal5 lines side by side, 4 um apart in plan",
-                      (("metal1", 0, 0, 30, 0.8, "rra"), ("metal5", 0, 4.8, 30, 6.0, "rrb"))),
+            _parallel("r_parallel_m1m3_close", "metal1", 0.6, "metal3", 0.6, 1, "rp"),
+            _parallel("r_parallel_m3m4", "metal3", 0.5, "metal4", 0.5, 2.5, "rq"),
+            _parallel("r_parallel_m1m5", "metal1", 0.8, "metal5", 1.2, 4, "rr"),
             _pair("r_lat_m2_mid", "metal2", 0.4, 0.4, 1.4, 30, "ra1"),
-            Structure("r_via_stack_m3", ("rva", "rvb"), "metal1 - metal3 pad stacks 1 um wide, 1 um apart",
-                      tuple(_vias(tech, 0, 0, "rva", "metal3", 1.0) + _vias(tech, 2.0, 0, "rvb", "metal3", 1.0))),
-            Structure("r_plate_m5_sub", ("rps", "0"), "metal5 plate to substrate", (("metal5", 0, 0, 10, 10, "rps"),))]
+            _pads(tech, "r_via_stack_m3", "metal3", 1.0, 1.0, "rv"),
+            _plate("r_plate_m5_sub", "metal5", 10, 10, "rps")]
 
 
 def _holdout5(tech) -> list:
@@ -273,17 +269,13 @@ def _holdout5(tech) -> list:
             _cross("s_cross_m2m3_135", "metal2", 0.4, "metal3", 0.6, 135, "sc4"),
             _cross("s_tee_m3m5", "metal3", 0.6, "metal5", 1.0, 90, "sc5", offset=9.2),
             _cross("s_tee_m2m4", "metal2", 0.4, "metal4", 0.8, 90, "sc6", offset=9.5),
-            Structure("s_parallel_m2m4_far", ("spa", "spb"), "metal2 and metal4 lines side by side, 3.5 um apart in plan",
-                      (("metal2", 0, 0, 30, 0.5, "spa"), ("metal4", 0, 4.0, 30, 4.5, "spb"))),
+            _parallel("s_parallel_m2m4_far", "metal2", 0.5, "metal4", 0.5, 3.5, "sp"),
             Structure("s_parallel_m1m2_wide", ("sqa", "sqb"), "a metal1 line 1.5 um wide and a metal2 line 0.4 um wide "
                       "side by side, 2 um apart in plan", (("metal1", 0, 0, 30, 1.5, "sqa"), ("metal2", 0, 3.5, 30, 3.9, "sqb"))),
-            Structure("s_parallel_m4m5", ("sra", "srb"), "metal4 and metal5 lines side by side, 1.5 um apart in plan",
-                      (("metal4", 0, 0, 30, 0.6, "sra"), ("metal5", 0, 2.1, 30, 3.1, "srb"))),
+            _parallel("s_parallel_m4m5", "metal4", 0.6, "metal5", 1, 1.5, "sr"),
             _pair("s_lat_m3_mid", "metal3", 0.6, 0.6, 0.9, 30, "sa1"),
-            Structure("s_via_stack_m5", ("sva", "svb"), "metal1 - metal5 pad stacks 1.5 um wide, 1.5 um apart",
-                      tuple(_vias(tech, 0, 0, "sva", "metal5", 1.5) + _vias(tech, 3.0, 0, "svb", "metal5", 1.5))),
-            Structure("s_plate_m2_m1", ("spl", "spu"), "metal2 plate over a metal1 plate",
-                      (("metal1", 0, 0, 12, 12, "spl"), ("metal2", 2, 2, 10, 10, "spu")))]
+            _pads(tech, "s_via_stack_m5", "metal5", 1.5, 1.5, "sv"),
+            _plates("s_plate_m2_m1", "metal1", 12, "metal2", 2, "sp")]
 
 
 SETS = {"first": _first, "development": _development, "validation": _validation, "holdout": _holdout,
