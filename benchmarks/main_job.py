@@ -12,8 +12,11 @@ EMPTY simulation cache of its own:
 - ``report-warm``: the same report again with every simulation in the cache (``--no-cache``: every
   section rebuilt, no SPICE run): the report's own work outside ngspice (sections, plots, KLayout,
   the page and its PDF). Its cache is the ``report`` part's of the same run, or one this part fills
-  first with the current code (not timed); the baseline's side uses the same cache, so it runs no
-  SPICE either as long as its decks are the same (its SPICE runs say so);
+  first with the current code (not timed), or ``--warm-cache``. The simulation cache keys on the
+  model files' paths (``tech.modellib.files_fingerprint``), so a cache serves only the tree that
+  filled it: the baseline's worktree misses it and simulates (its SPICE runs say so). A same-cache
+  comparison of two commits runs both in one tree, one after the other (how docs/benchmarks.md's
+  report-warm figures were measured);
 - ``verify``: ``pixelkit verify designs/dual_pixel_revB.toml`` (45 conditions, Monte Carlo 200);
 - ``gap``: ``pixelkit gap predict designs/dual_pixel_revA.toml --conditions examples/measured_revA.csv``
   (cold: the shipped surrogate of the thesis's chip is checked against SPICE before it is used);
@@ -360,7 +363,9 @@ def docs_block(res: dict) -> str:
     runs = res.get("runs", res.get("side_by_side", 1))
     lines = [(f"Measured at {res['head']}" if res["head"] else "Measured on the code of each part's commit (column "
                                                                "`code`)")
-             + f" on {res.get('date') or 'an unrecorded date'}, against "
+             + f" on {res.get('date') or 'an unrecorded date'}"
+             + (f" - {res['date_last']}" if res.get("date_last") and res["date_last"] != res.get("date") else "")
+             + ", against "
              f"{res['baseline'] or 'no baseline'}'s code in the same run, {res['cores']} cores, {res['jobs']} workers, "
              "each command in a fresh process with an empty cache"
              + (" (`report-warm`: the report part's, filled)" if "report-warm" in res["parts"] else "")
@@ -456,6 +461,7 @@ def merged(runs: list, code=code_commit) -> dict:
                                           None)
     out["baseline"] = next((r["baseline"] for r in runs if r["baseline"]), None)
     out["date"] = min(r.get("date", "") for r in runs) or None
+    out["date_last"] = max(r.get("date_last") or r.get("date", "") for r in runs) or None
     out.pop("side_by_side", None)
     out["runs"] = sum(r.get("runs", r.get("side_by_side", 1)) for r in runs)   # a stored record counts its own
     for r in runs:

@@ -159,7 +159,7 @@ def test_pixel_geometry_is_drawn_once_per_design(modelled, responses):
     """The light code asks for the drawn pixel several times per report section; it is drawn once per design
     (the same object back), and another design is drawn anew."""
     from dataclasses import replace
-    from pixelkit.layout.pex.collection import pixel_geometry
-    geo = pixel_geometry(modelled)
-    assert pixel_geometry(modelled) is geo
-    assert pixel_geometry(replace(modelled, name=modelled.name + "_b")) is not geo
+    from pixelkit.layout.pex.lightfigures import drawn
+    geo = drawn(modelled)
+    assert drawn(modelled) is geo
+    assert drawn(replace(modelled, name=modelled.name + "_b")) is not geo

@@ -61,29 +61,17 @@ def require(design):
     return c
 
 
-_GEOMETRY: dict = {}
-#: Drawn geometries kept per process (the newest).
-GEOMETRIES_KEPT = 4
-
-
 def pixel_geometry(design, gds: Path | None = None):
-    """``nets.NetGeometry`` of the dual pixel, drawn from ``design`` (or read from ``gds``). Drawn once per
-    process and design (the same object handed out again: the light code only reads it; the report's
-    light section asked for it four times, each a full draw, GDS write and KLayout extraction)."""
+    """``nets.NetGeometry`` of the dual pixel, drawn from ``design`` (or read from ``gds``)."""
     import tempfile
     from ..flow import write_gds
     from ..library import build_library
     from .nets import net_geometry
     if gds is not None:
         return net_geometry(gds, CELL, design)
-    key = hashlib.sha256(repr(design).encode()).hexdigest()
-    if key not in _GEOMETRY:
-        with tempfile.TemporaryDirectory(prefix="pixelkit-light-") as tmp:
-            path = write_gds(build_library(design), Path(tmp) / f"{design.name}.gds")
-            _GEOMETRY[key] = net_geometry(path, CELL, design)
-        while len(_GEOMETRY) > GEOMETRIES_KEPT:       # a design closure draws many variants: memory stays flat
-            _GEOMETRY.pop(next(iter(_GEOMETRY)))
-    return _GEOMETRY[key]
+    with tempfile.TemporaryDirectory(prefix="pixelkit-light-") as tmp:
+        path = write_gds(build_library(design), Path(tmp) / f"{design.name}.gds")
+        return net_geometry(path, CELL, design)
 
 
 # ---------------------------------------------------------------------------------------- rasters

@@ -27,6 +27,24 @@ import numpy as np
 from ...errors import ConfigError
 
 _MEMO: dict = {}
+_DRAWN: dict = {}
+#: Drawn geometries kept per process (the newest).
+DRAWN_KEPT = 4
+
+
+def drawn(design):
+    """``collection.pixel_geometry(design)`` drawn once per process and design (the same object handed
+    out again: the light code only reads it; the report's light section asked for it four times, each
+    a full draw, GDS write and KLayout extraction). Kept here, not in ``collection``, whose source is
+    part of the light store's keys."""
+    import hashlib
+    from .collection import pixel_geometry
+    key = hashlib.sha256(repr(design).encode()).hexdigest()
+    if key not in _DRAWN:
+        _DRAWN[key] = pixel_geometry(design)
+        while len(_DRAWN) > DRAWN_KEPT:         # a design closure draws many variants: memory stays flat
+            _DRAWN.pop(next(iter(_DRAWN)))
+    return _DRAWN[key]
 
 
 def nets_of(resp) -> dict:
@@ -108,10 +126,10 @@ def opening_table(design, n: int = 6, say=None) -> dict:
     transmission at each side: how the light spreads under the shield changes with the opening too,
     not counted; docs/light-collection.md measures the difference at one size)."""
     from ...physics import lightfield as lf
-    from .collection import MODAL_MAX, optics, pixel_geometry
+    from .collection import MODAL_MAX, optics
     spectrum = scene_spectrum(design)
     parts = _parts(design, say)
-    o = optics(design, pixel_geometry(design), design.light.grid)
+    o = optics(design, drawn(design), design.light.grid)
     op0 = o.modal[0]
     a0 = op0.a * op0.b
     wl = parts["wavelength_m"]
@@ -158,8 +176,8 @@ def _photon_weighted(resp, area_per_wl, spectrum) -> float:
 def _parts(design, say=None) -> dict:
     """The responses with all the light, the mask openings' light alone and the primary's alone, and
     the secondary's effective opening from each by wavelength."""
-    from .collection import pixel_geometry, response
-    geo = pixel_geometry(design)
+    from .collection import response
+    geo = drawn(design)
     r_all = response(design, geo, say=say)
     a_p = design.primary.area if design.primary.mask_opening is None else design.primary.mask_opening
     out = {"resp": r_all, "wavelength_m": r_all.wavelength_m}

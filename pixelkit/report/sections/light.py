@@ -71,11 +71,11 @@ def build(ctx) -> Section:
         return Section(TITLE, text=["Quick profile: the collection model is not run here (about a minute the first "
                                     "time, cached after); the full profile shows it for every design, either profile "
                                     "for a design with light.model = \"modelled\" (docs/light-collection.md)."])
-    from ...layout.pex.collection import pixel_geometry, response
-    from ...layout.pex.lightfigures import decomposition, figures, scene_spectrum
+    from ...layout.pex.collection import response
+    from ...layout.pex.lightfigures import decomposition, drawn, figures, scene_spectrum
     from ...physics.photo import Spectrum
     ctx.progress("light collection: the model of the drawn pixel")
-    geo = pixel_geometry(d)
+    geo = drawn(d)
     resp = response(d, geo)
     spectra = {f"halogen ({d.scene.spectrum_temperature:g} K, the scene's)": scene_spectrum(d),
                "white LED (phosphor-converted)": Spectrum.white_led()}
