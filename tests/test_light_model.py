@@ -163,3 +163,37 @@ def test_pixel_geometry_is_drawn_once_per_design(modelled, responses):
     geo = drawn(modelled)
     assert drawn(modelled) is geo
     assert drawn(replace(modelled, name=modelled.name + "_b")) is not geo
+
+
+def test_close_on_a_modelled_design_reruns_the_light_per_opening_and_names_the_spec(modelled, tmp_path, cli):
+    """``close`` on a design with light.model = "modelled" (the coarse model, one condition, the secondary's mask
+    opening its only knob): every candidate is the design reloaded, so the collection model's light field is
+    solved again for that candidate's opening (the silicon's collection maps come from the cache). With the
+    effective opening fixed the criterion could not move and close would refuse the knob as idle (exit 2); here it
+    moves with the opening, the secondary's signal rising with the light its opening passes. Under this light the
+    criterion is out of reach (the secondary collects the primary's deep carriers: the effective opening's floor of
+    docs/light-collection.md keeps it near saturation, over ten times its 6 % limit whatever the opening), and close
+    says so: exit 1, infeasible, naming criterion_secondary."""
+    import json
+    from pixelkit.schema import to_toml
+    text = Path(modelled.source).read_text().split("\n[verify]")[0]
+    p = tmp_path / "m.toml"
+    p.write_text(text + "\n" + to_toml({
+        "verify": {"corners": ["tt"], "temperatures": ["27 degC"], "supplies": ["0 %"], "mc": 0},
+        "spec": {"criterion_secondary": {"min": "4 %", "max": "6 %"}},
+        "close": {"objective": "min secondary.mask_opening", "tolerance": "5 %", "max_iterations": 6,
+                  "knobs": {"secondary.mask_opening": {"min": "0.4 um2", "max": "1.5 um2", "scale": "log"}}}}))
+    code, out, err = cli("close", p, "--out", tmp_path / "closed.toml", "--json")
+    assert code == 1, err
+    r = json.loads(out)
+    assert r["status"] == "infeasible" and "criterion_secondary" in err, err
+    path = json.loads((tmp_path / "closed.close.json").read_text())["iterations"]
+    seen = {}
+    for it in path:
+        seen[float(it["knobs"]["secondary.mask_opening"].split()[0])] = it["specs"]["criterion_secondary"]["margin_pct"]
+    assert len(seen) >= 3, path
+    sides = sorted(seen)
+    margins = [seen[s] for s in sides]
+    assert all(m < -1000 for m in margins), margins              # over 10 x the 6 % limit: near saturation
+    # a larger opening: more light, further out (openings the layout draws alike give the same figure)
+    assert all(a >= b for a, b in zip(margins, margins[1:])) and margins[0] > margins[-1], seen

@@ -7,7 +7,7 @@ from .common import design_arg, emit, json_opt, load, main, spice_opts
 
 
 def _text(r: dict) -> str:
-    lines = [f"light map, shield {r['shield']}, {r['irradiance_W_m2']:g} W/m2 on the die:",
+    lines = [f"light map, shield {r['shield']}, {r['light']} light, {r['irradiance_W_m2']:g} W/m2 on the die:",
              f"  {'cell':11s} {'net':12s} {'bench node':12s} {'junction':26s} {'area (um2)':>10s} {'I (pA)':>9s}"]
     for j in r["junctions"]:
         lines.append(f"  {j['cell']:11s} {j['net']:12s} {j['node']:12s} {j['kind']:26s} {j['area_m2'] * 1e12:10.3f} "
@@ -30,13 +30,16 @@ def _text(r: dict) -> str:
 @click.option("--shield", type=click.Choice(["pixels", "full"]), default="pixels", show_default=True,
               help="pixels: the shield as drawn over the subpixels, the readout open ([Thesis2019]'s chip); "
                    "full: only the pixels' light openings see light")
+@click.option("--light", type=click.Choice(["geometric", "modelled"]), default=None,
+              help="the junctions' currents: geometric (open area x the technology's QE) or modelled (the collection "
+                   "model of each readout cell, docs/light-collection.md) [default: the design's light.model]")
 @click.option("--max-error", default=None, metavar="KX|VOLTAGE",
               help="the limit of each column's AFE output error: a multiple of the read noise there ('1x') or a "
                    "voltage ('2 mV'); exit 1 beyond it [default: the design's light.max_readout_error, '1x' "
                    "unless it says otherwise]")
 @spice_opts
 @json_opt
-def lightmap_cmd(design, shield, max_error, backend, jobs, as_json):
+def lightmap_cmd(design, shield, light, max_error, backend, jobs, as_json):
     """Exposed junctions of the drawn dual pixel and its column circuits, their photocurrent at the
     scene's headlight irradiance, and the AFE output error each array's column sees (SPICE), judged
     against the design's limit ([light] max_readout_error) or --max-error: exit 1 when a column's error
@@ -48,7 +51,10 @@ def lightmap_cmd(design, shield, max_error, backend, jobs, as_json):
         parse_limit(max_error)   # refused before any run
     d = load(design)
     require_stack(d.tech, "the light map")
-    r = light_map(d, shield, backend)
+    if light == "modelled":
+        from ..layout.pex.collection import require
+        require(d)   # a technology without [collection]: refused naming it, before any run
+    r = light_map(d, shield, backend, light=light)
     r["verdict"] = judge(r["columns"], max_error if max_error is not None else d.light.max_readout_error)
     emit(r, as_json, _text)
     if r["verdict"]["exit"]:

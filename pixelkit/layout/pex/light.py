@@ -102,21 +102,22 @@ def _mapped(cell: str, net: str, n_secondary: int) -> bool:
     return net in AFE_NODES and net not in ("vdd", "vref")
 
 
-def modelled(design, geo, cell: str, shield: str = "pixels") -> list[Junction]:
+def modelled(design, geo, cell: str, shield: str = "pixels", resolution: tuple | None = None) -> list[Junction]:
     """The junctions of ``cell`` that the light map puts on the bench, with the collection model's currents
     (``light.model = "modelled"``, docs/light-collection.md): every diffusion of those nets collects, not
     only where no metal covers it - the carriers the light generates anywhere in the cell (and, in the
     dual pixel's column cell, under its photodiodes' openings) diffuse to them. The cell repeats along the
     row (periodic x), ends at its top and bottom (reflecting); ``shield``: ``pixels`` the metals as drawn,
     ``full`` a top metal over all but the photodiodes' openings. Each junction's ``area_m2`` is its exposed
-    area (as the geometric map gives it)."""
+    area (as the geometric map gives it). ``resolution``: (lateral grid, wavelength step) instead of
+    ``READOUT_GRID``, ``READOUT_STEP`` (a coarser model of the same cells: the tests')."""
     from .collection import polar, response
     e, spec = irradiance(design)
     n = design.secondary_per_pixel
     own = {polar(k, net) for k, nets in geo.junctions.items() if k in ("nsd", "psd") for net in nets
            if _mapped(cell, net, n)}
     r = response(design, geo, light="all" if shield == "pixels" else "full", own=own, periodic=(True, False),
-                 grid=READOUT_GRID, step=READOUT_STEP)
+                 grid=(resolution or (READOUT_GRID,))[0], step=(resolution or (None, READOUT_STEP))[1])
     seen = {(j.net, "psd" if j.kind == "psd" else "nsd"): j.area_m2 for j in exposed(geo, shield)}
     from ...physics.photo import responsivity
     out = []
@@ -251,15 +252,24 @@ def read_noise_at_afe(design) -> dict:
     return {w: chain(design, w, a, m)["pixel_V"] * g for w in ("primary", "secondary")}
 
 
-def light_map(design, shield: str = "pixels", backend: str = "batch", geos: dict | None = None) -> dict:
+LIGHTS = ("geometric", "modelled")
+
+
+def light_map(design, shield: str = "pixels", backend: str = "batch", geos: dict | None = None,
+              light: str | None = None, resolution: tuple | None = None) -> dict:
     """The light map of ``design`` under ``shield``: exposed junctions (node, kind, area, photocurrent) of
     the dual pixel with its column circuits and of the AFEs, the AFE output error of each column by
-    SPICE, its ratio to the read noise there. ``geos``: ``chip_geometry(design)`` when already made."""
+    SPICE, its ratio to the read noise there. ``geos``: ``chip_geometry(design)`` when already made;
+    ``light``: ``geometric`` (exposed area x QE) or ``modelled`` (the collection model of each readout
+    cell, ``resolution`` as :func:`modelled`) instead of the design's ``light.model``."""
     from . import chip_geometry
+    light = light or design.light.model
+    if light not in LIGHTS:
+        raise ValueError(f"light {light!r}: one of {', '.join(LIGHTS)}")
     geos = geos if geos is not None else chip_geometry(design, ("DUALPIX_COL", "AFE_P", "AFE_S"))
-    if design.light.model == "modelled":
-        js = modelled(design, geos["DUALPIX_COL"], "DUALPIX_COL", shield)
-        afe = {c: modelled(design, geos[c], c, shield) for c in ("AFE_P", "AFE_S")}
+    if light == "modelled":
+        js = modelled(design, geos["DUALPIX_COL"], "DUALPIX_COL", shield, resolution)
+        afe = {c: modelled(design, geos[c], c, shield, resolution) for c in ("AFE_P", "AFE_S")}
     else:
         js = with_currents(design, exposed(geos["DUALPIX_COL"], shield))
         afe = {c: with_currents(design, exposed(geos[c], shield)) for c in ("AFE_P", "AFE_S")}
@@ -279,7 +289,7 @@ def light_map(design, shield: str = "pixels", backend: str = "batch", geos: dict
                 "error_from_row_V": err_row[c],
                 "error_from_row_over_noise": abs(err_row[c]) / noise["primary" if c == "col_p" else "secondary"]}
             for c, v in err.items()}
-    return {"shield": shield, "light": design.light.model, "irradiance_W_m2": e, "junctions": rows, "columns": cols,
+    return {"shield": shield, "light": light, "irradiance_W_m2": e, "junctions": rows, "columns": cols,
             "readout_area_m2": sum(r["area_m2"] for r in rows if r["readout"]),
             "afe_area_m2": {c: sum(j.area_m2 for j in lst) for c, lst in afe.items()},
             "worst_error_over_noise": max(c["error_over_noise"] for c in cols.values())}
