@@ -165,6 +165,7 @@ def test_pixel_geometry_is_drawn_once_per_design(modelled, responses):
     assert drawn(replace(modelled, name=modelled.name + "_b")) is not geo
 
 
+@pytest.mark.slow
 def test_close_on_a_modelled_design_reruns_the_light_per_opening_and_names_the_spec(modelled, tmp_path, cli):
     """``close`` on a design with light.model = "modelled" (the coarse model, one condition, the secondary's mask
     opening its only knob): every candidate is the design reloaded, so the collection model's light field is
@@ -173,7 +174,8 @@ def test_close_on_a_modelled_design_reruns_the_light_per_opening_and_names_the_s
     moves with the opening, the secondary's signal rising with the light its opening passes. Under this light the
     criterion is out of reach (the secondary collects the primary's deep carriers: the effective opening's floor of
     docs/light-collection.md keeps it near saturation, over ten times its 6 % limit whatever the opening), and close
-    says so: exit 1, infeasible, naming criterion_secondary."""
+    says so: exit 1, infeasible, naming criterion_secondary. About 60 s CPU in close (30 SPICE runs, four openings
+    each with its light field solved again): slow."""
     import json
     from pixelkit.schema import to_toml
     text = Path(modelled.source).read_text().split("\n[verify]")[0]
