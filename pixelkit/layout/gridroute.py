@@ -323,22 +323,37 @@ class GridRouter:
         for net in order:
             self._route_net(net, terms[net])
             if net in self.guards:
-                reserved[net] = self._reserve(net, self.guards[net])
+                reserved[net] = self._reserve(net, self.guards[net], terms[net])
         for net, nodes in reserved.items():
             self._shield(self.guards[net], nodes)
 
-    def _reserve(self, net: str, shield: str) -> set:
+    def _reserve(self, net: str, shield: str, terms=()) -> set:
         """The free grid points beside ``net``'s route (the eight around each of its points on its layer,
-        the one over and the one under it), taken for ``shield``: no later net runs beside, over or under
-        the guarded one."""
+        the one over and the one under it) and beside its terminals (within a pitch of a landing, on its
+        layer and the one over it: the landings sit off the grid), taken for ``shield``: no later net runs
+        beside, over or under the guarded one."""
         out = set()
+
+        def take(kk, ii, jj):
+            if 0 <= ii < self.nx and 0 <= jj < self.ny and self.owner[kk].get((ii, jj)) is None:
+                self.owner[kk][(ii, jj)] = shield
+                out.add((kk, ii, jj))
+
         for k, i, j in self.done.get(net, ()):
             near = [(k, i + di, j + dj) for di in (-1, 0, 1) for dj in (-1, 0, 1) if di or dj]
             near += [(kk, i, j) for kk in (k - 1, k + 1) if 0 <= kk < len(self.layers)]
             for kk, ii, jj in near:
-                if 0 <= ii < self.nx and 0 <= jj < self.ny and self.owner[kk].get((ii, jj)) is None:
-                    self.owner[kk][(ii, jj)] = shield
-                    out.add((kk, ii, jj))
+                take(kk, ii, jj)
+        p = self.pitch
+        for t in terms:
+            if t.layer not in self.layers:
+                continue
+            k = self.layers.index(t.layer)
+            for kk in (k, k + 1)[:len(self.layers) - k]:
+                for i in self._range(t.box.x0 - 2 * p, t.box.x1 + 2 * p, self.x0, self.nx):
+                    for j in self._range(t.box.y0 - 2 * p, t.box.y1 + 2 * p, self.y0, self.ny):
+                        if self.pad(kk, i, j).gap(t.box) <= p:
+                            take(kk, i, j)
         return out
 
     def _shield(self, shield: str, nodes: set) -> None:

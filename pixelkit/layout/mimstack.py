@@ -27,6 +27,9 @@ from .canvas import Box, Canvas, box
 from .primitives import mim_cap, mim_extension, pad_side, square, top_metal_space
 
 
+TWINS = True
+
+
 @dataclass
 class Column:
     """Where a narrow cell's plates go (nm): the plate width, the x of a plate with its via on
@@ -66,21 +69,23 @@ def landing_gap(lt) -> int:
     return lt.snap_up(lt.nm("mim_bottom.space") + pad_side(lt, "metal4") + lt.space("metal4"))
 
 
-def _landing(cv: Canvas, lt, st: Stack, net: str, x: int, y: int) -> None:
-    """A via from the top metal down to a metal4 pad at (x, y)."""
+def _landing(cv: Canvas, lt, st: Stack, net: str, x: int, y: int, terminal: bool = True) -> None:
+    """A via from the top metal down to a metal4 pad at (x, y); ``terminal``: one the router reaches
+    (else the twin of one, drawn for symmetry only)."""
     cv.add("via4", square(x, y, lt.cut("via4")), net)
     pad = cv.add("metal4", square(x, y, pad_side(lt, "metal4")), net)
-    st.landings.setdefault(net, []).append(pad)
+    if terminal:
+        st.landings.setdefault(net, []).append(pad)
 
 
-def _lead(cv: Canvas, lt, st: Stack, net: str, x: int, y_from: int, y_land: int) -> None:
+def _lead(cv: Canvas, lt, st: Stack, net: str, x: int, y_from: int, y_land: int, terminal: bool = True) -> None:
     """A vertical top-metal lead centred on x from ``y_from`` to a landing at ``y_land``."""
     wt = lt.width("metal5")
     x = lt.snap(x)
     e = lt.cut("via4") // 2 + lt.nm("metal5.enclosure.via4")
     lo, hi = (y_land - e, y_from) if y_land < y_from else (y_from, y_land + e)
     cv.add("metal5", box(x - wt // 2, lo, x - wt // 2 + wt, hi), net)
-    _landing(cv, lt, st, net, x, y_land)
+    _landing(cv, lt, st, net, x, y_land, terminal)
 
 
 def draw_stack(cv: Canvas, lt, col: Column, caps: list, y: int) -> Stack:
@@ -112,9 +117,11 @@ def draw_stack(cv: Canvas, lt, col: Column, caps: list, y: int) -> Stack:
     for (a, *_), (b, *_) in zip(made, made[1:]):          # the shared node, plate to plate
         cv.add("metal5", box(max(a["top"].x0, b["top"].x0), a["top"].y1, min(a["top"].x1, b["top"].x1),
                              b["top"].y0), caps[0][0])
-    low = made[0][0]
+    low, high = made[0][0], made[-1][0]
     y_down = low["plate"].y0 - gap
     _lead(cv, lt, st, caps[0][0], low["top"].cx, low["top"].y0, y_down)
+    if TWINS:   # its twin up from the highest top plate, as far: the shared node faces both ends alike
+        _lead(cv, lt, st, caps[0][0], high["top"].cx, high["top"].y1, y_up, terminal=False)
     for k, (m, side, bottom) in enumerate(made):
         pad = m["bottom"]
         if k == len(made) - 1:                                  # the highest: up on the right
@@ -129,6 +136,8 @@ def draw_stack(cv: Canvas, lt, col: Column, caps: list, y: int) -> Stack:
             reach = lt.cut("via4") // 2 + lt.nm("metal5.enclosure.via4")
             top_end = made[-1][0]["plate"].y1 + (low["plate"].y0 - (y_down - reach))
             cv.add("metal5", box(col.lane[0], pad.cy, col.lane[0] + wt, top_end), bottom)
+            if TWINS:
+                _landing(cv, lt, st, bottom, (col.lane[0] + col.lane[1]) // 2, top_end - reach, terminal=False)
             st.y1 = max(st.y1, top_end)
         else:                                                   # the lowest: down on the right
             _lead(cv, lt, st, bottom, pad.cx, pad.cy, y_down)
