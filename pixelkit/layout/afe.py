@@ -358,7 +358,8 @@ def _switch_plan(devs, fit, below: str | None, above: str | None) -> list:
     the fewest source / drain pads of two neighbouring strips put a floating node (``GUARDED``) next to
     a node that moves between the phases (a pad of another net that is neither guarded nor a line
     every column shares); ``below`` / ``above``: the net beyond the group's ends (a tap, the other
-    group); then the fewest floating-node pads facing a pad of another net rather than a tap. Ties
+    group); then the fewest floating-node pads facing a pad of another net rather than a tap; then the
+    fewest moving-node pads two pads from a floating node's (a pad of neither net between). Ties
     go to the drawn order, so a group with no floating node is drawn as listed."""
     from itertools import permutations, product
 
@@ -369,15 +370,18 @@ def _switch_plan(devs, fit, below: str | None, above: str | None) -> list:
         return int((a in GUARDED and b not in quiet) or (b in GUARDED and a not in quiet))
 
     def cost(plan):
-        seq = [below]
+        seq, flat = [below], [below]
         for d, f in plan:
             p = _pads(d, fit, f)
             seq += [p[0], p[-1]]
+            flat += p
         seq.append(above)
+        flat.append(above)
         pairs = list(zip(seq[::2], seq[1::2]))
         return (sum(harm(a, b) for a, b in pairs),
                 sum(1 for a, b in pairs if None not in (a, b) and a != b and not {a, b} & TAPS
-                    and (a in GUARDED or b in GUARDED)))
+                    and (a in GUARDED or b in GUARDED)),
+                sum(harm(a, c) for a, b, c in zip(flat, flat[1:], flat[2:]) if b not in (a, c)))
 
     if len(devs) > 6:    # 6! x 2^6 plans at most
         return [(d, False) for d in devs]

@@ -34,6 +34,8 @@ STEP, CROSS, VIA = 10, 16, 24
 #: a guarded net's extra cost per neighbour another net holds (0 on the retry when the cell does not route with it)
 BESIDE = 8
 BLOCKED = "*"
+#: a guarded net keeps the grid points within NEAR pitches of its landings for its shield
+NEAR = 1.15
 
 
 @dataclass
@@ -352,7 +354,7 @@ class GridRouter:
             for kk in (k, k + 1)[:len(self.layers) - k]:
                 for i in self._range(t.box.x0 - 2 * p, t.box.x1 + 2 * p, self.x0, self.nx):
                     for j in self._range(t.box.y0 - 2 * p, t.box.y1 + 2 * p, self.y0, self.ny):
-                        if self.pad(kk, i, j).gap(t.box) <= p:
+                        if self.pad(kk, i, j).gap(t.box) <= NEAR * p:
                             take(kk, i, j)
         return out
 
