@@ -11,7 +11,9 @@ column's width. From the bottom edge (away from the array) up:
   LVS adds back up), a P+ substrate tap; its P-channel devices in one n-well with its N+ tap;
 - the horizontal lines every column shares (abutting cells join them): ``vss vdd vref p1 p1b
   p2 p2b``;
-- the transmission-gate switches (N strips, a tap; P strips in their n-well, a tap);
+- the transmission-gate switches (a tap, N strips; P strips in their n-well, a tap), each group
+  ordered and each strip turned (``_switch_plan``) so the floating nodes' pads face only their
+  own net, vref or a tap: the feedback switch's x beside the tap at both ends;
 - the MIM capacitors C13, C12, C11 (the technology's MIM device with its markers): their top
   plates are the shared node ``vm``, their bottom plates ``c``, ``x``, ``in``;
 - at the top edge the column circuit's ``out`` (the AFE input ``in``) and ``nbias`` arrive on

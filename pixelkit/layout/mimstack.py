@@ -11,9 +11,11 @@ metal on a grid, each plate gets one lead, planned here:
   straight down;
 - each bottom plate's via sits on the right of its plate, except the middle capacitor's, on the
   left: the lowest capacitor's lead runs down on the right, the middle one's down a lane along
-  the left edge (past the lowest) and, mirrored, up the lane past the highest as far (so the
-  middle's bottom node faces the lowest and the highest bottom plates alike), the highest one's up
-  on the right;
+  the left edge (past the lowest, to a landing one landing pitch lower than the others, so its
+  route arrives away from the lowest plate) and, mirrored, up the lane past the highest as far,
+  with a twin of its via and pad (so the middle's bottom node faces the lowest and the highest
+  bottom plates alike), the highest one's up on the right; the shared node's lead down from the
+  lowest top plate has such a twin up from the highest;
 - a lone capacitor (the op-amp's Cc) leaves both plates upwards.
 
 A lead ends on a landing - a via down to a metal4 pad - outside the MIM's metal4 keep-out
@@ -26,8 +28,6 @@ from dataclasses import dataclass, field
 from .canvas import Box, Canvas, box
 from .primitives import mim_cap, mim_extension, pad_side, square, top_metal_space
 
-
-TWINS = True
 
 
 @dataclass
@@ -99,7 +99,9 @@ def draw_stack(cv: Canvas, lt, col: Column, caps: list, y: int) -> Stack:
     gap, pad4 = landing_gap(lt), pad_side(lt, "metal4")
     st = Stack(y0=y)
     sides = {1: ["right"], 2: ["right", "right"], 3: ["right", "left", "right"]}[len(caps)]
-    plate_y = y if len(caps) == 1 else y + gap + pad4       # the lowest bottom plate's edge
+    # the middle's landing a landing pitch lower than the others: its route arrives away from the lowest plate
+    drop = pad4 + lt.space("metal4") if len(caps) == 3 else 0
+    plate_y = y if len(caps) == 1 else y + gap + pad4 + drop       # the lowest bottom plate's edge
     made = []
     for (top, bottom, length), side in zip(caps, sides):
         x = col.x_left_via if side == "left" else col.x_right_via
@@ -120,24 +122,23 @@ def draw_stack(cv: Canvas, lt, col: Column, caps: list, y: int) -> Stack:
     low, high = made[0][0], made[-1][0]
     y_down = low["plate"].y0 - gap
     _lead(cv, lt, st, caps[0][0], low["top"].cx, low["top"].y0, y_down)
-    if TWINS:   # its twin up from the highest top plate, as far: the shared node faces both ends alike
-        _lead(cv, lt, st, caps[0][0], high["top"].cx, high["top"].y1, y_up, terminal=False)
+    # its twin up from the highest top plate, as far (no terminal): the shared node faces both ends alike
+    _lead(cv, lt, st, caps[0][0], high["top"].cx, high["top"].y1, y_up, terminal=False)
     for k, (m, side, bottom) in enumerate(made):
         pad = m["bottom"]
         if k == len(made) - 1:                                  # the highest: up on the right
             _lead(cv, lt, st, bottom, pad.cx, pad.cy, y_up)
         elif side == "left":                                    # the middle: down the left lane
             cv.add("metal5", box(col.lane[0], pad.y0, pad.x1, pad.y1), bottom)   # as tall as the pad: no notch
-            _lead(cv, lt, st, bottom, (col.lane[0] + col.lane[1]) // 2, pad.cy, y_down)
+            _lead(cv, lt, st, bottom, (col.lane[0] + col.lane[1]) // 2, pad.cy, y_down - drop)
             # and mirrored up the same lane past the highest plate, as far beyond it as the lead reaches
             # below the lowest: the middle's bottom node then faces the lowest and the highest bottom
             # plates alike (the AFE's op-amp input x between c and in: docs/revisions.md)
             wt = lt.width("metal5")
             reach = lt.cut("via4") // 2 + lt.nm("metal5.enclosure.via4")
-            top_end = made[-1][0]["plate"].y1 + (low["plate"].y0 - (y_down - reach))
+            top_end = made[-1][0]["plate"].y1 + (low["plate"].y0 - (y_down - drop - reach))
             cv.add("metal5", box(col.lane[0], pad.cy, col.lane[0] + wt, top_end), bottom)
-            if TWINS:
-                _landing(cv, lt, st, bottom, (col.lane[0] + col.lane[1]) // 2, top_end - reach, terminal=False)
+            _landing(cv, lt, st, bottom, (col.lane[0] + col.lane[1]) // 2, top_end - reach, terminal=False)
             st.y1 = max(st.y1, top_end)
         else:                                                   # the lowest: down on the right
             _lead(cv, lt, st, bottom, pad.cx, pad.cy, y_down)
