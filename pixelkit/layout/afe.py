@@ -198,6 +198,7 @@ class _Stack:
     def __init__(self, cv: Canvas, lt, x_left: int, y: int):
         self.cv, self.lt, self.x, self.y = cv, lt, x_left, y
         self.terms: dict = {}
+        self.prev = None        # the last source / drain pad of the strip below in this group
 
     def term(self, net: str, layer: str, b: Box) -> None:
         self.terms.setdefault(net, []).append(Terminal(layer, b))
@@ -213,10 +214,27 @@ class _Stack:
         s = mos_strip(self.cv, lt, kind, self.x, y0, devs, nets, contacted, "right")
         for net, p in s.sd + s.gates:
             self.term(net, "metal1", p)
+        self._join(s)
         self.y = y0 + strip_height(lt, devs, contacted) + e
         return s
 
+    def _join(self, s) -> None:
+        """Two facing pads of one net in neighbouring strips, one of them beside a floating node's pad in
+        its own strip: joined on metal1, and only the other lands (no landing and access wire of a node
+        that moves between the phases beside the floating node's)."""
+        prev, self.prev = self.prev, (s.sd[-1], s.sd[-2][0])
+        if prev is None:
+            return
+        (net, a), beside_a = prev
+        (net_b, b), beside_b = s.sd[0], s.sd[1][0]
+        if net != net_b or net in GUARDED or a is None or b is None or not ({beside_a, beside_b} & set(GUARDED)):
+            return
+        self.cv.add("metal1", box(min(a.x0, b.x0), a.y0, max(a.x1, b.x1), b.y1), net)
+        drop = a if beside_a in GUARDED else b
+        self.terms[net] = [t for t in self.terms[net] if t.box != drop]
+
     def tap(self, kind: str, net: str):
+        self.prev = None
         side, iside = tap_size(self.lt, kind)
         cx, cy = self.x + iside // 2, self.y + iside // 2
         comp, pad = tap(self.cv, self.lt, kind, cx, cy, net)
@@ -411,6 +429,7 @@ def _n_group(st: _Stack, lt, plan, fit) -> None:
 def _p_group(st: _Stack, lt, plan, fit) -> None:
     if not plan:
         return
+    st.prev = None
     st.y += lt.nm("nwell.enclosure.pcomp") - lt.nm("pplus.enclosure.active")
     comps = []
     for i, item in enumerate(plan):
