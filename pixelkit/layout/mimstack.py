@@ -99,7 +99,8 @@ def draw_stack(cv: Canvas, lt, col: Column, caps: list, y: int) -> Stack:
     gap, pad4 = landing_gap(lt), pad_side(lt, "metal4")
     st = Stack(y0=y)
     sides = {1: ["right"], 2: ["right", "right"], 3: ["right", "left", "right"]}[len(caps)]
-    # the middle's landing a landing pitch lower than the others: its route arrives away from the lowest plate
+    # the middle's and the shared node's landings a landing pitch lower than the lowest's: their routes arrive
+    # away from the lowest plate (the twins above rise as far)
     drop = pad4 + lt.space("metal4") if len(caps) == 3 else 0
     plate_y = y if len(caps) == 1 else y + gap + pad4 + drop       # the lowest bottom plate's edge
     made = []
@@ -121,9 +122,9 @@ def draw_stack(cv: Canvas, lt, col: Column, caps: list, y: int) -> Stack:
                              b["top"].y0), caps[0][0])
     low, high = made[0][0], made[-1][0]
     y_down = low["plate"].y0 - gap
-    _lead(cv, lt, st, caps[0][0], low["top"].cx, low["top"].y0, y_down)
+    _lead(cv, lt, st, caps[0][0], low["top"].cx, low["top"].y0, y_down - drop)
     # its twin up from the highest top plate, as far (no terminal): the shared node faces both ends alike
-    _lead(cv, lt, st, caps[0][0], high["top"].cx, high["top"].y1, y_up, terminal=False)
+    _lead(cv, lt, st, caps[0][0], high["top"].cx, high["top"].y1, y_up + drop, terminal=False)
     for k, (m, side, bottom) in enumerate(made):
         pad = m["bottom"]
         if k == len(made) - 1:                                  # the highest: up on the right
