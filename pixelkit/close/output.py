@@ -191,7 +191,8 @@ def candidates(record) -> int:
 
 def _header(design, record) -> str:
     src = "".join(c if c.isprintable() else "?" for c in str(design.source))
-    moved = [f"{k['key']} {k['start']} -> {k['value']}" for k in record["knobs"] if k["start"] != k["value"]]
+    moved = [f"{k['key']}" + "".join(f" (and {t})" for t in k.get("tied", ())) + f" {k['start']} -> {k['value']}"
+             for k in record["knobs"] if k["start"] != k["value"]]
     lines = [f"# Closed by pixelkit close from {src} ({record['status']}, {candidates(record)} candidates, "
              f"objective {record['objective']['goal']}); the path: {Path(record['json']).name}",
              "# Knobs moved: " + ("; ".join(moved) or "none (the design passed as it was)")]

@@ -614,7 +614,7 @@ class Closer:
                "knobs": [{"key": k.name, "min": self.space.texts([k.lo], [k])[0],
                           "max": self.space.texts([k.hi], [k])[0], "scale": "log" if k.log else "lin",
                           "start": start["knobs"][k.name], "value": self.space.overrides(p.x)[k.name],
-                          "at_bound": at_bound(k, x)} for k, x in zip(self.space.knobs, p.x)],
+                          "at_bound": at_bound(k, x), "tied": list(k.tied)} for k, x in zip(self.space.knobs, p.x)],
                "overrides": self.space.overrides(p.x), "margin_target_pct": 100 * self.settings.margin,
                "tolerance": self.settings.tolerance,
                "targets": [{"spec": k[0], "condition": k[1].label, "target_pct": 100 * v} for k, v in
