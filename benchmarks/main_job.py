@@ -19,7 +19,7 @@ EMPTY simulation cache of its own:
   report-warm figures were measured);
 - ``verify``: ``pixelkit verify designs/dual_pixel_revB.toml`` (45 conditions, Monte Carlo 200);
 - ``gap``: ``pixelkit gap predict designs/dual_pixel_revA.toml --conditions examples/measured_revA.csv``
-  (cold: the shipped surrogate of the thesis's chip is checked against SPICE before it is used);
+  (cold: the shipped surrogate of the chip of [Thesis2019] is checked against SPICE before it is used);
 - ``afe4x4``: ``pixelkit array ... --rows 4 --cols 4 --afe --check``;
 - ``chip``: ``pixelkit array ... --rows 27 --cols 50 --afe`` (the whole chip with every column's AFE).
 
