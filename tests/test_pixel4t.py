@@ -99,11 +99,13 @@ def test_read_noise_is_a_few_electrons_where_the_fd_reset_noise_is_tens(experime
 
 def test_true_cds_cancels_a_reset_level_that_moves_every_frame(d4t):
     """A reset drain that lands every read on another level: the reset samples spread by mV, the CDS
-    outputs (both samples of one reset) by less than a thousandth of that."""
+    outputs (both samples of one reset) by less than a hundredth of that. (Measured 0.35 - 1.5 thousandths:
+    the drain's noise is drawn anew each run - ngspice 39 does not hold TRNOISE to the deck's seed
+    option - so a thousandth was a coin toss; a CDS that failed to cancel would leave ~1.)"""
     from pixelkit.rolepix.trnoise import fd_reset_check
     r = fd_reset_check(d4t)
     assert r["reset_sigma_V"] > 1e-3
-    assert r["cds_sigma_V"] < 1e-3 * r["reset_sigma_V"]
+    assert r["cds_sigma_V"] < 1e-2 * r["reset_sigma_V"]
 
 
 def test_lag_at_the_output_with_a_barrier(d4t):

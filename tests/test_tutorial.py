@@ -109,7 +109,11 @@ def run_blocks(blocks, folder, parse_slow=False, page=None):
     fixes, unfixed, servers, ports = [], [], [], {}
     prelude = (f'pixelkit() {{ "{sys.executable}" -m pixelkit "$@"; }}\n'
                f'python() {{ "{sys.executable}" "$@"; }}\n')
-    env = {**os.environ, "PIXELKIT_PROGRESS": "0", "PATH": f"{Path(sys.executable).parent}:{os.environ['PATH']}"}
+    env = {**os.environ, "PIXELKIT_PROGRESS": "0", "PATH": f"{Path(sys.executable).parent}:{os.environ['PATH']}",
+           # the package under test first, as in a user's clone whose root holds it: the clone's partial
+           # pixelkit/ folder (gap/silicon_cases only, which file: marks read) would otherwise shadow an
+           # editable install as a namespace package (PackageLoader: no report/templates)
+           "PYTHONPATH": os.pathsep.join(filter(None, (str(ROOT), os.environ.get("PYTHONPATH"))))}
     env.pop("PIXELKIT_REPORTS", None)
     try:
         for n, b in enumerate(blocks, 1):
