@@ -9,14 +9,11 @@ from conftest import ROOT
 D = ROOT / "designs"
 
 
-def _flat(table, prefix=""):
-    out = {}
-    for k, v in table.items():
-        if isinstance(v, dict) and not {"choices", "min", "max"} & set(v):
-            out.update(_flat(v, f"{prefix}{k}."))
-        else:
-            out[f"{prefix}{k}"] = v
-    return out
+def _flat(table):
+    """Dotted keys down to the values, a knob's entry ({choices} / {min, max}) kept whole: the design
+    schema's own flattening of a [close] table."""
+    from pixelkit.schema import _flat as flat
+    return flat(table, {"choices", "min", "max"})
 
 
 def test_revc_is_reva_with_the_knobs_close_reports_and_nothing_else():
