@@ -190,8 +190,19 @@ def start_server(b, folder, prelude, env, ports):
 
 
 def stop_server(proc):
-    """End the server block's process group (its scheduler and workers), ours alone."""
+    """End the server block's process group (its scheduler and workers), ours alone, and wait until no
+    process of the group is left (the shell exits first; its children may still hold the port)."""
     import signal
+
+    def group_gone():   # a live process of the group left (a zombie holds no port: an unreaping init)
+        for stat in Path("/proc").glob("[0-9]*/stat"):
+            try:
+                fields = stat.read_text().rsplit(")", 1)[1].split()
+            except OSError:
+                continue
+            if int(fields[2]) == proc.pid and fields[0] != "Z":
+                return False
+        return True
     try:
         os.killpg(proc.pid, signal.SIGTERM)
         proc.wait(timeout=60)
@@ -200,6 +211,11 @@ def stop_server(proc):
         proc.wait()
     except ProcessLookupError:
         pass
+    try:
+        wait_for(group_gone, "the server block's processes to end", within=60)
+    except AssertionError:
+        os.killpg(proc.pid, signal.SIGKILL)
+        wait_for(group_gone, "the server block's processes to end after SIGKILL", within=60)
 
 
 @pytest.fixture
