@@ -32,6 +32,9 @@ Four sources need no run and are checked wherever the marks are (``LOCAL``):
   at its top): a measurement a test cannot repeat (a benchmark, a full-grid sign-off).
 - ``file:PATH::KEY``: a JSON data file of the repository that is an input, not a measurement (the
   truth a virtual chip was made with).
+- ``input:PATH::KEY``: a value of a design or technology file (TOML, a quantity's number as written)
+  or JSON input; ``input:WHY`` (no ``::``) a stated input no file holds, not checked.
+- ``cite:KEY``: a source document's value (``KEY`` of docs/bibliography.md), not the kit's: not checked.
 - ``calc:EXPR``: a figure the sentence derives (a ratio, a difference), ``EXPR`` arithmetic
   (``+ - * / **``, ``abs min max``) over ``{SOURCE:KEY}`` references.
 
@@ -132,6 +135,39 @@ def _json_value(key: str, dated: bool) -> float:
     return float(data)
 
 
+def input_value(key: str) -> float:
+    """The value of an ``input:`` key: ``PATH::dotted.key`` of a design, technology or data file of
+    the repository (TOML or JSON; a quantity string such as ``"400 nA"`` gives its number as written),
+    or, with no ``::``, a stated input no file holds (a method's criterion, a test's band), not checked."""
+    if "::" not in key:
+        raise Unchecked(key)
+    path, _, dotted = key.partition("::")
+    f = (ROOT / path).resolve()
+    if ROOT not in f.parents:
+        raise KeyError(path)
+    if f.suffix == ".toml":
+        import tomllib
+        data = tomllib.loads(f.read_text())
+    else:
+        data = json.loads(f.read_text())
+    for part in dotted.split("."):
+        data = data[int(part)] if isinstance(data, list) else data[part]
+    return float(NUMBER_RE.match(data.strip())[0]) if isinstance(data, str) else float(data)
+
+
+class Unchecked(Exception):
+    """A mark that declares a number not the kit's output (a cited source's value, a stated input)."""
+
+
+def cite_value(key: str) -> float:
+    """``cite:KEY`` (``cite:KEY::where``): a value of a source document, which docs/bibliography.md must
+    define; compared with the kit by the sentence, not checked against it."""
+    name = key.split("::")[0]
+    if f"[{name}]" not in (ROOT / "docs" / "bibliography.md").read_text():
+        raise LookupError(f"[{name}] is not a key of docs/bibliography.md")
+    raise Unchecked(key)
+
+
 def record_value(key: str) -> float:
     """The value of a ``record:`` key (``PATH::dotted.key``) in a stored results file (dated)."""
     return _json_value(key, dated=True)
@@ -178,13 +214,14 @@ def calc_source(getters):
 
 def _with_local(getters: dict, page_text: str) -> dict:
     """``getters`` plus the sources that need no run: this page's blocks, stored records, calc."""
-    out = {**getters, "block": block_source(page_text), "record": record_value, "file": file_value}
+    out = {**getters, "block": block_source(page_text), "record": record_value, "file": file_value,
+           "input": input_value, "cite": cite_value}
     out["calc"] = calc_source(out)
     return out
 
 
 #: the sources every check has (no run needed)
-LOCAL = ("block", "record", "file", "calc")
+LOCAL = ("block", "record", "file", "calc", "input", "cite")
 #: sources checked by their own tests, not from the quick report: ``p4t`` (``pixelkit simulate
 #: designs/pixel4t_gf180.toml --json``, dotted keys into its JSON; tests/test_pixel4t.py);
 #: ``pl`` (the GF180 dual pixel's schematic and post-layout views, ``VIEW.ARRAY.FIGURE``: C_FD, C_PD,node, the
@@ -228,6 +265,8 @@ def check(report: Path, files=None, getters=None) -> tuple[list[dict], int]:
                 key, src, quoted = m["key"], m["src"], m["num"]
                 try:
                     value = _value(here, src, key)
+                except Unchecked:
+                    continue
                 except (LookupError, StopIteration, ValueError, TypeError, ZeroDivisionError,
                         SyntaxError, FileNotFoundError, json.JSONDecodeError) as exc:
                     bad.append({"page": page.name, "line": lineno, "key": f"{src}:{key}", "quoted": quoted,
@@ -281,7 +320,10 @@ def update(report: Path, files=None, getters=None) -> int:
             nonlocal changed
             if m["src"] not in here or _elsewhere(m, getters):
                 return m.group(0)
-            value = _value(here, m["src"], m["key"])
+            try:
+                value = _value(here, m["src"], m["key"])
+            except Unchecked:
+                return m.group(0)
             tol = abs(value) * float(m["tol"]) / 100 if m["tol"] else _digits(m["num"]) * (1 + 1e-9)
             if abs(float(m["num"]) - value) <= tol:
                 return m.group(0)
