@@ -9,6 +9,8 @@ changes; run it on a commit that is on main, or say in ``ran_on`` which main com
 code, as a rebased branch's id is not main's), the date, the exit status, wall and CPU time (the command and every process it waited for),
 the 1-minute load average before and after, and everything it printed (stdout then stderr).
 
+    python -m docsite.records attach NAME reports/x/signoff.json   # a verify run's figures per condition
+
 A page quotes it with a ```text block preceded by ``<!-- record: NAME -->``: every line of the
 block must be a line of the record's output, in order, numbers at the digits quoted (the same
 check as a command's output, ``docsite/outputs.py``), and the page must name the record's commit.
@@ -65,6 +67,48 @@ def run(name: str, command: list[str]) -> dict:
     return rec
 
 
+def _sig(x, n=6):
+    return float(f"{x:.{n}g}") if isinstance(x, (int, float)) and not isinstance(x, bool) else x
+
+
+def attach(name: str, signoff: Path) -> dict:
+    """Add the per-condition figures of a verify run's ``signoff.json`` to its record ``NAME`` (the same
+    run: its ``--out``), in each spec's unit, so a page can quote a condition's figure, a spec's
+    failing conditions or yield with ``record:docs/records/NAME.json::signoff.KEY`` marks."""
+    from pixelkit.verify.figures import FIGURES, shown
+    f = FOLDER / f"{name}.json"
+    rec, d = json.loads(f.read_text()), json.loads(Path(signoff).read_text())
+    units = {r["spec"]: (r["figure"], r["unit"]) for r in d["rows"]}
+    conditions = {}
+    for c in d["conditions"]:
+        row = {spec: _sig(shown(c["figures"][fig], unit, FIGURES[fig].dim))
+               for spec, (fig, unit) in units.items() if c["figures"].get(fig) is not None}
+        pixel = d["raw"].get(c["label"], {}).get("pixel", {})
+        for i, kind in enumerate(("primary", "secondary")):
+            if "swing_V" in pixel:
+                row[f"swing_V_{kind}"] = _sig(pixel["swing_V"][i])
+            if "cg_out_V_per_e" in pixel:
+                row[f"cg_out_uV_per_e_{kind}"] = _sig(pixel["cg_out_V_per_e"][i] * 1e6)
+        conditions[c["label"]] = row
+    rows = {r["spec"]: {"unit": r["unit"], "worst": r["worst"], "value": _sig(r["value"]),
+                        "nominal": _sig(r.get("nominal")), "margin_pct": _sig(r["margin_pct"]),
+                        "failing": len(r.get("failing_at") or []), "conditions": r["conditions"],
+                        "yield": {k: _sig(v) if not isinstance(v, list) else [_sig(x) for x in v]
+                                  for k, v in (r.get("yield") or {}).items() if k != "sigma_si"}}
+            for r in d["rows"]}
+    rec["signoff"] = {"from": "the run's signoff.json (--out)", "wall_s": _sig(d["wall_s"], 5),
+                      "mc": {k: d["mc"][k] for k in ("samples", "planned", "seed", "condition")},
+                      "rows": rows, "conditions": conditions,
+                      "power": {"chip_W": _sig(d["power"]["chip_W"]),
+                                "chip_blocks_W": {k: _sig(v) for k, v in d["power"]["chip_blocks_W"].items()},
+                                "estimate_chip_blocks_W": {k: _sig(v) for k, v in
+                                                           d["power"]["estimate"]["chip_blocks_W"].items()},
+                                "pixel_W": _sig(d["power"]["pixel_W"]), "column_W": _sig(d["power"]["column_W"]),
+                                "frame_period_s": d["power"]["frame_period_s"]}}
+    f.write_text(json.dumps(rec, indent=1) + "\n")
+    return rec
+
+
 def check(files) -> tuple[list[str], int]:
     """([every problem: page, record, line], how many record blocks were checked) of ``files``."""
     bad, n = [], 0
@@ -89,6 +133,9 @@ def check(files) -> tuple[list[str], int]:
 
 
 if __name__ == "__main__":
+    if len(sys.argv) == 4 and sys.argv[1] == "attach":
+        attach(sys.argv[2], Path(sys.argv[3]))
+        sys.exit(print(f"docs/records/{sys.argv[2]}.json: signoff figures of {sys.argv[3]} added"))
     if len(sys.argv) < 4 or sys.argv[1] != "run" or sys.argv[3] != "--":
         sys.exit("usage: python -m docsite.records run NAME -- COMMAND ...")
     r = run(sys.argv[2], sys.argv[4:])
