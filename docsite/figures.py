@@ -32,7 +32,8 @@ Four sources need no run and are checked wherever the marks are (``LOCAL``):
   at its top): a measurement a test cannot repeat (a benchmark, a full-grid sign-off).
 - ``file:PATH::KEY``: a JSON data file of the repository that is an input, not a measurement (the
   truth a virtual chip was made with).
-- ``input:PATH::KEY``: a value of a design or technology file (TOML, a quantity's number as written)
+- ``input:PATH::KEY``: a value of a design or technology file (TOML, a quantity's number as written;
+  a quoted part of the key may hold dots: ``close.knobs."afe.c11".min``)
   or JSON input; ``input:WHY`` (no ``::``) a stated input no file holds, not checked.
 - ``cite:KEY``: a source document's value (``KEY`` of docs/bibliography.md), not the kit's: not checked.
 - ``calc:EXPR``: a figure the sentence derives (a ratio, a difference), ``EXPR`` arithmetic
@@ -130,7 +131,7 @@ def _json_value(key: str, dated: bool) -> float:
     data = json.loads(f.read_text())
     if dated and ("date" not in data or not ({"commit", "head"} & set(data))):
         raise ValueError(f"{path} does not say when and on what it was measured (date, commit)")
-    for part in dotted.split("."):
+    for part in _parts(dotted):
         data = data[int(part)] if isinstance(data, list) else data[part]
     return float(data)
 
@@ -150,9 +151,14 @@ def input_value(key: str) -> float:
         data = tomllib.loads(f.read_text())
     else:
         data = json.loads(f.read_text())
-    for part in dotted.split("."):
+    for part in _parts(dotted):
         data = data[int(part)] if isinstance(data, list) else data[part]
     return float(NUMBER_RE.match(data.strip())[0]) if isinstance(data, str) else float(data)
+
+
+def _parts(dotted: str) -> list[str]:
+    """``a."b.c".0`` -> ``["a", "b.c", "0"]`` (a quoted part may hold dots, as a TOML key may)."""
+    return [p.strip('"') for p in re.findall(r'"[^"]*"|[^.]+', dotted)]
 
 
 class Unchecked(Exception):

@@ -122,3 +122,4 @@ def test_unmarked_numbers_are_listed_and_marked_pages_stay_marked(tmp_path):
     bad, n = figures.check(None, [page], getters={})
     assert [(b["quoted"], b.get("now")) for b in bad[:1]] == [("2", "1")]
     assert len(bad) == 2 and "NoSuchKey2000" in bad[1]["why"]
+    assert figures._parts('close.knobs."afe.c11".min') == ["close", "knobs", "afe.c11", "min"]
