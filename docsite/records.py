@@ -97,14 +97,14 @@ def attach(name: str, signoff: Path) -> dict:
                                   for k, v in (r.get("yield") or {}).items() if k != "sigma_si"}}
             for r in d["rows"]}
     rec["signoff"] = {"from": "the run's signoff.json (--out)", "wall_s": _sig(d["wall_s"], 5),
-                      "mc": {k: d["mc"][k] for k in ("samples", "planned", "seed", "condition")},
+                      "mc": {k: d["mc"].get(k) for k in ("samples", "planned", "seed", "condition")},
                       "rows": rows, "conditions": conditions,
                       "power": {"chip_W": _sig(d["power"]["chip_W"]),
                                 "chip_blocks_W": {k: _sig(v) for k, v in d["power"]["chip_blocks_W"].items()},
                                 "estimate_chip_blocks_W": {k: _sig(v) for k, v in
                                                            d["power"]["estimate"]["chip_blocks_W"].items()},
                                 "pixel_W": _sig(d["power"]["pixel_W"]), "column_W": _sig(d["power"]["column_W"]),
-                                "frame_period_s": d["power"]["frame_period_s"]}}
+                                **{k: _sig(v) for k, v in d["power"].items() if k.endswith("_s")}}}
     f.write_text(json.dumps(rec, indent=1) + "\n")
     return rec
 
