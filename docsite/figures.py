@@ -35,6 +35,7 @@ Four sources need no run and are checked wherever the marks are (``LOCAL``):
 - ``input:PATH::KEY``: a value of a design or technology file (TOML, a quantity's number as written;
   a quoted part of the key may hold dots: ``close.knobs."afe.c11".min``)
   or JSON input; ``input:WHY`` (no ``::``) a stated input no file holds, not checked.
+- ``default:DOTTED``: the design file schema's default of a field (``afe.supply_current``), SI.
 - ``cite:KEY``: a source document's value (``KEY`` of docs/bibliography.md), not the kit's: not checked.
 - ``calc:EXPR``: a figure the sentence derives (a ratio, a difference), ``EXPR`` arithmetic
   (``+ - * / **``, ``abs min max``) over ``{SOURCE:KEY}`` references.
@@ -161,6 +162,23 @@ def _parts(dotted: str) -> list[str]:
     return [p.strip('"') for p in re.findall(r'"[^"]*"|[^.]+', dotted)]
 
 
+def default_value(key: str) -> float:
+    """The value of a ``default:`` key: the design file schema's default of a field (``afe.supply_current``,
+    ``verify.confidence``), in SI (``*1e6``: A quoted in uA), as the loader applies it."""
+    import dataclasses
+    from pixelkit.design import Design
+    cls, value = Design, None
+    for part in key.split("."):
+        f = {f.name: f for f in dataclasses.fields(cls)}[part]
+        if f.metadata.get("kind") == "table":
+            cls = f.metadata["cls"]
+            continue
+        value = f.default if f.default is not dataclasses.MISSING else f.default_factory()
+    if not isinstance(value, (int, float)) or isinstance(value, bool):
+        raise LookupError(f"{key} has no numeric default")
+    return float(value)
+
+
 class Unchecked(Exception):
     """A mark that declares a number not the kit's output (a cited source's value, a stated input)."""
 
@@ -221,13 +239,13 @@ def calc_source(getters):
 def _with_local(getters: dict, page_text: str) -> dict:
     """``getters`` plus the sources that need no run: this page's blocks, stored records, calc."""
     out = {**getters, "block": block_source(page_text), "record": record_value, "file": file_value,
-           "input": input_value, "cite": cite_value}
+           "input": input_value, "cite": cite_value, "default": default_value}
     out["calc"] = calc_source(out)
     return out
 
 
 #: the sources every check has (no run needed)
-LOCAL = ("block", "record", "file", "calc", "input", "cite")
+LOCAL = ("block", "record", "file", "calc", "input", "cite", "default")
 #: sources checked by their own tests, not from the quick report: ``p4t`` (``pixelkit simulate
 #: designs/pixel4t_gf180.toml --json``, dotted keys into its JSON; tests/test_pixel4t.py);
 #: ``pl`` (the GF180 dual pixel's schematic and post-layout views, ``VIEW.ARRAY.FIGURE``: C_FD, C_PD,node, the

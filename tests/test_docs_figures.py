@@ -123,3 +123,5 @@ def test_unmarked_numbers_are_listed_and_marked_pages_stay_marked(tmp_path):
     assert [(b["quoted"], b.get("now")) for b in bad[:1]] == [("2", "1")]
     assert len(bad) == 2 and "NoSuchKey2000" in bad[1]["why"]
     assert figures._parts('close.knobs."afe.c11".min') == ["close", "knobs", "afe.c11", "min"]
+    page.write_text("10<!--fig default:afe.supply_current*1e6--> uA, 11<!--fig default:afe.supply_current*1e6--> uA\n")
+    assert [(b["quoted"], b.get("now")) for b in figures.check(None, [page], getters={})[0]] == [("11", "10")]
