@@ -96,9 +96,37 @@ def one(src: Path, n: int, args, folder: Path) -> dict:
                       "status": r["status"], "exit": p.returncode, "candidates": len(r["iterations"]) - 1,
                       "objective": r["objective"], "smallest_margin_pct": r["smallest_margin_pct"],
                       "conflict": (r.get("conflict") or {}).get("text"),
-                      "iterations": [{k: i[k] for k in ("iteration", "mode", "accepted", "verified_on", "spice_runs",
-                                                        "spice_cached", "wall_s", "smallest_margin_pct")}
+                      "cpu_s_own": r.get("cpu_s"), "choices": r.get("choices"),
+                      "yield": r.get("yield"),
+                      "iterations": [{k: i.get(k) for k in ("iteration", "mode", "accepted", "verified_on", "spice_runs",
+                                                            "spice_cached", "cpu_s", "wall_s", "smallest_margin_pct",
+                                                            "choice")}
                                      for i in r["iterations"]]}}
+
+
+def stages(c: dict) -> list[tuple[str, int, float]]:
+    """Where the CPU went: (stage, SPICE runs, CPU s) from close.json's records (each record holds the work
+    since the one before: a candidate's sensitivities count with it)."""
+    out: dict = {}
+
+    def add(name, runs, cpu):
+        r0, c0 = out.get(name, (0, 0.0))
+        out[name] = (r0 + (runs or 0), c0 + (cpu or 0.0))
+    for ch in c.get("choices") or []:
+        sc = ch.get("screen") or {}
+        if sc.get("cpu_s") is not None:
+            add("choice screen (the first choice's start grid + the others at its worst conditions)",
+                sc.get("spice_runs"), sc.get("cpu_s"))
+    for i in c["iterations"]:
+        name = {"start": "start (whole grid; replayed after a choice screen)",
+                "global": "global stage (samples, then its choice on the grid)"}.get(
+            i["mode"], ("grid-verified candidates and checks" if i["verified_on"] == "grid" else
+                        "screened candidates (with their sensitivities)"))
+        add(name, i["spice_runs"], i.get("cpu_s"))
+    y = c.get("yield") or {}
+    if y.get("cpu_s") is not None:
+        add(f"Monte Carlo yield ({y.get('samples')} samples)", y.get("spice_runs"), y.get("cpu_s"))
+    return [(k, r, cpu) for k, (r, cpu) in out.items()]
 
 
 def show(res: dict) -> None:
@@ -107,11 +135,20 @@ def show(res: dict) -> None:
           f"{c['candidates']} candidates, smallest margin {c['smallest_margin_pct'] if c['smallest_margin_pct'] is None else round(c['smallest_margin_pct'], 3)} %, objective "
           f"{c['objective']['shown_start']} -> {c['objective']['shown']}"
           + (f"; conflict: {c['conflict']}" if c["conflict"] else ""))
-    print("  iteration  mode      accepted  verified on          SPICE runs  cached  wall at end (s)")
+    for ch in c.get("choices") or []:
+        sc = ch.get("screen") or {}
+        print(f"  choice {ch['choice']}: {ch['status']}" + (f", screen {sc['short_pct']:+.3g} % ({sc.get('worst')})"
+                                                         if sc.get("short_pct") is not None else ""))
+    print("  iteration  mode      accepted  verified on          SPICE runs  cached  CPU (s)  wall at end (s)")
     for i in c["iterations"]:
+        cpu = "-" if i.get("cpu_s") is None else f"{i['cpu_s']:.0f}"
         print(f"  {i['iteration']:>9}  {i['mode']:<8}  {'yes' if i['accepted'] else 'no':<8}  {i['verified_on']:<19}  "
-              f"{i['spice_runs']:>10}  {i['spice_cached']:>6}  {i['wall_s']:>15.0f}")
-    print(f"  close:  {c['spice_runs']} SPICE runs, {c['wall_s']:.0f} s wall, {c['cpu_s']:.0f} s CPU (ngspice)")
+              f"{i['spice_runs']:>10}  {i['spice_cached']:>6}  {cpu:>7}  {i['wall_s']:>15.0f}")
+    print("  where the CPU went (close's own count: the command and its ngspice runs):")
+    for name, runs, cpu in stages(c):
+        print(f"    {name:<88} {runs:>6} runs {cpu:>7.0f} s CPU")
+    print(f"  close:  {c['spice_runs']} SPICE runs, {c['wall_s']:.0f} s wall, {c['cpu_s']:.0f} s CPU (the command and "
+          "its ngspice runs)")
     print(f"  verify: {v['spice_runs']} SPICE runs, {v['wall_s']:.0f} s wall, {v['cpu_s']:.0f} s CPU (ngspice), "
           "the same grid, no Monte Carlo")
     print(f"  ratio close / verify: runs {c['spice_runs'] / max(v['spice_runs'], 1):.1f}, wall "

@@ -99,24 +99,37 @@ def test_close_reports_an_infeasible_set_naming_the_conflicting_specs(tmp_path, 
     assert not out.exists() and json.loads((tmp_path / "b.close.json").read_text())["status"] == "infeasible"
 
 
-def test_a_circuit_choice_closes_what_the_supply_driven_gates_cannot(tmp_path, cli):
+@pytest.mark.parametrize("choose", ["screen", "all"])
+def test_a_circuit_choice_closes_what_the_supply_driven_gates_cannot(tmp_path, cli, choose):
     """The same two specs with the gates' drive free: from the supply the set stays infeasible (as above,
     from the cache), from a boosted rail (pixel.v_gate, absent in the reference, starts at the middle of
     its bounds) the reset is hard at -10 % supply and both pass; close keeps that choice, writes the rail
-    into [pixel] and verify alone passes the file."""
+    into [pixel] and verify alone passes the file. ``choose = "screen"`` (default): the supply, listed
+    first, is simulated on the grid, the rail's start at the same conditions; the rail's start has the
+    larger smallest margin on the rows the choice moves (the supply's worst: the lag, 6.12 % at -10 %), so
+    it is closed first and, passing, ends the search: the supply is screened, not closed. ``choose =
+    "all"``: both are closed, the supply infeasible naming the lag."""
     p = _design(tmp_path, {"full_well_primary": {"min": "192 ke-"}, "image_lag_primary": {"max": "0.1 %"}},
                 {"corners": ["tt"], "temperatures": ["27 degC"], "supplies": ["-10 %"], "mc": 0},
                 {"objective": "min power", "tolerance": "3 %", "knobs": {"pixel.v_pd_reset": ["1.6 V", "2.2 V"],
                                                      "pixel.gate_drive": {"choices": ["supply", "boosted"]},
-                                                     "pixel.v_gate": ["3.0 V", "3.6 V"]}})
+                                                     "pixel.v_gate": ["3.0 V", "3.6 V"]}, "choose": choose})
     out = tmp_path / "b.toml"
     code, stdout, err = cli("close", p, "--out", out, "--json")
     assert code == 0, err
     r = json.loads(stdout)
     by = {c["choice"]: c for c in r["choices"]}
     assert by["pixel.gate_drive = boosted"]["chosen"] and by["pixel.gate_drive = boosted"]["passes"]
-    assert by["pixel.gate_drive = supply"]["status"] == "infeasible"
-    assert "image_lag_primary" in by["pixel.gate_drive = supply"]["conflict"]
+    if choose == "all":
+        assert by["pixel.gate_drive = supply"]["status"] == "infeasible"
+        assert "image_lag_primary" in by["pixel.gate_drive = supply"]["conflict"]
+    else:
+        supply, boosted = by["pixel.gate_drive = supply"], by["pixel.gate_drive = boosted"]
+        assert supply["status"] == "screened" and supply["passes"] is None
+        assert [c["choice"] for c in r["choices"]] == ["pixel.gate_drive = boosted", "pixel.gate_drive = supply"]
+        assert supply["screen"]["short_pct"] < boosted["screen"]["short_pct"]
+        assert supply["screen"]["worst"].startswith("image_lag_primary")
+        assert {i["choice"] for i in r["iterations"]} == {"pixel.gate_drive = boosted"}
     text = out.read_text()
     assert 'gate_drive = "boosted"' in text and "v_gate = " in text
     code, stdout, err = cli("verify", out, "--out", tmp_path / "v", "--json")

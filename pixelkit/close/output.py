@@ -101,6 +101,7 @@ STATUS = {
     "not closed": "no passing revision found within max_iterations",
     "stalled": "no passing revision found: the trust region collapsed on candidates the linear models did not "
                "predict (a figure not smooth in the knobs), also when reopened; not a proof that none exists",
+    "screened": "screened at its start, not closed: a combination ranked before it passed",
     "yield not met": "the revision passes every condition but its Monte Carlo yield does not reach min_yield",
     "not measured": "not every spec was measured at every condition of the closed revision",
 }
@@ -112,8 +113,11 @@ def text(r: dict) -> str:
              f"{r['wall_s']:.0f} s wall" + (f", {r['cpu_s']:.0f} s CPU" if r.get("cpu_s") is not None else "")
              + f"; objective {r['objective']['goal']}: {r['objective']['shown_start']} -> {r['objective']['shown']}"]
     for c in r.get("choices", []):
-        lines.append(f"  with {c['choice']}: {STATUS.get(c['status'], c['status']).split(':')[0]}, smallest margin "
-                     f"{_pct(c['smallest_margin_pct'])}, {r['objective']['goal']} {c['objective_shown']}"
+        sc = c.get("screen")
+        lines.append(f"  with {c['choice']}: " + (f"screen (its start) {_pct(sc['short_pct'])}; " if sc else "")
+                     + (STATUS['screened'].split(':')[0] if c['status'] == "screened" else
+                        f"{STATUS.get(c['status'], c['status']).split(':')[0]}, smallest margin "
+                        f"{_pct(c['smallest_margin_pct'])}, {r['objective']['goal']} {c['objective_shown']}")
                      + ("  <- chosen" if c["chosen"] else "") + (f"; conflict: {c['conflict']}" if c["conflict"] else ""))
     width = max(len(k["key"]) for k in r["knobs"])
     for k in r["knobs"]:

@@ -84,6 +84,14 @@ class Point:
     signoff: dict | None = None   # verify's result (without Monte Carlo)
 
 
+def cpu_s() -> float:
+    """CPU seconds (user + system) of this process and of every child it waited for: with the batch
+    backend, every ngspice run (the worker threads wait for theirs as each ends)."""
+    import resource
+    me, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return me.ru_utime + me.ru_stime + kids.ru_utime + kids.ru_stime
+
+
 class _Counter:
     """SPICE runs and cache hits of the whole close, read per iteration."""
 
@@ -91,6 +99,13 @@ class _Counter:
         from ..spice.counter import SpiceCounter
         self.c = SpiceCounter(lambda _c: None)
         self.mark = (0, 0)
+        self.cpu_mark = cpu_s()
+
+    def cpu(self) -> float:
+        """CPU seconds (this process and its ngspice runs) since the last call."""
+        now = cpu_s()
+        out, self.cpu_mark = now - self.cpu_mark, now
+        return out
 
     def delta(self) -> tuple[int, int]:
         now = (self.c.runs, self.c.cached)
@@ -555,6 +570,9 @@ class Closer:
         self.tell(f"Monte Carlo yield: {v.mc} samples at {self.nominal.label}")
         r = verify(p.design, backend=self.backend, jobs=self.jobs, scheduler=self.scheduler)
         out = check(self.base, r, self.nominal, p.margins)
+        runs, cached = self.counter.delta()
+        out.update(spice_runs=runs, spice_cached=cached, cpu_s=self.counter.cpu(), samples=r["mc"].get("samples")
+                   if isinstance(r.get("mc"), dict) else None)
         self.say(out["text"])
         return {**out, "signoff": r}
 
@@ -572,7 +590,7 @@ class Closer:
                "knobs": self.space.overrides(p.x), "radius": radius,
                "smallest_margin_pct": _pct(self.smallest(p.margins)), "objective": p.f,
                "specs": self._specs(p.margins), "errors": p.errors[:5], "spice_runs": runs, "spice_cached": cached,
-               "wall_s": time.perf_counter() - self.t0}
+               "cpu_s": self.counter.cpu(), "wall_s": time.perf_counter() - self.t0}
         self.iterations.append(rec)
         from .output import iteration_text
         self.say(iteration_text(rec, self.objective, self.label))
@@ -585,7 +603,7 @@ class Closer:
                "smallest_margin_pct": _pct(self.smallest(m)),
                "objective": None if fc is None else fc * self.f_scale * (1 if self.objective.sense == "min" else -1),
                "specs": self._specs(m), "errors": [], "spice_runs": runs, "spice_cached": cached,
-               "wall_s": time.perf_counter() - self.t0}
+               "cpu_s": self.counter.cpu(), "wall_s": time.perf_counter() - self.t0}
         self.iterations.append(rec)
         from .output import iteration_text
         self.say(iteration_text(rec, self.objective, self.label))

@@ -119,6 +119,11 @@ class CloseSettings:
                                   doc="Latin-hypercube points of the global stage over the knobs a cheap bench "
                                       "reads alone (the AFE's), run when the start fails: -1 (default) 8 per "
                                       "such knob, at least 24; 0: no global stage (the local method alone)")
+    choose: str = text("screen", choices=("screen", "all"),
+                       doc="how close picks among the circuit choices: screen (default) ranks every combination "
+                           "by its start's smallest margin where the specs bind and closes them in that order "
+                           "until one passes; all closes every combination and keeps the passing one with the "
+                           "best objective")
 
     @property
     def goal(self) -> tuple[str, str]:
