@@ -194,7 +194,7 @@ def test_one_choice_is_the_designers_circuit_and_absent_knobs_start_mid_bounds()
     designer's (close solves under it, never the macromodel); under ``gate_drive = "boosted"`` the rail
     revA leaves absent starts at the middle of its bounds (as do the OTA's keys its file does not write),
     under ``"supply"`` it is left out."""
-    from pixelkit.close.revision import _under
+    from pixelkit.close.choices import _under
     d = load_design(REF)
     by = {k.name: k for k in d.close.knobs}
     assert by["afe.opamp"].choices == ("ota",) and by["pixel.gate_drive"].choices == ("boosted", "supply")
