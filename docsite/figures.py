@@ -29,7 +29,8 @@ Four sources need no run and are checked wherever the marks are (``LOCAL``):
   checked through it; on a page whose block is a dated record, the prose is held to the record.
 - ``record:PATH::KEY``: a stored results file of the repository (JSON, ``KEY`` dotted, list items
   by index), which must say when and on what it was measured (``date`` and ``commit`` or ``head``
-  at its top): a measurement a test cannot repeat (a benchmark, a full-grid sign-off).
+  at its top): a measurement a test cannot repeat (a benchmark, a full-grid sign-off); a record of a
+  ``--json`` command reads into its output (``record:docs/records/NAME.json::output.KEY``).
 - ``file:PATH::KEY``: a JSON data file of the repository that is an input, not a measurement (the
   truth a virtual chip was made with).
 - ``input:PATH::KEY``: a value of a design or technology file (TOML, a quantity's number as written;
@@ -133,6 +134,8 @@ def _json_value(key: str, dated: bool) -> float:
     if dated and ("date" not in data or not ({"commit", "head"} & set(data))):
         raise ValueError(f"{path} does not say when and on what it was measured (date, commit)")
     for part in _parts(dotted):
+        if isinstance(data, str):           # a record's output that is JSON (a command's --json)
+            data = json.loads(data)
         data = data[int(part)] if isinstance(data, list) else data[part]
     return float(data)
 
