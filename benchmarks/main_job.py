@@ -12,10 +12,11 @@ EMPTY simulation cache of its own:
 - ``report-warm``: the same report again with every simulation in the cache (``--no-cache``: every
   section rebuilt, no SPICE run): the report's own work outside ngspice (sections, plots, KLayout,
   the page and its PDF). Its cache is the ``report`` part's of the same run, or one this part fills
-  first with the current code (not timed), or ``--warm-cache``. The simulation cache keys on the
-  model files' paths (``tech.modellib.files_fingerprint``), so a cache serves only the tree that
-  filled it: the baseline's worktree misses it and simulates (its SPICE runs say so). A same-cache
-  comparison of two commits runs both in one tree, one after the other (how docs/benchmarks.md's
+  first with the current code (not timed), or ``--warm-cache``. Since issue 41's path-independent
+  key (``tech.modellib.content_fingerprint``: the model files' content, not where they lie) every
+  checkout shares a cache; a baseline older than that key (before 2026-11-29) keys on the model
+  files' paths, so its worktree misses the cache and simulates (its SPICE runs say so): a same-cache
+  comparison with such a commit runs both in one tree, one after the other (how docs/benchmarks.md's
   report-warm figures were measured);
 - ``verify``: ``pixelkit verify designs/dual_pixel_revB.toml`` (45 conditions, Monte Carlo 200);
 - ``gap``: ``pixelkit gap predict designs/dual_pixel_revA.toml --conditions examples/measured_revA.csv``

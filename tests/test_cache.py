@@ -151,3 +151,58 @@ def test_an_edited_model_file_is_simulated_again(tmp_path, edited):
                  else f.read_text().replace("1000*", "2000*"))
     os.utime(f, ns=(f.stat().st_mtime_ns + 10**9,) * 2)
     assert _right(simulate(net()), 2000.0)
+
+
+def _lib_net(folder):
+    from pixelkit.tech.modellib import Include
+    inc = Include("lib", folder.resolve(), "a.lib", "top")
+    return Netlist("rclib", (Element("V1", ("a", "0"), 1.0), Element("R1", ("a", "b"), Param("rr")),
+                             Element("C1", ("b", "0"), 1e-9)), Tran(1e-8, 5e-6, 0, 1e-8, uic=True),
+                   includes=(inc,))
+
+
+def test_two_checkouts_share_entries_and_an_edited_copy_does_not(tmp_path):
+    """The key holds the model files' content, not where they lie: the same library in two
+    checkouts (copies in two folders) is one cache entry, and an edit of a nested file in one
+    copy re-simulates that copy only. Reference: the RC derivation with each copy's resistance."""
+    import os
+    import shutil
+    a = tmp_path / "checkout_a" / "models"
+    a.mkdir(parents=True)
+    (a / "a.lib").write_text(".lib top\n.param rscale=1\n.lib 'b.lib' x\n.endl\n")
+    (a / "b.lib").write_text(".lib x\n.param rr='1000*rscale'\n.endl\n")
+    b = tmp_path / "checkout_b" / "models"
+    shutil.copytree(a, b)
+    first = simulate(_lib_net(a))
+    assert _right(first, 1000.0) and not first.meta["cached"]
+    other = simulate(_lib_net(b))
+    assert other.meta["cached"], "the same model files in another folder must share the entry"
+    assert _right(other, 1000.0)
+    f = b / "b.lib"
+    f.write_text(f.read_text().replace("1000*", "2000*"))
+    os.utime(f, ns=(f.stat().st_mtime_ns + 10**9,) * 2)
+    edited = simulate(_lib_net(b))
+    assert not edited.meta["cached"] and _right(edited, 2000.0)
+    again = simulate(_lib_net(a))
+    assert again.meta["cached"] and _right(again, 1000.0)
+
+
+def test_the_shipped_library_copied_elsewhere_keys_the_same(tmp_path):
+    """The kit's own model library (the reference designs' GF180 models) copied to another
+    folder gives every corner's deck the key it has in place."""
+    import dataclasses
+    import shutil
+
+    from pathlib import Path
+
+    from pixelkit.design import load_design
+    models = load_design(Path(__file__).parents[1] / "designs" / "dual_pixel_revB.toml").tech.models
+    copy = tmp_path / "elsewhere"
+    shutil.copytree(models.folder, copy)
+    for corner in sorted(models.corners):
+        incs = models.includes(corner)
+        moved = tuple(dataclasses.replace(i, folder=copy.resolve()) for i in incs)
+        here = dataclasses.replace(_rc(1e3), includes=incs)
+        there = dataclasses.replace(_rc(1e3), includes=moved)
+        assert here.text() == there.text()
+        assert engine._key(here, "v", "batch") == engine._key(there, "v", "batch")

@@ -1,8 +1,11 @@
 """Content-hash cache of simulation results.
 
-The key hashes the deck text, the bytes of every model file it includes, the
+The key hashes the deck text, the bytes of every model file it includes (and of
+the files those include, by base name and content: not by where they lie, so two
+checkouts of the kit, or a model library moved, share their entries), the
 ngspice version and the backend, so a repeated sweep point is free and a
-changed model file or simulator invalidates it. An entry is the result as an
+changed model file or simulator invalidates it. The deck text names the library
+only through the kit's link (``models/<file>``, :mod:`pixelkit.tech.modellib`). An entry is the result as an
 ``.npz`` (names, metadata, arrays) kept in the kit's one checked store
 (:mod:`pixelkit.cachestore`, folder ``$PIXELKIT_CACHE/sim``): an entry that is
 damaged (truncated, flipped, empty), holds another key's result (swapped,
@@ -26,7 +29,7 @@ import numpy as np
 
 from ..cachestore import Store
 from ..readfile import FileRefused
-from ..tech.modellib import files_fingerprint
+from ..tech.modellib import content_fingerprint
 from .result import Result
 
 STORE = Store("sim", "sim-cache", "re-simulating")
@@ -39,7 +42,7 @@ def cache_dir() -> Path:
 
 def key(deck_text: str, include_files: tuple, version: str, backend: str) -> str:
     h = hashlib.sha256()
-    for part in (deck_text, files_fingerprint(tuple(sorted(str(f) for f in include_files))) if include_files else "",
+    for part in (deck_text, content_fingerprint(tuple(str(f) for f in include_files)) if include_files else "",
                  version, backend):
         h.update(part.encode())
         h.update(b"\0")

@@ -70,12 +70,10 @@ def files_fingerprint(files: tuple[str, ...]) -> str:
 
 def content_fingerprint(files: tuple[str, ...]) -> str:
     """Hash of the content (and base names) of the model files and of the files they include,
-    independent of where they lie: the same library on two machines gives the same value."""
-    h = hashlib.sha256()
-    for f, st, _ in _walk(tuple(sorted(files)), "/"):
-        h.update(Path(f).name.encode() + b"\0")
-        h.update(b"(missing)" if isinstance(st, OSError) else Path(f).read_bytes())
-    return h.hexdigest()
+    independent of where they lie: the same library in two checkouts or on two machines gives
+    the same value (the simulation cache's key: checkouts share a cache). Read again whenever
+    one of the files changed (size, mtime), like :func:`files_fingerprint`."""
+    return _content(_closure(tuple(sorted(files))))
 
 
 def _closure(files: tuple[str, ...]) -> tuple:
@@ -122,6 +120,15 @@ def _fingerprint(names: tuple[str, ...], stamps: tuple) -> str:
         h.update(path.encode())
         h.update(read_bytes(path, "model file", "model") if size >= 0 else b"(missing)")
     return h.hexdigest()[:16]
+
+
+@lru_cache(maxsize=64)
+def _content(stamps: tuple) -> str:
+    h = hashlib.sha256()
+    for path, size, _ in stamps:
+        h.update(Path(path).name.encode() + b"\0")
+        h.update(read_bytes(path, "model file", "model") if size >= 0 else b"(missing)")
+    return h.hexdigest()
 
 
 def _resolve_folder(spec: str, base: Path, source: str) -> Path:
