@@ -208,7 +208,7 @@ def drc(tmp_path_factory, ref_design, gf_design, ref_cells):
     lib.add(top)
     path = folder / "all.gds"
     lib.write_gds(str(path))
-    return run_drc(path, "TOP", ref_design.tech, folder), lib
+    return run_drc(path, "TOP", ref_design.tech, folder, cache=True), lib
 
 
 def test_foundry_deck_finds_no_violation_in_any_generated_cell(drc):
@@ -224,6 +224,39 @@ def test_foundry_deck_catches_each_broken_variant(drc, cell):
     result, _ = drc
     rule = BROKEN[cell][1]
     assert rule in result.in_cell(cell), f"{cell}: expected {rule}, the deck found {result.in_cell(cell)}"
+
+
+def test_drc_cache_serves_the_same_drawing_and_runs_a_changed_one(drc, ref_design, tmp_path, monkeypatch):
+    """The deck's result is kept by the bytes of the GDS (with the top cell, deck, options, KLayout):
+    the same file copied elsewhere gets the deck's report back byte for byte without KLayout; one
+    polygon moved (or another run mode) goes to the deck again. The verdict compared is the deck's own
+    run above (the fixture), not one the cache made."""
+    import shutil
+
+    from pixelkit.layout.signoff import drc as drc_mod
+    result, lib = drc
+    assert not result.cached
+    copy = tmp_path / "elsewhere.gds"
+    shutil.copyfile(result.report.rsplit("/", 1)[0] + "/all.gds", copy)
+    ran = []
+
+    def klayout(*a, **k):
+        ran.append(a)
+        raise RuntimeError("KLayout asked")
+    monkeypatch.setattr(drc_mod, "klayout_run", klayout)
+    hit = drc_mod.run_drc(copy, "TOP", ref_design.tech, tmp_path / "again", cache=True)
+    assert hit.cached and not ran
+    assert hit.violations == result.violations and hit.options == result.options
+    assert Path(hit.report).read_bytes() == Path(result.report).read_bytes()
+    assert "from the cache" in (tmp_path / "again" / "TOP.drc.log").read_text().splitlines()[0]
+    moved = gdstk.read_gds(str(copy))
+    cell = next(c for c in moved.cells if c.name == "MIM")
+    cell.polygons[0].translate(0.005, 0)
+    moved.write_gds(str(tmp_path / "moved.gds"))
+    for gds, mode in ((tmp_path / "moved.gds", None), (copy, "flat")):
+        with pytest.raises(RuntimeError, match="KLayout asked"):
+            drc_mod.run_drc(gds, "TOP", ref_design.tech, tmp_path / "changed", mode=mode, cache=True)
+    assert len(ran) == 2
 
 
 def test_broken_contact_really_leaves_its_metal(ref_cells):

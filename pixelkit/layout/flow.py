@@ -47,7 +47,7 @@ def write_netlists(design, cells, folder: Path, top: str = SIGNOFF_TOP) -> dict:
 def layout_design(design, out_dir: Path = Path("layouts"), rows: int = 2, cols: int = 2,
                   pictures: bool = True, drc: bool = False, lvs: bool = False, afe: bool = False,
                   shield: str = "full", foundry_lvs: bool = False, density: bool = False,
-                  antenna: bool = False, fill: bool = False) -> dict:
+                  antenna: bool = False, fill: bool = False, drc_cache: bool = False) -> dict:
     """Every cell of an R x C chip (its readout with ``afe``; ``shield`` full / pixels / none) in
     one GDS, the netlists beside it, extraction, the shield's exposure per block, pictures and,
     on request, the sign-off of the chip cell."""
@@ -98,7 +98,7 @@ def layout_design(design, out_dir: Path = Path("layouts"), rows: int = 2, cols: 
                                                  f"{design.name} {top}: junction left open (--shield {shield})"))
     if drc:
         from .signoff.drc import run_drc
-        result["drc"] = run_drc(gds, top, design.tech, out_dir / "drc").as_dict()
+        result["drc"] = run_drc(gds, top, design.tech, out_dir / "drc", cache=drc_cache).as_dict()
     if lvs:
         from .signoff.lvs import run_lvs, run_lvs_deck
         if design.tech.signoff.lvs_deck:   # the technology's own deck (another PDK's)

@@ -14,9 +14,19 @@ with KLayout ``%include`` lines (resolved by KLayout's own loader only) is run d
 Only a deck pinned by its sha256 runs (``decks.py``). KLayout works in a private folder the kit
 makes inside the output folder and its report and log are renamed into place when it has
 finished (:func:`klayout_run`); it dies with the kit (:mod:`pixelkit.children`).
+
+A run asked with ``cache=True`` (the report's layout sign-off) is kept in the kit's checked store
+(``$PIXELKIT_CACHE/drc``, :mod:`pixelkit.cachestore`) under a key of everything the deck's verdict
+depends on: the GDS file's bytes, the top cell, the deck's and the runner's bytes, the deck's
+options and KLayout's version (not the thread count, not any path). A second run on the same
+drawing gets the deck's own report back (byte for byte) and the log of the run that made it,
+headed by a line saying so; ``DrcResult.cached`` says it, ``seconds`` is that run's. A changed
+drawing (one byte of the GDS), deck or option runs the deck again.
 """
 from __future__ import annotations
 
+import hashlib
+import json
 import os
 import re
 import shutil
@@ -24,6 +34,7 @@ import subprocess
 import time
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
+from functools import lru_cache
 from pathlib import Path
 
 from ...errors import PixelkitError
@@ -51,6 +62,7 @@ class DrcResult:
     klayout: str
     violations: list = field(default_factory=list)
     report: str = ""
+    cached: bool = False   # the result of an earlier run on the same drawing (module docstring)
 
     @property
     def clean(self) -> bool:
@@ -77,7 +89,7 @@ class DrcResult:
         return {"clean": self.clean, "total": self.total, "by_rule": self.by_rule(), "deck": self.deck,
                 "top": self.top, "options": self.options, "seconds": round(self.seconds, 2),
                 "klayout": self.klayout, "report": self.report,
-                "violations": [v.__dict__ for v in self.violations]}
+                "violations": [v.__dict__ for v in self.violations], **({"cached": True} if self.cached else {})}
 
 
 def klayout_binary() -> str:
@@ -88,8 +100,16 @@ def klayout_binary() -> str:
 
 
 def klayout_version() -> str:
+    exe = klayout_binary()
+    st = os.stat(exe)
+    return _version(exe, st.st_size, st.st_mtime_ns)
+
+
+@lru_cache(maxsize=4)
+def _version(exe: str, _size: int, _mtime_ns: int) -> str:
+    """KLayout's version, asked once per binary (as it is now: size, mtime)."""
     from ... import children
-    p = children.run([klayout_binary(), "-b", "-v"], capture_output=True, text=True, timeout=60)
+    p = children.run([exe, "-b", "-v"], capture_output=True, text=True, timeout=60)
     return p.stdout.strip()
 
 
@@ -177,10 +197,21 @@ def drc_result(code: int, gds, top: str, report: Path, log: Path, deck: Path, op
     return DrcResult(str(deck), top, options, seconds, klayout_version(), parse_report(report), str(report))
 
 
-def run_drc(gds: Path, top: str, tech, workdir: Path, threads: int = 2, mode: str | None = None) -> DrcResult:
+def run_drc(gds: Path, top: str, tech, workdir: Path, threads: int = 2, mode: str | None = None,
+            cache: bool = False) -> DrcResult:
     """Run the technology's DRC deck on cell ``top`` of ``gds``; report and log in ``workdir``, written by
-    KLayout in a private stage there and renamed into place (:func:`klayout_run`)."""
+    KLayout in a private stage there and renamed into place (:func:`klayout_run`). ``cache``: take the
+    result of an earlier run on the same bytes from the DRC cache, and keep this one there (module
+    docstring)."""
     drc_deck(tech)   # verified (pinned) before anything is made
+    if cache:
+        key, deck = _cache_key(gds, top, tech, mode)
+        hit = _from_cache(key, top, workdir, deck)
+        if hit is not None:
+            return hit
+        result = run_drc(gds, top, tech, workdir, threads, mode)
+        _to_cache(key, result, Path(workdir) / f"{top}.drc.log")
+        return result
     meta = {}
 
     def args(stage: Path) -> list[str]:
@@ -194,3 +225,57 @@ def run_drc(gds: Path, top: str, tech, workdir: Path, threads: int = 2, mode: st
     report = files.get(f"{top}.lyrdb", workdir / f"{top}.lyrdb")
     return drc_result(code, gds, top, Path(report), workdir / f"{top}.drc.log", meta["deck"], meta["options"],
                       time.perf_counter() - t0)
+
+
+_STORE = None
+
+
+def _store():
+    global _STORE
+    if _STORE is None:
+        from ...cachestore import Store
+        _STORE = Store("drc", "report-cache", "running the deck again")
+    return _STORE
+
+
+def _cache_key(gds: Path, top: str, tech, mode: str | None) -> tuple[str, Path]:
+    """(the key of everything the deck's verdict on ``top`` of ``gds`` depends on (module docstring),
+    the deck)."""
+    from .deckcache import sha256
+    _args, _report, _log, deck, options = drc_command(gds, top, tech, Path("."), 2, mode)
+    h = hashlib.sha256(b"pixelkit drc cache 1\0")
+    for part in (sha256(Path(gds)), top, sha256(deck),
+                 sha256(RUNNER) if "%include" not in deck.read_text(errors="replace") else "direct",
+                 json.dumps(options, sort_keys=True), klayout_version()):
+        h.update(str(part).encode() + b"\0")
+    return h.hexdigest(), deck
+
+
+def _from_cache(key: str, top: str, workdir: Path, deck: Path) -> DrcResult | None:
+    """The stored run of ``key`` with its report and log written into ``workdir``, or None."""
+    from ...fileio import check_target, out_folder, write_atomic
+    files = _store().load(key)
+    if files is None:
+        return None
+    try:
+        meta = json.loads(files["result.json"])
+        report_bytes, log_bytes = files["report.lyrdb"], files["drc.log"]
+        meta["options"], meta["seconds"], meta["klayout"]  # noqa: B018 - all there, or the entry is not one
+    except (KeyError, ValueError, TypeError):
+        _store().drop(key)
+        return None
+    workdir = out_folder(workdir)
+    report, log = workdir / f"{top}.lyrdb", workdir / f"{top}.drc.log"
+    for p in (report, log):
+        check_target(p)
+    write_atomic(report, report_bytes)
+    write_atomic(log, f"pixelkit: DRC result from the cache (entry {key[:16]}: the same GDS bytes, top cell, "
+                      f"deck, options and KLayout); the log of the run that made it follows\n".encode() + log_bytes)
+    return DrcResult(str(deck), top, meta["options"], float(meta["seconds"]), meta["klayout"],
+                     parse_report(report), str(report), cached=True)
+
+
+def _to_cache(key: str, result: DrcResult, log: Path) -> None:
+    meta = {"options": result.options, "seconds": result.seconds, "klayout": result.klayout}
+    _store().save(key, {"result.json": json.dumps(meta).encode(), "report.lyrdb": Path(result.report).read_bytes(),
+                        "drc.log": log.read_bytes() if log.is_file() else b""})

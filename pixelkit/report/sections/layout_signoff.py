@@ -6,7 +6,9 @@ Independent paths: the DRC verdict is the foundry deck's (GlobalFoundries' GF180
 KLayout), not the generator's; LVS compares the extracted layout with the netlist the
 simulations use; the open junction is measured on the GDS read back and set beside the
 openings the design file asks for (its PD and mask-opening sizes). Quick profile: LVS and the
-shield only (the full profile runs the deck; so does `pixelkit layout --afe --drc`).
+shield only (the full profile runs the deck; so does `pixelkit layout --afe --drc`). The deck's
+result is kept in the DRC cache (``signoff/drc.py``): a report rebuilt on the same drawing (a code
+change elsewhere, ``--no-cache``) reads the deck's report back instead of running it again.
 """
 from __future__ import annotations
 
@@ -32,7 +34,8 @@ def build(ctx) -> Section:
                  + ", LVS")
     try:
         r = layout_design(d, folder, ROWS, COLS, pictures=False, drc=run_drc, lvs=True, afe=True, shield="full",
-                          foundry_lvs=chip_checks, density=chip_checks, antenna=chip_checks, fill=chip_checks)
+                          foundry_lvs=chip_checks, density=chip_checks, antenna=chip_checks, fill=chip_checks,
+                          drc_cache=True)
     except PixelkitError as exc:
         return Section.unavailable(TITLE, f"the layout cannot be signed off: {exc}")
     from ...layout.render import plot_exposure
