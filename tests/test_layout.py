@@ -208,7 +208,12 @@ def drc(tmp_path_factory, ref_design, gf_design, ref_cells):
     lib.add(top)
     path = folder / "all.gds"
     lib.write_gds(str(path))
-    return run_drc(path, "TOP", ref_design.tech, folder, cache=True), lib
+    mp = pytest.MonkeyPatch()   # a DRC cache of its own: the run below is the deck's, whatever cache the suite has
+    mp.setenv("PIXELKIT_CACHE", str(folder / "cache"))
+    try:
+        return run_drc(path, "TOP", ref_design.tech, folder, cache=True), lib
+    finally:
+        mp.undo()
 
 
 def test_foundry_deck_finds_no_violation_in_any_generated_cell(drc):
@@ -236,8 +241,10 @@ def test_drc_cache_serves_the_same_drawing_and_runs_a_changed_one(drc, ref_desig
     from pixelkit.layout.signoff import drc as drc_mod
     result, lib = drc
     assert not result.cached
+    folder = Path(result.report).parent
+    monkeypatch.setenv("PIXELKIT_CACHE", str(folder / "cache"))   # the fixture's own
     copy = tmp_path / "elsewhere.gds"
-    shutil.copyfile(result.report.rsplit("/", 1)[0] + "/all.gds", copy)
+    shutil.copyfile(folder / "all.gds", copy)
     ran = []
 
     def klayout(*a, **k):
@@ -249,6 +256,15 @@ def test_drc_cache_serves_the_same_drawing_and_runs_a_changed_one(drc, ref_desig
     assert hit.violations == result.violations and hit.options == result.options
     assert Path(hit.report).read_bytes() == Path(result.report).read_bytes()
     assert "from the cache" in (tmp_path / "again" / "TOP.drc.log").read_text().splitlines()[0]
+    other = tmp_path / "checkout_b" / "deck_runner.drc"   # another checkout's kit: its report names its runner
+    other.parent.mkdir()
+    shutil.copyfile(drc_mod.RUNNER, other)
+    monkeypatch.setattr(drc_mod, "RUNNER", other)
+    there = drc_mod.run_drc(copy, "TOP", ref_design.tech, tmp_path / "there", cache=True)
+    assert there.cached and not ran
+    assert Path(there.report).read_bytes() == Path(result.report).read_bytes().replace(
+        str(Path(drc_mod.__file__).with_name("deck_runner.drc")).encode(), str(other).encode())
+    assert str(other) in Path(there.report).read_text()
     moved = gdstk.read_gds(str(copy))
     cell = next(c for c in moved.cells if c.name == "MIM")
     cell.polygons[0].translate(0.005, 0)

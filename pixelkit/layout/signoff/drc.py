@@ -19,7 +19,8 @@ A run asked with ``cache=True`` (the report's layout sign-off) is kept in the ki
 (``$PIXELKIT_CACHE/drc``, :mod:`pixelkit.cachestore`) under a key of everything the deck's verdict
 depends on: the GDS file's bytes, the top cell, the deck's and the runner's bytes, the deck's
 options and KLayout's version (not the thread count, not any path). A second run on the same
-drawing gets the deck's own report back (byte for byte) and the log of the run that made it,
+drawing gets the deck's own report back (byte for byte; the runner's path it names is this
+checkout's) and the log of the run that made it,
 headed by a line saying so; ``DrcResult.cached`` says it, ``seconds`` is that run's. A changed
 drawing (one byte of the GDS), deck or option runs the deck again.
 """
@@ -228,6 +229,9 @@ def run_drc(gds: Path, top: str, tech, workdir: Path, threads: int = 2, mode: st
 
 
 _STORE = None
+#: in a stored report, the runner's path (the report's generator line names the script that ran): a hit
+#: in another checkout of the kit names its own runner, as a run there would
+_HERE = b"\0pixelkit-deck-runner\0"
 
 
 def _store():
@@ -268,7 +272,7 @@ def _from_cache(key: str, top: str, workdir: Path, deck: Path) -> DrcResult | No
     report, log = workdir / f"{top}.lyrdb", workdir / f"{top}.drc.log"
     for p in (report, log):
         check_target(p)
-    write_atomic(report, report_bytes)
+    write_atomic(report, report_bytes.replace(_HERE, str(RUNNER).encode()))
     write_atomic(log, f"pixelkit: DRC result from the cache (entry {key[:16]}: the same GDS bytes, top cell, "
                       f"deck, options and KLayout); the log of the run that made it follows\n".encode() + log_bytes)
     return DrcResult(str(deck), top, meta["options"], float(meta["seconds"]), meta["klayout"],
@@ -277,5 +281,6 @@ def _from_cache(key: str, top: str, workdir: Path, deck: Path) -> DrcResult | No
 
 def _to_cache(key: str, result: DrcResult, log: Path) -> None:
     meta = {"options": result.options, "seconds": result.seconds, "klayout": result.klayout}
-    _store().save(key, {"result.json": json.dumps(meta).encode(), "report.lyrdb": Path(result.report).read_bytes(),
+    report = Path(result.report).read_bytes().replace(str(RUNNER).encode(), _HERE)
+    _store().save(key, {"result.json": json.dumps(meta).encode(), "report.lyrdb": report,
                         "drc.log": log.read_bytes() if log.is_file() else b""})
