@@ -165,6 +165,26 @@ def test_pixel_geometry_is_drawn_once_per_design(modelled, responses):
     assert drawn(replace(modelled, name=modelled.name + "_b")) is not geo
 
 
+def test_close_names_the_effective_openings_floor(modelled, responses):
+    """close's conflict on the secondary under the modelled light names the effective opening and its floor (the
+    primary's light, the mask openings closed): far above the drawn opening (the carriers from the primary), below
+    the whole effective opening, which is the design's photoactive area, and with the own opening's light adding
+    up to it within 5 % (the two fields interfere near the storage nodes); nothing for a conflict elsewhere or
+    under the geometric light."""
+    from dataclasses import replace
+    from pixelkit.close.output import light_floor
+    from pixelkit.layout.pex.lightfigures import decomposition
+    f = light_floor(modelled, [{"spec": "criterion_secondary"}], [])
+    assert f["floor_m2"] > 10 * f["drawn_m2"] and f["floor_m2"] < f["effective_m2"], f
+    assert f["effective_m2"] == pytest.approx(modelled.secondary.photoactive_area, rel=1e-9)
+    assert f["floor_m2"] + decomposition(modelled)["own_m2"] == pytest.approx(f["effective_m2"], rel=0.05)
+    assert f"{f['floor_m2'] * 1e12:.3g} um2" in f["text"] and "floor" in f["text"]
+    assert light_floor(modelled, [], [{"key": "secondary.mask_opening"}]) is not None
+    assert light_floor(modelled, [{"spec": "power"}], [{"key": "pixel.v_pd_reset"}]) is None
+    geometric = replace(modelled, light=replace(modelled.light, model="geometric"))
+    assert light_floor(geometric, [{"spec": "criterion_secondary"}], []) is None
+
+
 @pytest.mark.slow
 def test_close_on_a_modelled_design_reruns_the_light_per_opening_and_names_the_spec(modelled, tmp_path, cli):
     """``close`` on a design with light.model = "modelled" (the coarse model, one condition, the secondary's mask
@@ -189,6 +209,10 @@ def test_close_on_a_modelled_design_reruns_the_light_per_opening_and_names_the_s
     assert code == 1, err
     r = json.loads(out)
     assert r["status"] == "infeasible" and "criterion_secondary" in err, err
+    # the conflict names the floor: the primary's light's part of the effective opening, far above the opening
+    floor = r["conflict"]["light_floor"]
+    assert "effective opening's floor" in err and f"{floor['floor_m2'] * 1e12:.3g} um2" in err, err
+    assert floor["floor_m2"] > 10 * floor["drawn_m2"] and floor["floor_m2"] < floor["effective_m2"], floor
     path = json.loads((tmp_path / "closed.close.json").read_text())["iterations"]
     seen = {}
     for it in path:

@@ -90,7 +90,29 @@ def conflicts(closer, p, last) -> dict:
         text = "no spec carries the last step (the models found no direction)"
     if why:
         text += ": " + "; ".join(why)
-    return {"specs": specs, "knobs": knobs, "text": text}
+    floor = light_floor(p.design, specs, knobs)
+    if floor:
+        text += "; " + floor["text"]
+    return {"specs": specs, "knobs": knobs, "text": text, "light_floor": floor}
+
+
+def light_floor(design, specs, knobs) -> dict | None:
+    """Under the collection model's light (``light.model = "modelled"``) a conflict on the secondary (a spec or a
+    knob of it) is bounded by the secondary's effective opening, which no mask opening takes below the primary's
+    light's part (``lightfigures.decomposition``: the carriers diffusing from under the primary and the light under
+    the shield, the mask openings closed): that floor, the effective opening of the best compromise and its drawn
+    opening (m2, and the sentence the conflict adds); None otherwise."""
+    if design is None or design.light.model != "modelled":
+        return None
+    if not any("secondary" in s["spec"] for s in specs) and not any(k["key"].startswith("secondary.") for k in knobs):
+        return None
+    from ..layout.pex.lightfigures import decomposition
+    d = decomposition(design)
+    return {"floor_m2": d["primary_m2"], "effective_m2": d["total_m2"], "drawn_m2": d["drawn_m2"],
+            "text": f"under the modelled light the secondary collects like an opening of {d['total_m2'] * 1e12:.3g} um2 "
+                    f"(drawn {d['drawn_m2'] * 1e12:.3g} um2), of which {d['primary_m2'] * 1e12:.3g} um2 is the primary's "
+                    "light whatever the mask opening: the effective opening's floor, which no knob of the opening "
+                    "removes (docs/light-collection.md)"}
 
 
 STATUS = {
