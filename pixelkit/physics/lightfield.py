@@ -213,9 +213,9 @@ def absorbed(o: Optics, wavelength: float, n_si: complex, alpha: float, grid_z: 
                 dens = np.empty((nz, o.ny, o.nx))
                 for l, d in enumerate(grid_z[:-1]):
                     ph = np.exp(1j * kz_si * d)
-                    dens[l] = sum(np.abs(fft.ifft2(c * ph) * npts) ** 2 for c in (sx, sy, sz)) * scale
+                    dens[l] = sum(np.abs(fft.ifft2((c * ph).astype(SPECTRUM)) * npts) ** 2 for c in (sx, sy, sz)) * scale
             else:                                                 # its surface pattern, decaying
-                top = sum(np.abs(fft.ifft2(c) * npts) ** 2 for c in (sx, sy, sz)) * scale
+                top = sum(np.abs(fft.ifft2(c.astype(SPECTRUM)) * npts) ** 2 for c in (sx, sy, sz)) * scale
                 dens = top[None] * np.exp(-alpha * grid_z[:-1])[:, None, None]
             vox += (dens * within[:, None, None]).reshape(nz, ny, ratio, nx, ratio).sum(axis=(2, 4))
             deep += float(dens[-1].sum()) * np.exp(-alpha * dz[-1])
@@ -229,13 +229,13 @@ def _bounce(o, ex, ey, kz, base, planes, fresnel, p_inc):
     zs = [0.0] + [p[0] for p in planes] + [o.shield_z]
     masks = [None] + [p[1] for p in planes] + [o.shield]
     n = len(zs)
-    prop = [np.exp(1j * kz * (zs[i + 1] - zs[i])) for i in range(n - 1)]
+    prop = [np.exp(1j * kz * (zs[i + 1] - zs[i])).astype(SPECTRUM) for i in range(n - 1)]
     none = None
     down = [none] * n
     up = [none] * n
-    down[-1] = (ex, ey)
+    down[-1] = (ex.astype(SPECTRUM), ey.astype(SPECTRUM))
     out = []
-    r_s, r_p = fresnel
+    r_s, r_p = (r.astype(SPECTRUM) for r in fresnel)
     for _step in range(o.bounces * n):
         arr_down = [none] * n
         arr_up = [none] * n
@@ -249,31 +249,54 @@ def _bounce(o, ex, ey, kz, base, planes, fresnel, p_inc):
         if arr_down[0] is not None:
             ts, tp = base.sp(*arr_down[0])
             out.append((ts * (1 + r_s), tp * (1 + r_p)))
-            up[0] = base.xy(ts * r_s, tp * r_p)
+            up[0] = tuple(c.astype(SPECTRUM) for c in base.xy(ts * r_s, tp * r_p))
         for i in range(1, n):
-            m = masks[i]
-            ad, au = arr_down[i], arr_up[i]
-            if i < n - 1:
-                down[i] = _add(_masked(ad, ~m), _masked(au, m, -1))
-                up[i] = _add(_masked(au, ~m), _masked(ad, m, -1))
-            else:
-                down[i] = _masked(au, m, -1)
+            down[i], up[i] = _plane(arr_down[i], arr_up[i], masks[i], top=i == n - 1)
         left = sum(base.power(*f) for f in down + up if f is not None)
         if len(out) >= o.bounces or left < o.floor * p_exit:
             break
     return out
 
 
-def _add(a, b):
-    if a is None:
-        return b
+#: the spectra's precision in the bounces: single (the FFTs are nearly all of the light field's cost; their
+#: rounding, ~1e-7 of the field, is far below the model's other errors: benchmarks/light_map.py measures it)
+SPECTRUM = np.complex64
+
+
+def _plane(ad, au, mask, top=False):
+    """(down, up) spectra leaving a metal plane that ``ad`` (going down) and ``au`` (going up) arrive at: where
+    the metal is drawn (``mask``) each is reflected (E_t -> -E_t) into the other direction, elsewhere it passes;
+    the shield (``top``) lets the light going up out through its openings. One inverse transform per arriving
+    field and one transform per leaving one; a plane all metal or all open needs none (None: no field)."""
+    if not mask.any():
+        return (None, None) if top else (ad, au)
+    if mask.all():
+        return _neg(au), (None if top else _neg(ad))
+    rd, ru = _real(ad), _real(au)
+    if top:
+        return _spectrum(_sub(None, ru, mask)), None
+    return _spectrum(_sub(_keep(rd, ~mask), ru, mask)), _spectrum(_sub(_keep(ru, ~mask), rd, mask))
+
+
+def _real(f):
+    return None if f is None else tuple(fft.ifft2(c) for c in f)
+
+
+def _spectrum(f):
+    return None if f is None else tuple(fft.fft2(c) for c in f)
+
+
+def _neg(f):
+    return None if f is None else (-f[0], -f[1])
+
+
+def _keep(f, mask):
+    return None if f is None else (f[0] * mask, f[1] * mask)
+
+
+def _sub(a, b, mask):
+    """a - b x mask (fields in real space; None: no field)."""
     if b is None:
         return a
-    return (a[0] + b[0], a[1] + b[1])
-
-
-def _masked(f, mask, sign=1):
-    """The spectra of (field x mask) x sign; None for no field."""
-    if f is None or not mask.any():
-        return None
-    return tuple(sign * fft.fft2(fft.ifft2(c) * mask) for c in f)
+    mb = (b[0] * mask, b[1] * mask)
+    return (-mb[0], -mb[1]) if a is None else (a[0] - mb[0], a[1] - mb[1])
