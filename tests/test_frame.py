@@ -133,3 +133,32 @@ def test_array_check_reports_the_split_against_the_undivided_decks(cli, tmp_path
     assert c["split"] == "columns" and not c["void"]
     assert set(c) >= {"max_diff_signal_V", "max_diff_reset_level_V", "max_diff_afe_V"}
     assert c["ok"] and 0 < max(v for k, v in c.items() if k.startswith("max_diff")) < 1e-4
+
+
+def test_identical_column_chains_are_simulated_once(ref_design):
+    """Columns share only ideal sources, so a column chain whose photocurrents equal an earlier
+    chain's in every row is that chain's circuit under other names: it is not simulated and takes
+    the earlier chain's values. Independent path: the same frame with every chain simulated
+    (``reuse=False``). A chain differing in one row's current by one part in 1e12 is simulated."""
+    from pixelkit.chip.frame import _same_chain, tiles
+    d = ref_design
+    n = d.secondary_per_pixel
+    ip = np.full((2, 3), 3e-10)
+    base = np.array([[2e-11, 5e-11, 8e-11], [3e-11, 6e-11, 9e-11]])
+    is_ = np.hstack([base, base * 1.5, base])          # dual columns 0 and 2 alike, 1 not
+    kw = dict(with_afe=True, split="columns", kinds=("secondary",), jobs=2)
+    once = simulate_frame(d, ip, is_, **kw)
+    every = simulate_frame(d, ip, is_, reuse=False, **kw)
+    assert once.reused == [{"chain": "frame_2x3_s_c2", "from": "frame_2x3_s_c0"}] and not every.reused
+    assert (once.decks, every.decks) == (4, 6) and not once.failures and not every.failures
+    for name in ("signal", "reset_level", "afe"):
+        a, b = getattr(once, name)["secondary"], getattr(every, name)["secondary"]
+        assert np.all(np.isfinite(a)) and np.max(np.abs(a - b)) < 1e-9, name
+    assert np.all(np.abs(every.signal["secondary"][:, 2 * n:] - every.signal["secondary"][:, :n]) < 1e-9)
+    # one current moved by 1e-12 of itself: another chain, simulated
+    near = is_.copy()
+    near[1, 2 * n + 1] *= 1 + 1e-12
+    chains = [(d, ip, near, t, None, True, None, 5e-7, "batch", None, 2, f"c{t.cols[0]}", False, None)
+              for t in tiles(2, 3, "columns", True, ("secondary",))]
+    assert _same_chain(chains[2], chains[:2]) is None
+    assert _same_chain(chains[2], [(d, ip, is_, *chains[0][3:])]) is None

@@ -32,6 +32,14 @@ column within 0.013 mV (primary) / 0.038 mV (secondary); holding the line at the
 hand-over value from t = 0 instead left a dim pixel 2.2 mV off, re-simulating the
 previous row as a lead (the former row split) 0.39 mV off from the third row on.
 
+Identical chains (``reuse=True``, the default): two chains of the same array whose columns see
+the same photocurrents in every row (a uniform scene, a flat field, a dark or saturated band) are
+the same circuit under other names, since columns share only ideal sources. The later one is not
+simulated; its cells take the earlier chain's values, after a check: the photocurrents of every row
+equal bit for bit, and the first row's deck text the same once its column numbers are renamed to the
+earlier chain's (a column-dependent element, a Monte Carlo draw or an extracted view per column
+would differ there, and the chain is then simulated). ``Frame.reused`` lists them.
+
 ``split="rows"`` (the default without the AFE): one deck per array and row with all its
 columns (no AFE, no memory beyond the line, which the row's own RS resets; 27-row column
 within 0.011 mV of the undivided deck). Refused with the AFE.
@@ -94,6 +102,8 @@ class Frame:
     #: kind -> rows x cols x 2 (V): the sampled signal level's and reset level's own errors
     #: (sampled - settled; the settling error is the second minus the first)
     settling_parts: dict = field(default_factory=dict)
+    #: column chains not simulated, each identical to an earlier one: {"chain": title, "from": title}
+    reused: list = field(default_factory=list)
 
     def settling_summary(self, limit=None) -> dict | None:
         """``limit``: V, or per array a dict (default ``settling.LIMIT_V``)."""
@@ -104,7 +114,8 @@ class Frame:
 
     def as_dict(self) -> dict:
         out = {"rows": self.rows, "cols": self.cols, "split": self.split, "decks": self.decks,
-               "wall_s": self.wall_s, "failures": self.failures, "retried": self.retried}
+               "wall_s": self.wall_s, "failures": self.failures, "retried": self.retried,
+               **({"reused": self.reused} if self.reused else {})}
         for k in KINDS:
             out[f"{k}_signal_V"] = _listed(self.signal[k])
             out[f"{k}_reset_level_V"] = _listed(self.reset_level[k])
@@ -317,14 +328,16 @@ def default_split(with_afe: bool, seeded: bool = False) -> str:
 def simulate_frame(design, iph_p, iph_s, with_afe: bool = False, split: str | None = None,
                    t_exp: float | None = None, mismatch_seed: int | None = None, backend: str = "batch",
                    jobs: int | None = None, scheduler=None, options=None, max_step: float | None = None,
-                   kinds=KINDS, settling: bool = False, compression: dict | None = None) -> Frame:
+                   kinds=KINDS, settling: bool = False, compression: dict | None = None,
+                   reuse: bool = True) -> Frame:
     """Simulate one frame; see the module docstring for ``split``. ``options``: simulator
     options over the kit's defaults (``spice.options``); ``kinds``: the arrays to simulate
     (the others' results stay NaN); ``settling``: also read every row with a long S1 and
     measure each subpixel's settling error (``chip.settling``; twice the decks; not for
     ``split="none"``, whose decks hold every row); ``compression``: per array t_int / t_exp of
     the currents (``scene.Photocurrents.compression``): the light falls back to the real one when
-    the exposure ends (``circuits.array.array_bench``)."""
+    the exposure ends (``circuits.array.array_bench``); ``reuse``: a column chain identical to an
+    earlier one takes its values instead of being simulated (module docstring)."""
     rows, cols = frame_shape(design, iph_p, iph_s)
     n = design.secondary_per_pixel
     split = default_split(with_afe, mismatch_seed is not None) if split is None else split
@@ -335,12 +348,17 @@ def simulate_frame(design, iph_p, iph_s, with_afe: bool = False, split: str | No
     tm = frame_timings(design, t_exp, rows)
     if max_step is None:
         max_step = min(t.t_row for t in tm.values()) / STEPS_PER_ROW
-    tasks = []
+    tasks, copies = [], []
     for tile in tiles(rows, cols, split, with_afe, kinds):
         tag = "_".join(PREFIX[k] for k in tile.kinds)
         if split == "columns":
-            tasks.append((design, iph_p, iph_s, tile, t_exp, with_afe, mismatch_seed, max_step, backend, options,
-                          rows, f"frame_{rows}x{cols}_{tag}_c{tile.cols[0]}", settling, compression))
+            task = (design, iph_p, iph_s, tile, t_exp, with_afe, mismatch_seed, max_step, backend, options,
+                    rows, f"frame_{rows}x{cols}_{tag}_c{tile.cols[0]}", settling, compression)
+            same = _same_chain(task, tasks) if reuse and mismatch_seed is None else None
+            if same is not None:
+                copies.append((same, task))
+            else:
+                tasks.append(task)
             continue
         tag += f"_r{tile.rows[0]}" if len(tile.rows) == 1 else ""
         probes = _probes(design, tile, tm, with_afe)
@@ -367,7 +385,11 @@ def simulate_frame(design, iph_p, iph_s, with_afe: bool = False, split: str | No
     notes = [] if split != "none" else ["not measured: a frame with split='none' reads every row in one deck"]
     t0 = time.perf_counter()
     fn, desc = (_chain, "frame column chains") if split == "columns" else (_probe, "frame tiles")
+    outs = {}
     for i, out in run_tasks(fn, tasks, jobs=jobs, scheduler=scheduler, desc=desc, label=_task_title):
+        outs[i] = out
+    outs = [*outs.values(), *(_copied(outs[src], tasks[src], task, n) for src, task in copies if src in outs)]
+    for out in outs:
         failures += out["failures"]
         retried += out["retried"]
         decks += out["decks"]
@@ -381,7 +403,58 @@ def simulate_frame(design, iph_p, iph_s, with_afe: bool = False, split: str | No
             parts[k][r, j] = e
         notes += out.get("notes", [])
     return Frame(rows, cols, sig, rst, afe, decks, time.perf_counter() - t0, split, failures, retried,
-                 settle, notes if settling else [], parts)
+                 settle, notes if settling else [], parts,
+                 [{"chain": task[11], "from": tasks[src][11]} for src, task in copies])
+
+
+def _same_chain(task, earlier) -> int | None:
+    """The index in ``earlier`` of a column chain identical to ``task``'s (module docstring: same
+    array and column count, the same photocurrents in every row bit for bit, and the first row's
+    deck the same once its column numbers are renamed), or None."""
+    import re
+    design, tile = task[0], task[3]
+    n = design.secondary_per_pixel
+    kind = tile.kinds[0]
+    pick = 1 if kind == "primary" else 2
+    mine = tile.columns(kind, n)
+    for i, other in enumerate(earlier):
+        t2 = other[3]
+        theirs = t2.columns(kind, n)
+        if t2.kinds != tile.kinds or len(theirs) != len(mine) or any(a % n != b % n for a, b in zip(mine, theirs)):
+            continue
+        if not np.array_equal(np.asarray(task[pick])[:, mine], np.asarray(other[pick])[:, theirs]):
+            continue
+        to = dict(zip(map(str, mine), map(str, theirs)))
+        a, b = (_first_deck(x) for x in (other, task))
+        if a == re.sub(r"(?<=_)(\d+)(?![\d.eE])", lambda m: to.get(m.group(1), m.group(1)), b):
+            return i
+    return None
+
+
+def _first_deck(task) -> str:
+    """The text of a chain's first deck, its title left out (what ngspice simulates)."""
+    design, ip, is_, tile, t_exp, with_afe, seed, max_step, _b, _o, _rows, _title, _s, comp = task
+    net = array_bench(design, ip, is_, replace(tile, rows=(0,)), t_exp, with_afe, seed, max_step, title="chain",
+                      compression=comp)
+    return net.text()
+
+
+def _copied(out: dict, source, task, n: int) -> dict:
+    """The results of chain ``source`` as those of the identical chain ``task``: each cell moved to
+    the same place among ``task``'s columns; a failure of the source is the copy's too."""
+    kind = task[3].kinds[0]
+    to = dict(zip(source[3].columns(kind, n), task[3].columns(kind, n)))
+    moved = {part: {(k, r, to[j]): v for (k, r, j), v in out.get(part, {}).items()}
+             for part in ("values", "settling", "parts")}
+    import re
+
+    def said(what: str, entries: list) -> list:
+        return [{"deck": f["deck"].replace(source[11], task[11], 1),
+                 "message": f"identical to chain {source[11]}, whose deck {what}: {f['message']}"} for f in entries]
+    notes = [re.sub(r"column (\d+):", lambda m: f"column {to.get(int(m.group(1)), m.group(1))}:", x)
+             for x in out.get("notes", [])]
+    return {**moved, "failures": said("failed", out["failures"]), "retried": said("was retried", out["retried"]),
+            "decks": 0, "notes": notes}
 
 
 #: Tolerances at which a split is judged against the undivided deck: at the defaults two decks

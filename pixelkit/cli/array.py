@@ -73,7 +73,9 @@ def array_cmd(design, rows, cols, scene, unit, with_afe, split, check, settling,
         data["error"] = "some decks failed"
 
     def text(x):
-        lines = [f"{x['rows']} x {x['cols']} frame, {x['decks']} deck(s), {x['wall_s']:.1f} s",
+        same = (f" ({len(x['reused'])} column chain(s) identical to an earlier one's, not simulated: their values "
+                f"are that chain's)") if x.get("reused") else ""
+        lines = [f"{x['rows']} x {x['cols']} frame, {x['decks']} deck(s), {x['wall_s']:.1f} s{same}",
                  f"clipped (saturated): {x['clipped']}", *settling_lines(x["settling"]),
                  f"table: {x['csv']}", f"plot: {x['plot']}"]
         if "check" in x:
