@@ -27,7 +27,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from common import ROOT, child_cpu_s
+from common import child_cpu_s, chip_slice
 
 #: How far an option set may move any figure from the kit's options: a tenth of the frame's own
 #: error at the kit's tolerances against the converged deck (0.13 - 0.17 mV, docs/arrays.md).
@@ -65,20 +65,8 @@ def _diff_mV(a: dict, b: dict) -> float:
 
 
 def main(argv) -> int:
-    import argparse
-    ap = argparse.ArgumentParser()
-    ap.add_argument("design", nargs="?", default=str(ROOT / "designs" / "dual_pixel_revA.toml"))
-    ap.add_argument("--rows", type=int, default=9)
-    ap.add_argument("--cols", type=int, default=2)
-    ap.add_argument("--only", default="")
-    ap.add_argument("--json", action="store_true")
-    a = ap.parse_args(argv)
-    from pixelkit.api import load_design
     from pixelkit.chip.frame import CONVERGED
-    from pixelkit.chip.scene import default_map, photocurrents
-    d = load_design(a.design)
-    m, unit = default_map(a.rows, d.secondary_per_pixel * a.cols, "gradient")
-    ph = photocurrents(d, a.rows, a.cols, m, unit)
+    a, d, ph = chip_slice(argv, 2, "gradient", (("--only", ""),))
     sets = {"kit": (), **{k: v for k, v in CANDIDATES.items() if not a.only or k in a.only.split(",")},
             "converged": CONVERGED}
     runs = {}

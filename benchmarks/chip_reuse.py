@@ -19,26 +19,14 @@ import tempfile
 import time
 from pathlib import Path
 
-from common import ROOT, child_cpu_s
+from common import child_cpu_s, chip_slice
 
 
 def main(argv) -> int:
-    import argparse
-
     import numpy as np
-    ap = argparse.ArgumentParser()
-    ap.add_argument("design", nargs="?", default=str(ROOT / "designs" / "dual_pixel_revA.toml"))
-    ap.add_argument("--rows", type=int, default=9)
-    ap.add_argument("--cols", type=int, default=6)
-    ap.add_argument("--scene", default="uniform")
-    ap.add_argument("--json", action="store_true")
-    a = ap.parse_args(argv)
-    from pixelkit.api import load_design
+
     from pixelkit.chip.frame import simulate_frame
-    from pixelkit.chip.scene import default_map, photocurrents
-    d = load_design(a.design)
-    m, unit = default_map(a.rows, d.secondary_per_pixel * a.cols, a.scene)
-    ph = photocurrents(d, a.rows, a.cols, m, unit)
+    a, d, ph = chip_slice(argv, 6, "uniform")
     runs, frames = {}, {}
     for name, reuse in (("every chain", False), ("reuse", True)):
         os.environ["PIXELKIT_CACHE"] = tempfile.mkdtemp(prefix="pk-bench-reuse-")

@@ -38,3 +38,23 @@ def empty_gds(path: Path, design) -> Path:
     lib.add(cell)
     lib.write_gds(str(path))
     return path
+
+
+def chip_slice(argv, cols: int, scene: str, extra=()):
+    """The arguments of a chip-slice benchmark (``DESIGN --rows R --cols C [--scene S] --json`` and
+    ``extra``: (flag, default) pairs), the design and the photocurrents ``pixelkit array`` gives it."""
+    import argparse
+    ap = argparse.ArgumentParser()
+    ap.add_argument("design", nargs="?", default=str(ROOT / "designs" / "dual_pixel_revA.toml"))
+    ap.add_argument("--rows", type=int, default=9)
+    ap.add_argument("--cols", type=int, default=cols)
+    ap.add_argument("--scene", default=scene)
+    ap.add_argument("--json", action="store_true")
+    for flag, default in extra:
+        ap.add_argument(flag, default=default)
+    a = ap.parse_args(argv)
+    from pixelkit.api import load_design
+    from pixelkit.chip.scene import default_map, photocurrents
+    d = load_design(a.design)
+    m, unit = default_map(a.rows, d.secondary_per_pixel * a.cols, a.scene)
+    return a, d, photocurrents(d, a.rows, a.cols, m, unit)
