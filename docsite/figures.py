@@ -37,6 +37,8 @@ Four sources need no run and are checked wherever the marks are (``LOCAL``):
   a quoted part of the key may hold dots: ``close.knobs."afe.c11".min``)
   or JSON input; ``input:WHY`` (no ``::``) a stated input no file holds, not checked.
 - ``default:DOTTED``: the design file schema's default of a field (``afe.supply_current``), SI.
+- ``schema:DOTTED.META[.i]``: a field's metadata in the design schema (``schema:pixel.sf_bias.plausible.1``).
+- ``const:pixelkit.MODULE.NAME[.KEY...]``: a constant of the kit's code (a limit, a bound), SI.
 - ``cite:KEY``: a source document's value (``KEY`` of docs/bibliography.md), not the kit's: not checked.
 - ``calc:EXPR``: a figure the sentence derives (a ratio, a difference), ``EXPR`` arithmetic
   (``+ - * / **``, ``abs min max``) over ``{SOURCE:KEY}`` references.
@@ -170,16 +172,48 @@ def default_value(key: str) -> float:
     ``verify.confidence``), in SI (``*1e6``: A quoted in uA), as the loader applies it."""
     import dataclasses
     from pixelkit.design import Design
-    cls, value = Design, None
-    for part in key.split("."):
+    cls, value, parts = Design, None, key.split(".")
+    while parts:
+        part = parts.pop(0)
         f = {f.name: f for f in dataclasses.fields(cls)}[part]
         if f.metadata.get("kind") == "table":
             cls = f.metadata["cls"]
             continue
+        if parts:                               # schema: a field's metadata (plausible.0, le, ...)
+            value = f.metadata
+            for m in parts:
+                value = value[int(m)] if isinstance(value, (list, tuple)) else value[m]
+            break
         value = f.default if f.default is not dataclasses.MISSING else f.default_factory()
     if not isinstance(value, (int, float)) or isinstance(value, bool):
         raise LookupError(f"{key} has no numeric default")
     return float(value)
+
+
+def const_value(key: str) -> float:
+    """The value of a ``const:`` key: a constant of the kit's code, ``pixelkit.MODULE.NAME`` then
+    dotted keys or indices into it (``const:pixelkit.verify.figures.PLAUSIBLE.power.1``): a limit or
+    a stated bound the code itself holds, so the page fails when the code changes it."""
+    import importlib
+    parts = key.split(".")
+    if parts[0] != "pixelkit":
+        raise LookupError(f"{key}: only constants of pixelkit")
+    for n in range(len(parts), 0, -1):
+        try:
+            data, rest = importlib.import_module(".".join(parts[:n])), parts[n:]
+            break
+        except ImportError:
+            continue
+    for part in rest:
+        if isinstance(data, (list, tuple)):
+            data = data[int(part)]
+        elif isinstance(data, dict):
+            data = data[part]
+        else:
+            data = getattr(data, part)
+    if not isinstance(data, (int, float)) or isinstance(data, bool):
+        raise LookupError(f"{key} is not a number")
+    return float(data)
 
 
 class Unchecked(Exception):
@@ -242,13 +276,14 @@ def calc_source(getters):
 def _with_local(getters: dict, page_text: str) -> dict:
     """``getters`` plus the sources that need no run: this page's blocks, stored records, calc."""
     out = {**getters, "block": block_source(page_text), "record": record_value, "file": file_value,
-           "input": input_value, "cite": cite_value, "default": default_value}
+           "input": input_value, "cite": cite_value, "default": default_value, "schema": default_value,
+           "const": const_value}
     out["calc"] = calc_source(out)
     return out
 
 
 #: the sources every check has (no run needed)
-LOCAL = ("block", "record", "file", "calc", "input", "cite", "default")
+LOCAL = ("block", "record", "file", "calc", "input", "cite", "default", "schema", "const")
 #: sources checked by their own tests, not from the quick report: ``p4t`` (``pixelkit simulate
 #: designs/pixel4t_gf180.toml --json``, dotted keys into its JSON; tests/test_pixel4t.py);
 #: ``pl`` (the GF180 dual pixel's schematic and post-layout views, ``VIEW.ARRAY.FIGURE``: C_FD, C_PD,node, the

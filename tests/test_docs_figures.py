@@ -125,3 +125,7 @@ def test_unmarked_numbers_are_listed_and_marked_pages_stay_marked(tmp_path):
     assert figures._parts('close.knobs."afe.c11".min') == ["close", "knobs", "afe.c11", "min"]
     page.write_text("10<!--fig default:afe.supply_current*1e6--> uA, 11<!--fig default:afe.supply_current*1e6--> uA\n")
     assert [(b["quoted"], b.get("now")) for b in figures.check(None, [page], getters={})[0]] == [("11", "10")]
+    page.write_text("1<!--fig schema:pixel.sf_bias.plausible.1*1e3--> mA, 99<!--fig const:pixelkit.verify.figures.PLAUSIBLE.power_chip.1--> W, "
+                    "1<!--fig const:os.sep--> x\n")
+    bad = figures.check(None, [page], getters={})[0]
+    assert [(b["quoted"], b.get("now")) for b in bad[:1]] == [("99", "100")] and "only constants of pixelkit" in bad[1]["why"]
