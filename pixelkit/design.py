@@ -318,7 +318,7 @@ def load_design(path: str | Path) -> Design:
     path = Path(path)
     raw = read_toml(path, "design")
     if raw.get("family", "dual_pixel") != "dual_pixel":  # another family: a clear refusal
-        runs = ("simulate, models, regress, verify, netlist and report" if raw["family"] in ("pixel4t", "netlist")
+        runs = ("simulate, models, regress, verify, close, netlist and report" if raw["family"] in ("pixel4t", "netlist")
                 else "simulate, models and regress")
         raise ConfigError(str(path), "family", raw["family"], f"a dual-pixel design for this command (a "
                           f"{raw['family']} design runs with {runs})")

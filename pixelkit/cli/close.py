@@ -23,7 +23,14 @@ def close_cmd(design, out, scheduler, backend, jobs, as_json):
     from ..errors import EXIT_REGRESSION, verdict_exit
     from ..progress import enabled
     from ..spice.counter import spice_progress
-    d = load(design)
+    from ..family import ROLE_FAMILIES, family_of, load_family_design
+    fam = family_of(design)
+    if fam in ROLE_FAMILIES:   # a pixel read by role: its own figures and suite (rolepix), close's loop
+        from .common import refuse_post_layout
+        refuse_post_layout("close", fam)
+        d = load_family_design(design, fam)
+    else:
+        d = load(design)
     path = output_path(out, d, f"close/{d.name}_closed.toml")
     show = enabled() and not as_json
 

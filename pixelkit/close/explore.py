@@ -33,7 +33,6 @@ import math
 
 import numpy as np
 
-from ..verify import measure
 from . import margins as mg
 
 #: Measurement groups that read only some sections of a design (besides its technology and the
@@ -50,7 +49,7 @@ KEEP = 8
 def block(closer) -> tuple[list[int], list[str]]:
     """(indices of the block's knobs in ``closer.space``, names of the block's specs)."""
     sections = {s for g in BENCHES.values() for s in g}
-    specs = [s.name for s in closer.base.spec if set(measure.groups_for([s.fig.name])) <= set(BENCHES)]
+    specs = [s.name for s in closer.base.spec if set(closer.suite.groups_for([s.fig.name])) <= set(BENCHES)]
     knobs = [j for j, k in enumerate(closer.space.knobs) if k.name.split(".")[0] in sections]
     return (knobs, specs) if knobs and specs else ([], [])
 
@@ -73,10 +72,10 @@ def samples(closer, p, idx: list[int], n: int) -> list[np.ndarray]:
 
 
 def _groups(closer, pairs) -> dict:
-    order = list(measure.GROUPS)
+    order = list(closer.suite.GROUPS)
     out: dict = {}
     for name, c in pairs:
-        out.setdefault(c, set()).update(measure.groups_for([closer.spec[name].fig.name]))
+        out.setdefault(c, set()).update(closer.suite.groups_for([closer.spec[name].fig.name]))
     return {c: tuple(sorted(g, key=order.index)) for c, g in out.items()}
 
 
@@ -91,8 +90,8 @@ def _simulate(closer, xs, pairs, desc: str, objective: bool = False) -> list[tup
     if objective and closer.objective.figure:
         groups.setdefault(closer.nominal, ())
         groups[closer.nominal] = tuple(sorted(set(groups[closer.nominal])
-                                              | set(measure.groups_for([closer.objective.figure])),
-                                              key=list(measure.GROUPS).index))
+                                              | set(closer.suite.groups_for([closer.objective.figure])),
+                                              key=list(closer.suite.GROUPS).index))
     conds = sorted(groups)
     designs = [closer.space.design(closer.base, x) for x in xs]
     figs = closer.at(designs, conds, groups, desc)

@@ -142,6 +142,8 @@ def check_bounds(space: Space, design) -> None:
     """Each knob at each of its bounds (the others as designed, clipped) gives a design the file
     loader and every condition of the grid accept; refused naming the bound otherwise."""
     from ..verify import conditions
+    from ..verify.run import suite
+    at = suite(design).at
     x0, _ = space.start(design)
     grid = conditions.grid(design)
     for j, k in enumerate(space.knobs):
@@ -152,7 +154,7 @@ def check_bounds(space: Space, design) -> None:
             try:
                 d = space.design(design, x)
                 for c in grid:
-                    conditions.at(d, c)
+                    at(d, c)
             except ConfigError as exc:
                 raise ConfigError(design.source, f"close.knobs.{k.name}.{bound}", getattr(k, bound),
                                   f"a bound at which the design is valid ({exc.field} = {exc.value!r}: expected "

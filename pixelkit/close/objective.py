@@ -6,21 +6,23 @@
   at the nominal condition;
 - ``area``: the gate area W x L of the five transistors (EC, TG, RST, SF, RS) of every subpixel
   of one dual pixel (1 + ``secondary_per_pixel`` subpixels): the silicon the devices take from
-  the photodiodes. A closed form, no simulation;
+  the photodiodes; of a pixel read by role, its family's (the 4T's TG, RST, SF and RS; a netlist
+  pixel has none: refused when the file loads). A closed form, no simulation;
 - a knob (``max pixel.v_fd_reset``): its own value.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
-from ..verify.figures import FIGURES
-from ..verify.close_table import value_of
+from ..verify.close_table import figures_of, value_of
 
 _PIXEL_DEVICES = ("ec", "tg", "rst", "sf", "rs")
 
 
 def gate_area(design) -> float:
-    """m2 of gate per dual pixel (see the module docstring)."""
+    """m2 of gate per dual pixel, or per pixel of a role family (see the module docstring)."""
+    if hasattr(design, "gate_area"):
+        return design.gate_area()
     d = design.pixel.devices
     per_subpixel = sum(getattr(d, f"{n}_w") * getattr(d, f"{n}_l") for n in _PIXEL_DEVICES)
     return per_subpixel * (1 + design.secondary_per_pixel)
@@ -30,16 +32,17 @@ def gate_area(design) -> float:
 class Objective:
     sense: str        # "min" | "max"
     what: str         # a figure name, "area" or a knob key
+    figures: dict = field(default_factory=dict, repr=False, compare=False)   # the design's figures (by name)
 
     @property
     def figure(self) -> str | None:
         """The figure measured at the nominal condition, or None for a closed form."""
-        return self.what if self.what in FIGURES else None
+        return self.what if self.what in self.figures else None
 
     @property
     def unit(self) -> str:
         if self.figure:
-            return FIGURES[self.figure].unit
+            return self.figures[self.figure].unit
         return "um2" if self.what == "area" else ""
 
     def value(self, design, nominal_figures: dict | None) -> float | None:
@@ -56,4 +59,4 @@ class Objective:
 
 def of(design) -> Objective:
     sense, what = design.close.goal
-    return Objective(sense, what)
+    return Objective(sense, what, figures_of(design))

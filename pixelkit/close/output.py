@@ -20,9 +20,9 @@ def _pct(x) -> str:
 def _obj(value, objective) -> str:
     if value is None:
         return "-"
-    from ..verify.figures import FIGURES, shown
+    from ..verify.figures import shown
     if objective.figure:
-        f = FIGURES[objective.figure]
+        f = objective.figures[objective.figure]
         return f"{shown(value, f.unit, f.dim):.5g} {f.unit}".strip()
     if objective.what == "area":
         return f"{value * 1e12:.5g} um2"

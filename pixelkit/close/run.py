@@ -36,8 +36,8 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..errors import ConfigError
-from ..verify import conditions, measure
-from ..verify.run import measure_at, verify
+from ..verify import conditions
+from ..verify.run import measure_at, suite, verify
 from . import margins as mg
 from .knobs import Space, at_bound, check_bounds
 from .objective import of as objective_of
@@ -125,6 +125,7 @@ class Closer:
         self.tell, self.say = tell or (lambda _t: None), say or (lambda _t: None)
         self.refuse_idle, self.label, self.idle = refuse_idle, label, []
         self.space = Space(tuple(knobs if knobs is not None else design.close.knobs))
+        self.suite = suite(design)       # the measurement groups and figures of its family
         self.objective = objective_of(design)
         self.grid = conditions.grid(design)
         self.nominal = conditions.nominal(design)
@@ -155,7 +156,7 @@ class Closer:
     def objective_value(self, design, nominal_figs) -> float | None:
         fig = self.objective.figure
         if fig and (nominal_figs is None or nominal_figs.get(fig) is None):
-            (out,) = measure_at([(design, self.nominal, measure.groups_for([fig]))], backend=self.backend,
+            (out,) = measure_at([(design, self.nominal, self.suite.groups_for([fig]))], backend=self.backend,
                                 jobs=self.jobs, scheduler=self.scheduler, desc="objective")
             nominal_figs = out["figures"]
         return self.objective.value(design, nominal_figs)
@@ -185,11 +186,11 @@ class Closer:
         """(conditions, {condition: groups}) that measure ``pairs`` (and the objective at nominal)."""
         groups: dict = {}
         for name, c in pairs:
-            for g in measure.groups_for([self.spec[name].fig.name]):
+            for g in self.suite.groups_for([self.spec[name].fig.name]):
                 groups.setdefault(c, set()).add(g)
         if self.objective.figure:
-            groups.setdefault(self.nominal, set()).update(measure.groups_for([self.objective.figure]))
-        order = list(measure.GROUPS)
+            groups.setdefault(self.nominal, set()).update(self.suite.groups_for([self.objective.figure]))
+        order = list(self.suite.GROUPS)
         return sorted(groups), {c: tuple(sorted(gs, key=order.index)) for c, gs in groups.items()}
 
     def rows(self, groups: dict) -> list:
@@ -197,7 +198,7 @@ class Closer:
         out = []
         for s in self.base.spec:
             for c in conditions.spec_conditions(s, list(groups)):
-                if set(measure.groups_for([s.fig.name])) <= set(groups[c]):
+                if set(self.suite.groups_for([s.fig.name])) <= set(groups[c]):
                     out.append((s.name, c))
         return out
 
@@ -296,8 +297,8 @@ class Closer:
         for sp in self.base.spec:
             held = conditions.spec_conditions(sp, [self.nominal] + self.grid)
             if held:
-                groups.setdefault(held[0], set()).update(measure.groups_for([sp.fig.name]))
-        order = list(measure.GROUPS)
+                groups.setdefault(held[0], set()).update(self.suite.groups_for([sp.fig.name]))
+        order = list(self.suite.GROUPS)
         groups = {c: tuple(sorted(g, key=order.index)) for c, g in groups.items()}
         more = self.at([designs[0]] + [designs[j + 1] for j in suspects], sorted(groups), groups, "dependence")
         every = {sp.fig.name for sp in self.base.spec}
@@ -519,10 +520,10 @@ class Closer:
         spec's worst condition at ``p`` (a spec with a large margin is not modelled, but a step that
         breaks it is caught here, at a fraction of the grid's cost); and those (spec, worst) pairs."""
         screen = [(name, c) for name, (m, c) in mg.worst(self.base, p.margins).items() if c is not None]
-        order = list(measure.GROUPS)
+        order = list(self.suite.GROUPS)
         out = {c: set(g) for c, g in groups.items()}
         for name, c in screen:
-            out.setdefault(c, set()).update(measure.groups_for([self.spec[name].fig.name]))
+            out.setdefault(c, set()).update(self.suite.groups_for([self.spec[name].fig.name]))
         return sorted(out), {c: tuple(sorted(g, key=order.index)) for c, g in out.items()}, screen
 
     def attempt(self, xc, model, st, feasible, conds, groups, screen, p: Point, targets):

@@ -38,11 +38,16 @@ class DrawnPd:
         return rectangle(self.pd_width, self.pd_height)[1]
 
 
-def load_family_design(cls, path: str | Path):
-    """Load and validate a design of family class ``cls``, with its technology."""
+def load_family_design(cls, path: str | Path, raw: dict | None = None):
+    """Load and validate a design of family class ``cls``, with its technology; ``raw``: the file's content
+    as already read (``sweep.space.design_with``: a design with some keys changed, still at ``path``, so its
+    relative paths resolve as in the file). A class with a ``raw`` field keeps the content it was loaded from."""
+    import dataclasses
     path = Path(path)
-    design = load(cls, read_toml(path, "design"), "", str(path))
+    raw = read_toml(path, "design") if raw is None else raw
+    design = load(cls, raw, "", str(path))
     tech = load_technology(design.technology, relative_to=path.parent)
     if design.corner and design.corner not in tech.models.corners:
         raise ConfigError(str(path), "corner", design.corner, f"one of {', '.join(sorted(tech.models.corners))}")
-    return replace(design, tech=tech, source=str(path))
+    keep = {"raw": raw} if "raw" in {f.name for f in dataclasses.fields(cls)} else {}
+    return replace(design, tech=tech, source=str(path), **keep)

@@ -7,10 +7,11 @@ these tables; ``rolepix`` measures it and ``pixelkit verify`` signs it off with 
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 
 from ..errors import ConfigError
 from ..schema import integer, named, num, qty, table, text
+from ..verify.close_table import CloseSettings, check as check_close
 from ..verify.spec import RoleSpec, VerifySettings, check_conditions
 from .base import FamilyDesign, load_family_design
 
@@ -100,6 +101,9 @@ class RoleDesign(FamilyDesign):
     verify: VerifySettings = table(VerifySettings, default=VerifySettings,
                                    doc="the sign-off grid of pixelkit verify: corners, temperatures, supplies, Monte Carlo")
     spec: tuple = named(RoleSpec, doc="specifications on the figures of a pixel read by role (docs/verify.md)")
+    close: CloseSettings | None = table(CloseSettings, None, doc="the knobs pixelkit close may move, their bounds "
+                                        "and the objective (docs/close.md)")
+    raw: dict = field(default=None, metadata=dict(kind="skip"), repr=False, compare=False)
 
     @property
     def suite(self):
@@ -111,15 +115,26 @@ class RoleDesign(FamilyDesign):
         """The pixel as a role cell (``circuits.roles.PixelCell``): each family says how."""
         raise NotImplementedError
 
+    def gate_area(self) -> float | None:
+        """m2 of transistor gate in one pixel (``close``'s ``area`` objective); None: the family does not know."""
+        return None
 
-def load_role_design(cls, path, *checks):
+    def reloaded(self, raw: dict):
+        """This design with its file's content replaced by ``raw`` (``sweep.space.design_with``), loaded by its
+        family's loader at the same path (each family says how)."""
+        raise NotImplementedError
+
+
+def load_role_design(cls, path, *checks, raw: dict | None = None):
     """Load a design of role family ``cls``: the family's own ``checks`` (each ``check(design)``), then the
-    levels against the technology and the sign-off grid's conditions."""
-    d = load_family_design(cls, path)
+    levels against the technology, the sign-off grid's conditions and the ``[close]`` table's knobs."""
+    d = load_family_design(cls, path, raw)
     for check in checks:
         check(d)
     check_levels(d)
     check_conditions(d, d.tech)
+    if d.close is not None:   # the knobs against this design's keys (bounds in SI), as the dual pixel's
+        d = replace(d, close=check_close(d.close, d, d.source, d.raw))
     return d
 
 

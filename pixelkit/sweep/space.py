@@ -119,6 +119,13 @@ def design_with(design, overrides: dict):
             cur.pop(parts[-1], None)
         else:
             cur[parts[-1]] = value
+    if hasattr(design, "reloaded"):   # a pixel read by role: its family's loader, at its own path (its netlist
+        # and technology resolve as in the file)
+        try:
+            return design.reloaded(raw)
+        except ConfigError as exc:
+            raise ConfigError(f"{design.source} (sweep point {overrides})", exc.field, exc.value,
+                              exc.allowed) from None
     with tempfile.TemporaryDirectory(prefix="pixelkit-sweep-") as tmp:
         path = Path(tmp) / f"{design.name}.toml"
         write_atomic(path, to_toml(raw))

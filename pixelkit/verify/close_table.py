@@ -148,7 +148,6 @@ def check(close: CloseSettings, design, source: str, raw: dict) -> CloseSettings
     """The knobs against the design: each a continuous key the design sets, bounds in its unit
     and within what the design file accepts for it; the objective something close can evaluate.
     Returns the table with the knobs' bounds in SI."""
-    from .figures import FIGURES
     knobs = tuple(_choice(k, design, source) if k.choices else _knob(k, design, source) for k in close.knobs)
     combos = 1
     for k in knobs:
@@ -163,11 +162,19 @@ def check(close: CloseSettings, design, source: str, raw: dict) -> CloseSettings
             if key in {j.name for j in knobs} or any(key in j.tied for j in knobs if j is not k):
                 raise ConfigError(source, f"close.knobs.{k.name}.tied[{i}]", key,
                                   "a key no other knob moves or ties (one knob per design key)")
-    if what not in FIGURES and what != "area" and what not in keys:
+    figures = figures_of(design)
+    area = not hasattr(design, "gate_area") or design.gate_area() is not None
+    if what not in figures and not (what == "area" and area) and what not in keys:
         raise ConfigError(source, "close.objective", close.objective,
-                          "min or max of power, area, one of the knobs (" + ", ".join(sorted(keys)) + ") or a figure: "
-                          + ", ".join(FIGURES))
+                          "min or max of power, " + ("area, " if area else "") + "one of the knobs ("
+                          + ", ".join(sorted(keys)) + ") or a figure: " + ", ".join(figures))
     return dataclasses.replace(close, knobs=knobs)
+
+
+def figures_of(design) -> dict:
+    """The figures a spec of ``design`` can name: its suite's (a pixel read by role), else the dual pixel's."""
+    from .figures import FIGURES
+    return getattr(getattr(design, "suite", None), "FIGURES", None) or FIGURES
 
 
 def field_of(design_cls, key: str):

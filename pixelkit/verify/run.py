@@ -15,12 +15,14 @@ import time
 
 from ..errors import ConfigError, PixelkitError, SimulationError
 from . import conditions, measure, mismatch
+from .figures import FIGURES
 from .signoff import _margin
 from .yields import decided, looks, stop_confidence
 
 
 class _Dual:
     """The dual pixel's suite: ``verify.measure``'s groups and figures, ``conditions.at``."""
+    FIGURES = FIGURES
     GROUPS = measure.GROUPS
     run_group = staticmethod(measure.run_group)
     groups_for = staticmethod(measure.groups_for)

@@ -74,9 +74,12 @@ class NetlistDesign(RoleDesign):
     def cell(self):
         return self.pixel_cell
 
+    def reloaded(self, raw: dict):
+        return load_netlist_design(self.source, raw)
 
-def load_netlist_design(path: str | Path) -> NetlistDesign:
-    d = load_role_design(NetlistDesign, path, _netlist_given)
+
+def load_netlist_design(path: str | Path, raw: dict | None = None) -> NetlistDesign:
+    d = load_role_design(NetlistDesign, path, _netlist_given, raw=raw)
     return replace(d, pixel_cell=build_cell(d))
 
 

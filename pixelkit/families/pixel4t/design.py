@@ -78,9 +78,17 @@ class Pixel4tDesign(RoleDesign):
     def cell(self):
         return cell_of(self)
 
+    def reloaded(self, raw: dict):
+        return load_pixel4t_design(self.source, raw)
 
-def load_pixel4t_design(path: str | Path) -> Pixel4tDesign:
-    return load_role_design(Pixel4tDesign, path)
+    def gate_area(self) -> float:
+        """m2 of gate of the pixel's four transistors (TG, RST, SF, RS)."""
+        d = self.devices
+        return sum(getattr(d, f"{n}_w") * getattr(d, f"{n}_l") for n in ("tg", "rst", "sf", "rs"))
+
+
+def load_pixel4t_design(path: str | Path, raw: dict | None = None) -> Pixel4tDesign:
+    return load_role_design(Pixel4tDesign, path, raw=raw)
 
 
 def tg_channel(design):
