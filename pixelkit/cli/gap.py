@@ -32,6 +32,16 @@ def predict(design, conditions, out, backend, jobs, as_json):
     from ..gap.nominal import predict as nominal_predict
     from ..gap.store import load_nominal
     from ..progress import step
+    role = _role_design(design, "gap predict")
+    if role is not None:   # a pixel read by role: its own benches, every row simulated
+        from ..rolepix.gap import predict as role_predict, read
+        out = output_path(out, role, "predicted.csv")
+        table = read(conditions, role, measured=False)
+        with step("simulating every row on the pixel's true-CDS benches"):
+            v = role_predict(role, table, backend=backend, jobs=jobs)
+        _write_role(conditions, out, v)
+        emit({"out": str(out), "rows": len(v)}, as_json, lambda x: f"wrote {x['out']} ({x['rows']} rows, each simulated)")
+        return
     d = load(design)
     out = output_path(out, d, "predicted.csv")
     table = read_table(conditions, d, measured=False)
@@ -98,12 +108,65 @@ def diagnose(design, measured, out, seed, gain_tol, offset_tol, gain_sd, offset_
                             "own photon transfer; the design's surrogate does not enter")
         emit(r, as_json, _emva_text)
         return
+    role = _role_design(design, "gap diagnose")
+    if role is not None:   # a pixel read by role: its own effects on its own benches
+        from ..errors import ConfigError
+        from ..progress import step
+        from ..rolepix.gap import diagnose as role_diagnose, read
+        for opt, v in (("--gain-sd", gain_sd), ("--offset-sd", offset_sd), ("--out", out)):
+            if v is not None:
+                raise ConfigError("gap diagnose", opt, v, f"no {opt} for a {role.family} design (its diagnosis "
+                                  "fits no test set-up: docs/gap-diagnosis.md)")
+        table = read(measured, role, measured=True)
+        with step("simulating the rows and each candidate effect on the pixel's benches"):
+            r = role_diagnose(role, table, backend=backend, jobs=jobs)
+        emit(r, as_json, _role_text)
+        return
     d, table, nom = _prepare(design, measured, backend)
     r, X, resid = analyse(d, table, nom, seed=seed, setup=_setup(gain_tol, offset_tol, gain_sd, offset_sd))
     if out:
         from ..gap.report import write_section
         r["html"] = str(write_section(r, d.name, X, resid, Path(out)))
     emit(r, as_json, _text)
+
+
+def _role_design(path, command: str):
+    """The design at ``path`` when it is a pixel read by role (``--post-layout`` refused), else None."""
+    from ..family import ROLE_FAMILIES, family_of, load_family_design
+    fam = family_of(path)
+    if fam not in ROLE_FAMILIES:
+        return None
+    from .common import refuse_post_layout
+    refuse_post_layout(command, fam)
+    return load_family_design(path, fam)
+
+
+def _write_role(conditions, out, v) -> None:
+    """The conditions file's rows and columns as read, with ``v_nominal_V``."""
+    import csv
+    import io
+    from ..fileio import write_atomic
+    from ..gap.data import read_rows
+    header, rows, _src = read_rows(conditions, measured=False)
+    buf = io.StringIO()
+    w = csv.writer(buf)
+    w.writerow([*header, "v_nominal_V"])
+    for r, x in zip(rows, v):
+        w.writerow([*(r[h] for h in header), f"{float(x):.9g}"])
+    write_atomic(out, buf.getvalue())
+
+
+def _role_text(r) -> str:
+    lines = [f"verdict: {r['verdict']}",
+             f"{r['n_rows']} rows; noise {r['noise_rms_V'] * 1e3:.3g} mV rms; gap {r['gap_before_rms_V'] * 1e3:.3g} mV rms "
+             f"against the nominal read, {r['gap_after_rms_V'] * 1e3:.3g} mV with {r['best']}",
+             "candidates (least chi-square first):"]
+    for k in r["ranking"]:
+        f = r["fits"][k]
+        lines.append(f"  {k:<18} {f['value']:.4g} {f['unit']}{' (at its bound)' if f['at_bound'] else ''}  "
+                     f"chi2 {f['chi2']:.4g} over {r['n_rows']} rows, p = {f['p_value']:.3g}")
+    lines.append(f"  {'none':<18} chi2 {r['nominal_chi2']:.4g}, p = {r['nominal_p_value']:.3g}")
+    return "\n".join(lines)
 
 
 def _is_emva(path) -> bool:

@@ -84,6 +84,13 @@ class Table:
 
 
 def read_table(path: str | Path, design, measured: bool) -> Table:
+    header, rows, source = read_rows(path, measured)
+    return validate(header, rows, design, measured, source)
+
+
+def read_rows(path: str | Path, measured: bool) -> tuple[list, list, str]:
+    """(header, rows as {column: text}, source) of a CSV table, read bounded; DataError listing every
+    problem (not UTF-8, not CSV, a duplicated column, a row whose fields are not the header's)."""
     from ..readfile import FileRefused, read_bytes
     path = Path(path)
     try:
@@ -116,7 +123,7 @@ def read_table(path: str | Path, design, measured: bool) -> Table:
         raise DataError(str(path), problems)
     if not rows:
         raise DataError(str(path), ["no data rows (header only)"])
-    return validate(header, rows, design, measured, str(path))
+    return header, rows, str(path)
 
 
 def validate(header, rows, design, measured: bool, source: str) -> Table:

@@ -1,0 +1,271 @@
+"""The sim-to-real gap of a pixel read by role (``pixelkit gap predict | diagnose`` on a 4T or a netlist
+pixel): its measured CDS outputs against its SPICE read, and which of the pixel's own effects explains
+the difference (docs/gap-diagnosis.md, "A pixel read by role").
+
+**Data.** One row per pixel and frame: ``i_ph_A`` (photocurrent while the frame integrates), ``t_int_s``
+(its exposure), ``temp_C``, optionally ``i_ph_prev_A`` (the same pixel in the frame before, at the same
+exposure: lag) and, in measured files, ``v_V`` (the true-CDS output, reset sample minus signal sample)
+with ``v_std_V`` (its frame-to-frame standard deviation) and ``n_avg`` (frames averaged). Read with the
+dual pixel's bounded CSV reader (``gap.data.read_rows``); every problem is listed by row and column.
+
+**Nominal.** Every row is simulated, not interpolated: per (temperature, exposure) one true-CDS bench
+(``circuits.cds``) with one column per row, three frames (a flush, the previous frame, the frame read),
+the CDS output of the third.
+
+**Effects** (each one parameter, the pixel's own; ``EFFECTS``): ``fd_leakage`` (a current off FD while it
+holds the reset level until the signal sample, n_i's temperature law: what CDS does not cancel),
+``c_fd`` (capacitance on FD beyond the design's: the conversion gain), and for the 4T generator's PPD
+(``families.pixel4t``) ``transfer_barrier`` (the TG-edge barrier raised: transfer-limited lag and
+signal loss) and ``pinning_voltage`` (V_pin shifted: the full well). The FD effects need the pixel's
+``fd`` probe; a netlist pixel's photodiode is the designer's, so its PPD effects are not candidates.
+Each effect is simulated on the same benches at the values of its ``scan``; between them the prediction
+is interpolated linearly, row by row. The ``REFINE`` effects of least chi-square on that scan are then
+refined in SPICE (a bounded scalar search, each point simulated) between the scan values beside their
+best: a transfer barrier's onset is a few tens of mV wide, which no interpolation between scan values
+follows.
+
+**Verdict** (``gap.diagnose.verdict_text``'s words): the nominal read explains the data when its
+chi-square over the rows' noise is likely (p >= ``gap.diagnose.P_EXPLAINED``); else the effect of least
+chi-square explains them when its fit is likely; effects within ``AMBIGUOUS_DCHI2`` of it are named as
+indistinguishable. No test set-up gain or offset is fitted (the CDS output is the pixel's own
+difference; a set-up offset would look like FD leakage at one temperature): the data are taken as
+calibrated, and docs/gap-diagnosis.md says so.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+REQUIRED = ("i_ph_A", "t_int_s", "temp_C")
+OPTIONAL = ("i_ph_prev_A", "v_std_V", "n_avg")
+#: exposures the benches take (the longest is a long transient)
+T_INT_MAX = 0.1
+
+
+@dataclass(frozen=True)
+class Effect:
+    name: str
+    unit: str
+    scan: tuple          # parameter values simulated (SI); 0 is the nominal
+    needs: str           # "fd": the cell's FD probe; "ppd": the 4T generator's PPD model
+    what: str
+
+
+EFFECTS = (
+    Effect("fd_leakage", "A", (0.0, 2e-12, 1e-11), "fd",
+           "a junction leakage off FD (at 25 degC; n_i's temperature law) while it holds between the reset and "
+           "the signal sample"),
+    Effect("c_fd", "F", (-0.5e-15, 0.0, 0.5e-15, 1e-15, 2e-15, 4e-15), "fd",
+           "capacitance on FD beyond the design's (the conversion gain)"),
+    Effect("transfer_barrier", "V", (0.0, 0.2, 0.3, 0.35, 0.4, 0.5, 0.6), "ppd",
+           "the TG-edge barrier raised (transfer-limited lag and signal loss)"),
+    Effect("pinning_voltage", "V", (-0.2, 0.0, 0.1, 0.2), "ppd",
+           "the pinning voltage shifted (the full well)"),
+)
+BY_NAME = {e.name: e for e in EFFECTS}
+
+
+def candidates(design) -> list:
+    """The effects that apply to ``design``'s pixel."""
+    cell = design.cell()
+    out = []
+    for e in EFFECTS:
+        if e.needs == "fd" and cell.probe("fd"):
+            out.append(e)
+        elif e.needs == "ppd" and hasattr(design, "ppd"):
+            out.append(e)
+    return out
+
+
+# --- the data -------------------------------------------------------------------------------------
+def read(path, design, measured: bool) -> dict:
+    """{column: numpy array} of a role gap table (module docstring), validated; DataError listing every
+    problem by row and column otherwise."""
+    from ..circuits.cds import timing_of
+    from ..gap.data import DataError, read_rows
+    header, rows, source = read_rows(path, measured)
+    need = REQUIRED + (("v_V", "v_std_V") if measured else ())
+    problems = [f"missing column '{c}'" for c in need if c not in header]
+    if problems:
+        raise DataError(source, problems)
+    t_min = timing_of(design).frame(0.0).min_exposure
+    out = {}
+    for h in (*need, *(c for c in OPTIONAL if c in header)):
+        vals = np.full(len(rows), np.nan)
+        for i, r in enumerate(rows):
+            txt = (r.get(h) or "").strip()
+            if not txt:
+                if h in need:
+                    problems.append(f"row {i + 1}, column '{h}': empty")
+                continue
+            try:
+                x = float(txt)
+            except ValueError:
+                problems.append(f"row {i + 1}, column '{h}': '{txt}' is not a number")
+                continue
+            if not math.isfinite(x):
+                problems.append(f"row {i + 1}, column '{h}': {txt} (NaN or infinite)")
+            vals[i] = x
+        out[h] = vals
+    for i in range(len(rows)):
+        for h in ("i_ph_A", "i_ph_prev_A", "v_std_V"):
+            if h in out and out[h][i] < 0:
+                problems.append(f"row {i + 1}, column '{h}': {out[h][i]:g} is negative")
+        if "i_ph_A" in out and out["i_ph_A"][i] > 1e-6:
+            problems.append(f"row {i + 1}, column 'i_ph_A': {out['i_ph_A'][i]:g} A is beyond a pixel's photocurrent "
+                            "(at most 1 uA)")
+        t = out["t_int_s"][i]
+        if math.isfinite(t) and not t_min <= t <= T_INT_MAX:
+            problems.append(f"row {i + 1}, column 't_int_s': {t:g} s (allowed: {t_min:g} s, the shortest exposure "
+                            f"of the design's read, to {T_INT_MAX:g} s)")
+        tc = out["temp_C"][i]
+        if math.isfinite(tc) and not -60 <= tc <= 200:
+            problems.append(f"row {i + 1}, column 'temp_C': {tc:g} is outside -60..200 degC")
+        if "n_avg" in out and math.isfinite(out["n_avg"][i]) and (out["n_avg"][i] < 1 or out["n_avg"][i] != int(out["n_avg"][i])):
+            problems.append(f"row {i + 1}, column 'n_avg': {out['n_avg'][i]:g} (allowed: a whole number >= 1)")
+    if measured and not problems and np.all(out["v_std_V"] == 0):
+        problems.append("column 'v_std_V': every row 0 (the diagnosis weighs rows by their noise)")
+    if problems:
+        raise DataError(source, problems)
+    out.setdefault("i_ph_prev_A", np.zeros(len(rows)))
+    out["i_ph_prev_A"] = np.nan_to_num(out["i_ph_prev_A"])
+    return out
+
+
+# --- the SPICE read ------------------------------------------------------------------------------
+def _perturbed(design, effect: Effect | None, value: float):
+    if effect is None or effect.needs != "ppd" or value == 0.0:
+        return design
+    p = design.ppd
+    key = "barrier" if effect.name == "transfer_barrier" else "v_pin"
+    return replace(design, ppd=replace(p, **{key: getattr(p, key) + value}))
+
+
+def benches(design, table: dict, effect: Effect | None = None, value: float = 0.0, extra=None) -> list:
+    """(netlist, row indices) per (temperature, exposure) group: the rows' pixels on one true-CDS bench,
+    with ``effect`` at ``value``; ``extra(net, cell)``: a further edit of each netlist (a test's injected
+    element)."""
+    from ..circuits.cds import cds_bench
+    from ..gap.circuit_edits import add_to_subckt
+    from ..physics.ppd import dark_scale
+    from ..spice.netlist import Element
+    from .signal import flush_exposure
+    keys = sorted({(float(t), float(x)) for t, x in zip(table["temp_C"], table["t_int_s"])})
+    out = []
+    for t_c, t_int in keys:
+        idx = [i for i in range(len(table["temp_C"])) if table["temp_C"][i] == t_c and table["t_int_s"][i] == t_int]
+        d = _perturbed(replace(design, temperature=t_c + 273.15), effect, value)
+        cell = d.cell()
+        cur = [[0.0, float(table["i_ph_prev_A"][i]), float(table["i_ph_A"][i])] for i in idx]
+        net = cds_bench(d, cell, [flush_exposure(d), t_int, t_int], cur,
+                        title=f"rolegap_{effect.name if effect else 'nominal'}")
+        if effect is not None and effect.needs == "fd" and value != 0.0:
+            fd = cell.probe("fd")
+            if effect.name == "fd_leakage":
+                el = Element("Igapleak", (fd, "0"), value * dark_scale(t_c + 273.15, 298.15, "generation"))
+            else:
+                el = Element("Cgapfd", (fd, "0"), value)
+            net = add_to_subckt(net, cell.subckt.name, el)
+        if extra is not None:
+            net = extra(net, cell)
+        out.append((net, idx))
+    return out
+
+
+def simulate(design, table: dict, effect: Effect | None = None, value: float = 0.0, backend: str = "batch",
+             jobs=None, extra=None) -> np.ndarray:
+    """The CDS output (V) of every row (the third frame of its bench)."""
+    from ..circuits.cds import timing_of
+    from ..measure.cds import cds
+    from ..spice import simulate_many
+    groups = benches(design, table, effect, value, extra)
+    results = simulate_many([n for n, _ in groups], backend=backend, jobs=jobs)
+    v = np.full(len(table["temp_C"]), np.nan)
+    tm = timing_of(design)
+    for (net, idx), r in zip(groups, results):
+        fr = net.meta["frames"]
+        for k, i in enumerate(idx):
+            v[i] = cds(r, tm, fr["exposures"], fr["starts"], k, 2)
+    return v
+
+
+# --- the diagnosis -------------------------------------------------------------------------------
+#: effects refined in SPICE beyond their scan (the best ones on it), and the simulations each may take
+REFINE, REFINE_RUNS = 2, 7
+
+
+def _refine(design, table, effect: Effect, coarse: dict, y, sigma, backend, jobs) -> dict:
+    """``coarse``'s fit searched again between the scan values beside it, every point simulated."""
+    from scipy.optimize import minimize_scalar
+    xs = np.array(effect.scan)
+    k = int(np.clip(np.searchsorted(xs, coarse["value"]), 0, len(xs) - 1))
+    lo, hi = xs[max(k - 1, 0)], xs[min(k + 1, len(xs) - 1)]
+    seen = {}
+
+    def chi2(x):
+        v = simulate(design, table, effect, float(x), backend, jobs)
+        seen[float(x)] = v
+        return float(np.sum(((y - v) / sigma) ** 2))
+    r = minimize_scalar(chi2, bounds=(lo, hi), method="bounded",
+                        options={"xatol": (hi - lo) / 200, "maxiter": REFINE_RUNS})
+    if r.fun >= coarse["chi2"]:
+        return coarse
+    v = seen[float(r.x)]
+    return {"value": float(r.x), "chi2": float(r.fun), "at_bound": coarse["at_bound"] and r.x in (xs[0], xs[-1]),
+            "resid_rms_V": float(np.sqrt(np.mean((y - v) ** 2))), "refined": True}
+
+
+def _fit(effect: Effect, preds: np.ndarray, y, sigma) -> dict:
+    """The parameter of least chi-square, the prediction interpolated linearly between the scan's values."""
+    xs = np.array(effect.scan)
+    grid = np.unique(np.concatenate([np.linspace(a, b, 64) for a, b in zip(xs[:-1], xs[1:])]))
+    j = np.clip(np.searchsorted(xs, grid, side="right") - 1, 0, len(xs) - 2)
+    w = ((grid - xs[j]) / (xs[j + 1] - xs[j]))[:, None]
+    pred = (1 - w) * preds[j] + w * preds[j + 1]           # grid x rows
+    chi2 = np.sum(((y - pred) / sigma) ** 2, axis=1)
+    k = int(np.argmin(chi2))
+    return {"value": float(grid[k]), "chi2": float(chi2[k]), "at_bound": k in (0, len(grid) - 1),
+            "resid_rms_V": float(np.sqrt(np.mean((y - pred[k]) ** 2)))}
+
+
+def diagnose(design, table: dict, backend: str = "batch", jobs=None) -> dict:
+    from ..gap.diagnose import AMBIGUOUS_DCHI2, P_EXPLAINED, verdict_text
+    from ..gap.pvalue import chi2_sf
+    y = table["v_V"]
+    n_avg = table.get("n_avg", np.ones(len(y)))
+    sigma = np.maximum(table["v_std_V"] / np.sqrt(np.nan_to_num(n_avg, nan=1.0)), 1e-7)
+    nominal = simulate(design, table, backend=backend, jobs=jobs)
+    n = len(y)
+    chi0 = float(np.sum(((y - nominal) / sigma) ** 2))
+    p0 = float(chi2_sf(chi0, n))
+    fits = {}
+    for e in candidates(design):
+        preds = np.array([nominal if v == 0.0 else simulate(design, table, e, v, backend, jobs) for v in e.scan])
+        fits[e.name] = _fit(e, preds, y, sigma)
+    for k in (sorted(fits, key=lambda k: fits[k]["chi2"])[:REFINE] if p0 < P_EXPLAINED else ()):
+        fits[k] = _refine(design, table, BY_NAME[k], fits[k], y, sigma, backend, jobs)
+    ranking = sorted(fits, key=lambda k: fits[k]["chi2"])
+    for k in ranking:
+        fits[k]["p_value"] = float(chi2_sf(fits[k]["chi2"], max(n - 1, 1)))
+    if p0 >= P_EXPLAINED or not ranking:
+        best, explained, ambiguous = "none", p0 >= P_EXPLAINED, []
+    else:
+        best = ranking[0]
+        explained = fits[best]["p_value"] >= P_EXPLAINED
+        ambiguous = [k for k in ranking[1:] if fits[k]["chi2"] - fits[best]["chi2"] < AMBIGUOUS_DCHI2]
+    after = fits[best]["resid_rms_V"] if best != "none" else float(np.sqrt(np.mean((y - nominal) ** 2)))
+    return {"design": design.name, "n_rows": n, "candidates": [e.name for e in candidates(design)],
+            "noise_rms_V": float(np.sqrt(np.mean(sigma ** 2))),
+            "gap_before_rms_V": float(np.sqrt(np.mean((y - nominal) ** 2))), "gap_after_rms_V": after,
+            "nominal_chi2": chi0, "nominal_p_value": p0, "best": best, "explained": bool(explained),
+            "indistinguishable": ambiguous, "confident": not ambiguous,
+            "fits": {k: {**fits[k], "unit": BY_NAME[k].unit, "what": BY_NAME[k].what} for k in ranking},
+            "ranking": ranking,
+            "verdict": verdict_text(best, explained, ambiguous, False, ranking[0] if ranking else "none")}
+
+
+def predict(design, table: dict, backend: str = "batch", jobs=None) -> np.ndarray:
+    return simulate(design, table, backend=backend, jobs=jobs)
+
