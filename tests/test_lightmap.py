@@ -162,11 +162,15 @@ def test_light_during_the_row_is_the_charge_on_c13(gf, geos):
         assert v * want > 0 and abs(v - want) <= 0.05 * gross, (c, v, want, gross)
 
 
-#: the resolution of the modelled light's figure: with currents a hundred times the geometric light's, the
-#: secondaries' figure after their 2.7 ms idle scatters between runs of the same benches (measured on the reduced
-#: model, drawing of 92d7ff6: col_s0 +39.5 and +168.2 uV; col_p 138.9 uV both times); the drawing of 8eb0dd2's
-#: idle drift through the read was millivolts
-MODELLED_RESOLUTION_V = 200e-6
+#: how far the modelled light's figure (lit from the dark state through the exposures) may lie from its row window's
+#: (lit from the row's start), per array: the AFE's reset erases what the light did during the idle but for a
+#: scatter. Its cause (measured, docs/post-layout.md): through the idle the AFE sits open-loop (p1 and p2 off) while
+#: the light drains its floating x, so the op-amp's output swings between 0.6 and 3.5 V (0.125 V dark), and the
+#: transient through that regime depends on the simulator's step sequence: every current scaled by 1 + 1e-9 moved
+#: col_s1's figure from +77.9 to +140.0 uV, by 1 + 1e-6 col_s0's from +43.9 to +122.7 uV, the row window's by at
+#: most 5 uV. Over those runs and the earlier drawings' the secondaries (2.7 ms idle) lay within 94 uV of their row,
+#: the primary (172 us) within 9 uV
+MODELLED_RESOLUTION_V = {"primary": 30e-6, "secondary": 150e-6}
 
 #: the collection model of the readout cells reduced for the suite: a 1 um grid and 200 nm wavelength steps (the
 #: light map's own: 0.5 um, 100 nm). Not the same currents: the coarser grid loses or grows diffusions narrower than
@@ -211,16 +215,19 @@ def _check_modelled(gf, geos, m, resolution):
     - its currents: the junctions of each cell together collect less than a perfect detector of the cell's area
       would (the scene's irradiance at a quantum efficiency of 1), and over 10 x the geometric light's exposed
       area x QE on the AFE's island (the carriers under the metal);
-    - its row window (lit from the row's start): the ideal charge analysis ``_charge_on_c13`` of the island's
-      modelled currents within 6 % of the gross charge at 10 x the light (as the geometric light's row at
-      100 x), and at 1 x within that plus 10 uV (the scatter of a SPICE difference);
-    - its figure (lit from the dark state through the exposures): within the J A t / C bound of those currents
-      plus the modelled figure's resolution (``MODELLED_RESOLUTION_V``: the AFE's reset erases the idle's drift
-      but for a scatter of ~0.1 mV on the secondaries), so its verdict at the design's 1x is PASS. It fails for
-      the right reason: the full-resolution map on the drawing before the AFE's shields read 4 - 8 mV, the
-      idle's drift surviving the read (docs/post-layout.md)."""
+    - its row window (lit from the row's start) at 10 x the light (as the geometric light's row at 100 x): the
+      ideal charge analysis ``_charge_on_c13`` of the island's modelled currents, less at most 6 % of the gross
+      charge and more by at most 3 %: what the analysis leaves out is measured (docs/post-layout.md) and takes
+      from it - when p2 closes, the island's drift over the open-loop gap since p1 is pushed through C11 into the
+      column's sampling node, still settling at the end of S2, and x sits a few uV off its virtual ground - but
+      for the other junctions' small share (the bias line, the AFE's in and c, the sampling nodes: +1.6 % of the
+      gross on col_s0); at 1 x within 6 % plus 10 uV (the scatter of a SPICE difference);
+    - its figure (lit from the dark state through the exposures): its row window's but for the idle's scatter
+      (``MODELLED_RESOLUTION_V``), so its verdict at the design's 1x is PASS. It fails for the right reason: the
+      full-resolution map on the drawing before the AFE's shields read 4 - 8 mV, the idle's drift surviving the
+      read (docs/post-layout.md)."""
     from dataclasses import replace
-    from pixelkit.circuits.testbench import real_timings, timings
+    from pixelkit.circuits.testbench import timings
     from pixelkit.layout.pex.light import irradiance, modelled, output_errors
     from pixelkit.physics.photo import photocurrent
     from pixelkit.verify.light import judge
@@ -240,19 +247,18 @@ def _check_modelled(gf, geos, m, resolution):
     def lit(cell):
         return [replace(j, current_A=k * j.current_A) for j in modelled(gf, geos[cell], cell, "pixels", resolution)]
     row = output_errors(gf, lit("DUALPIX_COL"), afe_junctions=[lit("AFE_P"), lit("AFE_S")], windows=("row",))["row"]
-    short, real = timings(gf, gf.experiment.t_window), real_timings(gf)
+    short = timings(gf, gf.experiment.t_window)
     for c, v in m["columns"].items():
         arr = "primary" if c == "col_p" else "secondary"
         want = k * _charge_on_c13(gf, net, short[arr])
         g = k * abs(_charge_on_c13(gf, gross, short[arr]))
         assert g > 10 * RESOLUTION_V, g
-        # 6 %: on the final AFE drawing (f635692) col_s0's row at 10 x reads 727.2 uV against the analysis'
-        # 767.5 uV, 5.0 % of its 803 uV gross (the test was written at 5 % on an earlier drawing); the residual's
-        # cause (charge the ideal analysis leaves out) is not identified. A mV-level failure still fails.
-        assert abs(row[c] - want) <= 0.06 * g, (c, row[c], want, g)
+        # measured on the final AFE drawing: col_s0's row at 10 x 727.2 - 733.7 uV against the analysis' 767.5 uV
+        # (4.4 - 5.0 % of its 803 uV gross below it), col_p's 1468.9 against 1505.4 uV (2.4 % below)
+        short_of = (want - row[c]) / g if want > 0 else (row[c] - want) / g
+        assert -0.03 <= short_of <= 0.06, (c, row[c], want, g)
         assert abs(v["error_from_row_V"] - want / k) <= 0.06 * g / k + RESOLUTION_V / 5, (c, v, want / k)
-        bound = abs(_charge_on_c13(gf, gross, real[arr]))
-        assert abs(v["error_V"]) <= bound + MODELLED_RESOLUTION_V, (c, v["error_V"], bound)
+        assert abs(v["error_V"] - v["error_from_row_V"]) <= MODELLED_RESOLUTION_V[arr], (c, v)
     assert judge(m["columns"], gf.light.max_readout_error)["verdict"] == "PASS"
 
 
