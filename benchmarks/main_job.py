@@ -174,6 +174,12 @@ def replay(log: Path, jobs: int, every: int = 1) -> dict:
             "jobs": jobs}
 
 
+def part_argv(name: str, designs: dict) -> list[str]:
+    """The command line of part ``name``, each design file named in ``designs`` (this tree's path ->
+    the baseline's copy, ``baseline_design``) replaced by its copy: every argument a string."""
+    return [str(designs.get(x, x)) for x in PARTS[name]]
+
+
 def baseline_design(tree: Path, folder: Path, design: Path = DESIGN) -> tuple[Path, list]:
     """This tree's ``design`` as the baseline's code reads it: each table or spec it refuses
     (added since: a new figure's spec, a new table) dropped, one at a time as its loader names them
@@ -281,7 +287,7 @@ def main(argv=None):
             out, cache = {}, warm_cache(name, work, a.warm_cache)
             for side, tree in sides:
                 print(f"main_job: {name} with the {side} code ...", file=sys.stderr, flush=True)
-                argv = PARTS[name] if side == "current" else [base_designs.get(x, x) for x in PARTS[name]]
+                argv = part_argv(name, base_designs if side == "baseline" else {})
                 out[side] = run_part(tree, argv, work / name / side, cache)
                 res["parts"][name] = out
                 (work / "results.json").write_text(json.dumps(res, indent=1))   # a long run's figures so far

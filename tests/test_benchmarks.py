@@ -73,3 +73,15 @@ def test_main_job_merges_runs_each_part_with_its_code():
     with pytest.raises(SystemExit, match="more than one run"):
         mj.merged([a, dict(b, parts={"report": {}})], code=lambda rev: rev)
     assert mj.code_commit("HEAD") == subprocess.run(["git", "-C", str(ROOT), "log", "-1", "--format=%h", "--", *mj.CODE], capture_output=True, text=True).stdout.strip()
+
+
+def test_main_job_gives_the_baseline_its_copy_of_the_design_as_text(tmp_path):
+    """The baseline's command line names its copy of the design (a Path from baseline_design) as a
+    string, for every part that names a design (a Path there stopped the run at its first baseline part)."""
+    mj = _main_job()
+    for name, argv in mj.PARTS.items():
+        designs = {x: tmp_path / "copy" / f"{k}.toml" for k, x in enumerate(argv) if x.endswith(".toml")}
+        got = mj.part_argv(name, designs)
+        assert all(isinstance(x, str) for x in got)
+        assert [x for x in got if x.endswith(".toml")] == [str(v) for v in designs.values()]
+        assert mj.part_argv(name, {}) == argv
