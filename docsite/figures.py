@@ -192,7 +192,8 @@ def default_value(key: str) -> float:
 
 def const_value(key: str) -> float:
     """The value of a ``const:`` key: a constant of the kit's code, ``pixelkit.MODULE.NAME`` then
-    dotted keys or indices into it (``const:pixelkit.verify.figures.PLAUSIBLE.power.1``): a limit or
+    dotted keys or indices into it (``const:pixelkit.verify.figures.PLAUSIBLE.power.1``; a function's
+    parameter gives its default: ``const:pixelkit.spice.scratch.watch_parent.interval``): a limit or
     a stated bound the code itself holds, so the page fails when the code changes it."""
     import importlib
     parts = key.split(".")
@@ -209,6 +210,9 @@ def const_value(key: str) -> float:
             data = data[int(part)]
         elif isinstance(data, dict):
             data = data[part]
+        elif callable(data) and not isinstance(data, type) and not hasattr(data, part):
+            import inspect                      # a function's parameter: its default
+            data = inspect.signature(data).parameters[part].default
         else:
             data = getattr(data, part)
     if not isinstance(data, (int, float)) or isinstance(data, bool):

@@ -42,7 +42,7 @@ LINK_TARGET = re.compile(r"\]\([^)]*\)")
 
 #: pages whose every number with a unit is marked, cited or an estimate (the test holds them)
 MARKED = ("README.md", "bibliography.md", "cli-conventions.md", "howto-new-technology.md", "howto-sweeps-dask.md",
-          "monte-carlo.md", "pixel-netlist.md", "report.md",
+          "interrupts.md", "monte-carlo.md", "pixel-netlist.md", "report.md",
           "technologies.md")
 
 
