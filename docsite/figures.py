@@ -334,7 +334,7 @@ def check(report: Path, files=None, getters=None) -> tuple[list[dict], int]:
                 except Unchecked:
                     continue
                 except (LookupError, StopIteration, ValueError, TypeError, ZeroDivisionError,
-                        SyntaxError, FileNotFoundError, json.JSONDecodeError) as exc:
+                        SyntaxError, FileNotFoundError, json.JSONDecodeError, AttributeError, ImportError) as exc:
                     bad.append({"page": page.name, "line": lineno, "key": f"{src}:{key}", "quoted": quoted,
                                 "value": None, "why": f"no such figure ({type(exc).__name__}{': ' + str(exc) if type(exc) in (ValueError, LookupError) else ''})"})
                     continue

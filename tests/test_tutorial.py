@@ -224,7 +224,8 @@ def clone(tmp_path):
     data and the docs tooling with the pages it reads (``python -m docsite.figures`` checks every docs
     page and the README, run from the clone's root)."""
     for d in ("designs", "examples", "tests/data", "docsite", "docs",
-              "benchmarks/results", "pixelkit/gap/silicon_cases"):   # the files record: / file: marks read
+              "benchmarks/results", "pixelkit/gap/silicon_cases",     # the files record: / file: marks read
+              "pixelkit/tech/builtin"):                               # and input: marks (technology files)
         shutil.copytree(ROOT / d, tmp_path / d)
     shutil.copy2(ROOT / "README.md", tmp_path / "README.md")
     return tmp_path
