@@ -129,3 +129,14 @@ def test_unmarked_numbers_are_listed_and_marked_pages_stay_marked(tmp_path):
                     "1<!--fig const:os.sep--> x\n")
     bad = figures.check(None, [page], getters={})[0]
     assert [(b["quoted"], b.get("now")) for b in bad[:1]] == [("99", "100")] and "only constants of pixelkit" in bad[1]["why"]
+
+
+def test_every_file_a_mark_reads_is_in_the_docs_clone():
+    """The how-to runner checks the marks from a clone of the pages' inputs (tests/test_tutorial.py's
+    CLONE_FOLDERS): a mark reading a file outside it would pass here and fail there."""
+    import re
+    from test_tutorial import CLONE_FOLDERS
+    paths = {f[1] for p in figures.pages() for line in p.read_text().splitlines() for m in figures._outside_code(line)
+             for f in re.finditer(r"(?:record|file|input):([\w./-]+)::", m.group(0))}
+    outside = sorted(p for p in paths if not any(p.startswith(d + "/") for d in CLONE_FOLDERS))
+    assert paths and not outside, f"marks read files the docs clone lacks (add to CLONE_FOLDERS): {outside}"

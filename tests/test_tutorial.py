@@ -218,14 +218,18 @@ def stop_server(proc):
         wait_for(group_gone, "the server block's processes to end after SIGKILL", within=60)
 
 
+#: what a clone carries: the pages' inputs, and every file a docs mark reads (record: / file: / input:,
+#: held by tests/test_docs_figures.py::test_every_file_a_mark_reads_is_in_the_docs_clone)
+CLONE_FOLDERS = ("designs", "examples", "tests/data", "docsite", "docs", "benchmarks/results",
+                 "pixelkit/gap/silicon_cases", "pixelkit/tech/builtin")
+
+
 @pytest.fixture
 def clone(tmp_path):
     """What the pages' commands read from a clone: the designs, the examples, the EMVA 1288 test
     data and the docs tooling with the pages it reads (``python -m docsite.figures`` checks every docs
     page and the README, run from the clone's root)."""
-    for d in ("designs", "examples", "tests/data", "docsite", "docs",
-              "benchmarks/results", "pixelkit/gap/silicon_cases",     # the files record: / file: marks read
-              "pixelkit/tech/builtin"):                               # and input: marks (technology files)
+    for d in CLONE_FOLDERS:
         shutil.copytree(ROOT / d, tmp_path / d)
     shutil.copy2(ROOT / "README.md", tmp_path / "README.md")
     return tmp_path
