@@ -29,7 +29,7 @@ from .common import (design_arg, emit, finishing, json_opt, main, out_checked, p
 @click.option("--exhaustive", is_flag=True,
               help="no early stop: the sign-off's Monte Carlo runs every [verify] mc sample (the default stops "
                    "once every yield is decided against min_yield; docs/verify.md)")
-@click.option("--no-cache", is_flag=True, help="rebuild every section (SPICE runs still use the simulation cache)")
+@click.option("--no-cache", is_flag=True, help="rebuild every section (SPICE runs and the foundry DRC still use their caches)")
 @click.option("--backend", type=click.Choice(["batch", "shared"]), default="batch", show_default=True)
 @click.option("--jobs", type=click.IntRange(1, 64), default=None, help="parallel ngspice workers")
 @quiet_opt
