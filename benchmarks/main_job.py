@@ -458,12 +458,14 @@ def merged(runs: list, code=code_commit) -> dict:
     the kit's commit it measured (``code``: ``code_commit`` of its run's head), the baseline of the runs
     that had one, the earliest date; ``head`` the code when every part measured the same, else
     None. A part is measured by one run only (two runs of it: refused)."""
-    heads = [code(r["head"]) for r in runs]
     seen = [p for r in runs for p in r["parts"]]
     if len(seen) != len(set(seen)):
         raise SystemExit(f"main_job --docs: a part is in more than one run ({', '.join(sorted(seen))})")
-    out = dict(runs[0], parts={}, head=heads[0] if len(set(heads)) == 1 else None)
-    out["code"] = {p: h for r, h in zip(runs, heads) for p in r["parts"]}
+    # a stored record that already merged runs of different code has no head: its parts keep their own
+    codes = {p: (r["code"][p] if r.get("head") is None else code(r["head"])) for r in runs for p in r["parts"]}
+    heads = list(dict.fromkeys(codes.values()))
+    out = dict(runs[0], parts={}, head=heads[0] if len(heads) == 1 else None)
+    out["code"] = codes
     out["commands"] = {p: r.get("commands", {}).get(p) or LEGACY_COMMANDS.get(p) or COMMANDS[p]
                        for r in runs for p in r["parts"]}
     out["baseline_design_dropped"] = next((r["baseline_design_dropped"] for r in runs if r.get("baseline_design_dropped")),

@@ -70,6 +70,9 @@ def test_main_job_merges_runs_each_part_with_its_code():
     assert m["runs"] == 2 and m["head"] == "h1" and m["code"] == {"report": "h1", "chip": "h1"}
     m = mj.merged([a, dict(b, head="h2")], code=lambda rev: rev)
     assert m["head"] is None and m["code"] == {"report": "h1", "chip": "h2"}
+    stored = mj.merged([a, dict(b, head="h2")], code=lambda rev: rev)   # a record of mixed code, merged again
+    m = mj.merged([dict(stored, parts={"chip": {}}), {**a, "head": "h3", "parts": {"afe4x4": {}}}], code=lambda rev: rev)
+    assert m["code"] == {"chip": "h2", "afe4x4": "h3"} and m["head"] is None
     with pytest.raises(SystemExit, match="more than one run"):
         mj.merged([a, dict(b, parts={"report": {}})], code=lambda rev: rev)
     assert mj.code_commit("HEAD") == subprocess.run(["git", "-C", str(ROOT), "log", "-1", "--format=%h", "--", *mj.CODE], capture_output=True, text=True).stdout.strip()
