@@ -425,7 +425,10 @@ def _same_chain(task, earlier) -> int | None:
         if not np.array_equal(np.asarray(task[pick])[:, mine], np.asarray(other[pick])[:, theirs]):
             continue
         to = dict(zip(map(str, mine), map(str, theirs)))
-        a, b = (_first_deck(x) for x in (other, task))
+        try:
+            a, b = (_first_deck(x) for x in (other, task))
+        except (ConfigError, ValueError, KeyError):   # the chain says it when it runs (a failure of its own)
+            return None
         if a == re.sub(r"(?<=_)(\d+)(?![\d.eE])", lambda m: to.get(m.group(1), m.group(1)), b):
             return i
     return None
