@@ -269,7 +269,7 @@ TILE = 8e-6            # m: the width of the columns a block's pieces lie in
 CUTOFF_REACHES = 2.0   # sources farther in plan than this many reaches from a piece are left out of its potential
 
 
-def _potential(px, py, pz, sx, sy, sz, sq, si, cutoff, inner=0.0):
+def _potential(px, py, pz, sx, sy, sz, sq, si, cutoff, inner=0.0, top=None):
     """The potential (x 4 pi eps) at each point (px, py, pz) of the point charges sq at (sx, sy, sz), each with its
     image in the plane si under it (none where the point is not above that plane), from the sources within
     ``cutoff`` in plan: a source's image pair falls off as 1 / r^3 past the heights, so beyond twice the reach
@@ -298,10 +298,17 @@ def _potential(px, py, pz, sx, sy, sz, sq, si, cutoff, inner=0.0):
                 continue
             rxy = (bx[:, None] - sx[near][None, :]) ** 2 + (by[:, None] - sy[near][None, :]) ** 2
             zs, zi = sz[near][None, :], si[near][None, :]
+            zp = bz[:, None]
             with np.errstate(divide="ignore"):          # a piece against itself (left out by ``inner``)
-                g = np.where((bz[:, None] > zi) & (rxy <= cutoff * cutoff) & (rxy > inner * inner),
-                             1 / np.sqrt(rxy + (bz[:, None] - zs) ** 2) - 1 / np.sqrt(rxy + (bz[:, None] + zs - 2 * zi) ** 2),
-                             0.0)
+                g = np.where((zp > zi) & (rxy <= cutoff * cutoff) & (rxy > inner * inner),
+                             1 / np.sqrt(rxy + (zp - zs) ** 2) - 1 / np.sqrt(rxy + (zp + zs - 2 * zi) ** 2), 0.0)
+                if top is not None:     # the images in the top dielectric interface (first order in its K)
+                    h, k = top
+                    g += k * np.where((zp > zi) & (rxy <= cutoff * cutoff),
+                                      1 / np.sqrt(rxy + (2 * h - zs - zp) ** 2)
+                                      - 1 / np.sqrt(rxy + (2 * h - 2 * zi + zs - zp) ** 2)
+                                      - 1 / np.sqrt(rxy + (zp - 2 * zi + 2 * h - zs) ** 2)
+                                      + 1 / np.sqrt(rxy + (zp - 4 * zi + 2 * h + zs) ** 2), 0.0)
             out[blk] = g @ sq[near]
     return out
 
@@ -333,6 +340,17 @@ def _line_ends(pc, eps, cutoff) -> None:
         if ref < 1.0:
             scale[e] = np.maximum(1.0, (1 - v[e]) / (1 - ref))
     pc.q = pc.q * scale
+
+
+def _top_interface(stack, eps):
+    """(height, K) of the interface between the dielectrics over the conductors and what lies over the stack (its
+    last layer, reaching up without end: the air over the passivation), K = (k - k_top) / (k + k_top) the image
+    coefficient of a charge in a medium of permittivity ``eps`` (k relative); None in a uniform stack."""
+    from ...tech.stack import EPS0
+    if len(stack.dielectrics) < 2:
+        return None
+    k, kt = eps / EPS0, stack.dielectrics[-1].k
+    return (stack.dielectrics[-2].top, (k - kt) / (k + kt))
 
 
 def far_couplings(geo, stack, cpl) -> list:
@@ -419,7 +437,7 @@ def far_couplings(geo, stack, cpl) -> list:
                         strip[np.flatnonzero(e)[hits]] = True
                     m = pa.net == ka
                     phi = _potential(ps.x[kk], ps.y[kk], ps.z[kk], pa.x[m], pa.y[m], pa.z[m], pa.q[m], pa.image[m],
-                                     CUTOFF_REACHES * reach)
+                                     CUTOFF_REACHES * reach, top=_top_interface(stack, eps))
                     c = ps.q[kk] * phi / (4 * math.pi * eps)
                     band = (d[kk] <= src.z) & ~strip
                     for kb in np.unique(ps.net[kk]):
