@@ -203,13 +203,14 @@ def layout_file(design):
     return Path(design.source).parent / design.layout.gds
 
 
-def _key(design, afe: bool) -> str:
-    """Cache key of a design's extraction: the code that draws and extracts it, the design, whether
-    the AFEs are in it, and the bytes of the GDS it names in ``[layout] gds`` (if any)."""
+def _base(design, afe: bool) -> str:
+    """The part of an extraction's cache key that is not the design's fields: the code that draws and
+    extracts, the technology (whole), whether the AFEs are in it, and the bytes of the GDS the design names
+    in ``[layout] gds`` (if any)."""
     import hashlib
     from pathlib import Path
     pkg = Path(__file__).resolve().parents[2]
-    h = hashlib.sha256(repr((design, afe)).encode())
+    h = hashlib.sha256(repr((design.tech, afe)).encode())
     gds = layout_file(design)
     if gds is not None:
         from ...readfile import sha256_file
@@ -219,6 +220,37 @@ def _key(design, afe: bool) -> str:
             h.update(str(p.relative_to(pkg)).encode())
             h.update(p.read_bytes())
     return h.hexdigest()
+
+
+def _key(base: str, design, paths) -> str:
+    """Cache key of a design's extraction: ``_base`` and the design's values at ``paths``, the fields the
+    drawing and the extraction read (``readtrace``): a field they do not read (a bias voltage) is not in it."""
+    import hashlib
+    from .readtrace import values
+    return hashlib.sha256((base + values(design, paths)).encode()).hexdigest()
+
+
+_READS: dict = {}
+
+
+def _read_sets(base: str) -> list:
+    """The read sets (each a frozenset of field paths) extractions under ``base`` have met, stored beside them."""
+    import hashlib
+    import json
+    if base not in _READS:
+        files = store().load(hashlib.sha256((base + " read sets").encode()).hexdigest())
+        _READS[base] = [frozenset(tuple(p) for p in r) for r in json.loads(files["reads.json"])] if files else []
+    return _READS[base]
+
+
+def _add_read_set(base: str, reads) -> None:
+    import hashlib
+    import json
+    sets = _read_sets(base)
+    if frozenset(reads) not in sets:
+        sets.append(frozenset(reads))
+        store().save(hashlib.sha256((base + " read sets").encode()).hexdigest(),
+                     {"reads.json": json.dumps([sorted(map(list, r)) for r in sets]).encode()})
 
 
 def store():
@@ -250,23 +282,34 @@ def post_layout_view(design, afe: bool = True):
     the kit's own drawing; a clear error when its
     technology has no stack or its layout does not match its netlist. ``afe=False``: without the
     AFEs' extraction (for commands that simulate no AFE; see ``Parasitics.afe``). Extractions are
-    cached in ``$PIXELKIT_CACHE/pex`` (key: the design, ``afe`` and the code that draws and extracts it)."""
+    cached in ``$PIXELKIT_CACHE/pex`` (key: the code that draws and extracts it, the technology, ``afe`` and the
+    design's fields the drawing and the extraction read, ``readtrace``: a bias voltage or a timing changed
+    finds the extraction it had)."""
     from ...tech.stack import require_stack
     from . import AFE_CELLS, chip_geometry
     require_stack(design.tech)
     if getattr(design, "post_layout", None) is not None and design.post_layout.afe == afe:
         return design
+    from .readtrace import reading
     design = replace(design, post_layout=None)
-    key = _key(design, afe)
-    if key not in _CACHE:
-        found = _stored(key)
-        if found is None:
-            gds = layout_file(design)
-            if gds is not None:          # the designer's layout ([layout] gds), not the drawing
-                found = from_gds(design, gds, afe)
-            else:
-                g = chip_geometry(design, ("DUALPIX", "DUALPIX_COL", *(AFE_CELLS if afe else ())))
-                found = build(design, g["DUALPIX"], g["DUALPIX_COL"], [g[c] for c in AFE_CELLS if afe])
-            _store(key, found)
-        _CACHE[key] = found
-    return replace(design, post_layout=_CACHE[key])
+    base = _base(design, afe)
+    for paths in _read_sets(base):
+        key = _key(base, design, paths)
+        if key not in _CACHE:
+            found = _stored(key)
+            if found is None:
+                continue
+            _CACHE[key] = found
+        return replace(design, post_layout=_CACHE[key])
+    gds = layout_file(design)
+    with reading(design, skip=("tech", "post_layout")) as reads:
+        if gds is not None:          # the designer's layout ([layout] gds), not the drawing
+            found = from_gds(design, gds, afe)
+        else:
+            g = chip_geometry(design, ("DUALPIX", "DUALPIX_COL", *(AFE_CELLS if afe else ())))
+            found = build(design, g["DUALPIX"], g["DUALPIX_COL"], [g[c] for c in AFE_CELLS if afe])
+    key = _key(base, design, reads)
+    _store(key, found)
+    _add_read_set(base, reads)
+    _CACHE[key] = found
+    return replace(design, post_layout=found)
