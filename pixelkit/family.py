@@ -69,12 +69,18 @@ def run_family(path, family: str, backend: str = "batch", jobs: int | None = Non
     return _attr(mod, fn)(load_family_design(path, family), backend=backend, jobs=jobs)
 
 
-def family_waveforms(path, family: str, out, backend: str = "batch") -> str:
+def run_loaded(design, family: str, backend: str = "batch", jobs: int | None = None) -> dict:
+    """The family's experiment on a design already loaded (a role family's post-layout view)."""
+    _, _, mod, fn = FAMILIES[family]
+    return _attr(mod, fn)(design, backend=backend, jobs=jobs)
+
+
+def family_waveforms(path, family: str, out, backend: str = "batch", design=None) -> str:
     """Write the waveforms of the family's main bench (its experiment's sweep deck; a cache hit)."""
     from .api import write_waveforms
     from .families import goldens
     from .spice import simulate
-    d = load_family_design(path, family)
+    d = design or load_family_design(path, family)
     if family in ROLE_FAMILIES:   # the lag deck: flush, window, window (dark / small / bright pixels)
         from .rolepix.signal import lag_run
         _out, r, _net, _lad = lag_run(d, None, backend)

@@ -52,6 +52,9 @@ def pixel4t(design, channel: Channel, name: str = "pix4t") -> PixelCell:
           mosfet("rst", "vrst", "rst", "fd", "0", dev.rst_w, dev.rst_l, t),
           mosfet("sf", "vdd", "fd", "sfo", "0", dev.sf_w, dev.sf_l, t),
           mosfet("rs", "sfo", "rs", "col", "0", dev.rs_w, dev.rs_l, t))
+    pl = getattr(design, "post_layout", None)
+    if pl is not None:   # the post-layout view: the drawn cell's wiring (layout.pixel4t.extracted)
+        el += tuple(Element(f"Cpex{i}", (a, b), c) for i, (a, b, c) in enumerate(pl.couplings))
     x = "X" if t.mos.kind == "subckt" else "M"
     return PixelCell(Subckt(name, PORTS, el, models=cards), ROLES, PROBES, source="circuits.pixel4t",
                      noise=((f"{x}sf", "gate"), (f"{x}rs", "drain")))

@@ -23,12 +23,11 @@ def close_cmd(design, out, scheduler, backend, jobs, as_json):
     from ..errors import EXIT_REGRESSION, verdict_exit
     from ..progress import enabled
     from ..spice.counter import spice_progress
-    from ..family import ROLE_FAMILIES, family_of, load_family_design
+    from ..family import ROLE_FAMILIES, family_of
     fam = family_of(design)
     if fam in ROLE_FAMILIES:   # a pixel read by role: its own figures and suite (rolepix), close's loop
-        from .common import refuse_post_layout
-        refuse_post_layout("close", fam)
-        d = load_family_design(design, fam)
+        from .common import load_role
+        d = load_role(design, fam, "close")    # with --post-layout the 4T's extraction, redrawn per candidate
     else:
         d = load(design)
     path = output_path(out, d, f"close/{d.name}_closed.toml")

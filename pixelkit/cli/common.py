@@ -195,15 +195,31 @@ def load(design_path: str, drawable: bool = True, afe: bool = True):
 
 
 def refuse_post_layout(command: str, family: str) -> None:
-    """A pixel read by role has no post-layout view (its layout's extraction is not fed back into its benches):
+    """Where a pixel read by role has no post-layout view (a netlist pixel; a 4T's report and exported decks),
     ``--post-layout`` is refused (exit 2) rather than ignored."""
     ctx = click.get_current_context(silent=True)
     if ctx is not None and ctx.meta.get("pixelkit.post_layout"):
         from ..errors import ConfigError
-        why = ("its extraction is not fed back into its benches, docs/pixel4t.md" if family == "pixel4t" else
+        why = (f"{command} does not take it yet; verify, simulate, close and gap do, docs/pixel4t.md"
+               if family == "pixel4t" else
                "sign off your own GDS with pixelkit signoff: its post-layout netlist is <top>.post.spice")
-        raise ConfigError(command, "--post-layout", True, f"a dual-pixel design (a {family} design has no "
-                          f"post-layout view yet: {why})")
+        who = "a dual-pixel design" if family == "pixel4t" else "a dual-pixel design or a 4T"
+        raise ConfigError(command, "--post-layout", True, f"{who} for this command (a {family} design has no "
+                          f"post-layout view {'here' if family == 'pixel4t' else 'yet'}: {why})")
+
+
+def load_role(path, family: str, command: str):
+    """A design read by role, for ``command``: with ``--post-layout`` the 4T's post-layout view (its drawn
+    cell's extraction in its subcircuit, ``layout.pixel4t``); a netlist pixel's is refused (exit 2)."""
+    from ..family import load_family_design
+    ctx = click.get_current_context(silent=True)
+    if ctx is not None and ctx.meta.get("pixelkit.post_layout") and family != "pixel4t":
+        refuse_post_layout(command, family)
+    d = load_family_design(path, family)
+    if ctx is not None and ctx.meta.get("pixelkit.post_layout"):
+        from ..layout.pixel4t import post_layout_view
+        return post_layout_view(d)
+    return d
 
 
 def view(design, afe: bool = True):

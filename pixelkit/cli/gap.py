@@ -132,13 +132,12 @@ def diagnose(design, measured, out, seed, gain_tol, offset_tol, gain_sd, offset_
 
 def _role_design(path, command: str):
     """The design at ``path`` when it is a pixel read by role (``--post-layout`` refused), else None."""
-    from ..family import ROLE_FAMILIES, family_of, load_family_design
+    from ..family import ROLE_FAMILIES, family_of
     fam = family_of(path)
     if fam not in ROLE_FAMILIES:
         return None
-    from .common import refuse_post_layout
-    refuse_post_layout(command, fam)
-    return load_family_design(path, fam)
+    from .common import load_role
+    return load_role(path, fam, command)
 
 
 def _write_role(conditions, out, v) -> None:

@@ -42,9 +42,18 @@ def simulate(design, backend, jobs, waveforms, as_json):
     """
     from ..api import experiment
     from ..experiments.reference import is_reference
-    from ..family import DEFAULT, family_of, family_text, family_waveforms, run_family
+    from ..family import DEFAULT, ROLE_FAMILIES, family_of, family_text, family_waveforms, run_family, run_loaded
     from ..report.text import simulate_text
     fam = family_of(design)
+    if fam in ROLE_FAMILIES:   # a pixel read by role; with --post-layout the 4T's drawn cell's extraction
+        from .common import load_role
+        d = load_role(design, fam, "simulate")
+        r = run_loaded(d, fam, backend=backend, jobs=jobs)
+        if getattr(d, "post_layout", None) is not None:
+            r["view"] = d.post_layout.source
+        if waveforms:
+            r["waveforms"] = family_waveforms(design, fam, waveforms, backend, design=d)
+        return emit(r, as_json, family_text)
     if fam != DEFAULT:  # another pixel family (pixelkit/family.py): its own experiment
         r = run_family(design, fam, backend=backend, jobs=jobs)
         if waveforms:

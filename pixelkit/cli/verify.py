@@ -59,12 +59,11 @@ def verify_cmd(design, corners, temperatures, supplies, mc, seed, mc_full, sched
     from ..verify.run import verify
     from ..verify.signoff import COLUMNS, csv_rows, exit_status, not_measured, text, where
     from ..errors import ConfigError
-    from ..family import ROLE_FAMILIES, family_of, load_family_design
+    from ..family import ROLE_FAMILIES, family_of
     fam = family_of(design)
     if fam in ROLE_FAMILIES:   # a pixel read by role: its own figures, verify's run (rolepix.suite)
-        from .common import refuse_post_layout
-        refuse_post_layout("verify", fam)
-        d = load_family_design(design, fam)
+        from .common import load_role
+        d = load_role(design, fam, "verify")   # with --post-layout the 4T's drawn cell's extraction
     elif fam == "ratio":   # its own figures (docs/verify.md); a WDR design is refused by load
         from ..families.ratio.design import load_ratio_design
         from ..families.ratio.signoff import verify

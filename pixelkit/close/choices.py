@@ -25,7 +25,6 @@ import itertools
 import math
 
 from ..errors import ConfigError
-from ..verify import measure
 from . import margins as mg
 from .knobs import Space
 from .run import Closer
@@ -131,10 +130,10 @@ def screen(setups: list, backend, jobs, scheduler, tell, say) -> list[dict]:
                           key=lambda mc: (mc[0], mc[1]))
             pairs += [(name, c) for _m, c in rows[:SCREEN]]
         pairs = sorted(set(pairs))
-        order = list(measure.GROUPS)
+        order = list(first.suite.GROUPS)
         groups: dict = {}
         for name, c in pairs:
-            groups.setdefault(c, set()).update(measure.groups_for([first.spec[name].fig.name]))
+            groups.setdefault(c, set()).update(first.suite.groups_for([first.spec[name].fig.name]))
         groups = {c: tuple(sorted(g, key=order.index)) for c, g in groups.items()}
         conds = sorted(groups)
         margins = [{k: p0.margins.get(k) for k in pairs}]
@@ -184,8 +183,8 @@ def _under(design, setting: dict, numeric: list):
         try:
             base = design_with(design, values)
             if pl is not None:   # the post-layout view, as the command asked
-                from ..layout.pex.overlay import post_layout_view
-                base = post_layout_view(base, pl.afe)
+                from .knobs import same_view
+                base = same_view(design, base)
             break
         except ConfigError as exc:
             if exc.field in names and values.get(exc.field) is not None:

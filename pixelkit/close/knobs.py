@@ -130,12 +130,19 @@ class Space:
         """The design at knob values ``x`` (SI, already snapped), loaded as a file would be; in the
         post-layout view when ``base`` is in it (the layout drawn and extracted again for these values)."""
         from ..sweep.space import design_with
-        d = design_with(base, self.overrides(x))
-        pl = getattr(base, "post_layout", None)
-        if pl is not None:
-            from ..layout.pex.overlay import post_layout_view
-            d = post_layout_view(d, pl.afe)
+        return same_view(base, design_with(base, self.overrides(x)))
+
+
+def same_view(base, d):
+    """``d`` in ``base``'s view: post-layout (drawn and extracted again for ``d``'s values) when ``base`` is."""
+    pl = getattr(base, "post_layout", None)
+    if pl is None:
         return d
+    if hasattr(base, "reloaded"):   # a pixel read by role: the 4T's cell
+        from ..layout.pixel4t import post_layout_view as role_view
+        return role_view(d)
+    from ..layout.pex.overlay import post_layout_view
+    return post_layout_view(d, pl.afe)
 
 
 def check_bounds(space: Space, design) -> None:

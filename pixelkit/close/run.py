@@ -419,7 +419,10 @@ class Closer:
                 targets = np.array([self.target(r) for r in model.keys])
                 xc, dc, cf, fc, local, bad = self.attempt(xc, model, st, feasible, sconds, sgroups, screen, p, targets)
                 fresh = False
-                if local < ETA and not bad and feasible and fc is not None and fc < model.f:
+                measured = np.all(np.isfinite(self.row_margins(model.keys, cf)))
+                if local < ETA and not bad and feasible and fc is not None and fc < model.f and measured:
+                    # (a candidate where a modelled spec was not measured - its deck failed - has no margin to
+                    # correct onto: it is rejected as it is)
                     # the objective improved but a modelled constraint curved away: a second-order
                     # correction, back onto the passing side, before giving the step up
                     self.record_partial(xc, cf, model.keys + screen, fc, mode, radius)

@@ -106,3 +106,62 @@ def layout_pixel4t(design, out_dir: Path, drc: bool = False, lvs: bool = False, 
         r["signoff"] = signoff(gds, spice, design.tech, out_dir / "signoff", CELL, skip)
         r["exit_status"] = r["signoff"]["exit_status"]
     return r
+
+
+@dataclass(frozen=True)
+class Extracted:
+    """The 4T cell's wiring capacitances as the simulated subcircuit ``pix4t`` names its nodes (F):
+    ``couplings`` ((node, node, C), ...) among ``fd``, ``sfo``, its ports and ground (``0``); ``fd_F`` FD's
+    total; ``dropped``: the stand-in photodiode's own wiring (its N+ contact and metal, which a pinned
+    photodiode has not: a coupling of FD to it is kept, to ground)."""
+    couplings: tuple
+    fd_F: float
+    dropped_F: float
+    source: str
+
+
+#: the drawn cell's nets -> the simulated subcircuit's nodes (the substrate and the shield are its ground)
+NODE = {"fd": "fd", "sfo": "sfo", "vdd": "vdd", "vrst": "vrst", "rst": "rst", "tg": "tg", "rs": "rs", "col": "col",
+        "vss": "0", "0": "0", "pd": "pd"}
+
+
+def geometry(design):
+    """The drawn 4T cell's ``pex.nets.NetGeometry``, its nets named by its LVS netlist."""
+    import tempfile
+
+    from .pex.nets import view_geometry
+    from .signoff.netlist_in import read_netlist
+    from ..tech.stack import require_stack
+    require_stack(design.tech)
+    with tempfile.TemporaryDirectory(prefix="pixelkit-4t-") as tmp:
+        r = layout_pixel4t(design, Path(tmp))
+        view = read_netlist(r["spice"], design.tech).top_view(CELL)
+        return view_geometry(r["gds"], CELL, design.tech, view)
+
+
+def extracted(design) -> Extracted:
+    """The drawn cell's couplings placed in ``pix4t`` (``Extracted``'s docstring says where each goes)."""
+    from .pex.capacitance import capacitances
+    cpl = capacitances(geometry(design), design.tech.stack)
+    acc, dropped = {}, 0.0
+    for (a, b), c in cpl.items():
+        a, b = NODE.get(a, "0"), NODE.get(b, "0")
+        if "pd" in (a, b):
+            other = b if a == "pd" else a
+            if other in ("0", "pd"):
+                dropped += c
+                continue
+            a, b = other, "0"
+        if a == b or c <= 1e-19:
+            continue
+        key = tuple(sorted((a, b)))
+        acc[key] = acc.get(key, 0.0) + c
+    pairs = tuple((a, b, c) for (a, b), c in sorted(acc.items()))
+    fd = sum(c for a, b, c in pairs if "fd" in (a, b))
+    return Extracted(pairs, fd, dropped, f"extracted from the drawn {CELL} of {design.name} ({design.tech.stack.source})")
+
+
+def post_layout_view(design):
+    """``design`` carrying its drawn cell's extraction: its generator then adds the couplings to ``pix4t``."""
+    from dataclasses import replace
+    return replace(design, post_layout=extracted(design))

@@ -6,7 +6,7 @@ pixel read by role has (``families.roledesign``).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from ...errors import ConfigError
@@ -74,6 +74,8 @@ class Pixel4tDesign(RoleDesign):
     pixel: Pixel = table(Pixel, default=Pixel, doc="cell pitch and the PPD's drawn size")
     ppd: PpdParams = table(PpdParams, default=PpdParams, doc="the pinned photodiode's model parameters")
     devices: Devices = table(Devices, default=Devices, doc="TG, RST, SF and RS sizes")
+    #: the drawn cell's extraction (``layout.pixel4t.Extracted``) in the post-layout view; None: schematic
+    post_layout: object = field(default=None, metadata=dict(kind="skip"))
 
     def cell(self):
         return cell_of(self)

@@ -1,0 +1,71 @@
+"""The 4T's post-layout view: its drawn cell (layout/pixel4t.py) extracted and fed back into its benches.
+
+Independent paths: FastCap2 (a 3D boundary-element solver) on the same drawn shapes around FD, for the
+extraction; for the feed-back, the conversion gain's derivation: CG = A_sf q / C_FD, so the wiring
+divides it by 1 + C_w / C_FD, C_FD the closed form of families/pixel4t/model.py at FD's read level and
+C_w FD's extracted couplings (those to the follower's source and the column count 1 - A_sf of themselves:
+they follow FD). SPICE's conversion gain in the view against the schematic's must fall by that ratio.
+"""
+import json
+
+import pytest
+
+from conftest import ROOT
+
+DESIGN = ROOT / "designs" / "pixel4t_gf180.toml"
+
+
+@pytest.fixture(scope="module")
+def d4t():
+    from pixelkit.families.pixel4t.design import load_pixel4t_design
+    return load_pixel4t_design(DESIGN)
+
+
+@pytest.fixture(scope="module")
+def view(d4t):
+    from pixelkit.layout.pixel4t import post_layout_view
+    return post_layout_view(d4t)
+
+
+def test_fd_wiring_of_the_drawn_4t_within_10_percent_of_fastcap(d4t):
+    """FD's metal and poly with every neighbour within 1.5 um: the kit's 2.5D total against FastCap2's
+    (measured 0.770 fF against 0.775 fF)."""
+    import klayout.db as kdb
+    from pixelkit.layout.pex.fastcap import clip, compare
+    from pixelkit.layout.pixel4t import geometry
+    geo = geometry(d4t)
+    r = kdb.Region()
+    for nets in geo.wires.values():
+        if "fd" in nets:
+            r += nets["fd"]
+    b, d, m = r.bbox(), geo.dbu, 1.5e-6
+    res = compare(clip(geo, (b.left * d - m, b.bottom * d - m, b.right * d + m, b.top * d + m)), d4t.tech.stack, "fd",
+                  mesh=0.4e-6)
+    assert 0.3e-15 < res["total_fastcap_F"] < 2e-15
+    assert res["total_kit_F"] == pytest.approx(res["total_fastcap_F"], rel=0.10)
+
+
+def test_the_extraction_reaches_the_simulation_as_its_derivation_says(d4t, view, tmp_path, cli):
+    from pixelkit.families.pixel4t import model
+    from pixelkit.rolepix.signal import signal
+    pl = view.post_layout
+    assert pl.couplings and pl.fd_F > 0.3e-15 and "drawn PIX4T" in pl.source
+    assert all("pd" not in (a, b) for a, b, _c in pl.couplings)       # the stand-in's own wiring is not a PPD's
+    assert any(e.name.startswith("Cpex") for e in view.cell().subckt.elements)
+    assert not any(e.name.startswith("Cpex") for e in d4t.cell().subckt.elements)
+    cg = model.conversion_gain(d4t, d4t.levels.v_rst_for(d4t.tech.supply) - 1.0)
+    a = cg["a_sf"]
+    c_w = sum(c * ((1 - a) if ({x, y} - {"fd"}) <= {"sfo", "col"} else 1.0) for x, y, c in pl.couplings if "fd" in (x, y))
+    ratio = signal(view)["cg_V_per_e"] / signal(d4t)["cg_V_per_e"]
+    assert ratio == pytest.approx(cg["c_fd_F"] / (cg["c_fd_F"] + c_w), rel=0.03)    # measured 0.749 vs 0.741
+    assert ratio < 0.9
+
+    # the command line: verify --post-layout signs off the view (the view's conversion gain, named as such)
+    p = tmp_path / "p4t.toml"
+    p.write_text(DESIGN.read_text().split("\n[verify]")[0] + '\n[verify]\ncorners = ["tt"]\ntemperatures = ["27 degC"]\n'
+                 'supplies = ["0 %"]\nmc = 0\n\n[spec.conversion_gain]\nmin = "30 uV/e-"\nmax = "70 uV/e-"\n')
+    code, out, err = cli("verify", p, "--post-layout", "--out", tmp_path / "v", "--json")
+    assert code == 0, err
+    r = json.loads(out)
+    assert r["view"] == "post-layout"
+    assert r["rows"][0]["value"] == pytest.approx(signal(view)["cg_V_per_e"] * 1e6, rel=1e-6)   # uV/e-
