@@ -37,6 +37,35 @@ def test_the_trace_records_leaf_reads_and_whole_objects(design):
     assert value_at(design, ("pixel", "devices", "tg_w")) == design.pixel.devices.tg_w
 
 
+def test_traces_in_two_threads_take_turns_and_leave_the_classes_as_they_were(design):
+    import threading
+    cls = type(design.afe)
+    seen = []
+
+    def trace(field):
+        with reading(design) as reads:
+            getattr(design.afe, field)
+            entered.set()
+            go.wait(5)
+        seen.append(reads)
+    entered, go = threading.Event(), threading.Event()
+    t = threading.Thread(target=trace, args=("c11",))
+    t.start()
+    entered.wait(5)
+    entered.clear()
+    u = threading.Thread(target=trace, args=("c12",))
+    u.start()
+    # the second waits for the first (without the lock it enters at once, patches over the first's tracer, and
+    # the first's exit leaves the second's reads untraced and a tracer on the class: the last assert). The
+    # wait can only pass when it should not (a thread slower than 0.2 s to start), never fail when it should.
+    assert not entered.wait(0.2)
+    go.set()
+    t.join(5)
+    u.join(5)
+    assert {("afe", "c11")} in seen and {("afe", "c12")} in seen
+    assert "__getattribute__" not in cls.__dict__
+
+
 def _fresh(monkeypatch, tmp_path, name):
     monkeypatch.setenv("PIXELKIT_CACHE", str(tmp_path / name))
     monkeypatch.setattr(overlay, "_CACHE", {})

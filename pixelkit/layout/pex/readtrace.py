@@ -15,9 +15,12 @@ set decide every branch the drawing takes, so the same values read the same fiel
 from __future__ import annotations
 
 import dataclasses
+import threading
 from contextlib import contextmanager
 
 _WHOLE = ("__dict__", "__reduce_ex__", "__reduce__", "__getstate__")
+_LOCK = threading.RLock()    # one trace at a time: the classes are patched for every thread (the report's
+                             # prefetch threads); another thread's reads of the same objects are recorded too
 
 
 def _walk(obj, path, out, skip):
@@ -57,17 +60,18 @@ def reading(design, skip=()):
             elif name in _WHOLE:
                 reads.update(entry[1])
         return value
-    saved = {c: c.__dict__.get("__getattribute__") for c in classes}
-    for c in classes:
-        c.__getattribute__ = traced
-    try:
-        yield reads
-    finally:
-        for c, old in saved.items():
-            if old is None:
-                del c.__getattribute__
-            else:
-                c.__getattribute__ = old
+    with _LOCK:
+        saved = {c: c.__dict__.get("__getattribute__") for c in classes}
+        for c in classes:
+            c.__getattribute__ = traced
+        try:
+            yield reads
+        finally:
+            for c, old in saved.items():
+                if old is None:
+                    del c.__getattribute__
+                else:
+                    c.__getattribute__ = old
 
 
 def value_at(design, path):
