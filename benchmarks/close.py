@@ -139,8 +139,9 @@ def show(res: dict) -> None:
           + (f"; conflict: {c['conflict']}" if c["conflict"] else ""))
     for ch in c.get("choices") or []:
         sc = ch.get("screen") or {}
-        print(f"  choice {ch['choice']}: {ch['status']}" + (f", screen {sc['short_pct']:+.3g} % ({sc.get('worst')})"
-                                                         if sc.get("short_pct") is not None else ""))
+        print(f"  choice {ch['choice']}: {ch['status']}" + (f", screen: {-sc['behind_pct']:.3g} % behind the best "
+                                                         f"({sc.get('worst')})" if sc.get("behind_pct") is not None
+                                                         else ""))
     print("  iteration  mode      accepted  verified on          SPICE runs  cached  CPU (s)  wall at end (s)")
     for i in c["iterations"]:
         cpu = "-" if i.get("cpu_s") is None else f"{i['cpu_s']:.0f}"

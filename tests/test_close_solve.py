@@ -105,9 +105,9 @@ def test_a_circuit_choice_closes_what_the_supply_driven_gates_cannot(tmp_path, c
     from the cache), from a boosted rail (pixel.v_gate, absent in the reference, starts at the middle of
     its bounds) the reset is hard at -10 % supply and both pass; close keeps that choice, writes the rail
     into [pixel] and verify alone passes the file. ``choose = "screen"`` (default): the supply, listed
-    first, is simulated on the grid, the rail's start at the same conditions; the rail's start has the
-    larger smallest margin on the rows the choice moves (the supply's worst: the lag, 6.12 % at -10 %), so
-    it is closed first and, passing, ends the search: the supply is screened, not closed. ``choose =
+    first, is simulated on the grid, the rail's start at the same conditions; on the rows the choice moves
+    the rail is nowhere behind the supply, the supply is behind on the lag (6.12 % at -10 %), so the rail
+    is closed first and, passing, ends the search: the supply is screened, not closed. ``choose =
     "all"``: both are closed, the supply infeasible naming the lag."""
     p = _design(tmp_path, {"full_well_primary": {"min": "192 ke-"}, "image_lag_primary": {"max": "0.1 %"}},
                 {"corners": ["tt"], "temperatures": ["27 degC"], "supplies": ["-10 %"], "mc": 0},
@@ -127,6 +127,7 @@ def test_a_circuit_choice_closes_what_the_supply_driven_gates_cannot(tmp_path, c
         supply, boosted = by["pixel.gate_drive = supply"], by["pixel.gate_drive = boosted"]
         assert supply["status"] == "screened" and supply["passes"] is None
         assert [c["choice"] for c in r["choices"]] == ["pixel.gate_drive = boosted", "pixel.gate_drive = supply"]
+        assert boosted["screen"]["behind_pct"] == 0 and supply["screen"]["behind_pct"] < -100   # lag 6 % vs 0.1 %
         assert supply["screen"]["short_pct"] < boosted["screen"]["short_pct"]
         assert supply["screen"]["worst"].startswith("image_lag_primary")
         assert {i["choice"] for i in r["iterations"]} == {"pixel.gate_drive = boosted"}

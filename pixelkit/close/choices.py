@@ -10,8 +10,12 @@ the order of that screen until one passes:
    the same simulations: the cache replays them).
 2. Every other combination's start is simulated at those conditions, for the specs measured there.
 3. The rows the choice moves (a (spec, condition) whose margin differs between combinations: the AFE
-   gain error does not depend on how the pixel's gates are driven) rank them: the largest smallest
-   margin less its target first, ties in the listed order.
+   gain error does not depend on how the pixel's gates are driven) rank them. On each row, each
+   combination's shortfall below its target (0 when it meets it) is compared with the best
+   combination's there; a combination is as far behind as its worst row: the least behind first
+   (0: no other combination does better on any row it fails), then the largest smallest margin,
+   then as listed. A row every combination fails alike (the secondary's settling while the OTA
+   still slews) does not decide; the row one circuit fails and the other meets does.
 4. Close solves the first; a combination that ends passing ends the search; otherwise the next one.
 
 So a later combination with a better objective is not sought once one passes: a choice is a circuit
@@ -51,7 +55,7 @@ def choose(design, backend, jobs, scheduler, tell, say) -> dict:
     every = design.close.choose == "all" or len(setups) == 1
     screens = None if every else screen(setups, backend, jobs, scheduler, tell, say)
     order = list(range(len(setups))) if screens is None else sorted(
-        range(len(setups)), key=lambda i: (-screens[i]["short"], i))
+        range(len(setups)), key=lambda i: rank(screens[i], i))
     runs = []
     for i in order:
         s = setups[i]
@@ -93,7 +97,7 @@ def choose(design, backend, jobs, scheduler, tell, say) -> dict:
     out["choices"] = []
     for i in order:
         s, r = setups[i], closed.get(setups[i]["label"].strip(" []"))
-        sc = None if screens is None else {k: v for k, v in screens[i].items() if k != "short"}
+        sc = None if screens is None else {k: v for k, v in screens[i].items() if k not in ("short", "behind")}
         if r is None:   # screened, not closed: another passed first
             out["choices"].append({"choice": s["label"].strip(" []"), "status": "screened", "passes": None,
                                    "objective": None, "objective_shown": "-", "smallest_margin_pct": None,
@@ -145,22 +149,37 @@ def screen(setups: list, backend, jobs, scheduler, tell, say) -> list[dict]:
             margins.append({(n, c): mg.margin(cl.spec[n], figs.get(c, {}).get(cl.spec[n].fig.name))
                             for n, c in pairs})
     moved = [k for k in pairs if len({None if m[k] is None else round(m[k], 9) for m in margins}) > 1]
+
+    def shortfall(m, k):   # below target: how far (<= 0); not measured: -inf
+        return -math.inf if m[k] is None else min(m[k] - first.target(k), 0.0)
+    best = {k: max(shortfall(m, k) for m in margins) for k in moved}
     out = []
-    for cl, m in zip(closers, margins):
-        short = min(((-math.inf if m[k] is None else m[k] - cl.target(k)) for k in moved), default=0.0)
-        worst = min(moved, key=lambda k: -math.inf if m[k] is None else m[k] - cl.target(k), default=None)
-        out.append({"short": short, "short_pct": 100 * short if math.isfinite(short) else None,
+    for m in margins:
+        short = min(((-math.inf if m[k] is None else m[k] - first.target(k)) for k in moved), default=0.0)
+        lag = {k: 0.0 if shortfall(m, k) == best[k] else shortfall(m, k) - best[k] for k in moved}
+        behind = min(lag.values(), default=0.0)
+        worst = min(moved, key=lambda k: (lag[k], -math.inf if m[k] is None else m[k]), default=None)
+        out.append({"behind": behind, "short": short,
+                    "behind_pct": 100 * behind if math.isfinite(behind) else None,
+                    "short_pct": 100 * short if math.isfinite(short) else None,
                     "worst": None if worst is None else f"{worst[0]} at {worst[1].label}",
                     "conditions": [c.label for c in conds], "rows": len(moved)})
     runs, cached = counter.delta()
     out[0].update(spice_runs=runs, spice_cached=cached, cpu_s=counter.cpu(), wall_s=time.perf_counter() - t0)
-    ranked = sorted(range(len(setups)), key=lambda i: (-out[i]["short"], i))
+    ranked = sorted(range(len(setups)), key=lambda i: rank(out[i], i))
     say("close: circuit choices screened at their start (" + f"{len(moved)} rows the choice moves, "
         f"{len(conds)} conditions): " + "; ".join(
-            f"{setups[i]['label'].strip(' []')} smallest margin "
-            + ("not measured" if out[i]["short_pct"] is None else f"{out[i]['short_pct']:+.3g} %")
-            + (f" ({out[i]['worst']})" if out[i]["worst"] else "") for i in ranked))
+            f"{setups[i]['label'].strip(' []')} short of the best choice by "
+            + ("-" if out[i]["behind_pct"] is None else f"{-out[i]['behind_pct']:.3g} %")
+            + (f" ({out[i]['worst']})" if out[i]["worst"] else "") + ", smallest margin "
+            + ("not measured" if out[i]["short_pct"] is None else f"{out[i]['short_pct']:+.3g} %") for i in ranked))
     return out
+
+
+def rank(s: dict, i: int) -> tuple:
+    """The screen's order: least behind the best choice row by row first, then the largest smallest
+    margin, then as listed."""
+    return (-s["behind"], -s["short"], i)
 
 
 def _value(design, key):

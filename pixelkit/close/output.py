@@ -17,6 +17,14 @@ def _pct(x) -> str:
     return "-" if x is None or (isinstance(x, float) and not math.isfinite(x)) else f"{x:+.3g} %"
 
 
+def _behind(sc: dict) -> str:
+    """A choice's screen: how far behind the best choice, and where."""
+    if sc.get("behind_pct") is None:
+        return "not measured"
+    return ("the best on every row it fails" if sc["behind_pct"] == 0 else
+            f"{-sc['behind_pct']:.3g} % behind the best at {sc['worst']}") + f", smallest margin {_pct(sc['short_pct'])}"
+
+
 def _obj(value, objective) -> str:
     if value is None:
         return "-"
@@ -136,7 +144,7 @@ def text(r: dict) -> str:
              + f"; objective {r['objective']['goal']}: {r['objective']['shown_start']} -> {r['objective']['shown']}"]
     for c in r.get("choices", []):
         sc = c.get("screen")
-        lines.append(f"  with {c['choice']}: " + (f"screen (its start) {_pct(sc['short_pct'])}; " if sc else "")
+        lines.append(f"  with {c['choice']}: " + (f"screen (its start): {_behind(sc)}; " if sc else "")
                      + (STATUS['screened'].split(':')[0] if c['status'] == "screened" else
                         f"{STATUS.get(c['status'], c['status']).split(':')[0]}, smallest margin "
                         f"{_pct(c['smallest_margin_pct'])}, {r['objective']['goal']} {c['objective_shown']}")
