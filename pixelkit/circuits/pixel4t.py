@@ -11,7 +11,7 @@ drain and RST source junctions, both overlaps, the SF gate.
 from __future__ import annotations
 
 from ..physics.nodes import overlap
-from ..physics.ppd import Channel, Ppd, dark_scale
+from ..physics.ppd import Channel, Ppd, dark_scale, pinning_voltage
 from ..spice.netlist import Element, Subckt
 from .devices import mosfet
 from .ppd import LIGHT_PORT, fd_junction, ppd_elements
@@ -27,7 +27,7 @@ def ppd_model(design, channel: Channel, temperature_K: float | None = None) -> P
     p, px = design.ppd, design.pixel
     t = design.temperature if temperature_K is None else temperature_K
     area, perim = px.ppd_width * px.ppd_height, 2 * (px.ppd_width + px.ppd_height)
-    return Ppd(v_pin=p.v_pin, c=p.c_area * area + p.c_perimeter * perim,
+    return Ppd(v_pin=pinning_voltage(p.v_pin, p.v_bi, t, p.t_ref), c=p.c_area * area + p.c_perimeter * perim,
                i_dif=p.j_dif * area * dark_scale(t, p.t_ref, "diffusion"),
                i_gen=p.j_gen * area * dark_scale(t, p.t_ref, "generation"),
                barrier=p.barrier, channel=channel, temperature=t)

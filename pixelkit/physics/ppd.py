@@ -158,6 +158,20 @@ def dark_scale(temperature_K: float, t_ref: float, kind: str) -> float:
     raise ValueError(kind)
 
 
+def pinning_voltage(v_pin: float, v_bi: float | None, temperature_K: float, t_ref: float) -> float:
+    """V_pin (V) at ``temperature_K`` of a PPD whose pinning voltage is ``v_pin`` at ``t_ref``: the one value
+    without ``v_bi``; else it follows the junctions' built-in potential (``v_bi`` at ``t_ref``), which falls as
+    n_i rises: V_bi(T) = U_T ln(N_A N_D / n_i(T)^2), so V_bi(T) = U_T(T) (v_bi / U_T(t_ref) - ln(n_i^2(T) /
+    n_i^2(t_ref))) (``dark_scale``'s n_i^2), and V_pin(T) = v_pin - (V_bi(T) - v_bi): the depleted well's
+    potential maximum is the pinning layer's potential plus what the junction's built-in potential no longer
+    holds back [Pelamatti2015]."""
+    if v_bi is None:
+        return v_pin
+    vbi = thermal_voltage(temperature_K) * (v_bi / thermal_voltage(t_ref)
+                                            - math.log(dark_scale(temperature_K, t_ref, "diffusion")))
+    return v_pin - (vbi - v_bi)
+
+
 def doubling_K(temperature_K: float, t_ref: float, kind: str) -> float:
     """The temperature step (K) that doubles a component near ``temperature_K``."""
     r = dark_scale(temperature_K + 0.5, t_ref, kind) / dark_scale(temperature_K - 0.5, t_ref, kind)

@@ -41,7 +41,12 @@ class Pixel:
 class PpdParams:
     """The pinned photodiode's model (physics.ppd)."""
     v_pin: float = qty("V", 1.0, gt=0, plausible=(0.1, 3.0),
-                       doc="pinning voltage: the potential of the empty, fully depleted PPD")
+                       doc="pinning voltage: the potential of the empty, fully depleted PPD (at t_ref when v_bi is given)")
+    v_bi: float | None = qty("V", None, gt=0, plausible=(0.3, 1.2),
+                             doc="built-in potential of the PPD's junctions at t_ref: V_pin then follows it, "
+                                 "V_pin(T) = v_pin - (V_bi(T) - v_bi), V_bi = U_T ln(N_A N_D / n_i^2) (about "
+                                 "+1.3 mV/K at 0.9 V: the dark full well rises with temperature, as [Pelamatti2015] "
+                                 "measured); absent: V_pin is one value at every temperature")
     c_area: float = qty("F/m2", 0.12e-3, gt=0, plausible=(1e-6, 1e-2),
                         doc="PPD capacitance per area (the dQ/dV of the filling well)")
     c_perimeter: float = qty("F/m", 0.05e-9, ge=0, plausible=(0.0, 1e-8), doc="PPD capacitance per perimeter")
