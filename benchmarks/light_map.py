@@ -1,5 +1,5 @@
-"""The modelled light map's collection model of the readout cells: the light field's cost and result against
-the light field's code at a baseline revision, in the same run, on the same optics.
+"""The modelled light map's collection model of the readout cells: its cost and result against the light field's
+and the collection solver's code at a baseline revision, in the same run, on the same cells.
 
     python benchmarks/light_map.py [--baseline REV] [--grid UM] [--step NM] [--cells C,..]
 
@@ -25,31 +25,33 @@ import numpy as np
 from common import ROOT, reference_design
 
 
-def baseline_lightfield(rev: str):
-    """``pixelkit.physics.lightfield`` as it was at ``rev`` (a module beside the current one: its relative imports
+def baseline(rev: str, module: str):
+    """``pixelkit.physics.<module>`` as it was at ``rev`` (a module beside the current one: its relative imports
     resolve in ``pixelkit.physics``)."""
-    src = subprocess.run(["git", "-C", str(ROOT), "show", f"{rev}:pixelkit/physics/lightfield.py"],
+    src = subprocess.run(["git", "-C", str(ROOT), "show", f"{rev}:pixelkit/physics/{module}.py"],
                          capture_output=True, text=True, check=True).stdout
-    name = "pixelkit.physics._lightfield_baseline"
+    name = f"pixelkit.physics._{module}_baseline"
     spec = importlib.util.spec_from_loader(name, loader=None)
     mod = importlib.util.module_from_spec(spec)
     mod.__package__ = "pixelkit.physics"
     sys.modules[name] = mod
-    exec(compile(src, f"{rev}:pixelkit/physics/lightfield.py", "exec"), mod.__dict__)
+    exec(compile(src, f"{rev}:pixelkit/physics/{module}.py", "exec"), mod.__dict__)
     return mod
 
 
-def cell(design, geo, name, grid, step, base) -> dict:
+def cell(design, geo, name, grid, step, base, base_solve) -> dict:
     from pixelkit.layout.pex import collection as cl
     from pixelkit.layout.pex.light import _mapped
-    from pixelkit.physics import lightfield as lf, silicon as si
+    from pixelkit.physics import collection as pc, lightfield as lf, silicon as si
     n = design.secondary_per_pixel
     own = {cl.polar(k, net) for k, nets in geo.junctions.items() if k in ("nsd", "psd") for net in nets
            if _mapped(name, net, n)}
     sil = cl.silicon(design, geo, grid, design.light.depth, own, (True, False))
-    c0 = time.process_time()
-    maps = cl.maps(sil)
-    t_maps = time.process_time() - c0
+    maps, t_maps = {}, {}
+    for key, solve in (("base", base_solve), ("new", pc.solve)):
+        c0 = time.process_time()
+        maps[key] = solve(sil.grid, sil.labels, sil.n_type, sil.substrate)
+        t_maps[key] = time.process_time() - c0
     wl = cl.wavelengths(design, step)
     n_ox = cl.require(design).dielectric_index
     t = {"new": 0.0, "base": 0.0}
@@ -63,13 +65,13 @@ def cell(design, geo, name, grid, step, base) -> dict:
             c0 = time.process_time()
             ab = mod.absorbed(*args)
             t[key] += time.process_time() - c0
-            col = maps.collected(ab.voxels, ab.deep)
+            col = maps[key].collected(ab.voxels, ab.deep)
             eta[key].append([col.get(k + 1, 0.0) for k in range(len(sil.nets))])
         print(f"  {name} {w * 1e9:.0f} nm: light grid {grid / r * 1e9:.0f} nm, {o.nx} x {o.ny} points", flush=True)
     new, old = np.array(eta["new"]), np.array(eta["base"])
     rel_own = float(np.max(np.abs(new - old) / np.maximum(np.abs(old), 1e-300)))
     rel_cell = float(np.max(np.abs(new - old)) / np.max(np.abs(old)))
-    return {"maps_cpu_s": t_maps, "light_cpu_s": t["new"], "baseline_light_cpu_s": t["base"],
+    return {"maps_cpu_s": t_maps["new"], "baseline_maps_cpu_s": t_maps["base"], "light_cpu_s": t["new"], "baseline_light_cpu_s": t["base"],
             "max_rel_diff_own": rel_own, "max_rel_diff_cell": rel_cell, "nets": len(sil.nets), "wavelengths": wl.size}
 
 
@@ -84,21 +86,24 @@ def main():
     from pixelkit.layout.pex import chip_geometry
     cells = a.cells.split(",")
     geos = chip_geometry(d, tuple(cells))
-    base = baseline_lightfield(a.baseline)
-    print(f"collection model of the readout cells at {a.grid:g} um, {a.step:g} nm; light field against {a.baseline}")
-    tot = {"maps": 0.0, "new": 0.0, "base": 0.0}
+    base = baseline(a.baseline, "lightfield")
+    base_solve = baseline(a.baseline, "collection").solve
+    print(f"collection model of the readout cells at {a.grid:g} um, {a.step:g} nm; against {a.baseline}")
+    tot = {"maps": 0.0, "base_maps": 0.0, "new": 0.0, "base": 0.0}
     for c in cells:
-        r = cell(d, geos[c], c, a.grid * 1e-6, a.step * 1e-9, base)
+        r = cell(d, geos[c], c, a.grid * 1e-6, a.step * 1e-9, base, base_solve)
         tot["maps"] += r["maps_cpu_s"]
+        tot["base_maps"] += r["baseline_maps_cpu_s"]
         tot["new"] += r["light_cpu_s"]
         tot["base"] += r["baseline_light_cpu_s"]
-        print(f"{c}: maps {r['maps_cpu_s']:.1f} s CPU ({r['nets']} junctions); light field {r['light_cpu_s']:.1f} s CPU "
-              f"against {r['baseline_light_cpu_s']:.1f} s at {a.baseline} (x {r['light_cpu_s'] / r['baseline_light_cpu_s']:.2f}); "
-              f"collected electrons per photon differ by at most {r['max_rel_diff_own']:.2g} of the junction's own, "
+        print(f"{c}: maps {r['maps_cpu_s']:.1f} s CPU against {r['baseline_maps_cpu_s']:.1f} s ({r['nets']} junctions); "
+              f"light field {r['light_cpu_s']:.1f} s CPU against {r['baseline_light_cpu_s']:.1f} s; collected electrons "
+              f"per photon differ by at most {r['max_rel_diff_own']:.2g} of the junction's own, "
               f"{r['max_rel_diff_cell']:.2g} of the cell's largest", flush=True)
-    print(f"total: maps {tot['maps']:.1f} s CPU, light field {tot['new']:.1f} s against {tot['base']:.1f} s "
-          f"(x {tot['new'] / tot['base']:.2f}); the model {tot['maps'] + tot['new']:.1f} s against "
-          f"{tot['maps'] + tot['base']:.1f} s (x {(tot['maps'] + tot['new']) / (tot['maps'] + tot['base']):.2f})")
+    new, old = tot["maps"] + tot["new"], tot["base_maps"] + tot["base"]
+    print(f"total: maps {tot['maps']:.1f} s CPU against {tot['base_maps']:.1f} s (x {tot['maps'] / tot['base_maps']:.2f}), "
+          f"light field {tot['new']:.1f} s against {tot['base']:.1f} s (x {tot['new'] / tot['base']:.2f}); the model "
+          f"{new:.1f} s against {old:.1f} s at {a.baseline} (x {new / old:.2f})")
 
 
 if __name__ == "__main__":
