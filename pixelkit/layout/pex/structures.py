@@ -296,9 +296,25 @@ def _holdout6(tech) -> list:
             _plates("t_plate_m5_m4", "metal4", 10, "metal5", 1.5, "tr")]
 
 
+def _holdout7(tech) -> list:
+    """An eighth held-out set, drawn and solved by FastCap2 after holdout6's look, before the self-consistency
+    of the top interface's images was tried: lower-metal crossings and lines side by side (the images'
+    overshoot), couplings to metal5, at geometries no set had."""
+    return [_cross("u_cross_m1m3_wide", "metal1", 1.2, "metal3", 0.8, 90, "uc1"),
+            _cross("u_cross_m1m2_mid", "metal1", 0.6, "metal2", 0.7, 90, "uc2"),
+            _cross("u_cross_m2m4", "metal2", 0.4, "metal4", 1.0, 90, "uc3"),
+            _cross("u_cross_m2m5", "metal2", 1.0, "metal5", 0.8, 90, "uc4"),
+            _cross("u_tee_m1m4", "metal1", 0.8, "metal4", 0.4, 90, "uc5", offset=9.4),
+            _parallel("u_parallel_m1m3_far", "metal1", 0.5, "metal3", 0.8, 3.5, "up"),
+            _parallel("u_parallel_m2m4_close", "metal2", 0.8, "metal4", 0.4, 0.8, "uq"),
+            _parallel("u_parallel_m1m5", "metal1", 0.6, "metal5", 1.0, 2.5, "ur"),
+            _pair("u_lat_m2_wide", "metal2", 1.5, 0.5, 1.0, 30, "ua1"),
+            _plate("u_plate_m1_sub", "metal1", 9, 14, "ups")]
+
+
 SETS = {"first": _first, "development": _development, "validation": _validation, "holdout": _holdout,
         "holdout2": _holdout2, "holdout3": _holdout3,
-        "holdout4": _holdout4, "holdout5": _holdout5, "holdout6": _holdout6}
+        "holdout4": _holdout4, "holdout5": _holdout5, "holdout6": _holdout6, "holdout7": _holdout7}
 
 
 def _bounds(shape):
@@ -412,7 +428,8 @@ REFERENCE = {"first": "extraction_structures.json", "development": "extraction_s
              "holdout2": "extraction_structures_holdout2.json", "holdout3": "extraction_structures_holdout3.json",
              "holdout4": "extraction_structures_holdout4.json",
              "holdout5": "extraction_structures_holdout5.json",
-             "holdout6": "extraction_structures_holdout6.json"}
+             "holdout6": "extraction_structures_holdout6.json",
+             "holdout7": "extraction_structures_holdout7.json"}
 
 
 if __name__ == "__main__":      # python -m pixelkit.layout.pex.structures SET OUT.json: the FastCap2 reference
