@@ -59,6 +59,11 @@ def test_the_extraction_reaches_the_simulation_as_its_derivation_says(d4t, view,
     ratio = signal(view)["cg_V_per_e"] / signal(d4t)["cg_V_per_e"]
     assert ratio == pytest.approx(cg["c_fd_F"] / (cg["c_fd_F"] + c_w), rel=0.03)    # measured 0.749 vs 0.741
     assert ratio < 0.9
+    # the closed form in the view carries the same wiring (families.pixel4t.model.wiring): SPICE within 5 %, as on
+    # the schematic (tests/test_pixel4t.py)
+    cg_view = model.conversion_gain(view, view.levels.v_rst_for(view.tech.supply) - 1.0)
+    assert cg_view["c_fd_F"] == pytest.approx(cg["c_fd_F"] + c_w, rel=1e-9)
+    assert signal(view)["cg_V_per_e"] == pytest.approx(cg_view["cg_V_per_e"], rel=0.05)
 
     # the command line: verify --post-layout signs off the view (the view's conversion gain, named as such)
     p = tmp_path / "p4t.toml"

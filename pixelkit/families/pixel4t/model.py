@@ -4,7 +4,7 @@
   technology's MOS junction parameters, C(V) at FD's reverse bias), the TG overlap as the generator
   writes it, RST's overlap at its gate-off bias, and the source follower's gate: the drain overlap
   plus ``(1 - A_sf)`` of the gate-source capacitance (Miller bootstrap), as ``physics.fd`` builds the
-  dual pixel's FD from the same primitives.
+  dual pixel's FD from the same primitives; in the post-layout view, FD's extracted wiring (``wiring``).
 - **Conversion gain**: ``CG = A_sf q / C_FD`` at FD's level during the read, A_sf the follower with
   its row select and column load from two SPICE operating points (the kit has no closed form for
   BSIM4's gain), the sample-and-hold's gain 1.
@@ -52,7 +52,18 @@ def fd_capacitance(design, a: float, v_fd: float) -> float:
         c += c_ov if v_ov is not None else 0.0     # the TG's overlap is the generator's element
     c_gs = 2.0 / 3.0 * mos.cox * dev.sf_w * dev.sf_l + overlap(dev.sf_w, 1.0, mos)
     c += overlap(dev.sf_w, v_fd - tech.supply, mos) + (1.0 - a) * c_gs
-    return float(Node(tuple(terms), c).capacitance(v_fd))
+    return float(Node(tuple(terms), c).capacitance(v_fd)) + wiring(design, a)
+
+
+def wiring(design, a: float) -> float:
+    """FD's extracted wiring (F) in the post-layout view (``layout.pixel4t.extracted``; 0 on the schematic):
+    every coupling of FD, those to the follower's source and the column counted 1 - A_sf of themselves (they
+    follow FD)."""
+    pl = getattr(design, "post_layout", None)
+    if pl is None:
+        return 0.0
+    return sum(c * ((1.0 - a) if ({x, y} - {"fd"}) <= {"sfo", "col"} else 1.0)
+               for x, y, c in pl.couplings if "fd" in (x, y))
 
 
 def conversion_gain(design, v_fd: float, backend: str = "batch") -> dict:
