@@ -139,7 +139,7 @@ def show(res: dict) -> None:
           + (f"; conflict: {c['conflict']}" if c["conflict"] else ""))
     for ch in c.get("choices") or []:
         sc = ch.get("screen") or {}
-        print(f"  choice {ch['choice']}: {ch['status']}" + (f", screen: {-sc['behind_pct']:.3g} % behind the best "
+        print(f"  choice {ch['choice']}: {ch['status']}" + (f", screen: {0.0 - sc['behind_pct']:.3g} % behind the best "
                                                          f"({sc.get('worst')})" if sc.get("behind_pct") is not None
                                                          else ""))
     print("  iteration  mode      accepted  verified on          SPICE runs  cached  CPU (s)  wall at end (s)")
