@@ -3,7 +3,7 @@
 Independent path: the dual-pixel bench a user runs (``circuits.testbench.dual_pixel_bench`` with its
 AFEs), simulated fresh by ngspice at charges and a temperature the surrogate's tables were not built
 from; the surrogate was built from packed decks (``gap.chains.packed``: four chains of one array per
-deck) and must predict the bench's levels. Cost: 4 check decks + 1 deck (~10 s on 2 cores).
+deck) and must predict the bench's levels. Cost: 4 check decks + 1 deck (~10 s on 2 cores); the step test 3 decks (~10 s).
 """
 import numpy as np
 import pytest
@@ -67,3 +67,33 @@ def test_a_read_that_changes_regime_with_temperature_drops_its_table(thesis_read
     nom = store.read(thesis_read_design)
     assert nom is not None and nom.temp is None
     assert nom.error["temp_table"].startswith("dropped") and nom.error["temp_pixel_max_V"] > 1e-3
+
+
+def test_gap_decks_integrate_a_mixed_charge_bench_as_a_fine_step_does(ref_design):
+    """The gap's decks step at most one clock edge (``chains.edge_resolved``). Independent path: the same deck at an
+    eighth of that step. The deck is one where the dual-pixel bench's own 20 ns step went wrong (primary at 17 fC,
+    secondaries at 0.8 / 5.4 / 14 fC: every chain's levels 1.5 - 2.4 mV off, the step control passing over the
+    charge sharing when S1X connects the column to C11); the test also holds that it still does, so the check
+    can fail. Cost: 3 decks (~10 s on 2 cores)."""
+    from dataclasses import replace
+
+    from pixelkit.circuits.testbench import dual_pixel_bench, timings
+    from pixelkit.gap.chains import standard
+    from pixelkit.measure.pixel import levels
+    from pixelkit.spice import simulate_many
+    d = ref_design
+    net, cs = standard(d, 1.7225464960265043e-14, (7.930285043015434e-16, 5.36027425154516e-15, 1.4107548461941892e-14),
+                       "gapstep")
+    tm = timings(d, d.experiment.t_window)
+    assert net.analysis.max_step == min(t.edge for t in tm.values())
+    bench_step = dual_pixel_bench(d, 0.0, 0.0).analysis.max_step
+    assert bench_step > net.analysis.max_step
+    decks = [net] + [replace(net, title=f"gapstep{k}", analysis=replace(net.analysis, max_step=s))
+                     for k, s in ((1, net.analysis.max_step / 8), (2, bench_step))]
+    got = []
+    for r in simulate_many(decks):
+        got.append([v for c in cs for v in (*levels(r, c.col, tm[c.array]),
+                                            float(r.at(c.out, tm[c.array].t_reset_level(0))))])
+    edge, fine, bench = (np.array(g) for g in got)
+    assert np.max(np.abs(edge - fine)) < 0.5e-3, (edge - fine)
+    assert np.max(np.abs(bench - fine)) > 1e-3, (bench - fine)

@@ -82,6 +82,7 @@ def decks(design, q_grid: dict, q_pick=IDLE_Q_PICK, currents=IDLE_I) -> list:
     """[(grid index, {column: current}, netlist)]: per picked charge, a deck without light and one per
     current (the primary's column at it, the secondaries' at the currents a third and two thirds along)."""
     from ..circuits.testbench import dual_pixel_bench
+    from .chains import edge_resolved
     from .circuit_edits import specialise
     t_w = design.experiment.t_window
     pat = pattern(design)
@@ -91,8 +92,8 @@ def decks(design, q_grid: dict, q_pick=IDLE_Q_PICK, currents=IDLE_I) -> list:
         qp, qs = q_grid["primary"][k], q_grid["secondary"][k]
         for j in range(-1, n):
             cur = {} if j < 0 else {c: currents[(j + m * n // len(cols)) % n] for m, c in enumerate(cols)}
-            net = specialise(dual_pixel_bench(design, qp / t_w, qs / t_w, with_afe=True, title=f"gapidle{k}_{j + 1}"),
-                             design.secondary_per_pixel)
+            net = edge_resolved(specialise(dual_pixel_bench(design, qp / t_w, qs / t_w, with_afe=True,
+                                                            title=f"gapidle{k}_{j + 1}"), design.secondary_per_pixel), design)
             out.append((k, cur, light(net, pat, cur)))
     return out
 

@@ -52,6 +52,7 @@ from ..fileio import write_atomic
 from ..measure.pixel import levels
 from ..spice.netlist import Element
 from . import circuit_edits as ce
+from .chains import edge_resolved
 from .nominal import ARRAYS
 
 N_OP = 7
@@ -279,7 +280,7 @@ def deck(design, nom, op, effect, p, colp, title):
     at = replace(design, temperature=op["temp"] + 273.15) if op.get("device_temperature") else design
     net = dual_pixel_bench(_variant(at, parts), q["primary"] / t_w, tuple(q[s] / t_w for s in SUBS[1:]),
                            with_afe=True, title=title)
-    net = ce.specialise(net, design.secondary_per_pixel)
+    net = edge_resolved(ce.specialise(net, design.secondary_per_pixel), design)
     for name, pe in parts:
         net = _insert(net, design, nom, op, name, pe, colp)
     return net
