@@ -202,8 +202,8 @@ EFFECTS = {
     "dark_current": ((Param("i_d_A", 0.0, 1e-11, 1e-14, 1e-15), Param("perimeter_share", 0.0, 1.0, 0.1, 0.5),
                       DIFF_SHARE, DEA, BETA, Param("perimeter_diff_share", 0.0, 1.0, 0.1, 0.2),
                       Param("perimeter_dea_eV", -0.15, 0.25, 0.05, 0.0)), _dark_current),
-    "charge_injection": ((Param("c_rst_fd_F", 0.0, 4.5e-17, 1e-17, 1e-17),
-                          Param("c_p1_vm_F", -3e-15, 3e-15, 1e-15, 0.0), C_FD), _charge_injection),
+    "charge_injection": ((Param("c_rst_fd_F", 0.0, 4.5e-16, 1e-17, 1e-17),
+                          Param("c_p1_vm_F", -9e-15, 9e-15, 1e-15, 0.0), C_FD), _charge_injection),
     "sf_gain": ((Param("g_col_S", 0.0, 2.5e-7, 1e-7, 5e-8), Param("pivot_dv_V", -1.5, 1.5, 0.1, 0.0)), _sf_gain),
     "column_load": ((Param("load_rel", -0.3, 0.3, 1e-2, 0.0),), _column_load),
     "afe_gain": ((Param("eps_extra", -0.05, 1.0, 1e-2, 0.0), Param("c11_rel", -0.075, 0.075, 1e-2, 0.0),
@@ -237,7 +237,7 @@ CORE = {
     "lag": ((Param("lag", 0.0, 0.5, 1e-2, 1e-3),), lambda p: [p[0], 1e6]),
     "sf_gain": ((Param("g_col_S", 0.0, 2.5e-7, 1e-7, 5e-8),), lambda p: [p[0], 0.0]),
     "sf_strength": ((Param("sf_w_rel", -0.6, 0.9, 0.1, 0.0),), lambda p: [p[0], 0.0, 0.0, 0.0]),
-    "charge_injection": ((Param("c_rst_fd_F", 0.0, 4.5e-17, 1e-17, 1e-17), Param("c_p1_vm_F", -3e-15, 3e-15, 1e-15, 0.0)),
+    "charge_injection": ((Param("c_rst_fd_F", 0.0, 4.5e-16, 1e-17, 1e-17), Param("c_p1_vm_F", -9e-15, 9e-15, 1e-15, 0.0)),
                          lambda p: [p[0], p[1], 0.0]),
 }
 CORE_SUFFIX = ":core"

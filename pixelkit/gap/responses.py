@@ -35,12 +35,19 @@ Kind ``level``: the table holds the shift of the pixel probe and of the AFE
 probe. Between the charges, cubic splines; in the amplitude, the polynomial
 through zero and two or three measured amplitudes (quadratic, cubic: ``fd`` up to
 6 % of the full well, where a lab's 25 % of the storage node's swing lies), or piecewise linear
-through zero and four or six (``p1_vm``, ``sf_w``, ``a_ol``: steps from the
+through zero and four to eight (``p1_vm``, ``sf_w``, ``a_ol``: steps from the
 op-amp's clamp, a log-like response; ``load``: the +-20 % a campaign draws, where a
-quadratic through +-15 % missed a 20 % change by 1 mV); beyond the largest amplitude the same, so the
+quadratic through +-15 % missed a 20 % change by 1 mV; ``rst_fd``: 0.01 - 0.3 fF, see below); beyond the largest amplitude the same, so the
 library bounds its parameters to ``EXTRAPOLATE`` times it. ``store.check`` (run before a stored
 surrogate is used; ``tests/test_gap.py::test_shipped_surrogate_matches_fresh_spice``) checks the
 interpolation against decks at charges and amplitudes the tables were not built on.
+
+Switch amplitudes: a reset switch drawn k times wider puts k - 1 more of its overlap and half-channel
+charge on FD when it opens. On the reference design's RST (0.6 / 0.5 um, GF180 3.3 V: C_ox ~5 fF/um^2,
+overlap ~0.35 fF/um) that is ~0.2 fF of overlap and ~0.4 fC of channel charge (~0.1 fF at the clock's swing)
+per width, so a switch 1.5 - 3 times as wide couples 0.15 - 0.6 fF more: ``rst_fd`` is measured to 0.3 fF (the
+library's bound 0.45 fF), where 0.03 fF (bound 0.045 fF) held only a 10 % wider switch and a wider switch's
+case was fitted on its bound and "not explained". Likewise ``p1_vm`` to 6 fF (the AFE's vm switches, 1 um wide).
 """
 from __future__ import annotations
 
@@ -107,8 +114,9 @@ SITES = {
     "fd": Site("charge", _fd, lambda arr, q_max: (0.005 * q_max, 0.02 * q_max, 0.06 * q_max)),
     "col_g": Site("level", _col_g, lambda arr, q_max: (1 / 16e6, 1 / 6e6)),
     "load": Site("level", _load, lambda arr, q_max: (-0.25, -0.16, -0.07, 0.07, 0.16, 0.25)),
-    "rst_fd": Site("level", _rst_fd, lambda arr, q_max: (1e-17, 3e-17)),
-    "p1_vm": Site("level", _p1_vm, lambda arr, q_max: (-3e-15, -1.5e-15, -0.6e-15, 0.6e-15, 1.5e-15, 3e-15)),
+    "rst_fd": Site("level", _rst_fd, lambda arr, q_max: (1e-17, 3e-17, 1e-16, 3e-16)),
+    "p1_vm": Site("level", _p1_vm, lambda arr, q_max: (-6e-15, -3e-15, -1.5e-15, -0.6e-15, 0.6e-15, 1.5e-15, 3e-15,
+                                                        6e-15)),
     "sf_w": Site("level", _sf_w, lambda arr, q_max: (-0.4, -0.15, 0.15, 0.6)),
     "c11": Site("level", _c11, lambda arr, q_max: (-0.05, 0.05)),
     "a_ol": Site("level", _a_ol, lambda arr, q_max: (1.0, 3.0, 10.0, 30.0)),
