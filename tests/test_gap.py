@@ -117,8 +117,9 @@ def test_column_load_is_named_with_its_conductance_and_the_setup_gain(thesis_rea
 def test_a_chain_gain_is_placed_by_the_pixel_probe_and_its_absence_is_said(thesis_read_design, nominal):
     """A conductance on each column (SPICE, case of sf_gain) moves the pixel probe and, through the chain, the AFE
     probe: with both probes it is sf_gain, placed in the column, and not confused with an AFE gain. With the AFE
-    probe alone the two act alike: the verdict says they are indistinguishable here and the plan names the
-    pixel probe as the measurement that separates them (issue 46, item 1)."""
+    probe alone the two act alike: the verdict says they are indistinguishable here (or, with the thesis read's
+    surrogate rebuilt at one clock edge, that these data cannot show the AFE gain: the set-up's own gain takes it)
+    and the plan names the pixel probe as the measurement that separates them (issue 46, item 1)."""
     from pixelkit.gap.diagnose import diagnose
     from pixelkit.gap.plan import plan
     cid = gapcases.ids("sf_gain")[0]
@@ -128,8 +129,10 @@ def test_a_chain_gain_is_placed_by_the_pixel_probe_and_its_absence_is_said(thesi
     rows = [r for r in gapcases.rows(cid) if r["probe"] == "afe"]
     table = silicon.table_of(thesis_read_design, rows, cid)
     d = diagnose(thesis_read_design, table, nominal)
-    assert {"sf_gain", "afe_gain"} <= {d["best"], *d["indistinguishable"]}, d["verdict"]
-    assert "indistinguishable on these data" in d["verdict"]
+    # the AFE gain is a look-alike within the noise, or (no calibration stated) the set-up's own gain: either way
+    # not a confident name, and said in the verdict
+    assert not d["confident"] and ({"sf_gain", "afe_gain"} <= {d["best"], *d["indistinguishable"]}
+                                   or "cannot show" in d["verdict"] and "afe_gain" in d["verdict"]), d["verdict"]
     p = plan(thesis_read_design, table, nominal, d)
     assert p["measurements"][0].startswith("the pixel probe"), p["measurements"]
 
