@@ -88,6 +88,30 @@ def read_table(path: str | Path, design, measured: bool) -> Table:
     return validate(header, rows, design, measured, source)
 
 
+def numeric_column(name, texts, required, integer, problems):
+    """The column ``name``'s cells (text or None) as floats, NaN where empty; each bad cell (empty in a
+    required column, not a number, not a whole number where ``integer``, NaN or infinite) appended to
+    ``problems`` as 'row N, column NAME: ...'."""
+    vals = np.full(len(texts), np.nan)
+    for i, txt in enumerate(texts):
+        if txt is None or txt.strip() == "":
+            if required:
+                problems.append(f"row {i + 1}, column '{name}': empty")
+            continue
+        if integer and not _INT.match(txt):
+            problems.append(f"row {i + 1}, column '{name}': '{txt}' is not a whole number (digits only)")
+            continue
+        try:
+            x = float(txt)
+        except ValueError:
+            problems.append(f"row {i + 1}, column '{name}': '{txt}' is not a number")
+            continue
+        if not math.isfinite(x):
+            problems.append(f"row {i + 1}, column '{name}': {txt} (NaN or infinite)")
+        vals[i] = x
+    return vals
+
+
 def read_rows(path: str | Path, measured: bool) -> tuple[list, list, str]:
     """(header, rows as {column: text}, source) of a CSV table, read bounded; DataError listing every
     problem (not UTF-8, not CSV, a duplicated column, a row whose fields are not the header's)."""
@@ -144,24 +168,7 @@ def validate(header, rows, design, measured: bool, source: str) -> Table:
     out = {}
     for h in header:
         if h in NUMERIC:
-            vals = np.full(len(rows), np.nan)
-            for i, txt in enumerate(cols[h]):
-                if txt is None or txt.strip() == "":
-                    if h in need:
-                        problems.append(f"row {i + 1}, column '{h}': empty")
-                    continue
-                if h in INTEGER and not _INT.match(txt):
-                    problems.append(f"row {i + 1}, column '{h}': '{txt}' is not a whole number (digits only)")
-                    continue
-                try:
-                    x = float(txt)
-                except ValueError:
-                    problems.append(f"row {i + 1}, column '{h}': '{txt}' is not a number")
-                    continue
-                if not math.isfinite(x):
-                    problems.append(f"row {i + 1}, column '{h}': {txt} (NaN or infinite)")
-                vals[i] = x
-            out[h] = vals
+            out[h] = numeric_column(h, cols[h], h in need, h in INTEGER, problems)
         else:
             out[h] = [(v or "").strip() for v in cols[h]]
     wells = full_wells(design)

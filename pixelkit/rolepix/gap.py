@@ -84,7 +84,7 @@ def read(path, design, measured: bool) -> dict:
     """{column: numpy array} of a role gap table (module docstring), validated; DataError listing every
     problem by row and column otherwise."""
     from ..circuits.cds import timing_of
-    from ..gap.data import DataError, read_rows
+    from ..gap.data import DataError, numeric_column, read_rows
     header, rows, source = read_rows(path, measured)
     need = REQUIRED + (("v_V", "v_std_V") if measured else ())
     problems = [f"missing column '{c}'" for c in need if c not in header]
@@ -93,22 +93,7 @@ def read(path, design, measured: bool) -> dict:
     t_min = timing_of(design).frame(0.0).min_exposure
     out = {}
     for h in (*need, *(c for c in OPTIONAL if c in header)):
-        vals = np.full(len(rows), np.nan)
-        for i, r in enumerate(rows):
-            txt = (r.get(h) or "").strip()
-            if not txt:
-                if h in need:
-                    problems.append(f"row {i + 1}, column '{h}': empty")
-                continue
-            try:
-                x = float(txt)
-            except ValueError:
-                problems.append(f"row {i + 1}, column '{h}': '{txt}' is not a number")
-                continue
-            if not math.isfinite(x):
-                problems.append(f"row {i + 1}, column '{h}': {txt} (NaN or infinite)")
-            vals[i] = x
-        out[h] = vals
+        out[h] = numeric_column(h, [r.get(h) for r in rows], h in need, False, problems)
     for i in range(len(rows)):
         for h in ("i_ph_A", "i_ph_prev_A", "v_std_V"):
             if h in out and out[h][i] < 0:
