@@ -15,6 +15,7 @@ line on stderr), never an internal error (3) or a traceback, and never the marke
 injection payload would create if a value reached an ngspice control block.
 """
 import random
+import re
 import tomllib
 from pathlib import Path
 
@@ -44,13 +45,18 @@ def _stub(*_a, **_k):
 def _design_file(tmp, family, key, value):
     raw = tomllib.loads((ROOT / "designs" / family).read_text())
     node = raw
-    *head, last = key.split(".")
+    *head, last = _key_parts(key)
     for h in head:
         node = node[h]
     node[last] = value
     p = tmp / f"f{abs(hash((family, key, repr(value)))) % 10**8}.toml"
     p.write_text(to_toml(raw))
     return p
+
+
+def _key_parts(key):
+    """A dotted key's parts, a quoted part ("column.bias", a [close] knob's name) kept whole."""
+    return [m.strip('"') for m in re.findall(r'"[^"]*"|[^.]+', key)]
 
 
 def _family_keys(family):
@@ -60,11 +66,15 @@ def _family_keys(family):
     def walk(node, prefix):
         for k, v in node.items():
             if isinstance(v, dict):
-                walk(v, f"{prefix}{k}.")
+                walk(v, f"{prefix}{_quoted(k)}.")
             elif k not in ("family",):
-                out.append(f"{prefix}{k}")
+                out.append(f"{prefix}{_quoted(k)}")
     walk(raw, "")
     return out
+
+
+def _quoted(k):
+    return f'"{k}"' if "." in k else k
 
 
 def _emva(tmp, template, value):

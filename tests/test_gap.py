@@ -117,8 +117,8 @@ def test_column_load_is_named_with_its_conductance_and_the_setup_gain(thesis_rea
 def test_a_chain_gain_is_placed_by_the_pixel_probe_and_its_absence_is_said(thesis_read_design, nominal):
     """A conductance on each column (SPICE, case of sf_gain) moves the pixel probe and, through the chain, the AFE
     probe: with both probes it is sf_gain, placed in the column, and not confused with an AFE gain. With the AFE
-    probe alone the two act alike: the verdict says they are indistinguishable here (or, with the thesis read's
-    surrogate rebuilt at one clock edge, that these data cannot show the AFE gain: the set-up's own gain takes it)
+    probe alone the two act alike: the verdict says they are indistinguishable here (or, with the surrogate of the thesis's read [Thesis2019]
+    rebuilt at one clock edge, that these data cannot show the AFE gain: the set-up's own gain takes it)
     and the plan names the pixel probe as the measurement that separates them (issue 46, item 1)."""
     from pixelkit.gap.diagnose import diagnose
     from pixelkit.gap.plan import plan
