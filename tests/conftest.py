@@ -55,11 +55,16 @@ def wait_for(condition, what: str, within: float = 600.0):
         time.sleep(0.02)
 
 
-# Simulation results are cached per test session only (real runs every session).
+# Simulation results are cached per test session only (real runs every session); the session's own
+# cache (1 - 2 GB after the whole suite) is removed when the session ends, a given PIXELKIT_CACHE kept.
+import atexit  # noqa: E402
 import os  # noqa: E402
+import shutil  # noqa: E402
 import tempfile  # noqa: E402
 
-os.environ.setdefault("PIXELKIT_CACHE", tempfile.mkdtemp(prefix="pixelkit-test-cache-"))
+if "PIXELKIT_CACHE" not in os.environ:
+    os.environ["PIXELKIT_CACHE"] = tempfile.mkdtemp(prefix="pixelkit-test-cache-")
+    atexit.register(shutil.rmtree, os.environ["PIXELKIT_CACHE"], ignore_errors=True)
 
 
 @pytest.fixture(scope="session")
