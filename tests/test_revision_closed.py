@@ -22,12 +22,12 @@ def test_revc_is_reva_with_the_knobs_close_reports_and_nothing_else():
     report = json.loads((D / "dual_pixel_revC.close.json").read_text())
     assert report["status"] == "closed" and report["source"] == "designs/dual_pixel_revA.toml"
     moved = {k for k in a.keys() | c.keys() if a.get(k) != c.get(k)}
-    # the run's one restriction of revA's [close] table (docs/revisions.md says so) and the rename
-    allowed = set(report["overrides"]) | {"name", "revision", "close.knobs.pixel.gate_drive"}
+    # the rename alone besides the knobs: revA's [close] table as shipped, the gate drive chosen by close
+    allowed = set(report["overrides"]) | {"name", "revision"}
     assert moved <= allowed, sorted(moved - allowed)
     for key, value in report["overrides"].items():
         assert c[key] == value, key
-    assert c["close.knobs.pixel.gate_drive"] == {"choices": ["boosted"]}
+    assert report["choose"] == "screen" and c["close.knobs.pixel.gate_drive"] == a["close.knobs.pixel.gate_drive"]
 
 
 def test_revc_answers_to_reva_specs_and_its_record_passed():
