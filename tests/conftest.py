@@ -13,6 +13,8 @@ ROOT = Path(__file__).resolve().parents[1]
 REF = ROOT / "designs" / "dual_pixel_revA.toml"
 #: The same chip with the thesis's own read (~400 nA, does not settle with the AFE): the gap module's silicon.
 THESIS_READ = ROOT / "designs" / "dual_pixel_revA_thesis_read.toml"
+#: The 4T pinned-photodiode pixel on GF180, read by role (issue 47).
+PIXEL4T = ROOT / "designs" / "pixel4t_gf180.toml"
 #: ``pixelkit report REF --quick`` exits 5: every spec the nominal condition measures passes there (the
 #: reference's failures are at other conditions of its grid, docs/verify.md), and pd_dark_drop_secondary,
 #: held at 85 degC only, is not run by the nominal-only profile; a report exits as verify does.
@@ -31,6 +33,12 @@ def ref_design():
 def thesis_read_design():
     from pixelkit.design import load_design
     return load_design(THESIS_READ)
+
+
+@pytest.fixture(scope="session")
+def d4t():
+    from pixelkit.families.pixel4t.design import load_pixel4t_design
+    return load_pixel4t_design(PIXEL4T)
 
 
 def run_cli(*args, cwd=None, timeout=600):

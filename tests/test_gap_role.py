@@ -21,18 +21,12 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from conftest import ROOT
+from conftest import PIXEL4T, ROOT
 
-DESIGN = ROOT / "designs" / "pixel4t_gf180.toml"
+DESIGN = PIXEL4T
 SIGMA = 1e-4
 ELECTRONS = (0, 1000, 4000, 8000, 12000, 0, 0)       # in the frame read
 PREVIOUS = (0, 0, 0, 0, 0, 8000, 16000)              # in the frame before (lag)
-
-
-@pytest.fixture(scope="module")
-def d4t():
-    from pixelkit.families.pixel4t.design import load_pixel4t_design
-    return load_pixel4t_design(DESIGN)
 
 
 def _conditions(d):

@@ -10,15 +10,9 @@ import json
 
 import pytest
 
-from conftest import ROOT
+from conftest import PIXEL4T
 
-DESIGN = ROOT / "designs" / "pixel4t_gf180.toml"
-
-
-@pytest.fixture(scope="module")
-def d4t():
-    from pixelkit.families.pixel4t.design import load_pixel4t_design
-    return load_pixel4t_design(DESIGN)
+DESIGN = PIXEL4T
 
 
 @pytest.fixture(scope="module")

@@ -23,14 +23,6 @@ import pytest
 
 from conftest import ROOT
 
-DESIGN = ROOT / "designs" / "pixel4t_gf180.toml"
-
-
-@pytest.fixture(scope="module")
-def design():
-    from pixelkit.families.pixel4t.design import load_pixel4t_design
-    return load_pixel4t_design(DESIGN)
-
 
 def _ppd(design, celsius):
     from pixelkit.circuits.pixel4t import ppd_model
@@ -52,13 +44,13 @@ TEMPS = (27.0, 85.0)
 
 
 @pytest.fixture(scope="module")
-def illuminated(design):
+def illuminated(d4t):
     """{(celsius, light): (SPICE full well, closed form) in C}: each well filled from empty for ten
     fill times (the last Q_T approaches with time constant Q_T / I_ph)."""
     from pixelkit.spice.engine import simulate_many
     cases, nets = [], []
     for c in TEMPS:
-        p = _ppd(design, c)
+        p = _ppd(d4t, c)
         for i in LIGHTS:
             cases.append((c, i, p))
             nets.append(_deck(f"ppd_fw_{int(c)}_{len(nets)}", p, c, i, 10 * p.full_well(i) / i))
@@ -73,9 +65,9 @@ def test_the_illuminated_full_well_in_spice_is_the_overflow_balance(illuminated)
         assert spice == pytest.approx(model, rel=2e-3), (c, i)
 
 
-def test_the_illuminated_full_well_grows_by_c_ut_ln10_per_decade_of_light(design, illuminated):
+def test_the_illuminated_full_well_grows_by_c_ut_ln10_per_decade_of_light(d4t, illuminated):
     for c in TEMPS:
-        p = _ppd(design, c)
+        p = _ppd(d4t, c)
         steps = np.diff([illuminated[c, i][0] for i in LIGHTS])
         # the diffusion current is far below every light here: ln(1 + I/I_dif) is ln(I/I_dif) to < 1e-3
         assert steps == pytest.approx(p.c * p.ut * math.log(10), rel=1e-2), c
@@ -90,11 +82,11 @@ def test_the_illuminated_full_well_falls_as_the_temperature_rises_as_published(i
 
 
 @pytest.fixture(scope="module")
-def relaxation(design):
+def relaxation(d4t):
     """The well filled to its 1 pA full well at 27 degC, light off: four runs of 1e-4 .. 100 s, each
     resolved in 2000 steps (one run over six decades leaves ngspice a few steps per decade)."""
     from pixelkit.spice.engine import simulate_many
-    p = _ppd(design, 27.0)
+    p = _ppd(d4t, 27.0)
     q0 = p.full_well(1e-12)
     horizons = (1e-4, 1e-2, 1.0, 100.0)
     runs = simulate_many([_deck(f"ppd_relax_{k}", p, 27.0, 0.0, h, q0=q0) for k, h in enumerate(horizons)])
@@ -121,27 +113,27 @@ def test_after_the_light_the_charge_relaxes_to_equilibrium_over_six_decades_of_t
     assert q0 - ends[-1] > 0.2 * q0
 
 
-def test_the_dark_full_well_trend_is_the_fixed_pinning_voltage_one(design):
+def test_the_dark_full_well_trend_is_the_fixed_pinning_voltage_one(d4t):
     """Not the published trend (docs/pixel4t.md): with V_pin fixed, the dark full well is
     C_PPD (V_pin + U_T ln(1 + I_gen / I_dif)), which falls with temperature as diffusion overtakes
     generation. Held to that derivation so a model of V_pin(T) shows up here."""
     for c in (-20.0, 27.0, 85.0):
-        p = _ppd(design, c)
+        p = _ppd(d4t, c)
         assert p.full_well() == pytest.approx(p.c * (p.v_pin + p.ut * math.log1p(p.i_gen / p.i_dif)), rel=2e-3)
-    assert _ppd(design, 85.0).full_well() < _ppd(design, -20.0).full_well()
+    assert _ppd(d4t, 85.0).full_well() < _ppd(d4t, -20.0).full_well()
 
 
-def test_docs_quote_the_dark_full_wells_of_this_sizing(design):
+def test_docs_quote_the_dark_full_wells_of_this_sizing(d4t):
     """docs/pixel4t.md's "-20 to 85 degC: A to B e-" is the model's, to the electron."""
     import re
     from pixelkit.constants import Q
     page = (ROOT / "docs" / "pixel4t.md").read_text()
     m = re.search(r"-20 to 85 degC: (\d+) to (\d+) e-", page)
     assert m, "docs/pixel4t.md no longer quotes the dark full well from -20 to 85 degC"
-    assert [int(m[1]), int(m[2])] == [round(_ppd(design, c).full_well() / Q) for c in (-20.0, 85.0)]
+    assert [int(m[1]), int(m[2])] == [round(_ppd(d4t, c).full_well() / Q) for c in (-20.0, 85.0)]
 
 
-def test_with_v_bi_the_pinning_voltage_follows_the_built_in_potential_and_the_dark_full_well_rises(design):
+def test_with_v_bi_the_pinning_voltage_follows_the_built_in_potential_and_the_dark_full_well_rises(d4t):
     """``[ppd] v_bi`` (opt-in): V_pin(T) = V_pin - (V_bi(T) - V_bi(T_ref)), V_bi = U_T ln(N_A N_D / n_i^2).
     Written out here: n_i^2 ~ T^3 exp(-E_g / kT) with E_g(T) of Varshni's form (BSIM4's coefficients), so
     dV_bi/dT = (V_bi - 3 U_T - (E_g - T dE_g/dT) / q) / T, about -1.3 mV/K at 0.9 V. Then the published
@@ -151,7 +143,7 @@ def test_with_v_bi_the_pinning_voltage_follows_the_built_in_potential_and_the_da
     from dataclasses import replace
     from pixelkit.spice.engine import simulate_many
     k_q = 8.617333262e-5
-    d = replace(design, ppd=replace(design.ppd, v_bi=0.9))
+    d = replace(d4t, ppd=replace(d4t.ppd, v_bi=0.9))
     t_ref = d.ppd.t_ref
     assert _ppd(d, t_ref - 273.15).v_pin == pytest.approx(d.ppd.v_pin, abs=1e-12)
     e_g = lambda t: 1.16 - 7.02e-4 * t * t / (t + 1108.0)                     # eV
@@ -164,11 +156,11 @@ def test_with_v_bi_the_pinning_voltage_follows_the_built_in_potential_and_the_da
     assert got == pytest.approx(slope, rel=2e-3) and -1.5e-3 < got < -1.1e-3
     cold, hot = _ppd(d, -20.0), _ppd(d, 85.0)
     for c, p in ((-20.0, cold), (85.0, hot)):   # the well holds C_PPD more per volt of V_pin
-        fixed = _ppd(design, c)
+        fixed = _ppd(d4t, c)
         assert p.full_well() - fixed.full_well() == pytest.approx(p.c * (p.v_pin - fixed.v_pin), rel=2e-3)
     assert (hot.v_pin - cold.v_pin) * hot.c / cold.full_well() == pytest.approx(0.13, abs=0.02)
     assert hot.full_well() > cold.full_well()            # rising, as published (+0.4 %: the fixed V_pin's -11 %
-    assert _ppd(design, 85.0).full_well() < _ppd(design, -20.0).full_well()   # and V_pin's +13 %); without v_bi: falls
+    assert _ppd(d4t, 85.0).full_well() < _ppd(d4t, -20.0).full_well()   # and V_pin's +13 %); without v_bi: falls
     q0 = hot.full_well() + 3 * hot.q_t
     (r,) = simulate_many([_deck("ppd_vbi_hot", hot, 85.0, 0.0, 50.0 * hot.q_t / hot.i_dif, q0=q0)])
     assert -r["v(q)"][-1] * hot.c == pytest.approx(hot.full_well(), rel=2e-3)
