@@ -134,11 +134,7 @@ def screen(setups: list, backend, jobs, scheduler, tell, say) -> list[dict]:
                           key=lambda mc: (mc[0], mc[1]))
             pairs += [(name, c) for _m, c in rows[:SCREEN]]
         pairs = sorted(set(pairs))
-        order = list(first.suite.GROUPS)
-        groups: dict = {}
-        for name, c in pairs:
-            groups.setdefault(c, set()).update(first.suite.groups_for([first.spec[name].fig.name]))
-        groups = {c: tuple(sorted(g, key=order.index)) for c, g in groups.items()}
+        groups = first.groups(pairs)
         conds = sorted(groups)
         margins = [{k: p0.margins.get(k) for k in pairs}]
         for cl in closers[1:]:

@@ -71,14 +71,6 @@ def samples(closer, p, idx: list[int], n: int) -> list[np.ndarray]:
     return out
 
 
-def _groups(closer, pairs) -> dict:
-    order = list(closer.suite.GROUPS)
-    out: dict = {}
-    for name, c in pairs:
-        out.setdefault(c, set()).update(closer.suite.groups_for([closer.spec[name].fig.name]))
-    return {c: tuple(sorted(g, key=order.index)) for c, g in out.items()}
-
-
 def _short(closer, margins: dict) -> float:
     """The smallest margin less its target over ``margins`` (-inf for one not measured)."""
     return min(((-math.inf if m is None else m - closer.target(k)) for k, m in margins.items()), default=math.inf)
@@ -86,7 +78,7 @@ def _short(closer, margins: dict) -> float:
 
 def _simulate(closer, xs, pairs, desc: str, objective: bool = False) -> list[tuple[dict, float | None]]:
     """({(spec, condition): margin}, objective) of each point of ``xs`` at ``pairs``."""
-    groups = _groups(closer, pairs)
+    groups = closer.groups(pairs)
     if objective and closer.objective.figure:
         groups.setdefault(closer.nominal, ())
         groups[closer.nominal] = tuple(sorted(set(groups[closer.nominal])

@@ -184,14 +184,22 @@ class Closer:
     # --- the models -----------------------------------------------------------------------------
     def plan(self, pairs) -> tuple[list, dict]:
         """(conditions, {condition: groups}) that measure ``pairs`` (and the objective at nominal)."""
-        groups: dict = {}
+        fig = self.objective.figure
+        groups = self.groups(pairs, {self.nominal: self.suite.groups_for([fig])} if fig else None)
+        return sorted(groups), groups
+
+    def groups(self, pairs, into: dict | None = None) -> dict:
+        """{condition: measurement groups, in the suite's order} that measure the (spec, condition)
+        ``pairs``, added to those of ``into``."""
+        out = {c: set(g) for c, g in (into or {}).items()}
         for name, c in pairs:
-            for g in self.suite.groups_for([self.spec[name].fig.name]):
-                groups.setdefault(c, set()).add(g)
-        if self.objective.figure:
-            groups.setdefault(self.nominal, set()).update(self.suite.groups_for([self.objective.figure]))
+            out.setdefault(c, set()).update(self.suite.groups_for([self.spec[name].fig.name]))
+        return self.ordered(out)
+
+    def ordered(self, groups: dict) -> dict:
+        """{condition: groups} with each condition's groups as a tuple in the suite's order."""
         order = list(self.suite.GROUPS)
-        return sorted(groups), {c: tuple(sorted(gs, key=order.index)) for c, gs in groups.items()}
+        return {c: tuple(sorted(g, key=order.index)) for c, g in groups.items()}
 
     def rows(self, groups: dict) -> list:
         """Every (spec, condition) the planned groups measure (more rows than bind, at no cost)."""
@@ -298,8 +306,7 @@ class Closer:
             held = conditions.spec_conditions(sp, [self.nominal] + self.grid)
             if held:
                 groups.setdefault(held[0], set()).update(self.suite.groups_for([sp.fig.name]))
-        order = list(self.suite.GROUPS)
-        groups = {c: tuple(sorted(g, key=order.index)) for c, g in groups.items()}
+        groups = self.ordered(groups)
         more = self.at([designs[0]] + [designs[j + 1] for j in suspects], sorted(groups), groups, "dependence")
         every = {sp.fig.name for sp in self.base.spec}
         for i, j in enumerate(suspects):
@@ -523,11 +530,8 @@ class Closer:
         spec's worst condition at ``p`` (a spec with a large margin is not modelled, but a step that
         breaks it is caught here, at a fraction of the grid's cost); and those (spec, worst) pairs."""
         screen = [(name, c) for name, (m, c) in mg.worst(self.base, p.margins).items() if c is not None]
-        order = list(self.suite.GROUPS)
-        out = {c: set(g) for c, g in groups.items()}
-        for name, c in screen:
-            out.setdefault(c, set()).update(self.suite.groups_for([self.spec[name].fig.name]))
-        return sorted(out), {c: tuple(sorted(g, key=order.index)) for c, g in out.items()}, screen
+        out = self.groups(screen, groups)
+        return sorted(out), out, screen
 
     def attempt(self, xc, model, st, feasible, conds, groups, screen, p: Point, targets):
         """Simulate candidate ``xc`` at ``conds``: (xc, its figures, objective, the share of the promised
