@@ -112,6 +112,13 @@ def numeric_column(name, texts, required, integer, problems):
     return vals
 
 
+def temperature_problem(i: int, t: float) -> list:
+    """[the problem of row ``i``'s die temperature ``t`` (degC) outside -60..200 degC] or []."""
+    if math.isfinite(t) and not -60 <= t <= 200:
+        return [f"row {i + 1}, column 'temp_C': {t:g} is outside -60..200 degC"]
+    return []
+
+
 def read_rows(path: str | Path, measured: bool) -> tuple[list, list, str]:
     """(header, rows as {column: text}, source) of a CSV table, read bounded; DataError listing every
     problem (not UTF-8, not CSV, a duplicated column, a row whose fields are not the header's)."""
@@ -210,9 +217,7 @@ def validate(header, rows, design, measured: bool, source: str) -> Table:
         for name in ("f_read_Hz", "vdd_V"):
             if name in out and math.isfinite(out[name][i]) and out[name][i] <= 0:
                 problems.append(f"row {i + 1}, column '{name}': {out[name][i]:g} must be positive")
-        t = out["temp_C"][i]
-        if math.isfinite(t) and not -60 <= t <= 200:
-            problems.append(f"row {i + 1}, column 'temp_C': {t:g} is outside -60..200 degC")
+        problems += temperature_problem(i, out["temp_C"][i])
         if math.isfinite(out["t_int_s"][i]) and out["t_int_s"][i] == 0:
             problems.append(f"row {i + 1}, column 't_int_s': zero integration time")
     if problems:

@@ -84,7 +84,7 @@ def read(path, design, measured: bool) -> dict:
     """{column: numpy array} of a role gap table (module docstring), validated; DataError listing every
     problem by row and column otherwise."""
     from ..circuits.cds import timing_of
-    from ..gap.data import DataError, numeric_column, read_rows
+    from ..gap.data import DataError, numeric_column, read_rows, temperature_problem
     header, rows, source = read_rows(path, measured)
     need = REQUIRED + (("v_V", "v_std_V") if measured else ())
     problems = [f"missing column '{c}'" for c in need if c not in header]
@@ -105,9 +105,7 @@ def read(path, design, measured: bool) -> dict:
         if math.isfinite(t) and not t_min <= t <= T_INT_MAX:
             problems.append(f"row {i + 1}, column 't_int_s': {t:g} s (allowed: {t_min:g} s, the shortest exposure "
                             f"of the design's read, to {T_INT_MAX:g} s)")
-        tc = out["temp_C"][i]
-        if math.isfinite(tc) and not -60 <= tc <= 200:
-            problems.append(f"row {i + 1}, column 'temp_C': {tc:g} is outside -60..200 degC")
+        problems += temperature_problem(i, out["temp_C"][i])
         if "n_avg" in out and math.isfinite(out["n_avg"][i]) and (out["n_avg"][i] < 1 or out["n_avg"][i] != int(out["n_avg"][i])):
             problems.append(f"row {i + 1}, column 'n_avg': {out['n_avg'][i]:g} (allowed: a whole number >= 1)")
     if measured and not problems and np.all(out["v_std_V"] == 0):
