@@ -258,3 +258,32 @@ def test_a_live_owners_temporary_is_left_alone(tmp_path):
     dead.write_text("debris")
     assert owner.sweep(tmp_path, ".x.") == [dead] and mine.exists()
 
+
+
+def test_a_copied_checkout_keys_report_sections_alike_and_an_edit_does_not(tmp_path):
+    """Issue 41: a report section's key holds the content of the design, the kit and the model files,
+    not where the checkout lies: two copies of the kit (every path in them different) give a section
+    the same key, so the sections one copy built serve the other; an edited model file (not kit code:
+    only the model files' fingerprint sees it) or an edited design file gives another key."""
+    import shutil
+    code = ("from pixelkit.design import load_design; from pixelkit.report.cache import section_key; "
+            "print(section_key('signoff', load_design('designs/dual_pixel_revB.toml'), {'quick': False}))")
+
+    def key(root):
+        p = subprocess.run([sys.executable, "-c", code], cwd=root, capture_output=True, text=True, timeout=120,
+                           env={**os.environ, "PYTHONPATH": str(root)})
+        assert p.returncode == 0, p.stderr[-2000:]
+        return p.stdout.strip()
+    roots = [tmp_path / name / "kit" for name in ("a", "elsewhere_b")]
+    for r in roots:
+        shutil.copytree(os.path.join(ROOT, "pixelkit"), r / "pixelkit", ignore=shutil.ignore_patterns("__pycache__"))
+        (r / "designs").mkdir()
+        shutil.copy(os.path.join(ROOT, "designs", "dual_pixel_revB.toml"), r / "designs")
+    first = key(roots[0])
+    assert key(roots[1]) == first, "the same content in another folder must key the section alike"
+    model = roots[1] / "pixelkit" / "tech" / "models" / "gf180mcu" / "design.ngspice"
+    model.write_text(model.read_text() + "\n* edited\n")
+    edited_model = key(roots[1])
+    design = roots[0] / "designs" / "dual_pixel_revB.toml"
+    design.write_text(design.read_text() + "\n# edited\n")
+    assert len({first, edited_model, key(roots[0])}) == 3

@@ -46,14 +46,29 @@ def source_hash() -> str:
 
 
 def design_hash(design) -> str:
-    """Content hash of a loaded design: every field, its technology and its model files."""
-    from ..tech.modellib import files_fingerprint
-    files = tuple(sorted(str(i.file) for i in design.tech.models.includes(design.corner or None)))
+    """Content hash of a loaded design: every field, its technology and the content of its model
+    files, not where they lie: two checkouts (or two machines) of the same design, kit and models
+    key a section alike and share the section cache, as the simulation cache does
+    (``spice.cache``). The design's path stays as it was spelled (the reproducibility section
+    prints it in its rebuild command), its file's bytes are hashed too; the technology file and
+    the model folders go by their names, their content being in the fields (the technology), in
+    :func:`source_hash` (the kit's own files) and in the model files' fingerprint, taken over
+    every corner's includes (the sign-off simulates the other corners too)."""
+    from ..tech.modellib import content_fingerprint
+    lib = design.tech.models
+    incs = [*(i for corner in lib.corners.values() for i in corner), *lib.mim.values()]
     text = repr(design)
-    if getattr(design, "source", None):   # the same file however its path is spelled
-        text = text.replace(f"source={design.source!r})", f"source={str(Path(design.source).resolve())!r})")
+    tech_source = getattr(design.tech, "source", None)
+    names = {str(lib.folder): "<models>", **{str(i.folder): "<models>" for i in incs}}
+    if tech_source:
+        names[str(tech_source)] = Path(tech_source).name
+    for path in sorted(names, key=len, reverse=True):   # a folder inside another is replaced first
+        text = text.replace(path, names[path])
     h = hashlib.sha256(text.encode())
-    h.update(files_fingerprint(files).encode() if files else b"")
+    h.update(content_fingerprint(tuple(sorted({str(i.file) for i in incs}))).encode() if incs else b"")
+    src = getattr(design, "source", None)
+    if src and is_regular(Path(src)):
+        h.update(read_bytes(Path(src), "design", "design"))
     return h.hexdigest()[:16]
 
 

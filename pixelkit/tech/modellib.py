@@ -61,18 +61,12 @@ class ModelLibrary:
         return self.corners[corner]
 
 
-def files_fingerprint(files: tuple[str, ...]) -> str:
-    """Hash of the model files and of every file they include or reference (followed as
-    ngspice follows them, wherever they lie), recomputed whenever one of them changed
-    (size, mtime): an edit of a nested file, or of any file during a session, changes it."""
-    return _fingerprint(tuple(files), _closure(tuple(files)))
-
-
 def content_fingerprint(files: tuple[str, ...]) -> str:
     """Hash of the content (and base names) of the model files and of the files they include,
     independent of where they lie: the same library in two checkouts or on two machines gives
     the same value (the simulation cache's key: checkouts share a cache). Read again whenever
-    one of the files changed (size, mtime), like :func:`files_fingerprint`."""
+    one of the files changed (size, mtime): an edit of a nested file, or of any file during a
+    session, changes it."""
     return _content(_closure(tuple(sorted(files))))
 
 
@@ -109,17 +103,6 @@ def _walk(paths, root: str):
             continue
         yield f, st, has_control
         todo += [Path(n) for n in nested]
-
-
-@lru_cache(maxsize=64)
-def _fingerprint(names: tuple[str, ...], stamps: tuple) -> str:
-    h = hashlib.sha256()
-    for f in names:
-        h.update(f.encode())
-    for path, size, _ in stamps:
-        h.update(path.encode())
-        h.update(read_bytes(path, "model file", "model") if size >= 0 else b"(missing)")
-    return h.hexdigest()[:16]
 
 
 @lru_cache(maxsize=64)

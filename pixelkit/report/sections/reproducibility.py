@@ -32,11 +32,17 @@ def _git() -> str:
     return head or "not a git checkout"
 
 
+def inputs(ctx) -> dict:
+    """What the section shows besides the design and the kit's code (the report's section cache keys
+    on it): the checkout's git commit, which a commit that changes no code still moves."""
+    return {"git": _git()}
+
+
 def build(ctx) -> Section:
     from ...registry import GENERATORS, golden_text
     from ...spice.batch import ngspice_version
     from ...spice.options import DEFAULTS, RETRIES
-    from ...tech.modellib import files_fingerprint
+    from ...tech.modellib import content_fingerprint
     from ..cache import design_hash, source_hash
     d = ctx.design
     corner = d.corner or d.tech.models.default_corner
@@ -54,7 +60,7 @@ def build(ctx) -> Section:
     hashes = [["design file " + (src.name if src else "(in memory)"),
                hashlib.sha256(src.read_bytes()).hexdigest()[:16] if src and src.is_file() else "-"],
               ["loaded design + technology + model files", design_hash(d)],
-              ["model files", files_fingerprint(files) if files else "-"],
+              ["model files (names and bytes)", content_fingerprint(files)[:16] if files else "-"],
               ["pixelkit code and templates", source_hash()]]
     hashes += [[f"netlist {n}", hashlib.sha256(golden_text(n, d).encode()).hexdigest()[:16]] for n in GENERATORS]
     cmd = f"pixelkit report {d.source or 'DESIGN'} --out <folder>" + (" --quick" if ctx.quick else "")
