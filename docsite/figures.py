@@ -233,6 +233,22 @@ def cite_value(key: str) -> float:
     raise Unchecked(key)
 
 
+def dated_source(page_text: str):
+    """``dated:COMMIT``: a figure of a past run the page quotes as history (a study on copies of a
+    design, a benchmark before a change) whose output was not stored: not checked against the kit, but
+    the page must name the commit it was measured at (outside the marks), so the reader sees its age;
+    a figure of the kit as it is now is never ``dated:``."""
+    plain = ANY_MARK.sub("", page_text)
+
+    def value(key: str) -> float:
+        if not re.fullmatch(r"[0-9a-f]{7,40}", key):
+            raise ValueError(f"dated:{key}: not a commit id (7 - 40 hex digits)")
+        if not re.search(r"\b" + key[:7], plain):
+            raise LookupError(f"the page does not name the commit {key}")
+        raise Unchecked(key)
+    return value
+
+
 def record_value(key: str) -> float:
     """The value of a ``record:`` key (``PATH::dotted.key``) in a stored results file (dated)."""
     return _json_value(key, dated=True)
@@ -281,18 +297,20 @@ def _with_local(getters: dict, page_text: str) -> dict:
     """``getters`` plus the sources that need no run: this page's blocks, stored records, calc."""
     out = {**getters, "block": block_source(page_text), "record": record_value, "file": file_value,
            "input": input_value, "cite": cite_value, "default": default_value, "schema": default_value,
-           "const": const_value}
+           "const": const_value, "dated": dated_source(page_text)}
     out["calc"] = calc_source(out)
     return out
 
 
 #: the sources every check has (no run needed)
-LOCAL = ("block", "record", "file", "calc", "input", "cite", "default", "schema", "const")
+LOCAL = ("block", "record", "file", "calc", "input", "cite", "default", "schema", "const", "dated")
 #: sources checked by their own tests, not from the quick report: ``p4t`` (``pixelkit simulate
 #: designs/pixel4t_gf180.toml --json``, dotted keys into its JSON; tests/test_pixel4t.py);
 #: ``pl`` (the GF180 dual pixel's schematic and post-layout views, ``VIEW.ARRAY.FIGURE``: C_FD, C_PD,node, the
-#: column line, CG_out(0) model and SPICE charge step; tests/test_post_layout.py)
-OTHER_SOURCES = ("p4t", "pl")
+#: column line, CG_out(0) model and SPICE charge step; tests/test_post_layout.py); ``xs`` (the extraction's
+#: term of a test structure, ``SET.NAME`` in F: docs/post-layout.md's structure tables;
+#: tests/test_extraction_structures.py)
+OTHER_SOURCES = ("p4t", "pl", "xs")
 
 
 def _digits(text: str) -> float:

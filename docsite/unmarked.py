@@ -2,7 +2,8 @@
 
 A kit figure in a sentence is marked (``docsite/figures.py``: ``quick:``, ``block:``, ``record:``,
 ``file:``, ``calc:``, ``input:``) or, when it is not the kit's, says what it is (``cite:KEY``: a
-source document's value; an estimate is written as one: ``~7 %``, ``about 2 min``). No program can
+source document's value; ``dated:COMMIT``: a past run's figure told as history, the page naming
+the commit; an estimate is written as one: ``~7 %``, ``about 2 min``). No program can
 tell a kit figure from any other number, so this scan is a measure, not a proof: it lists every
 number followed by a unit (``fF``, ``mV``, ``ke-``, ``%``, ``s``, ``SPICE runs``, ...) in the prose
 and tables of a page (not in fenced blocks, inline code or comments) that has no mark after it
@@ -46,7 +47,7 @@ LINK_TARGET = re.compile(r"\]\([^)]*\)")
 MARKED = ("README.md", "bibliography.md", "cli-conventions.md", "howto-docs-figures.md", "howto-new-technology.md",
           "howto-sweeps-dask.md",
           "interrupts.md", "monte-carlo.md", "pixel-netlist.md", "report-figures.md", "report.md",
-          "technologies.md")
+          "technologies.md", "timing-and-settling.md", "validation.md")
 
 
 def scan(text: str) -> list[tuple[int, str, str]]:

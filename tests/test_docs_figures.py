@@ -130,6 +130,11 @@ def test_unmarked_numbers_are_listed_and_marked_pages_stay_marked(tmp_path):
                     "1<!--fig const:os.sep--> x\n")
     bad = figures.check(None, [page], getters={})[0]
     assert [(b["quoted"], b.get("now")) for b in bad[:1]] == [("99", "100")] and "only constants of pixelkit" in bad[1]["why"]
+    page.write_text("Measured at 2826076 (copies): 0.394<!--fig dated:2826076--> mV, 0.5<!--fig dated:abc1234--> mV, "
+                    "1<!--fig dated:HEAD--> mV\n")
+    bad = figures.check(None, [page], getters={})[0]
+    assert [b["quoted"] for b in bad] == ["0.5", "1"] and "does not name the commit abc1234" in bad[0]["why"]
+    assert "not a commit id" in bad[1]["why"]
 
 
 def test_every_file_a_mark_reads_is_in_the_docs_clone():

@@ -109,6 +109,24 @@ def test_development_validation_and_holdout_sets_against_fastcap(other_sets, whi
     assert not bad and not moved, (bad, moved)
 
 
+def test_post_layout_page_quotes_the_current_structure_terms(signed, other_sets):
+    """docs/post-layout.md's structure tables quote the kit's term of each structure as computed above
+    (``xs:SET.NAME`` marks: the first set through ``pixelkit signoff``, the others by the model on FastCap2's
+    windows), FastCap2's from the stored reference (``file:``) and their difference (``calc:``): a change of
+    the model that moves a quoted figure fails here, naming the line (``PIXELKIT_DOCS_REWRITE=1`` rewrites
+    the figures; then read the sentences around them)."""
+    import os
+    from docsite import figures
+    terms = {"first": signed, **other_sets}
+    getters = {"xs": lambda key: terms[key.split(".")[0]][key.split(".", 1)[1]]}
+    page = ROOT / "docs" / "post-layout.md"
+    if os.environ.get("PIXELKIT_DOCS_REWRITE"):
+        figures.update(None, [page], getters=getters)
+    bad, n = figures.check(None, [page], getters=getters)
+    assert n >= 366 and not bad, "\n".join(f"post-layout.md:{b['line']}: {b['key']}: quoted {b['quoted']}, now "
+                                         f"{b.get('now') or b.get('why')}" for b in bad)
+
+
 def test_the_stack_gives_the_pdks_area_coefficients(gf):
     """The GF180MCU open PDK's extraction coefficients (Magic's tech file, as klayout-pex 0.6 carries them):
     metal1 over the substrate 29.304 aF/um2, metal2 over metal1 59.027, metal1 over poly 51.434. The layered
