@@ -3,7 +3,7 @@ grow with the number of knobs (2, 5, 10), against one plain ``verify`` of the sa
 measured in the same run (the unit a designer knows: "close costs N sign-offs").
 
     python3 benchmarks/close.py [--knobs 2,5,10] [--grid small|full] [--mc N] [--max-iterations N]
-                                [--design FILE] [--reference] [--json]
+                                [--design FILE] [--reference] [--base REV] [--json]
 
 For each knob count, with a fresh empty simulation cache each (``PIXELKIT_CACHE``): ``pixelkit verify``
 of the design with that grid (the baseline), then ``pixelkit close`` of the same design with the
@@ -19,6 +19,12 @@ Monte Carlo unless ``--mc``. ``--reference``: the design's own grid, Monte Carlo
 gates' drive as a circuit choice, the rail, both resets, the transistor OTA's bias and compensation,
 the AFE's capacitors): "close on the reference from an empty cache" (issue 40: within 30 min on 2
 cores), the run that writes designs/dual_pixel_revB.toml.
+
+``--base REV``: a change to close itself, measured against the kit at git revision ``REV`` (say
+``HEAD~1``) in the same run: both closes run side by side, each from its own empty cache, the base with
+``REV``'s code (``git archive`` into a temporary folder), and the ratios new / base are printed (CPU,
+SPICE runs, wall) with both results (status, candidates, objective): a cut that moves the result shows
+here. No verify baseline is run then.
 """
 from __future__ import annotations
 
@@ -77,6 +83,59 @@ def timed(cmd: list, env: dict) -> tuple[subprocess.CompletedProcess, float, flo
     return p, time.perf_counter() - t0, child_cpu_s() - c0
 
 
+def base_tree(rev: str) -> Path:
+    """The kit at git revision ``rev``, unpacked into a temporary folder."""
+    out = Path(tempfile.mkdtemp(prefix="pk-bench-base-"))
+    archive = subprocess.run(["git", "-C", str(ROOT), "archive", rev], capture_output=True, check=True).stdout
+    subprocess.run(["tar", "-x", "-C", str(out)], input=archive, check=True)
+    return out
+
+
+def closes(d: Path, n: int, folder: Path, base: Path | None) -> list[tuple[dict, float, float, int]]:
+    """``pixelkit close`` of ``d`` with this kit (and, with ``base``, the base kit's, side by side), each from
+    its own empty cache: [(close.json, wall, CPU, exit)] (CPU: close's own count, the command and its ngspice
+    runs, as two processes run at once)."""
+    runs = []
+    for tag, root in [("", ROOT)] + ([("base_", base)] if base else []):
+        env = dict(os.environ, PIXELKIT_CACHE=tempfile.mkdtemp(prefix="pk-bench-close-"), PIXELKIT_PROGRESS="0",
+                   PYTHONPATH=str(root))
+        out = folder / f"{tag}closed_{n}.toml"
+        design = root / d.relative_to(ROOT) if d.is_relative_to(ROOT) else d   # a kit's own design file
+        p = subprocess.Popen([sys.executable, "-m", "pixelkit", "close", str(design), "--out", str(out), "--json"],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env, cwd=root)
+        runs.append((p, time.perf_counter()))
+    done = []
+    for p, t0 in runs:
+        stdout, stderr = p.communicate()
+        done.append((p, stdout, stderr, time.perf_counter() - t0))
+    out = []
+    for p, stdout, stderr, wall in done:
+        if p.returncode not in (0, 1, 5):
+            raise SystemExit(f"close exited {p.returncode}: {stderr[-2000:]}")
+        r = json.loads(stdout)
+        out.append((r, wall, r.get("cpu_s"), p.returncode))
+    return out
+
+
+def summary(r: dict, wall: float, cpu: float, code: int) -> dict:
+    """What the benchmark keeps of a close.json (``r``), its wall and CPU time and its exit status."""
+    return {"wall_s": wall, "cpu_s": cpu, "spice_runs": r["spice_runs"], "cached": r["spice_cached"],
+            "status": r["status"], "exit": code, "candidates": len(r["iterations"]) - 1,
+            "objective": r["objective"], "smallest_margin_pct": r["smallest_margin_pct"],
+            "conflict": (r.get("conflict") or {}).get("text"), "overrides": r.get("overrides"),
+            "cpu_s_own": r.get("cpu_s"), "choices": r.get("choices"), "yield": r.get("yield"),
+            "iterations": [{k: i.get(k) for k in ("iteration", "mode", "accepted", "verified_on", "spice_runs",
+                                                  "spice_cached", "cpu_s", "wall_s", "smallest_margin_pct", "choice")}
+                           for i in r["iterations"]]}
+
+
+def against(src: Path, n: int, args, folder: Path) -> dict:
+    """This kit's close and the base revision's, side by side in the same run."""
+    d = design_file(src, n, args.grid, args.mc, args.max_iterations, folder)
+    (new, base) = closes(d, n, folder, base_tree(args.base))
+    return {"knobs": n, "base": args.base, "close": summary(*new), "base_close": summary(*base)}
+
+
 def one(src: Path, n: int, args, folder: Path) -> dict:
     d = design_file(src, n, args.grid, args.mc, args.max_iterations, folder)
     env = dict(os.environ, PIXELKIT_CACHE=tempfile.mkdtemp(prefix="pk-bench-verify-"), PIXELKIT_PROGRESS="0")
@@ -94,16 +153,7 @@ def one(src: Path, n: int, args, folder: Path) -> dict:
     r = json.loads(p.stdout)
     return {"knobs": n, "conditions": v["grid"]["conditions"], "verify": {"wall_s": v_wall, "cpu_s": v_cpu,
                                                                           "spice_runs": v_runs},
-            "close": {"wall_s": c_wall, "cpu_s": c_cpu, "spice_runs": r["spice_runs"], "cached": r["spice_cached"],
-                      "status": r["status"], "exit": p.returncode, "candidates": len(r["iterations"]) - 1,
-                      "objective": r["objective"], "smallest_margin_pct": r["smallest_margin_pct"],
-                      "conflict": (r.get("conflict") or {}).get("text"),
-                      "cpu_s_own": r.get("cpu_s"), "choices": r.get("choices"),
-                      "yield": r.get("yield"),
-                      "iterations": [{k: i.get(k) for k in ("iteration", "mode", "accepted", "verified_on", "spice_runs",
-                                                            "spice_cached", "cpu_s", "wall_s", "smallest_margin_pct",
-                                                            "choice")}
-                                     for i in r["iterations"]]}}
+            "close": summary(r, c_wall, c_cpu, p.returncode)}
 
 
 def stages(c: dict) -> list[tuple[str, int, float]]:
@@ -158,6 +208,23 @@ def show(res: dict) -> None:
           f"{c['wall_s'] / v['wall_s']:.1f}, CPU {c['cpu_s'] / max(v['cpu_s'], 1e-9):.1f}")
 
 
+def show_against(res: dict) -> None:
+    c, b = res["close"], res["base_close"]
+    print(f"\n{res['knobs'] or 'the reference'} knobs: this kit against {res['base']}, side by side, each from an "
+          "empty cache")
+    for tag, r in (("this kit", c), (res["base"], b)):
+        print(f"  {tag:<10} {r['status']} (exit {r['exit']}) after {r['candidates']} candidates, "
+              f"{r['objective']['shown_start']} -> {r['objective']['shown']}; {r['spice_runs']} SPICE runs, "
+              f"{r['cpu_s']:.0f} s CPU, {r['wall_s']:.0f} s wall")
+        print("    " + ", ".join(f"{k} {v}" for k, v in sorted((r.get("overrides") or {}).items())))
+        for name, runs, cpu in stages(r):
+            print(f"    {name:<88} {runs:>6} runs {cpu:>7.0f} s CPU")
+    same = c["overrides"] == b["overrides"] and c["status"] == b["status"]
+    print(f"  the same revision: {'yes' if same else 'NO'}; ratio this kit / {res['base']}: CPU "
+          f"{c['cpu_s'] / b['cpu_s']:.3f}, SPICE runs {c['spice_runs'] / max(b['spice_runs'], 1):.3f}, wall "
+          f"{c['wall_s'] / b['wall_s']:.3f} (wall: both ran at once)")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--knobs", default="2,5,10")
@@ -168,6 +235,8 @@ def main():
     ap.add_argument("--design", type=Path, default=ROOT / "designs" / "dual_pixel_revA.toml")
     ap.add_argument("--reference", action="store_true",
                     help="the reference run instead: the design's full grid, Monte Carlo and [close] table")
+    ap.add_argument("--base", default=None, help="a git revision: this kit's close against that revision's, "
+                                                  "side by side in the same run (no verify baseline)")
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args()
     if args.reference:
@@ -177,14 +246,16 @@ def main():
     counts = [int(x) for x in args.knobs.split(",")]
     folder = Path(tempfile.mkdtemp(prefix="pk-bench-close-"))
     load = os.getloadavg()[0]
-    results = [one(args.design, n, args, folder) for n in counts]
+    results = [(against if args.base else one)(args.design, n, args, folder) for n in counts]
     if args.json:
         print(json.dumps({"results": results, "load_at_start": load, "load_at_end": os.getloadavg()[0]}, indent=1))
         return
     print(f"pixelkit close on {args.design.name}, grid {args.grid}, load average {load:.1f} at the start, "
           f"{os.getloadavg()[0]:.1f} at the end; files in {folder}")
     for res in results:
-        show(res)
+        (show_against if args.base else show)(res)
+    if args.base:
+        return
     base = results[0]
     per = {r["knobs"]: r["close"]["spice_runs"] / max(r["close"]["candidates"], 1) for r in results}
     if len(results) > 1:
