@@ -68,3 +68,45 @@ def test_the_extraction_reaches_the_simulation_as_its_derivation_says(d4t, view,
     r = json.loads(out)
     assert r["view"] == "post-layout"
     assert r["rows"][0]["value"] == pytest.approx(signal(view)["cg_V_per_e"] * 1e6, rel=1e-6)   # uV/e-
+
+
+def test_revision_b_passes_its_conversion_gain_as_drawn_in_a_raw_ngspice_run_of_its_exported_deck(d4t, tmp_path, cli):
+    """designs/pixel4t_gf180_revB.toml (RST 0.3 um wide, the follower 0.8 / 0.3 um) is revision A resized so its
+    FD, wiring included, reads 50 - 70 uV/e- as drawn. Independent paths: the closed form of
+    families/pixel4t/model.py in each post-layout view (revision A 44.0, revision B 57.9 uV/e-: its file's header)
+    and a run of ``pixelkit netlist --bench cds --post-layout``'s deck in raw ngspice (no kit code), which must
+    carry the drawn cell's wiring (its Cpex capacitors) and read B's closed form within 5 %."""
+    import os
+    import subprocess
+
+    import numpy as np
+    from pixelkit.circuits.cds import timing_of
+    from pixelkit.families.pixel4t import model
+    from pixelkit.families.pixel4t.design import load_pixel4t_design
+    from pixelkit.layout.pixel4t import post_layout_view
+    from pixelkit.measure.cds import cds
+    from pixelkit.rolepix.export import CDS_EXPORT_E, export_benches
+    from pixelkit.spice.raw import read_raw
+    from pixelkit.spice.result import Result, vector_key
+    rev_b = DESIGN.with_name("pixel4t_gf180_revB.toml")
+    b = post_layout_view(load_pixel4t_design(rev_b))
+    v_fd = b.levels.v_rst_for(b.tech.supply) - 1.0
+    cg_a = model.conversion_gain(post_layout_view(d4t), v_fd)["cg_V_per_e"]
+    cg_b = model.conversion_gain(b, v_fd)["cg_V_per_e"]
+    assert cg_a * 1e6 == pytest.approx(44.0, abs=0.05) and cg_b * 1e6 == pytest.approx(57.9, abs=0.05)
+
+    deck = tmp_path / "cds.cir"
+    code, _out, err = cli("netlist", rev_b, "--bench", "cds", "--post-layout", "--out", deck, "--json")
+    assert code == 0, err
+    text = deck.read_text()
+    assert all(f"Cpex{i} " in text for i in range(len(b.post_layout.couplings)))
+    p = subprocess.run(["ngspice", "-b", "-r", str(tmp_path / "out.raw"), str(deck)], cwd=tmp_path, capture_output=True,
+                       text=True, timeout=300, env={**os.environ, "OMP_NUM_THREADS": "1"})
+    assert (tmp_path / "out.raw").exists(), p.stdout[-2000:] + p.stderr[-2000:]
+    vec = {vector_key(k): np.real(v) for k, v in read_raw(tmp_path / "out.raw")[-1]["data"].items()}
+    raw = Result(np.real(vec.pop("time")), vec, {})
+    fr = export_benches(b)["cds"]().meta["frames"]
+    out = [cds(raw, timing_of(b), fr["exposures"], fr["starts"], k, 1) for k in range(len(CDS_EXPORT_E))]
+    cg = (out[1] - out[0]) / CDS_EXPORT_E[1]
+    assert cg == pytest.approx(cg_b, rel=0.05)
+    assert 50e-6 < cg < 70e-6

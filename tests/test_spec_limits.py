@@ -118,9 +118,12 @@ def test_every_spec_says_where_its_limit_comes_from():
 
 def test_revisions_keep_their_revision_a_specs():
     """The closed revisions answer to their revision A's datasheet: the same specs, the same limits (the
-    revision B files say so in the derived specs' notes); only the yield requirement is new."""
-    for a, b in (("dual_pixel_revA", "dual_pixel_revB"), ("dual_pixel_gf180", "dual_pixel_gf180_revB")):
+    revision B files say so in the derived specs' notes); only the dual pixels' yield requirement is new (the 4T's
+    revision B is its revision A resized to pass as drawn)."""
+    for a, b in (("dual_pixel_revA", "dual_pixel_revB"), ("dual_pixel_gf180", "dual_pixel_gf180_revB"),
+                 ("pixel4t_gf180", "pixel4t_gf180_revB")):
         sa, sb = (tomllib.loads((ROOT / "designs" / f"{n}.toml").read_text()) for n in (a, b))
         limits = {n: {k: v for k, v in s.items() if k != "note"} for n, s in sa["spec"].items()}
         assert limits == {n: {k: v for k, v in s.items() if k != "note"} for n, s in sb["spec"].items()}, b
-        assert sb["verify"]["min_yield"] == "95 %" and "min_yield" not in sa["verify"]
+        if b.startswith("dual"):   # the 4T's revision B is its revision A made to pass as drawn (no Monte Carlo)
+            assert sb["verify"]["min_yield"] == "95 %" and "min_yield" not in sa["verify"]

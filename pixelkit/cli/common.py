@@ -195,17 +195,14 @@ def load(design_path: str, drawable: bool = True, afe: bool = True):
 
 
 def refuse_post_layout(command: str, family: str) -> None:
-    """Where a pixel read by role has no post-layout view (a netlist pixel; a 4T's report and exported decks),
-    ``--post-layout`` is refused (exit 2) rather than ignored."""
+    """A netlist pixel has no post-layout view (its layout is the designer's): ``--post-layout`` is refused
+    (exit 2) rather than ignored."""
     ctx = click.get_current_context(silent=True)
     if ctx is not None and ctx.meta.get("pixelkit.post_layout"):
         from ..errors import ConfigError
-        why = (f"{command} does not take it yet; verify, simulate, close and gap do, docs/pixel4t.md"
-               if family == "pixel4t" else
-               "sign off your own GDS with pixelkit signoff: its post-layout netlist is <top>.post.spice")
-        who = "a dual-pixel design" if family == "pixel4t" else "a dual-pixel design or a 4T"
-        raise ConfigError(command, "--post-layout", True, f"{who} for this command (a {family} design has no "
-                          f"post-layout view {'here' if family == 'pixel4t' else 'yet'}: {why})")
+        raise ConfigError(command, "--post-layout", True, f"a dual-pixel design or a 4T for this command (a {family} "
+                          "design has no post-layout view yet: sign off your own GDS with pixelkit signoff: its "
+                          "post-layout netlist is <top>.post.spice)")
 
 
 def load_role(path, family: str, command: str):

@@ -29,7 +29,7 @@ REFERENCE = "designs/dual_pixel_revA.toml"
 @json_opt
 def netlist(design, bench_name, out, models_mode, schematic, as_json):
     """Write a deck that runs as it is in `ngspice -b`: the kit's options, models, stimulus."""
-    from ..family import ROLE_FAMILIES, family_of, load_family_design
+    from ..family import ROLE_FAMILIES, family_of
     from ..spice.export import export_deck as write_deck
     if schematic is not None and schematic.suffix != ".sch":
         from ..errors import ConfigError
@@ -38,9 +38,8 @@ def netlist(design, bench_name, out, models_mode, schematic, as_json):
     if fam in ROLE_FAMILIES:   # a pixel read by role: its own benches (rolepix.export)
         from ..errors import ConfigError
         from ..rolepix.export import export_benches
-        from .common import refuse_post_layout
-        refuse_post_layout("netlist", fam)
-        d = load_family_design(design, fam)
+        from .common import load_role
+        d = load_role(design, fam, "netlist")   # the 4T with --post-layout: its drawn cell's wiring as Cpex*
         benches = export_benches(d)
         name = "cds" if bench_name == "bench_dual_pixel" else bench_name
         if name not in benches:

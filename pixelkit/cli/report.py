@@ -8,8 +8,8 @@ import click
 
 from .types import FilePath
 
-from .common import (design_arg, emit, finishing, json_opt, main, out_checked, post_layout_opt, quiet_opt,
-                     refuse_post_layout, view)
+from .common import (design_arg, emit, finishing, json_opt, load_role, main, out_checked, post_layout_opt,
+                     quiet_opt, view)
 
 
 @main.command("report")
@@ -39,7 +39,7 @@ def report(design, out, baseline, measured, quick, exhaustive, waves, no_cache, 
     """Write the design report (HTML + CSV/JSON + summary.json); with --baseline, the revision diff.
     Exit 1 when a spec fails (or the diff does), 5 when nothing fails but something was not measured."""
     from ..design import load_design
-    from ..family import ROLE_FAMILIES, family_of, load_family_design
+    from ..family import ROLE_FAMILIES, family_of
     from ..report.build import build_report
     from ..report.text import report_text
     fam, registry = family_of(design), None
@@ -49,8 +49,7 @@ def report(design, out, baseline, measured, quick, exhaustive, waves, no_cache, 
         if measured is not None:
             raise ConfigError(design, "--measured", str(measured), f"no --measured for a {fam} design (the gap "
                               "diagnosis of a pixel read by role is not written yet)")
-        refuse_post_layout("report", fam)
-        d, registry = load_family_design(design, fam), ROLE_REGISTRY
+        d, registry = load_role(design, fam, "report"), ROLE_REGISTRY   # the 4T with --post-layout: its view
     else:
         d = view(load_design(design))
     out = Path(out) if out else Path("reports") / d.name
