@@ -65,7 +65,8 @@ def _c11_marker(cv: Canvas):
 def drc(tmp_path_factory, gf, ref_design, chip):
     """One deep run of the foundry deck over the chip, the same chip with the thesis's shield
     (``pixels``, its cells prefixed P_), the reference design's chip (c35_thesis, R_), the 1 x 1 chip
-    without AFEs (``layout --rows 1 --cols 1``, U_: each strap meets one line there), and a copy
+    without AFEs (``layout --rows 1 --cols 1``, U_: each strap meets one line there), the GF180
+    revision B's 1 x 1 chip (boosted gate drive: its row drivers on the vgate rail, B_), and a copy
     of AFE_S whose C11 lost its CAP_MK / MIM_L_MK markers."""
     from pixelkit.layout.signoff.drc import run_drc
     folder = tmp_path_factory.mktemp("drc")
@@ -76,8 +77,9 @@ def drc(tmp_path_factory, gf, ref_design, chip):
     top = gdstk.Cell("TOP")
     top.add(gdstk.Reference(next(c for c in lib.cells if c.name == TOP), (0, 0)))
     top.add(gdstk.Reference(cell, (-40, 0)))
+    boosted = load_design(ROOT / "designs" / "dual_pixel_gf180_revB.toml")
     for k, (prefix, d, mode, n, afe) in enumerate((("P_", gf, "pixels", 2, True), ("R_", ref_design, "full", 2, True),
-                                                   ("U_", gf, "full", 1, False))):
+                                                   ("U_", gf, "full", 1, False), ("B_", boosted, "full", 1, False))):
         cells, name = build_chip_cells(d, n, n, afe=afe, shield=mode)
         sub = to_library(d, cells)
         for c in sub.cells:
@@ -109,6 +111,14 @@ def test_the_1x1_chip_is_drc_clean(drc):
     result, lib = drc
     assert "U_CHIP_1X1" in {c.name for c in lib.cells}
     assert not [v for v in result.violations if v.cell.startswith("U_")], result.violations
+
+
+def test_the_boosted_chip_with_its_row_drivers_is_drc_clean(drc):
+    """The gate-drive choice drawn (tests/test_rowdriver.py checks its LVS): the drivers' cell, its two
+    n-wells (vdd, vgate) at the different-potential spacing, the bank beside the straps."""
+    result, lib = drc
+    assert {"B_CHIP_1X1", "B_ROWDRV"} <= {c.name for c in lib.cells}
+    assert not [v for v in result.violations if v.cell.startswith("B_")], result.violations
 
 
 def test_foundry_deck_catches_a_mim_capacitor_without_its_marker(drc):

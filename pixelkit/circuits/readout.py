@@ -15,6 +15,7 @@ from ..spice.netlist import Element, Subckt
 from .afe import PORTS as AFE_PORTS, sc_afe
 from .column import CELL_PORTS, column_cell, pre_clock
 from .opamp import PORTS as OPAMP_PORTS, ota
+from .rowdriver import NAME as DRIVER, boosted, driven_lines, driver_input
 
 BIAS = "nb"
 KINDS = ("primary", "secondary")
@@ -83,12 +84,17 @@ def chip_ports(design, rows: int, cols: int, afe: bool) -> tuple:
             out += [f"nb_{s}_{j}", f"out_{s}_{j}"] if afe else [f"out_{s}_{j}"]
     if afe:
         out.append("vref")
+    if boosted(design):   # the gate-drive choice: each driven line's driver input is the pin, the rail a pin
+        driven = set(driven_lines(rows))
+        out = [driver_input(p) if p in driven else p for p in out] + ["vgate"]
     return tuple(out)
 
 
 def chip(design, rows: int, cols: int, afe: bool) -> Subckt:
     """The R x C array (``array.pixel_array``'s connections: EC and TG global, RST and RS per
-    row) with every column's circuit and, ``afe``, its AFE (``array.array_bench``'s)."""
+    row) with every column's circuit and, ``afe``, its AFE (``array.array_bench``'s); with the
+    boosted gate drive the row drivers (``circuits.rowdriver``) between the pins ``<line>_in`` and
+    the EC / TG / RST lines, on the rail ``vgate``."""
     from .array import pixel_array
     n = design.secondary_per_pixel
     arr = pixel_array(design, rows, cols)
@@ -106,6 +112,9 @@ def chip(design, rows: int, cols: int, afe: bool) -> Subckt:
             else:
                 elems.append(Element(f"Xc_{s}{j}", ("vdd", col, f"nbias_{s}_{j}", f"out_{s}_{j}", f"s1_{s}",
                                                     f"s1b_{s}", f"s2_{s}", f"s2b_{s}", *pre), f"column_{kind}"))
+    if boosted(design):   # the row drivers on the boosted rail (circuits.rowdriver)
+        elems += [Element(f"Xdrv_{line}", (driver_input(line), line, "vdd", "vgate"), DRIVER)
+                  for line in driven_lines(rows)]
     return Subckt(f"chip_{rows}x{cols}{'_afe' if afe else ''}", chip_ports(design, rows, cols, afe), tuple(elems))
 
 

@@ -25,9 +25,13 @@ wider pad next to its neighbours.
 from __future__ import annotations
 
 import math
+from collections import OrderedDict
 
+from ..circuits.rowdriver import boosted, driven_lines, driver_input
 from .canvas import Box, Canvas, box
 from .dual import CONTROLS, SUPPLIES
+from .rowdriver import row_driver_layout
+from .primitives import pad_side
 from .rules import RuleError
 
 KIND_SUFFIX = {"primary": "p", "secondary": "s"}
@@ -125,7 +129,7 @@ def build_chip(design, lt, cells: dict, rows: int, cols: int, afe: bool) -> dict
     dual = cells["DUALPIX"]
     wp, hd = dual.ports["width"], dual.ports["height"]
     ps = lt.snap(design.secondary.pitch * 1e9)
-    out = {}
+    out = OrderedDict()
     arr = Canvas(f"ARRAY_{rows}X{cols}", lt)
     arr.place(dual, 0, 0, {}, columns=cols, spacing=wp, rows=rows, row_spacing=hd, register=False)
     arr.add("boundary", box(0, 0, cols * wp, rows * hd), "")
@@ -140,9 +144,13 @@ def build_chip(design, lt, cells: dict, rows: int, cols: int, afe: bool) -> dict
         bottom, top = cells["COLUMN_S"], cells["COLUMN_P"]
         info = {"s": column_readouts(cells)["COLUMN_S"], "p": column_readouts(cells)["COLUMN_P"]}
     hb, ht = info["s"]["height"], info["p"]["height"]
-    n_straps = len(STRAPS)
+    drv = row_driver_layout(design, lt) if boosted(design) else None
+    driven = driven_lines(rows) if drv else ()
+    straps = (*STRAPS, "vgate") if drv else STRAPS
+    n_straps = len(straps)
     pitch = lt.snap_up(lt.width("metal4") + lt.space("metal4") + 100)
-    margin = lt.snap_up(CLEAR + n_straps * pitch + PIN_ROOM)
+    bank_w = len(driven) * drv.ports["width"] if drv else 0
+    margin = lt.snap_up(bank_w + CLEAR + n_straps * pitch + PIN_ROOM)
     chip = Canvas(chip_name(rows, cols, afe), lt)
     chip.place(bottom, margin, 0, {}, columns=n * cols, spacing=ps, register=False, name="xro_s")
     chip.place(arr, margin, hb, {}, register=False, name="xarr")
@@ -162,10 +170,15 @@ def build_chip(design, lt, cells: dict, rows: int, cols: int, afe: bool) -> dict
         for (part, net), y in info[tag]["lines"].items():
             name = net if net in ("vdd", "vss", "vref") else f"{net}_{tag}"
             lines.append((name, y0 + y, _line_width(lt, bottom if tag == "s" else top, part)))
-    strap_x = {net: margin - CLEAR - k * pitch for k, net in enumerate(STRAPS)}
+    strap_x = {net: margin - CLEAR - k * pitch for k, net in enumerate(straps)}
     reach: dict = {}
     cut = lt.cut("via3")
     ext = lt.nm("metal3.enclosure.via3")
+    drive = {}      # driven line -> (x of its driver's output, y of the driver's bank)
+    if drv:
+        height = _driver_bank(chip, lt, drv, driven, height, strap_x, reach, drive)
+        out[drv.name] = drv
+        out.move_to_end(drv.name, last=False)
     for net, y, w in lines:
         if net in strap_x:
             x = strap_x[net]
@@ -173,6 +186,12 @@ def build_chip(design, lt, cells: dict, rows: int, cols: int, afe: bool) -> dict
             chip.add("via3", box(x - cut // 2, y - cut // 2, x - cut // 2 + cut, y - cut // 2 + cut), net)
             lo, hi = reach.get(net, (y, y))
             reach[net] = (min(lo, y), max(hi, y))
+        elif net in drive:   # a row's driven line: metal4 from its driver's output down to the line
+            x, y_top = drive[net]
+            w4, e4 = lt.width("metal4"), lt.nm("metal4.enclosure.via3")
+            chip.add("metal3", box(x - cut // 2 - ext, y - w // 2, margin, y - w // 2 + w), net)
+            chip.add("via3", box(x - cut // 2, y - cut // 2, x - cut // 2 + cut, y - cut // 2 + cut), net)
+            chip.add("metal4", box(x - w4 // 2, y - cut // 2 - e4, x - w4 // 2 + w4, y_top), net)
         else:   # a pin at the left edge
             chip.add("metal3", box(0, y - w // 2, margin, y - w // 2 + w), net)
             chip.label("metal3_label", w, y, net)
@@ -196,11 +215,56 @@ def build_chip(design, lt, cells: dict, rows: int, cols: int, afe: bool) -> dict
             for net, x in info[tag]["pins"].items():
                 chip.label("metal4_label", margin + j * step + x, y + (1 if tag == "s" else -1), f"{net}_{tag}_{j}")
     chip.add("boundary", box(0, 0, width, height), "")
+    blocks = _blocks(margin, hb, ht, rows, cols, wp, hd, ps, n, afe, info)
+    if drv:   # the row drivers' bank and the room between it and the array: periphery
+        blocks["periphery"].append(box(0, hb + rows * hd + ht, margin, height))
     chip.ports = {"readouts": {"s": (bottom, 0, n * cols, ps), "p": (top, hb + rows * hd, cols, wp)},"width": width, "height": height, "margin": margin, "hb": hb, "ht": ht, "rows": rows,
                   "cols": cols, "afe": afe, "straps": strap_x, "reach": reach, "pixel": (wp, hd),
-                  "blocks": _blocks(margin, hb, ht, rows, cols, wp, hd, ps, n, afe, info)}
+                  "blocks": blocks, "drivers": driven}
     out[chip.name] = chip
     return out
+
+
+def _driver_bank(chip, lt, drv, driven, height: int, strap_x: dict, reach: dict, drive: dict) -> int:
+    """The boosted rail's row drivers (``ROWDRV``, one per driven line) side by side above the
+    chip's left margin, at x = 0, 1, 2 ... cell widths; returns the chip's new height. A global
+    line's driver (EC / TG, tied by their straps) meets its strap through a metal3 jumper in the
+    room between the array's readout and the bank; a row's line (RST) is reached by a metal4 strap
+    of its own from the driver's output down to the line (``drive``: {line: (x, top)}, drawn with
+    the line). The bank's shared lines (vss, vdd, vgate) run right to their straps (``reach``)."""
+    cut, ext = lt.cut("via3"), lt.nm("metal3.enclosure.via3")
+    w3, w4, e4 = lt.width("metal3"), lt.width("metal4"), lt.nm("metal4.enclosure.via3")
+    row3 = lt.snap_up(pad_side(lt, "metal3") + lt.space("metal3") + 100)
+    glob = [line for line in driven if line in strap_x]
+    y_bank = lt.snap_up(height + 2 * CLEAR + len(glob) * row3)
+    wd, stub, hdrv = drv.ports["width"], drv.ports["stub"], drv.ports["height"]
+
+    def via(x, y, net):
+        chip.add("via3", box(x - cut // 2, y - cut // 2, x - cut // 2 + cut, y - cut // 2 + cut), net)
+
+    for k, line in enumerate(driven):
+        x0 = k * wd
+        chip.place(drv, x0, y_bank, {"in": driver_input(line), "out": line, "vss": "vss", "vdd": "vdd",
+                                     "vgate": "vgate"}, register=False, name=f"xdrv_{line}")
+        chip.label("metal4_label", x0 + drv.ports["in"], y_bank + hdrv - stub // 2, driver_input(line))
+        xo = x0 + drv.ports["out"]
+        if line in glob:
+            y = height + CLEAR + glob.index(line) * row3
+            chip.add("metal4", box(xo - w4 // 2, y - cut // 2 - e4, xo - w4 // 2 + w4, y_bank + stub // 2), line)
+            via(xo, y, line)
+            xs = strap_x[line]
+            chip.add("metal3", box(xo - cut // 2 - ext, y - w3 // 2, xs + cut // 2 + ext, y - w3 // 2 + w3), line)
+            via(xs, y, line)
+            reach[line] = (y, y)
+        else:
+            drive[line] = (xo, y_bank + stub // 2)
+    w = pad_side(lt, "metal3")
+    for net, yl in drv.ports["lines"].items():
+        y, xs = y_bank + yl, strap_x[net]
+        chip.add("metal3", box(len(driven) * wd - w, y - w // 2, xs + cut // 2 + ext, y - w // 2 + w), net)
+        via(xs, y, net)
+        reach[net] = (y, y)
+    return y_bank + hdrv
 
 
 def chip_size(ports: dict, rows: int, cols: int) -> tuple[int, int]:

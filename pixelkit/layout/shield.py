@@ -125,7 +125,7 @@ def add_shield(lt, cells: dict, chip: Canvas, mode: str, readouts: dict) -> dict
 
 def _tie_rows(p) -> list:
     """Where the shield meets the vss strap: the middle of each pixel row."""
-    hd = (p["height"] - p["hb"] - p["ht"]) // p["rows"]
+    hd = p["pixel"][1]
     return [p["hb"] + r * hd + hd // 2 for r in range(p["rows"])]
 
 

@@ -29,22 +29,30 @@ def circuits_of(design, top: str) -> list:
         from ...circuits.array import pixel_array
         from ...circuits.readout import chip as chip_circuit, readout_cells
         rows, cols, afe = chip
+        from ...circuits.rowdriver import boosted, row_driver
         ro = readout_cells(design) if afe else [column_cell(design, "primary"), column_cell(design, "secondary")]
-        return [*dual_pixel(design), pixel_array(design, rows, cols), *ro, chip_circuit(design, rows, cols, afe)]
+        drv = [row_driver(design)] if boosted(design) else []
+        return [*dual_pixel(design), pixel_array(design, rows, cols), *ro, *drv, chip_circuit(design, rows, cols, afe)]
     pix = list(dual_pixel(design))                 # primary, secondary, dualpix
     col = [column_cell(design, "primary"), column_cell(design, "secondary")]
     table = {"PRIMARY": [pixel5t(design, "primary")], "SECONDARY": [pixel5t(design, "secondary")],
              "DUALPIX": pix, "COLUMN_P": col[:1], "COLUMN_S": col[1:],
              "DUALPIX_COL": [*pix, *col, dual_pixel_column(design)],
              "AFE_P": [opamp_cell(design), afe_cell(design, "primary")],
-             "AFE_S": [opamp_cell(design), afe_cell(design, "secondary")]}
+             "AFE_S": [opamp_cell(design), afe_cell(design, "secondary")],
+             "ROWDRV": [_row_driver(design)]}
     return table[top]
+
+
+def _row_driver(design):
+    from ...circuits.rowdriver import row_driver
+    return row_driver(design)
 
 
 #: layout cell -> the kit's subcircuit of it
 CELL_CIRCUIT = {"PRIMARY": "pix5t_primary", "SECONDARY": "pix5t_secondary", "DUALPIX": "dualpix",
                 "COLUMN_P": "column_primary", "COLUMN_S": "column_secondary", "DUALPIX_COL": "dualpix_col",
-                "AFE_P": "afe_primary", "AFE_S": "afe_secondary"}
+                "AFE_P": "afe_primary", "AFE_S": "afe_secondary", "ROWDRV": "rowdrv"}
 
 
 def _chip(cell: str):
