@@ -16,7 +16,10 @@ Floor plan of ``CHIP_RxC[_AFE]`` (origin lower left; ``M`` the left margin):
   ``vref``; every other line (``rst_*`` / ``rs_*`` of each row, the readouts' clocks) runs to
   the left edge, where it is a pin;
 - per-column pins at the bottom and top edges: ``out_*``, ``nbias_*`` and ``nb_*`` (the
-  AFE's bias) of each column.
+  AFE's bias) of each column;
+- with the boosted gate drive (``circuits.rowdriver``): a bank of ``ROWDRV`` cells above the margin,
+  one per EC / TG / RST line, their inputs the pins ``<line>_in``, their rail the strap ``vgate``
+  (:func:`_driver_bank`); the driven lines are then no pins.
 
 The straps meet the lines with a via3 of the lines' own width (the foundry allows a via
 overlap under 0.04 um on two sides when the other two overlap 0.06 um), so no line needs a
