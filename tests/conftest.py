@@ -53,6 +53,20 @@ def cli():
     return run_cli
 
 
+def layout_variant(path, design, cells: dict, top: str, edit):
+    """The GDS (at ``path``) of ``cells`` with ``edit(shapes)`` applied to cell ``top``'s own shapes
+    (a broken variant for a sign-off check to catch); the cell is left as it was."""
+    from pixelkit.layout.flow import write_gds
+    from pixelkit.layout.library import to_library
+    cell = cells[top]
+    keep = list(cell.shapes)
+    cell.shapes = edit(list(cell.shapes))
+    try:
+        return write_gds(to_library(design, cells), path)
+    finally:
+        cell.shapes = keep
+
+
 def wait_for(condition, what: str, within: float = 600.0):
     """Poll an observable state until ``condition()`` holds; fail naming ``what`` after ``within`` s
     (a generous bound for a loaded machine, never a guess at how long the work takes)."""

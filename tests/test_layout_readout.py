@@ -15,7 +15,7 @@ from pathlib import Path
 import gdstk
 import pytest
 
-from conftest import ROOT
+from conftest import ROOT, layout_variant
 from pixelkit.design import load_design
 from pixelkit.layout.canvas import Box, Canvas
 from pixelkit.layout.flow import write_gds
@@ -158,13 +158,7 @@ def test_lvs_catches_a_mim_capacitor_without_its_marker(tmp_path, gf, chip):
 
 def _chip_variant(tmp_path, gf, chip, edit) -> Path:
     """The chip's GDS with ``edit(chip_cell_shapes)`` applied to the chip cell's own shapes."""
-    top = chip[TOP]
-    keep = list(top.shapes)
-    top.shapes = edit(list(top.shapes))
-    try:
-        return write_gds(to_library(gf, chip), tmp_path / "v.gds")
-    finally:
-        top.shapes = keep
+    return layout_variant(tmp_path / "v.gds", gf, chip, TOP, edit)
 
 
 def test_lvs_catches_a_row_line_cut_from_its_strap(tmp_path, gf, chip):

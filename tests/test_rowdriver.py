@@ -12,13 +12,12 @@ DRC deck signs the same chip off in tests/test_layout_readout.py (its ``drc`` fi
 import numpy as np
 import pytest
 
-from conftest import ROOT
+from conftest import ROOT, layout_variant
 from pixelkit.circuits.devices import mosfet
 from pixelkit.circuits.rowdriver import driven_lines, row_driver
 from pixelkit.design import load_design
 from pixelkit.layout.canvas import Box, Shape
-from pixelkit.layout.flow import write_gds
-from pixelkit.layout.library import build_chip_cells, to_library
+from pixelkit.layout.library import build_chip_cells
 from pixelkit.layout.signoff.lvs import run_lvs
 from pixelkit.spice import simulate
 from pixelkit.spice.netlist import Element, Netlist, Pwl, Tran
@@ -78,13 +77,7 @@ def chip(revb):
 
 
 def _variant(tmp_path, design, cells, edit):
-    top = cells[TOP]
-    keep = list(top.shapes)
-    top.shapes = edit(list(top.shapes))
-    try:
-        return write_gds(to_library(design, cells), tmp_path / "v.gds")
-    finally:
-        top.shapes = keep
+    return layout_variant(tmp_path / "v.gds", design, cells, TOP, edit)
 
 
 def test_lvs_matches_the_chip_with_its_row_drivers(tmp_path, revb, chip):
