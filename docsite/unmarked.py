@@ -50,7 +50,7 @@ LINK_TARGET = re.compile(r"\]\([^)]*\)")
 MARKED = ("README.md", "bibliography.md", "cli-conventions.md", "howto-docs-figures.md", "howto-new-technology.md",
           "howto-sweeps-dask.md",
           "interrupts.md", "monte-carlo.md", "pixel-netlist.md", "report-figures.md", "report.md",
-          "layout-readout.md", "technologies.md", "timing-and-settling.md", "validation.md")
+          "layout-readout.md", "layout-signoff.md", "technologies.md", "timing-and-settling.md", "validation.md")
 
 
 def scan(text: str) -> list[tuple[int, str, str]]:
