@@ -114,7 +114,8 @@ class Pixel:
                            doc="the circuit that drives the EC, TG and RST gates high: supply = the row drivers "
                                "run from the supply (the gates follow it, -10 % included: a 2.0 V reset turns soft "
                                "at slow corners); boosted = they run from a regulated rail at pixel.v_gate, the same "
-                               "at every supply condition (docs/pixel-model.md)")
+                               "at every supply condition: the layout draws a level-shifting row driver per line on "
+                               "the chip's pin vgate, compared by LVS (docs/pixel-model.md)")
     v_gate: float | None = qty("V", None, gt=0, plausible=(0.5, 40.0),
                                doc="the boosted rail (gate_drive = \"boosted\"): the EC, TG and RST gate-high level; "
                                    "at most the devices' rated gate voltage (technology mos.v_gate_max)")

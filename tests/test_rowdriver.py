@@ -115,3 +115,15 @@ def test_lvs_catches_the_drivers_rail_fed_from_the_supply(tmp_path, revb, chip):
         return out
     r = run_lvs(_variant(tmp_path, revb, chip, edit), TOP, revb)
     assert not r.match and r.mismatches, r.mismatches
+
+
+def test_the_whole_chips_size_counts_its_row_drivers(revb, chip):
+    """The design's whole chip is estimated from the signed-off one (the report's area table): with
+    the boosted drive the bank grows by two drivers per row; the 1 x 1 chip's estimate of a 2 x 2
+    chip is the 2 x 2 chip drawn."""
+    from pixelkit.layout.chip import chip_size
+    cells, top = build_chip_cells(revb, 2, 2, afe=False, shield="none")
+    p = cells[top].ports
+    assert len(p["drivers"]) == len(chip[TOP].ports["drivers"]) + 2
+    assert chip_size(chip[TOP].ports, 2, 2) == (p["width"], p["height"])
+    assert chip_size(p, 1, 1) == (chip[TOP].ports["width"], chip[TOP].ports["height"])

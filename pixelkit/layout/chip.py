@@ -178,8 +178,11 @@ def build_chip(design, lt, cells: dict, rows: int, cols: int, afe: bool) -> dict
     cut = lt.cut("via3")
     ext = lt.nm("metal3.enclosure.via3")
     drive = {}      # driven line -> (x of its driver's output, y of the driver's bank)
+    bank = None
     if drv:
+        below = height
         height = _driver_bank(chip, lt, drv, driven, height, strap_x, reach, drive)
+        bank = {"width": drv.ports["width"], "height": height - below}
         out[drv.name] = drv
         out.move_to_end(drv.name, last=False)
     for net, y, w in lines:
@@ -223,7 +226,7 @@ def build_chip(design, lt, cells: dict, rows: int, cols: int, afe: bool) -> dict
         blocks["periphery"].append(box(0, hb + rows * hd + ht, margin, height))
     chip.ports = {"readouts": {"s": (bottom, 0, n * cols, ps), "p": (top, hb + rows * hd, cols, wp)},"width": width, "height": height, "margin": margin, "hb": hb, "ht": ht, "rows": rows,
                   "cols": cols, "afe": afe, "straps": strap_x, "reach": reach, "pixel": (wp, hd),
-                  "blocks": blocks, "drivers": driven}
+                  "blocks": blocks, "drivers": driven, "bank": bank}
     out[chip.name] = chip
     return out
 
@@ -271,9 +274,15 @@ def _driver_bank(chip, lt, drv, driven, height: int, strap_x: dict, reach: dict,
 
 
 def chip_size(ports: dict, rows: int, cols: int) -> tuple[int, int]:
-    """(width, height) in nm of the same chip with ``rows`` x ``cols`` dual pixels."""
+    """(width, height) in nm of the same chip with ``rows`` x ``cols`` dual pixels (with the boosted
+    gate drive its bank of row drivers as wide as ``rows`` asks)."""
     wp, hd = ports["pixel"]
-    return ports["margin"] + cols * wp, ports["hb"] + rows * hd + ports["ht"]
+    margin, extra = ports["margin"], 0
+    bank = ports.get("bank")
+    if bank:
+        margin += (len(driven_lines(rows)) - len(driven_lines(ports["rows"]))) * bank["width"]
+        extra = bank["height"]
+    return margin + cols * wp, ports["hb"] + rows * hd + ports["ht"] + extra
 
 
 def _line_width(lt, cell, part: str) -> int:

@@ -85,7 +85,7 @@ def layout_design(design, out_dir: Path = Path("layouts"), rows: int = 2, cols: 
     full = chip_size(chip.ports, design.primary.rows, design.primary.cols)
     result["full_chip_um"] = [full[0] / 1000, full[1] / 1000]
     result["cell_sizes"] = {("ARRAY" if name.startswith("ARRAY_") else name): _size_um(cv) for name, cv in cells.items()
-                            if name in ("DUALPIX", "COLUMN_P", "COLUMN_S", "AFE_P", "AFE_S") or name.startswith("ARRAY_")}
+                            if name in ("DUALPIX", "COLUMN_P", "COLUMN_S", "AFE_P", "AFE_S", "ROWDRV") or name.startswith("ARRAY_")}
     result["block_regions_um"] = {k: [[b.x0 / 1000, b.y0 / 1000, b.x1 / 1000, b.y1 / 1000] for b in v]
                                   for k, v in chip.ports["blocks"].items()}
     if pictures:

@@ -147,8 +147,8 @@ def _areas(d, r) -> list:
     size = r["cell_sizes"]
     rows = []
     for block, cells in (("pixel (dual pixel)", ["DUALPIX"]), ("column circuit", ["COLUMN_P", "COLUMN_S"]),
-                         ("AFE", ["AFE_P", "AFE_S"])):
-        for c in cells:
+                         ("AFE", ["AFE_P", "AFE_S"]), ("row driver (boosted gate rail)", ["ROWDRV"])):
+        for c in (c for c in cells if c in size):
             w, h = size[c]
             rows.append([block, c, w, h, w * h])
     w, h = size["ARRAY"]
