@@ -80,6 +80,20 @@ def test_gap_on_a_role_pixel_finds_an_fd_leak_injected_as_a_junction(d4t, tmp_pa
     from pixelkit.physics.ppd import dark_scale
     assert r["fits"]["fd_leakage"]["value"] == pytest.approx(2e-12 / dark_scale(300.15, 298.15, "generation"), rel=0.1)
     assert r["nominal_p_value"] < 1e-6 and r["gap_after_rms_V"] < 2 * SIGMA < r["gap_before_rms_V"]
+    assert r["noise"]["run"] is False and "n_avg" in r["noise"]["why"]   # v_std_V here weighs the means only
+    assert r["setup"]["stated"] is False and r["setup"]["gain"] == 1.0
+
+    # the same pixel behind a test set-up 3 % high in gain, its calibration stated (1 +- 5 %): the leak is
+    # still named, and the set-up's gain is measured as 1.03 (not fitted, it would be 1: the check can fail)
+    scaled = _write(tmp_path / "scaled.csv", table, {"v_V": 1.03 * v, "v_std_V": np.full(len(v), SIGMA)})
+    code, out, err = cli("gap", "diagnose", DESIGN, "--measured", scaled, "--gain-sd", "0.05", "--json")
+    assert code == 0, err
+    r = json.loads(out)
+    assert r["best"] == "fd_leakage" and r["explained"], r["verdict"]
+    assert r["setup"]["stated"] and r["setup"]["gain"] == pytest.approx(1.03, abs=0.002)
+    assert r["setup"]["offset_V"] == 0.0 and r["setup"]["offset_sd_V"] is None   # not stated: calibrated
+    code, _out, err = cli("gap", "diagnose", DESIGN, "--measured", scaled, "--out", tmp_path / "h")
+    assert code == 2 and "--out" in err, err
 
     # a measured file without its noise is refused, naming the column (exit 2)
     bad = _write(tmp_path / "bad.csv", table, {"v_V": v})
@@ -102,3 +116,75 @@ def test_gap_on_a_role_pixel_finds_a_barrier_written_into_the_designers_netlist(
     r = diagnose(d4t, {**table, "v_V": v, "v_std_V": np.full(len(v), SIGMA)})
     assert r["best"] == "transfer_barrier" and r["explained"], r["verdict"]
     assert r["fits"]["transfer_barrier"]["value"] == pytest.approx(0.37, abs=0.01)
+
+
+def _virtual_reads(d, electrons, kick_e_rms, seed, reads=24):
+    """Virtual silicon of ``reads`` reads per row, each a column of one SPICE true-CDS bench: the row's
+    electrons drawn from Poisson per read (the photon shot noise, in the stimulus) and, with ``kick_e_rms``,
+    a charge drawn from a Gaussian (that many e- rms) put on FD by a current pulse in each column's own copy
+    of the cell after the transfer, before the signal sample: a read whose two samples are not of the same FD
+    level, FD's kT/C left by it. {"v_V", "v_std_V", "n_avg"} per row (mean and standard deviation of its reads)."""
+    from pixelkit.circuits.cds import cds_bench, timing_of
+    from pixelkit.constants import Q
+    from pixelkit.measure.cds import cds
+    from pixelkit.rolepix.run import run
+    from pixelkit.rolepix.signal import current_for, flush_exposure
+    from pixelkit.spice.netlist import Element, Pwl, Subckt
+    rng = np.random.default_rng(seed)
+    tw, cell = d.experiment.t_window, d.cell()
+    n = rng.poisson(np.repeat(np.asarray(electrons, float), reads))
+    ex = [flush_exposure(d), tw, tw]
+    net = cds_bench(d, cell, ex, [[0.0, 0.0, current_for(d, float(x), tw)] for x in n], title="vsi_ktc")
+    tm, st = timing_of(d), net.meta["frames"]["starts"]
+    if kick_e_rms:
+        a, w, e = st[2] + tm.frame(tw).t_read + tm.tg[1] + tm.edge + 50e-9, 100e-9, tm.edge
+        subs, els = [], []
+        for el in net.elements:
+            k = el.name[1:]
+            if el.name.startswith("X") and el.value == cell.subckt.name:
+                i = rng.normal(0.0, kick_e_rms) * Q / (w - e)
+                kick = Element("Ikick", ("0", cell.probe("fd")), Pwl(((0.0, 0.0), (a, 0.0), (a + e, i), (a + w - e, i),
+                                                                         (a + w, 0.0))))
+                s = cell.subckt
+                subs.append(Subckt(f"{s.name}k{k}", s.ports, (*s.elements, kick), s.params, s.models))
+                el = replace(el, value=subs[-1].name)
+            els.append(el)
+        net = replace(net, elements=tuple(els), subckts=(*net.subckts, *subs))
+    (r,) = run([net], d)
+    v = np.array([cds(r, tm, ex, st, k, 2) for k in range(len(n))]).reshape(len(electrons), reads)
+    return {"v_V": v.mean(axis=1), "v_std_V": v.std(axis=1, ddof=1), "n_avg": np.full(len(electrons), reads)}
+
+
+def test_gap_on_a_role_pixel_names_ktc_left_by_the_read_in_the_standard_deviations(d4t):
+    """kT/C where CDS leaves it (rolepix.gapnoise): virtual silicon made by SPICE (``_virtual_reads``: shot
+    noise drawn in the stimulus, FD kicked by kT C_FD of charge between the two samples in each read) is named
+    ``ktc`` with a share of FD's kT/C near 1; the same reads without the kick are the nominal read's noise.
+    The diagnosis's variance is its own sum (.noise read noise + CG v + share A_sf^2 kT / C_FD); what SPICE
+    does with the charge (FD's capacitance, the follower, the S/H) is not it. 24 reads a row: a standard
+    deviation's standard error is 15 %, the share's ~20 %."""
+    from pixelkit.constants import K_B, Q
+    from pixelkit.families.pixel4t import model
+    from pixelkit.rolepix import gapnoise
+    from pixelkit.rolepix.gap import simulate
+    from pixelkit.rolepix.signal import current_for
+    electrons = (0, 0, 300, 1000)
+    tw = d4t.experiment.t_window
+    table = {"i_ph_A": np.array([current_for(d4t, x, tw) for x in electrons]), "t_int_s": np.full(4, tw),
+             "temp_C": np.full(4, 27.0), "i_ph_prev_A": np.zeros(4)}
+    nominal = simulate(d4t, table)
+    c_fd = model.conversion_gain(d4t, d4t.levels.v_rst_for(d4t.tech.supply) - 1.0)["c_fd_F"]
+    ktc_e = (K_B * d4t.temperature * c_fd) ** 0.5 / Q                       # 18.7 e- rms at 2.17 fF
+    kicked = _virtual_reads(d4t, electrons, ktc_e, seed=5)
+    r = gapnoise.diagnose(d4t, {**table, **kicked}, nominal)
+    assert r["run"] and r["best"] == "ktc" and r["explained"], r["verdict"]
+    assert r["nominal_p_value"] < 1e-6 and 0.6 < r["share"] < 1.4, r
+    bound = 4 * np.sqrt((ktc_e ** 2 + np.array(electrons)) / 24) * 60e-6     # 4 sigma of a 24-read mean at ~57 uV/e-
+    assert np.all(np.abs(kicked["v_V"] - nominal) < bound)                    # a kick moves no mean
+
+    # without the kick: Poisson shot noise only (and no read noise in the transient: 1.5 e- against the shot
+    # noise's 17 e- at 300 e-), so the dark rows are left out; the nominal read explains the rest
+    plain = _virtual_reads(d4t, electrons[2:], 0.0, seed=6)
+    sub = {k: v[2:] for k, v in table.items()}
+    r = gapnoise.diagnose(d4t, {**sub, **plain}, nominal[2:])
+    assert r["run"] and r["best"] == "none" and r["explained"], r
+    assert gapnoise.applies(d4t, table) is not None      # no n_avg: v_std_V weighs the means only

@@ -112,14 +112,14 @@ def diagnose(design, measured, out, seed, gain_tol, offset_tol, gain_sd, offset_
     if role is not None:   # a pixel read by role: its own effects on its own benches
         from ..errors import ConfigError
         from ..progress import step
-        from ..rolepix.gap import diagnose as role_diagnose, read
-        for opt, v in (("--gain-sd", gain_sd), ("--offset-sd", offset_sd), ("--out", out)):
-            if v is not None:
-                raise ConfigError("gap diagnose", opt, v, f"no {opt} for a {role.family} design (its diagnosis "
-                                  "fits no test set-up: docs/gap-diagnosis.md)")
+        from ..rolepix.gap import Setup, diagnose as role_diagnose, read
+        if out is not None:
+            raise ConfigError("gap diagnose", "--out", out, f"no --out for a {role.family} design (its diagnosis "
+                              "writes no HTML section: docs/gap-diagnosis.md)")
+        setup = Setup(gain_sd, offset_sd) if gain_sd is not None or offset_sd is not None else None
         table = read(measured, role, measured=True)
         with step("simulating the rows and each candidate effect on the pixel's benches"):
-            r = role_diagnose(role, table, backend=backend, jobs=jobs)
+            r = role_diagnose(role, table, backend=backend, jobs=jobs, setup=setup)
         emit(r, as_json, _role_text)
         return
     d, table, nom = _prepare(design, measured, backend)
@@ -165,6 +165,15 @@ def _role_text(r) -> str:
         lines.append(f"  {k:<18} {f['value']:.4g} {f['unit']}{' (at its bound)' if f['at_bound'] else ''}  "
                      f"chi2 {f['chi2']:.4g} over {r['n_rows']} rows, p = {f['p_value']:.3g}")
     lines.append(f"  {'none':<18} chi2 {r['nominal_chi2']:.4g}, p = {r['nominal_p_value']:.3g}")
+    su = r.get("setup")
+    if su and su["stated"]:
+        lines.append(f"set-up (stated calibration): gain {su['gain']:.4f}, offset {su['offset_V'] * 1e3:+.3f} mV "
+                     f"with {r['best']}")
+    nz = r.get("noise")
+    if nz is not None:
+        lines.append(f"noise (v_std_V): {nz['verdict']}; the nominal read's chi2 {nz['nominal_chi2']:.4g}, p = "
+                     f"{nz['nominal_p_value']:.3g}; with {nz['share']:.3g} of FD's kT/C chi2 {nz['chi2']:.4g}, p = "
+                     f"{nz['p_value']:.3g}" if nz["run"] else f"noise (v_std_V): not read: {nz['why']}")
     return "\n".join(lines)
 
 

@@ -29,7 +29,13 @@ chi-square over the rows' noise is likely (p >= ``gap.diagnose.P_EXPLAINED``); e
 chi-square explains them when its fit is likely; effects within ``AMBIGUOUS_DCHI2`` of it are named as
 indistinguishable. No test set-up gain or offset is fitted (the CDS output is the pixel's own
 difference; a set-up offset would look like FD leakage at one temperature): the data are taken as
-calibrated, and docs/gap-diagnosis.md says so.
+calibrated, and docs/gap-diagnosis.md says so. A stated calibration (``Setup``: ``--gain-sd`` /
+``--offset-sd``) adds the set-up's gain and offset to every fit, the nominal's included, each a Gaussian
+measurement of itself (1 +- gain_sd, 0 +- offset): what is stated is fitted, what is not is calibrated.
+
+**Noise** (``rolepix.gapnoise``): where ``v_std_V`` is a measured frame-to-frame standard deviation
+(``n_avg`` >= 2), the result's ``noise`` says whether the nominal read's noise explains it or a share of
+FD's kT/C left by the read (``ktc``): kT/C moves no mean, so it is diagnosed on that column alone.
 """
 from __future__ import annotations
 
@@ -179,7 +185,42 @@ def simulate(design, table: dict, effect: Effect | None = None, value: float = 0
 REFINE, REFINE_RUNS = 2, 7
 
 
-def _refine(design, table, effect: Effect, coarse: dict, y, sigma, backend, jobs) -> dict:
+@dataclass(frozen=True)
+class Setup:
+    """A test set-up's calibration, stated (``--gain-sd`` / ``--offset-sd``): the measured output is
+    ``gain v + offset`` of the pixel's, gain 1 +- ``gain_sd``, offset 0 +- ``offset_V``; None: that one is
+    taken as calibrated (gain 1, offset 0) and not fitted."""
+    gain_sd: float | None = None
+    offset_V: float | None = None
+
+
+def setup_fit(pred, y, sigma, setup: Setup | None):
+    """(chi-square, gain, offset) of predictions ``pred`` (points x rows, or rows) against ``y`` with the
+    set-up's gain and offset of least chi-square, each stated one a Gaussian measurement of itself (its
+    term in the chi-square): weighted least squares in closed form."""
+    p = np.atleast_2d(np.asarray(pred, float))
+    w = 1.0 / sigma ** 2
+    g, o = np.ones(len(p)), np.zeros(len(p))
+    fit_g = setup is not None and setup.gain_sd is not None
+    fit_o = setup is not None and setup.offset_V is not None
+    pg = 1.0 / setup.gain_sd ** 2 if fit_g else 0.0
+    po = 1.0 / setup.offset_V ** 2 if fit_o else 0.0
+    spp, sp, s1 = (w * p * p).sum(1), (w * p).sum(1), w.sum()
+    spy, sy = (w * p * y).sum(1), (w * y).sum()
+    if fit_g and fit_o:
+        a, b, d = spp + pg, sp, s1 + po
+        det = a * d - b * b
+        g = ((spy + pg) * d - b * sy) / det
+        o = (a * sy - b * (spy + pg)) / det
+    elif fit_g:
+        g = (spy + pg) / (spp + pg)
+    elif fit_o:
+        o = (sy - sp) / (s1 + po)
+    chi2 = (w * (y - g[:, None] * p - o[:, None]) ** 2).sum(1) + pg * (g - 1.0) ** 2 + po * o ** 2
+    return chi2, g, o
+
+
+def _refine(design, table, effect: Effect, coarse: dict, y, sigma, backend, jobs, setup=None) -> dict:
     """``coarse``'s fit searched again between the scan values beside it, every point simulated."""
     from scipy.optimize import minimize_scalar
     xs = np.array(effect.scan)
@@ -190,30 +231,34 @@ def _refine(design, table, effect: Effect, coarse: dict, y, sigma, backend, jobs
     def chi2(x):
         v = simulate(design, table, effect, float(x), backend, jobs)
         seen[float(x)] = v
-        return float(np.sum(((y - v) / sigma) ** 2))
+        return float(setup_fit(v, y, sigma, setup)[0][0])
     r = minimize_scalar(chi2, bounds=(lo, hi), method="bounded",
                         options={"xatol": (hi - lo) / 200, "maxiter": REFINE_RUNS})
     if r.fun >= coarse["chi2"]:
         return coarse
     v = seen[float(r.x)]
-    return {"value": float(r.x), "chi2": float(r.fun), "at_bound": coarse["at_bound"] and r.x in (xs[0], xs[-1]),
-            "resid_rms_V": float(np.sqrt(np.mean((y - v) ** 2))), "refined": True}
+    c, g, o = setup_fit(v, y, sigma, setup)
+    return {"value": float(r.x), "chi2": float(c[0]), "at_bound": coarse["at_bound"] and r.x in (xs[0], xs[-1]),
+            "resid_rms_V": float(np.sqrt(np.mean((y - g[0] * v - o[0]) ** 2))), "gain": float(g[0]),
+            "offset_V": float(o[0]), "refined": True}
 
 
-def _fit(effect: Effect, preds: np.ndarray, y, sigma) -> dict:
-    """The parameter of least chi-square, the prediction interpolated linearly between the scan's values."""
+def _fit(effect: Effect, preds: np.ndarray, y, sigma, setup=None) -> dict:
+    """The parameter of least chi-square (with the stated set-up's gain and offset fitted at each), the
+    prediction interpolated linearly between the scan's values."""
     xs = np.array(effect.scan)
     grid = np.unique(np.concatenate([np.linspace(a, b, 64) for a, b in zip(xs[:-1], xs[1:])]))
     j = np.clip(np.searchsorted(xs, grid, side="right") - 1, 0, len(xs) - 2)
     w = ((grid - xs[j]) / (xs[j + 1] - xs[j]))[:, None]
     pred = (1 - w) * preds[j] + w * preds[j + 1]           # grid x rows
-    chi2 = np.sum(((y - pred) / sigma) ** 2, axis=1)
+    chi2, g, o = setup_fit(pred, y, sigma, setup)
     k = int(np.argmin(chi2))
     return {"value": float(grid[k]), "chi2": float(chi2[k]), "at_bound": k in (0, len(grid) - 1),
-            "resid_rms_V": float(np.sqrt(np.mean((y - pred[k]) ** 2)))}
+            "resid_rms_V": float(np.sqrt(np.mean((y - g[k] * pred[k] - o[k]) ** 2))), "gain": float(g[k]),
+            "offset_V": float(o[k])}
 
 
-def diagnose(design, table: dict, backend: str = "batch", jobs=None) -> dict:
+def diagnose(design, table: dict, backend: str = "batch", jobs=None, setup: Setup | None = None) -> dict:
     from ..gap.diagnose import AMBIGUOUS_DCHI2, P_EXPLAINED, verdict_text
     from ..gap.pvalue import chi2_sf
     y = table["v_V"]
@@ -221,14 +266,15 @@ def diagnose(design, table: dict, backend: str = "batch", jobs=None) -> dict:
     sigma = np.maximum(table["v_std_V"] / np.sqrt(np.nan_to_num(n_avg, nan=1.0)), 1e-7)
     nominal = simulate(design, table, backend=backend, jobs=jobs)
     n = len(y)
-    chi0 = float(np.sum(((y - nominal) / sigma) ** 2))
+    c0, g0, o0 = setup_fit(nominal, y, sigma, setup)
+    chi0 = float(c0[0])
     p0 = float(chi2_sf(chi0, n))
     fits = {}
     for e in candidates(design):
         preds = np.array([nominal if v == 0.0 else simulate(design, table, e, v, backend, jobs) for v in e.scan])
-        fits[e.name] = _fit(e, preds, y, sigma)
+        fits[e.name] = _fit(e, preds, y, sigma, setup)
     for k in (sorted(fits, key=lambda k: fits[k]["chi2"])[:REFINE] if p0 < P_EXPLAINED else ()):
-        fits[k] = _refine(design, table, BY_NAME[k], fits[k], y, sigma, backend, jobs)
+        fits[k] = _refine(design, table, BY_NAME[k], fits[k], y, sigma, backend, jobs, setup)
     ranking = sorted(fits, key=lambda k: fits[k]["chi2"])
     for k in ranking:
         fits[k]["p_value"] = float(chi2_sf(fits[k]["chi2"], max(n - 1, 1)))
@@ -238,7 +284,11 @@ def diagnose(design, table: dict, backend: str = "batch", jobs=None) -> dict:
         best = ranking[0]
         explained = fits[best]["p_value"] >= P_EXPLAINED
         ambiguous = [k for k in ranking[1:] if fits[k]["chi2"] - fits[best]["chi2"] < AMBIGUOUS_DCHI2]
-    after = fits[best]["resid_rms_V"] if best != "none" else float(np.sqrt(np.mean((y - nominal) ** 2)))
+    after = (fits[best]["resid_rms_V"] if best != "none" else
+             float(np.sqrt(np.mean((y - g0[0] * nominal - o0[0]) ** 2))))
+    chosen = fits[best] if best != "none" else {"gain": float(g0[0]), "offset_V": float(o0[0])}
+    from .gapnoise import diagnose as noise_diagnosis    # kT/C where CDS leaves it: the v_std_V column
+    noise = noise_diagnosis(design, table, nominal, backend)
     return {"design": design.name, "n_rows": n, "candidates": [e.name for e in candidates(design)],
             "noise_rms_V": float(np.sqrt(np.mean(sigma ** 2))),
             "gap_before_rms_V": float(np.sqrt(np.mean((y - nominal) ** 2))), "gap_after_rms_V": after,
@@ -246,7 +296,11 @@ def diagnose(design, table: dict, backend: str = "batch", jobs=None) -> dict:
             "indistinguishable": ambiguous, "confident": not ambiguous,
             "fits": {k: {**fits[k], "unit": BY_NAME[k].unit, "what": BY_NAME[k].what} for k in ranking},
             "ranking": ranking,
-            "verdict": verdict_text(best, explained, ambiguous, False, ranking[0] if ranking else "none")}
+            "verdict": verdict_text(best, explained, ambiguous, False, ranking[0] if ranking else "none"),
+            "noise": noise,
+            "setup": {"stated": setup is not None, "gain_sd": setup.gain_sd if setup else None,
+                      "offset_sd_V": setup.offset_V if setup else None, "gain": chosen["gain"],
+                      "offset_V": chosen["offset_V"]}}
 
 
 def predict(design, table: dict, backend: str = "batch", jobs=None) -> np.ndarray:

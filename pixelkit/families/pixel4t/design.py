@@ -12,6 +12,7 @@ from pathlib import Path
 from ...errors import ConfigError
 from ...schema import qty, table, text
 from ..roledesign import RoleDesign, load_role_design
+from .model import conversion_gain, tg_channel
 
 _WL = (0.1e-6, 1e-3)
 
@@ -88,6 +89,11 @@ class Pixel4tDesign(RoleDesign):
     def reloaded(self, raw: dict):
         return load_pixel4t_design(self.source, raw)
 
+    def fd_read(self, backend: str = "batch") -> dict:
+        """FD at its read level by the closed form (``families.pixel4t.model.conversion_gain``: ``a_sf``,
+        ``c_fd_F``, ...): what the role gap's kT/C term reads (``rolepix.gapnoise``)."""
+        return conversion_gain(self, self.levels.v_rst_for(self.tech.supply) - 1.0, backend)
+
     def gate_area(self) -> float:
         """m2 of gate of the pixel's four transistors (TG, RST, SF, RS)."""
         d = self.devices
@@ -96,16 +102,6 @@ class Pixel4tDesign(RoleDesign):
 
 def load_pixel4t_design(path: str | Path, raw: dict | None = None) -> Pixel4tDesign:
     return load_role_design(Pixel4tDesign, path, raw=raw)
-
-
-def tg_channel(design):
-    """The TG channel: the technology's NMOS fitted (EKV, ``techfit.ekv``) at the TG's size and the design's
-    temperature and corner."""
-    from ...physics.ppd import Channel
-    from ...techfit.ekv import fit
-    dev = design.devices
-    ekv, _rms = fit(design.tech, dev.tg_w, dev.tg_l, design.temperature, corner=design.corner or None)
-    return Channel(ekv.vt0, ekv.gamma, ekv.phi, ekv.kp, dev.tg_w / dev.tg_l)
 
 
 def cell_of(design):

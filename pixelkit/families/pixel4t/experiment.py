@@ -31,7 +31,7 @@ def _residual_after_read(design, n_bright: float, backend: str) -> float:
     from ...circuits.pixel4t import ppd_model
     from ...rolepix.run import run
     from ...rolepix.signal import current_for, flush_exposure
-    from .design import tg_channel
+    from .model import tg_channel
     cell = design.cell()
     tw, t0 = design.experiment.t_window, flush_exposure(design)
     ex = [t0, tw]
@@ -46,7 +46,7 @@ def _residual_after_read(design, n_bright: float, backend: str) -> float:
 def lag_curve(design, n_bright: float, backend: str = "batch") -> list[dict]:
     from ...circuits.cds import tg_high
     from ...circuits.pixel4t import ppd_model
-    from .design import tg_channel
+    from .model import tg_channel
     p = ppd_model(design, tg_channel(design))
     v0, rows = tg_high(design), []
     for dv in TG_STEPS:
@@ -65,7 +65,7 @@ def transfer_curve(design, n0: float, backend: str = "batch") -> dict:
     from ...circuits.pixel4t import ppd_model
     from ...rolepix.run import run
     from ...rolepix.signal import current_for, flush_exposure
-    from .design import tg_channel
+    from .model import tg_channel
     p = ppd_model(design, tg_channel(design))
     t_tg = design.timing.t_tg
     levels = np.arange(tg_high(design), 1.0, -0.01)
@@ -99,7 +99,7 @@ def ppd_full_well(design, backend: str = "batch") -> dict:
     from ...circuits.pixel4t import ppd_model
     from ...rolepix.run import run
     from ...rolepix.signal import current_for, flush_exposure
-    from .design import tg_channel
+    from .model import tg_channel
     p = ppd_model(design, tg_channel(design))
     tw, t0 = design.experiment.t_window, flush_exposure(design)
     i_ph = current_for(design, 5 * p.full_well() / Q, tw)
@@ -117,7 +117,7 @@ def run_pixel4t_experiment(design, backend: str = "batch", jobs: int | None = No
     from ...circuits.pixel4t import ppd_model
     from ...rolepix import suite
     from ...rolepix.noise import read_point
-    from .design import tg_channel
+    from .model import tg_channel
     t0 = time.perf_counter()
     raw = suite.run_experiment_groups(design, "4T pixel", backend)
     figs = suite.figures(raw)

@@ -21,6 +21,16 @@ from ...physics.junction import Node
 from ...physics.nodes import overlap, switch_side
 
 
+def tg_channel(design):
+    """The TG channel: the technology's NMOS fitted (EKV, ``techfit.ekv``) at the TG's size and the design's
+    temperature and corner."""
+    from ...physics.ppd import Channel
+    from ...techfit.ekv import fit
+    dev = design.devices
+    ekv, _rms = fit(design.tech, dev.tg_w, dev.tg_l, design.temperature, corner=design.corner or None)
+    return Channel(ekv.vt0, ekv.gamma, ekv.phi, ekv.kp, dev.tg_w / dev.tg_l)
+
+
 def a_sf(design, v_fd: float, dv: float = 0.01, backend: str = "batch") -> float:
     """dV_col / dV_FD of the follower, its row select (on) and the column load, two SPICE operating points."""
     from ...circuits.devices import mosfet
@@ -93,7 +103,6 @@ def figures(design, backend: str = "batch") -> dict:
     the conversion gain at FD's reset-drain level (A_sf from two SPICE operating points), kT/C."""
     from ...circuits.cds import tg_high
     from ...circuits.pixel4t import ppd_model
-    from .design import tg_channel
     p = ppd_model(design, tg_channel(design))
     v_tg = tg_high(design)
     v_fd = design.levels.v_rst_for(design.tech.supply) - 1.0   # a soft reset leaves FD ~1 V below its drain
