@@ -13,31 +13,20 @@ settling error between them (the baseline simulated every one of those columns i
 from __future__ import annotations
 
 import json
-import os
 import sys
-import tempfile
-import time
 from pathlib import Path
 
-from common import child_cpu_s, chip_slice
+from common import chip_slice, frame_runs
 
 
 def main(argv) -> int:
     import numpy as np
 
-    from pixelkit.chip.frame import simulate_frame
     a, d, ph = chip_slice(argv, 6, "uniform")
-    runs, frames = {}, {}
-    for name, reuse in (("every chain", False), ("reuse", True)):
-        os.environ["PIXELKIT_CACHE"] = tempfile.mkdtemp(prefix="pk-bench-reuse-")
-        load0 = os.getloadavg()[0]
-        c0, t0 = child_cpu_s(), time.perf_counter()
-        f = simulate_frame(d, ph.iph_p, ph.iph_s, with_afe=True, settling=True, compression=ph.compression,
-                           reuse=reuse)
-        runs[name] = {"cpu_s": round(child_cpu_s() - c0, 2), "wall_s": round(time.perf_counter() - t0, 1),
-                      "decks": f.decks, "reused_chains": len(f.reused), "failures": len(f.failures),
-                      "load": [round(load0, 1), round(os.getloadavg()[0], 1)]}
-        frames[name] = f
+    runs, frames = frame_runs(d, ph, {"every chain": {"reuse": False, "interpolate": False},
+                                      "reuse": {"reuse": True, "interpolate": False}}, "pk-bench-reuse-")
+    for name, f in frames.items():
+        runs[name]["reused_chains"] = len(f.reused)
     a0, b0 = frames["every chain"], frames["reuse"]
     diff = max(float(np.nanmax(np.abs(getattr(a0, x)[k] - getattr(b0, x)[k])))
                for x in ("signal", "reset_level", "afe", "settling") for k in ("primary", "secondary"))

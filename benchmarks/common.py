@@ -58,3 +58,25 @@ def chip_slice(argv, cols: int, scene: str, extra=()):
     d = load_design(a.design)
     m, unit = default_map(a.rows, d.secondary_per_pixel * a.cols, a.scene)
     return a, d, photocurrents(d, a.rows, a.cols, m, unit)
+
+
+def frame_runs(design, ph, variants: dict, prefix: str) -> tuple[dict, dict]:
+    """The chip slice ``ph`` simulated as ``pixelkit array --afe`` does (column chains, settling reads)
+    once per ``variants`` entry (name -> keyword arguments of ``simulate_frame``), in order, each on a
+    fresh empty simulation cache: ({name: CPU of ngspice, wall, decks, load}, {name: Frame})."""
+    import os
+    import tempfile
+    import time
+
+    from pixelkit.chip.frame import simulate_frame
+    runs, frames = {}, {}
+    for name, kw in variants.items():
+        os.environ["PIXELKIT_CACHE"] = tempfile.mkdtemp(prefix=prefix)
+        load0 = os.getloadavg()[0]
+        c0, t0 = child_cpu_s(), time.perf_counter()
+        f = simulate_frame(design, ph.iph_p, ph.iph_s, with_afe=True, settling=True, compression=ph.compression, **kw)
+        runs[name] = {"cpu_s": round(child_cpu_s() - c0, 2), "wall_s": round(time.perf_counter() - t0, 1),
+                      "decks": f.decks, "failures": len(f.failures),
+                      "load": [round(load0, 1), round(os.getloadavg()[0], 1)]}
+        frames[name] = f
+    return runs, frames

@@ -162,3 +162,44 @@ def test_identical_column_chains_are_simulated_once(ref_design):
               for t in tiles(2, 3, "columns", True, ("secondary",))]
     assert _same_chain(chains[2], chains[:2]) is None
     assert _same_chain(chains[2], [(d, ip, is_, *chains[0][3:])]) is None
+
+
+def test_chains_interpolated_in_photocurrent_match_simulated_ones(ref_design, monkeypatch):
+    """``chip.interp``: the chains of an array whose columns each see one current in every row are
+    interpolated in photocurrent through anchor chains, checked on held-out chains (both at converged
+    tolerances). Independent path: the same frame with every chain simulated at converged tolerances;
+    every figure of the interpolated columns (signal, reset level, AFE output, settling error) within
+    ``LIMIT_V`` of it. The check must be able to refuse: 3 anchors (a parabola) over the primary's
+    whole gradient miss its held-out chains by more than the limit, and the array is then simulated as
+    the exhaustive path simulates it (every chain at the kit's tolerances)."""
+    from pixelkit.chip import interp
+    from pixelkit.chip.frame import CONVERGED
+    from pixelkit.chip.report import frame_table
+    monkeypatch.setattr(interp, "ANCHORS", 3)        # 6 chains: 3 anchors, 2 held out, 4 interpolated
+    d = ref_design
+    kw = dict(with_afe=True, kinds=("secondary",), jobs=2, settling=True)
+    ph = photocurrents(d, 2, 6, np.tile(np.linspace(0.3, 0.4, 18), (2, 1)), "fs")
+    fast = simulate_frame(d, ph.iph_p, ph.iph_s, compression=ph.compression, **kw)
+    conv = simulate_frame(d, ph.iph_p, ph.iph_s, compression=ph.compression, interpolate=False, options=CONVERGED,
+                          **kw)
+    [rec] = fast.interpolated
+    assert rec["used"] and rec["chains"] == 4 and rec["max_diff_V"] <= interp.LIMIT_V, rec
+    assert (fast.decks, conv.decks) == (20, 24) and not fast.failures and not conv.failures and not conv.interpolated
+    cols, n = rec["columns"], d.secondary_per_pixel
+    held = [j for c in (3, 4) for j in range(n * c, n * c + n)]    # the middle and the brightest but one
+    assert cols == [j for j in range(6 * n) if j not in held]
+    for name in ("signal", "reset_level", "afe", "settling"):
+        a, b = getattr(fast, name)["secondary"], getattr(conv, name)["secondary"]
+        assert np.all(np.isfinite(a)) and np.max(np.abs(a - b)[:, cols]) <= interp.LIMIT_V, name
+        assert np.array_equal(a[:, held], b[:, held]), name
+    table = frame_table(fast)
+    assert table.splitlines()[0].endswith(",from") and table.count(",interpolated\n") == 2 * 4 * n
+    kw = dict(with_afe=True, kinds=("primary",), jobs=2)
+    wide = photocurrents(d, 1, 18, np.tile(np.linspace(0.05, 0.8, 18 * n), (1, 1)), "fs")
+    refused = simulate_frame(d, wide.iph_p, wide.iph_s, compression=wide.compression, **kw)
+    exact = simulate_frame(d, wide.iph_p, wide.iph_s, compression=wide.compression, interpolate=False, **kw)
+    [rec] = refused.interpolated
+    assert not rec["used"] and rec["max_diff_V"] > interp.LIMIT_V and rec["why"].startswith("held-out"), rec
+    assert refused.decks == 3 + 2 + 6 and "from" not in frame_table(refused).splitlines()[0]
+    for name in ("signal", "reset_level", "afe"):      # the array as the exhaustive path gives it
+        assert np.array_equal(getattr(refused, name)["primary"], getattr(exact, name)["primary"]), name

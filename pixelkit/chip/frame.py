@@ -104,6 +104,9 @@ class Frame:
     settling_parts: dict = field(default_factory=dict)
     #: column chains not simulated, each identical to an earlier one: {"chain": title, "from": title}
     reused: list = field(default_factory=list)
+    #: per array whose chains were interpolated in photocurrent, or tried (``chip.interp``): anchors,
+    #: held-out chains, chains interpolated, the held-out difference and its limit, used or why not
+    interpolated: list = field(default_factory=list)
 
     def settling_summary(self, limit=None) -> dict | None:
         """``limit``: V, or per array a dict (default ``settling.LIMIT_V``)."""
@@ -115,7 +118,8 @@ class Frame:
     def as_dict(self) -> dict:
         out = {"rows": self.rows, "cols": self.cols, "split": self.split, "decks": self.decks,
                "wall_s": self.wall_s, "failures": self.failures, "retried": self.retried,
-               **({"reused": self.reused} if self.reused else {})}
+               **({"reused": self.reused} if self.reused else {}),
+               **({"interpolated": self.interpolated} if self.interpolated else {})}
         for k in KINDS:
             out[f"{k}_signal_V"] = _listed(self.signal[k])
             out[f"{k}_reset_level_V"] = _listed(self.reset_level[k])
@@ -329,7 +333,7 @@ def simulate_frame(design, iph_p, iph_s, with_afe: bool = False, split: str | No
                    t_exp: float | None = None, mismatch_seed: int | None = None, backend: str = "batch",
                    jobs: int | None = None, scheduler=None, options=None, max_step: float | None = None,
                    kinds=KINDS, settling: bool = False, compression: dict | None = None,
-                   reuse: bool = True) -> Frame:
+                   reuse: bool = True, interpolate: bool = True) -> Frame:
     """Simulate one frame; see the module docstring for ``split``. ``options``: simulator
     options over the kit's defaults (``spice.options``); ``kinds``: the arrays to simulate
     (the others' results stay NaN); ``settling``: also read every row with a long S1 and
@@ -337,7 +341,9 @@ def simulate_frame(design, iph_p, iph_s, with_afe: bool = False, split: str | No
     ``split="none"``, whose decks hold every row); ``compression``: per array t_int / t_exp of
     the currents (``scene.Photocurrents.compression``): the light falls back to the real one when
     the exposure ends (``circuits.array.array_bench``); ``reuse``: a column chain identical to an
-    earlier one takes its values instead of being simulated (module docstring)."""
+    earlier one takes its values instead of being simulated (module docstring); ``interpolate``: the
+    chains of an array whose columns each see one current in every row are interpolated in photocurrent
+    from a few simulated ones, checked against held-out chains simulated too (``chip.interp``)."""
     rows, cols = frame_shape(design, iph_p, iph_s)
     n = design.secondary_per_pixel
     split = default_split(with_afe, mismatch_seed is not None) if split is None else split
@@ -385,10 +391,15 @@ def simulate_frame(design, iph_p, iph_s, with_afe: bool = False, split: str | No
     notes = [] if split != "none" else ["not measured: a frame with split='none' reads every row in one deck"]
     t0 = time.perf_counter()
     fn, desc = (_chain, "frame column chains") if split == "columns" else (_probe, "frame tiles")
-    outs = {}
-    for i, out in run_tasks(fn, tasks, jobs=jobs, scheduler=scheduler, desc=desc, label=_task_title):
-        outs[i] = out
-    outs = [*outs.values(), *(_copied(outs[src], tasks[src], task, n) for src, task in copies if src in outs)]
+
+    def run(ts):
+        return dict(run_tasks(fn, ts, jobs=jobs, scheduler=scheduler, desc=desc, label=_task_title))
+    if interpolate and split == "columns" and mismatch_seed is None:
+        outs, anchors, interpolated = _interpolated(tasks, run, design, kinds, t_exp)
+    else:
+        outs, anchors, interpolated = run(tasks), [], []
+    outs = [*outs.values(), *anchors,
+            *(_copied(outs[src], tasks[src], task, n) for src, task in copies if src in outs)]
     for out in outs:
         failures += out["failures"]
         retried += out["retried"]
@@ -404,14 +415,47 @@ def simulate_frame(design, iph_p, iph_s, with_afe: bool = False, split: str | No
         notes += out.get("notes", [])
     return Frame(rows, cols, sig, rst, afe, decks, time.perf_counter() - t0, split, failures, retried,
                  settle, notes if settling else [], parts,
-                 [{"chain": task[11], "from": tasks[src][11]} for src, task in copies])
+                 [{"chain": task[11], "from": tasks[src][11]} for src, task in copies], interpolated)
+
+
+def _interpolated(tasks, run, design, kinds, t_exp) -> tuple[dict, list, list]:
+    """Run the chains ``tasks`` (``run``: {index: out}), those of an array that ``chip.interp`` can
+    interpolate in photocurrent through its anchors, checked on held-out chains (else simulated after
+    all): ({index: out} of every task, the outs of runs whose cells are no subpixel's - the anchors, an
+    array's converged runs when its check refused them - with their decks and retries only: a failure
+    there is said in ``Frame.interpolated`` and the array simulated whole, ``Frame.interpolated``)."""
+    from . import interp
+    plans = interp.plan(tasks, kinds, design, t_exp, lambda t, mine, to: renamed(_first_deck(t), mine, to), CONVERGED)
+    rest = {i for p in plans.values() for i in p["rest"]}
+    first = [i for i in range(len(tasks)) if i not in rest]
+    anchors = [a for p in plans.values() for a in p["anchors"]]
+    tight = {i: t for p in plans.values() for i, t in p["tight"].items()}
+    got = run([tight.get(i, tasks[i]) for i in first] + anchors)
+    outs = {i: got[m] for m, i in enumerate(first)}
+    anchor_outs, records, later = [got[len(first) + m] for m in range(len(anchors))], [], []
+    start = 0
+    for kind, p in plans.items():
+        mine, start = anchor_outs[start:start + len(p["anchors"])], start + len(p["anchors"])
+        done, rec = interp.resolve(p, kind, outs, mine)
+        rec["held_out_chains"] = [tasks[i][11] for i in p["held_out"]]
+        records.append(rec)
+        if done is None:   # the array as the exhaustive path gives it, at the kit's tolerances
+            later += [*p["rest"], *p["tight"]]
+        else:
+            outs.update(done)
+            rec["columns"] = sorted(int(j) for i in p["rest"] for j in p["cols"][i])
+    spent = list(anchor_outs)
+    if later:
+        spent += [outs[i] for i in later if i in outs]
+        got = run([tasks[i] for i in later])
+        outs.update({i: got[m] for m, i in enumerate(later)})
+    return outs, [{"decks": o["decks"], "retried": o["retried"], "failures": [], "values": {}} for o in spent], records
 
 
 def _same_chain(task, earlier) -> int | None:
     """The index in ``earlier`` of a column chain identical to ``task``'s (module docstring: same
     array and column count, the same photocurrents in every row bit for bit, and the first row's
     deck the same once its column numbers are renamed), or None."""
-    import re
     design, tile = task[0], task[3]
     n = design.secondary_per_pixel
     kind = tile.kinds[0]
@@ -424,14 +468,20 @@ def _same_chain(task, earlier) -> int | None:
             continue
         if not np.array_equal(np.asarray(task[pick])[:, mine], np.asarray(other[pick])[:, theirs]):
             continue
-        to = dict(zip(map(str, mine), map(str, theirs)))
         try:
             a, b = (_first_deck(x) for x in (other, task))
         except (ConfigError, ValueError, KeyError):   # the chain says it when it runs (a failure of its own)
             return None
-        if a == re.sub(r"(?<=_)(\d+)(?![\d.eE])", lambda m: to.get(m.group(1), m.group(1)), b):
+        if a == renamed(b, mine, theirs):
             return i
     return None
+
+
+def renamed(text: str, mine, to) -> str:
+    """A deck's text with its column numbers ``mine`` renamed to ``to`` (in node and element names)."""
+    import re
+    names = dict(zip(map(str, mine), map(str, to)))
+    return re.sub(r"(?<=_)(\d+)(?![\d.eE])", lambda m: names.get(m.group(1), m.group(1)), text)
 
 
 def _first_deck(task) -> str:
@@ -472,7 +522,7 @@ def check_split(design, iph_p, iph_s, split: str | None = None, limit: float = 1
     ``CONVERGED`` tolerances: largest differences (V) of the signal, reset level and AFE
     output, and ``void``: decks that failed or were retried (at looser options), and cells
     without a value; ``ok`` when nothing is void and every difference is within ``limit``."""
-    kw = dict(kw, options=CONVERGED)
+    kw = dict(kw, options=CONVERGED, interpolate=False)
     f = simulate_frame(design, iph_p, iph_s, split=split, **kw)
     ref = simulate_frame(design, iph_p, iph_s, split="none", **kw)
     kinds = kw.get("kinds", KINDS)

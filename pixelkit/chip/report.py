@@ -10,9 +10,11 @@ from .frame import KINDS
 
 
 def frame_table(frame, photo=None) -> str:
-    """CSV text: kind,row,col,iph_A,signal_V,reset_level_V[,afe_out_V][,settling_V]."""
+    """CSV text: kind,row,col,iph_A,signal_V,reset_level_V[,afe_out_V][,settling_V][,from]; ``from``
+    (when some chains were interpolated, ``chip.interp``): spice or interpolated."""
+    interp = {r["array"]: set(r["columns"]) for r in frame.interpolated if r["used"]}
     head = ["kind", "row", "col", "iph_A", "signal_V", "reset_level_V"] + (["afe_out_V"] if frame.afe else []) \
-        + (["settling_V"] if frame.settling else [])
+        + (["settling_V"] if frame.settling else []) + (["from"] if interp else [])
     buf = io.StringIO()
     buf.write(",".join(head) + "\n")
     for k in KINDS:
@@ -25,6 +27,8 @@ def frame_table(frame, photo=None) -> str:
             if frame.settling:
                 e = frame.settling.get(k)
                 cells.append("" if e is None or e[r, j] != e[r, j] else f"{e[r, j]:.4g}")
+            if interp:
+                cells.append("interpolated" if j in interp.get(k, ()) else "spice")
             buf.write(",".join(map(str, cells)) + "\n")
     return buf.getvalue()
 

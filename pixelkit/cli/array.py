@@ -30,6 +30,11 @@ from .types import FiniteRange
               help="largest settling error (mV) the frame accepts, finite (default: the design's "
                    "[spec.settling_<array>] max, else 0.5 mV; --no-settling skips the measurement, and the "
                    "verdict then says it was not measured)")
+@click.option("--interpolate/--exhaustive", default=True, show_default=True,
+              help="with --afe, the column chains of an array whose columns each see one photocurrent in every row "
+                   "(the default gradient) are interpolated in photocurrent from a few simulated ones and checked "
+                   "against held-out chains simulated too (all simulated when beyond 0.05 mV); --exhaustive "
+                   "simulates every chain. See pixelkit.chip.interp")
 @click.option("--seed", type=click.IntRange(0, 2**31 - 1), default=None, help="Monte Carlo mismatch draw (GF180 statistical models)")
 @click.option("--t-exp", "t_exp", type=FiniteRange(0.0, 10.0, min_open=True), default=None,
               help="simulated exposure in s (default: the experiment window); charge of t_int kept")
@@ -38,7 +43,7 @@ from .types import FiniteRange
 @spice_opts
 @post_layout_opt
 @json_opt
-def array_cmd(design, rows, cols, scene, unit, with_afe, split, check, settling, settling_limit, seed, t_exp,
+def array_cmd(design, rows, cols, scene, unit, with_afe, split, check, settling, settling_limit, interpolate, seed, t_exp,
               scheduler, out, backend, jobs, as_json):
     """Simulate one frame of both arrays (with column circuits) under a scene."""
     from ..chip.frame import check_split, default_split, simulate_frame
@@ -53,7 +58,8 @@ def array_cmd(design, rows, cols, scene, unit, with_afe, split, check, settling,
     ph = photocurrents(d, rows, cols, m, unit or default_unit, t_exp)
     kw = dict(with_afe=with_afe, t_exp=t_exp, mismatch_seed=seed, backend=backend, jobs=jobs,
               scheduler=scheduler, compression=ph.compression)
-    f = simulate_frame(d, ph.iph_p, ph.iph_s, split=split, settling=settling and seed is None, **kw)
+    f = simulate_frame(d, ph.iph_p, ph.iph_s, split=split, settling=settling and seed is None, interpolate=interpolate,
+                       **kw)
     from ..chip.settling import limits
     limit = limits(d, None if settling_limit is None else settling_limit * 1e-3)
     folder = output_path(out, d, f"array_{rows}x{cols}")
@@ -76,6 +82,7 @@ def array_cmd(design, rows, cols, scene, unit, with_afe, split, check, settling,
         same = (f" ({len(x['reused'])} column chain(s) identical to an earlier one's, not simulated: their values "
                 f"are that chain's)") if x.get("reused") else ""
         lines = [f"{x['rows']} x {x['cols']} frame, {x['decks']} deck(s), {x['wall_s']:.1f} s{same}",
+                 *interpolated_lines(x.get("interpolated", [])),
                  f"clipped (saturated): {x['clipped']}", *settling_lines(x["settling"]),
                  f"table: {x['csv']}", f"plot: {x['plot']}"]
         if "check" in x:
@@ -96,6 +103,21 @@ def array_cmd(design, rows, cols, scene, unit, with_afe, split, check, settling,
         raise SystemExit(4)
     if check and not (data["check"]["ok"] and data["verdict"]["ok"]):
         raise SystemExit(1)
+
+
+def interpolated_lines(recs) -> list[str]:
+    """What ``chip.interp`` did per array: interpolated and checked, or simulated whole after all."""
+    out = []
+    for r in recs:
+        diff = "-" if r["max_diff_V"] is None else f"{r['max_diff_V'] * 1e3:.4f} mV"
+        check = (f"held-out chains {', '.join(r['held_out_chains'])} simulated too: largest difference {diff} "
+                 f"(limit {r['limit_V'] * 1e3:g} mV)")
+        if r["used"]:
+            out.append(f"{r['array']}: {r['chains']} column chain(s) interpolated in photocurrent from {r['anchors']} "
+                       f"simulated anchor chains; {check}")
+        else:
+            out.append(f"{r['array']}: every column chain simulated ({r['why']}; {check})")
+    return out
 
 
 def settling_lines(s) -> list[str]:

@@ -1,0 +1,186 @@
+"""Column chains of a frame interpolated in photocurrent, checked against SPICE in every frame.
+
+When: ``chip.frame.simulate_frame(..., interpolate=True)`` (the default of ``split="columns"``,
+``pixelkit array --afe``; ``--exhaustive`` simulates every chain), for the chains of one array
+whose columns each see one photocurrent in every row (a scene that varies only across the
+columns: the default gradient, bars), no subpixel within ``CLIP_MARGIN`` of clipping, and more
+such chains than ``ANCHORS`` + the held-out ones. Everything else is simulated as before.
+
+Why it holds: the columns of a chain share only ideal sources (``chip.frame``), so a column's
+results - every row's double-sampled signal, reset level, AFE output, settling error and its two
+parts - depend only on its own photocurrents and on its place in its chain (the secondary's
+lines differ per place in the post-layout view). With one current per column, each is a smooth
+function of that current away from clipping (the PD's and FD's junction capacitances, the
+source follower's gain: no switching threshold in between), which a polynomial through a few
+simulated currents follows.
+
+How: per array, ``ANCHORS`` chains are simulated with their columns at Chebyshev-Lobatto
+currents over the range of the columns at that place (the chain's own deck, its currents
+replaced: the first deck of every interpolated chain must equal the anchors' once its column
+numbers are renamed and its photocurrents masked, else it is simulated); every figure of every
+other column is the polynomial through the anchors at its current (barycentric form), row by
+row. The anchors, and the array's chains that are simulated, run at ``chip.frame.CONVERGED`` tolerances (reltol 1e-6, abstol 1e-12, ~1.25x
+the time of a deck): at the kit's tolerances each chain carries its own step-sequence error, the
+same for the columns of one chain and different from chain to chain (on the gradient of revB,
+2 x 50: +-0.17 mV primary, +-0.8 mV secondary signal around a smooth curve), which a polynomial
+through default-tolerance anchors would amplify. Checked in every frame: ``held_out`` real
+chains (the one in the middle of the range and the brightest but one) are simulated as well, at
+the same tolerances, and every figure of theirs compared with its interpolated value; beyond
+``LIMIT_V`` (or an anchor or held-out deck that failed, or a figure an anchor could not measure)
+every chain of the array is simulated after all at the kit's tolerances, as ``interpolate=False``
+does (the converged runs are then not used: the array is as the exhaustive path gives it). ``Frame.interpolated`` says per array what was done and the held-out difference; the
+frame's table marks each cell ``spice`` or ``interpolated``.
+
+``LIMIT_V``: 0.1 mV, the limit the kit holds its frame splits to against the undivided deck
+(``tests/test_frame.py``) and below the kit's own chain-to-chain error at its default
+tolerances (above): an interpolated figure is no further from the converged answer than a
+simulated one.
+"""
+from __future__ import annotations
+
+import re
+from dataclasses import replace
+
+import numpy as np
+
+#: Simulated currents per place in a chain (Chebyshev-Lobatto: both ends of the range included).
+ANCHORS = 6
+#: Largest difference (V) of any figure of a held-out chain from its interpolated value.
+LIMIT_V = 1e-4
+#: A column is interpolated only below this fraction of the current that clips it (``scene.i_floor``).
+CLIP_MARGIN = 0.9
+_CURRENT = re.compile(r"\b(iph\w*)=\S+")
+
+
+def plan(tasks: list, kinds, design, t_exp: float, deck, converged) -> dict:
+    """Which chains of ``tasks`` (``chip.frame._chain`` tasks) to interpolate, per array:
+    {kind: {"anchors": [task], "x": places x ANCHORS currents, "held_out": [index], "rest": [index],
+    "cols": {index: columns}, ...}}; an array left out is simulated whole. ``deck(task, mine, to)``:
+    the text of a chain's first deck, its columns ``mine`` renamed to ``to``; ``converged``: the
+    simulator options the anchors and held-out chains run at, over the chain's own."""
+    from .scene import i_floor
+    out = {}
+    n = design.secondary_per_pixel
+    for kind in kinds:
+        idx = [i for i, t in enumerate(tasks) if t[3].kinds == (kind,)]
+        cur = np.asarray(tasks[idx[0]][1 if kind == "primary" else 2], float) if idx else None
+        if cur is None:
+            continue
+        hi = CLIP_MARGIN * i_floor(design, kind, t_exp)
+        width = max(len(tasks[i][3].columns(kind, n)) for i in idx)
+        cols = {i: tasks[i][3].columns(kind, n) for i in idx}
+        ok = [i for i in idx if len(cols[i]) == width
+              and all(np.all(cur[:, j] == cur[0, j]) and 0 <= cur[0, j] < hi for j in cols[i])]
+        if len(ok) <= ANCHORS + 2:
+            continue
+        lo_p = [min(cur[0, cols[i][p]] for i in ok) for p in range(width)]
+        hi_p = [max(cur[0, cols[i][p]] for i in ok) for p in range(width)]
+        if any(b <= a for a, b in zip(lo_p, hi_p)):
+            continue
+        k = np.arange(ANCHORS)
+        x = np.array([(a + b) / 2 - (b - a) / 2 * np.cos(np.pi * k / (ANCHORS - 1)) for a, b in zip(lo_p, hi_p)])
+        base = tasks[ok[0]]
+        anchors = [_tight(_anchor(base, kind, cols[ok[0]], x[:, a], a), converged) for a in range(ANCHORS)]
+        ref = _masked(deck(anchors[0], cols[ok[0]], cols[ok[0]]))
+        ok = [i for i in ok if _masked(deck(tasks[i], cols[i], cols[ok[0]])) == ref]
+        if len(ok) <= ANCHORS + 2:
+            continue
+        order = sorted(ok, key=lambda i: float(np.mean([cur[0, j] for j in cols[i]])))
+        held = list(dict.fromkeys([order[len(order) // 2], order[-2]]))
+        out[kind] = {"anchors": anchors, "x": x, "held_out": held, "rest": [i for i in ok if i not in held],
+                     # the array's chains simulated: at the anchors' tolerances, so that the array is of one accuracy
+                     "tight": {i: _tight(tasks[i], converged) for i in idx if i in held or i not in ok},
+                     "cols": cols, "anchor_cols": cols[ok[0]], "current": cur[0]}
+    return out
+
+
+def _tight(task, converged) -> tuple:
+    """``task``'s chain simulated at the options ``converged`` over its own."""
+    from ..spice.options import merged
+    t = list(task)
+    t[9] = merged(task[9] or (), converged)
+    return tuple(t)
+
+
+def _anchor(task, kind: str, cols, currents, a: int) -> tuple:
+    """``task``'s chain with its columns at ``currents`` (one per place, every row)."""
+    pick = 1 if kind == "primary" else 2
+    cur = np.array(task[pick], float)
+    for j, c in zip(cols, currents):
+        cur[:, j] = c
+    t = list(task)
+    t[pick] = cur
+    t[11] = f"{task[11]}_anchor{a}"
+    return tuple(t)
+
+
+def _masked(text: str) -> str:
+    """A deck's text with its photocurrents masked: what must be equal for two chains to differ only in
+    their currents."""
+    return _CURRENT.sub(r"\1=?", text)
+
+
+def resolve(p: dict, kind: str, outs: dict, anchor_outs: list) -> tuple[dict | None, dict]:
+    """The interpolated outs of ``p["rest"]`` ({index: out}, None when the check refuses them) and the
+    array's record for ``Frame.interpolated``."""
+    from scipy.interpolate import BarycentricInterpolator
+    rec = {"array": kind, "anchors": len(anchor_outs), "held_out": len(p["held_out"]), "limit_V": LIMIT_V,
+           "chains": len(p["rest"]), "max_diff_V": None, "used": False}
+    bad = [o for o in anchor_outs + [outs[i] for i in p["held_out"]] if o["failures"]]
+    if bad:
+        rec["why"] = "an anchor or held-out chain failed"
+        return None, rec
+    ac = p["anchor_cols"]
+    rows = sorted({r for (_k, r, _j) in anchor_outs[0]["values"]})
+    fields = _fields(anchor_outs[0])
+    # per place: ANCHORS x rows x figures
+    data = np.array([[[_figures(o, (kind, r, ac[q]), fields) for r in rows] for o in anchor_outs]
+                     for q in range(len(ac))], float)
+    if not np.all(np.isfinite(data)):
+        rec["why"] = "an anchor figure was not measured"
+        return None, rec
+    poly = [BarycentricInterpolator(p["x"][q], data[q]) for q in range(len(ac))]
+
+    def cells(i):
+        return {(kind, r, j): vals[ri] for q, j in enumerate(p["cols"][i])
+                for vals in [poly[q](p["current"][j])] for ri, r in enumerate(rows)}
+    worst = 0.0
+    for i in p["held_out"]:
+        for key, v in cells(i).items():
+            fresh = np.array(_figures(outs[i], key, fields), float)
+            if not np.all(np.isfinite(fresh)):
+                rec["why"] = "a held-out figure was not measured"
+                return None, rec
+            worst = max(worst, float(np.max(np.abs(fresh - v))))
+    rec["max_diff_V"] = worst
+    if worst > LIMIT_V:
+        rec["why"] = "held-out chains beyond the limit"
+        return None, rec
+    rec["used"] = True
+    return {i: _out(cells(i), fields) for i in p["rest"]}, rec
+
+
+def _fields(out) -> tuple:
+    """The figures a chain's out holds: (AFE output measured, settling measured)."""
+    first = next(iter(out["values"].values()))
+    return first[2] is not None, bool(out.get("settling"))
+
+
+def _figures(out, key, fields) -> list:
+    """signal, reset level[, AFE output][, settling error and its two parts] of cell ``key``."""
+    s, rst, afe = out["values"][key]
+    v = [s, rst, *([afe] if fields[0] else [])]
+    if fields[1]:
+        v += [out["settling"][key], *out["parts"][key]]
+    return [np.nan if x is None else x for x in v]
+
+
+def _out(cells: dict, fields) -> dict:
+    """An interpolated chain's out, as ``chip.frame._chain`` gives a simulated one's."""
+    a = 3 if fields[0] else 2
+    out = {"failures": [], "retried": [], "decks": 0, "notes": [],
+           "values": {k: (float(v[0]), float(v[1]), float(v[2]) if fields[0] else None) for k, v in cells.items()}}
+    if fields[1]:
+        out["settling"] = {k: float(v[a]) for k, v in cells.items()}
+        out["parts"] = {k: (float(v[a + 1]), float(v[a + 2])) for k, v in cells.items()}
+    return out
