@@ -4,7 +4,7 @@ When: ``chip.frame.simulate_frame(..., interpolate=True)`` (the default of ``spl
 ``pixelkit array --afe``; ``--exhaustive`` simulates every chain), for the chains of one array
 whose columns each see one photocurrent in every row (a scene that varies only across the
 columns: the default gradient, bars), no subpixel within ``CLIP_MARGIN`` of clipping, and more
-such chains than ``ANCHORS`` + the held-out ones. Everything else is simulated as before.
+such chains than ``ANCHORS`` + the 2 held-out ones. Everything else is simulated as before.
 
 Why it holds: the columns of a chain share only ideal sources (``chip.frame``), so a column's
 results - every row's double-sampled signal, reset level, AFE output, settling error and its two
@@ -23,8 +23,8 @@ row. The anchors, and the array's chains that are simulated, run at ``chip.frame
 the time of a deck): at the kit's tolerances each chain carries its own step-sequence error, the
 same for the columns of one chain and different from chain to chain (on the gradient of revB,
 2 x 50: +-0.17 mV primary, +-0.8 mV secondary signal around a smooth curve), which a polynomial
-through default-tolerance anchors would amplify. Checked in every frame: ``held_out`` real
-chains (the one in the middle of the range and the brightest but one) are simulated as well, at
+through default-tolerance anchors would amplify. Checked in every frame: 2 real chains (those
+where the nodal polynomial, the factor of the interpolation error, is largest) are simulated as well, at
 the same tolerances, and every figure of theirs compared with its interpolated value; beyond
 ``LIMIT_V`` (or an anchor or held-out deck that failed, or a figure an anchor could not measure)
 every chain of the array is simulated after all at the kit's tolerances, as ``interpolate=False``
@@ -43,8 +43,12 @@ from dataclasses import replace
 
 import numpy as np
 
-#: Simulated currents per place in a chain (Chebyshev-Lobatto: both ends of the range included).
-ANCHORS = 6
+#: Simulated currents per place in a chain (Chebyshev-Lobatto: both ends of the range included), per
+#: array. On revB's gradient (2 x 50, against every column simulated at converged tolerances) the
+#: largest error of any figure: primary 0.17 mV with 6, 0.069 with 7, 0.025 with 8 (its signal bends
+#: towards the top of the range); secondary 0.030 with 5, 0.017 with 6, flat beyond (the converged
+#: decks' own scatter).
+ANCHORS = {"primary": 8, "secondary": 6}
 #: Largest difference (V) of any figure of a held-out chain from its interpolated value.
 LIMIT_V = 1e-4
 #: A column is interpolated only below this fraction of the current that clips it (``scene.i_floor``).
@@ -71,27 +75,34 @@ def plan(tasks: list, kinds, design, t_exp: float, deck, converged) -> dict:
         cols = {i: tasks[i][3].columns(kind, n) for i in idx}
         ok = [i for i in idx if len(cols[i]) == width
               and all(np.all(cur[:, j] == cur[0, j]) and 0 <= cur[0, j] < hi for j in cols[i])]
-        if len(ok) <= ANCHORS + 2:
+        K = ANCHORS[kind]
+        if len(ok) <= K + 2:
             continue
         lo_p = [min(cur[0, cols[i][p]] for i in ok) for p in range(width)]
         hi_p = [max(cur[0, cols[i][p]] for i in ok) for p in range(width)]
         if any(b <= a for a, b in zip(lo_p, hi_p)):
             continue
-        k = np.arange(ANCHORS)
-        x = np.array([(a + b) / 2 - (b - a) / 2 * np.cos(np.pi * k / (ANCHORS - 1)) for a, b in zip(lo_p, hi_p)])
+        k = np.arange(K)
+        x = np.array([(a + b) / 2 - (b - a) / 2 * np.cos(np.pi * k / (K - 1)) for a, b in zip(lo_p, hi_p)])
         base = tasks[ok[0]]
-        anchors = [_tight(_anchor(base, kind, cols[ok[0]], x[:, a], a), converged) for a in range(ANCHORS)]
+        anchors = [_tight(_anchor(base, kind, cols[ok[0]], x[:, a], a), converged) for a in range(K)]
         ref = _masked(deck(anchors[0], cols[ok[0]], cols[ok[0]]))
         ok = [i for i in ok if _masked(deck(tasks[i], cols[i], cols[ok[0]])) == ref]
-        if len(ok) <= ANCHORS + 2:
+        if len(ok) <= K + 2:
             continue
-        order = sorted(ok, key=lambda i: float(np.mean([cur[0, j] for j in cols[i]])))
-        held = list(dict.fromkeys([order[len(order) // 2], order[-2]]))
+        # held out: the two chains where an interpolation error is likeliest largest
+        held = sorted(ok, key=lambda i: _nodal(cur[0], cols[i], x, lo_p, hi_p))[-2:]
         out[kind] = {"anchors": anchors, "x": x, "held_out": held, "rest": [i for i in ok if i not in held],
                      # the array's chains simulated: at the anchors' tolerances, so that the array is of one accuracy
                      "tight": {i: _tight(tasks[i], converged) for i in idx if i in held or i not in ok},
                      "cols": cols, "anchor_cols": cols[ok[0]], "current": cur[0]}
     return out
+
+
+def _nodal(cur, cols, x, lo, hi) -> float:
+    """The largest nodal polynomial |prod_k (i - x_k)| over a chain's places (currents scaled to the
+    range): the factor of the error of polynomial interpolation that depends on where ``i`` lies."""
+    return max(abs(float(np.prod((cur[j] - x[q]) / (hi[q] - lo[q])))) for q, j in enumerate(cols))
 
 
 def _tight(task, converged) -> tuple:
