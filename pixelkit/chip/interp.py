@@ -19,27 +19,30 @@ currents over the range of the columns at that place (the chain's own deck, its 
 replaced: the first deck of every interpolated chain must equal the anchors' once its column
 numbers are renamed and its photocurrents masked, else it is simulated); every figure of every
 other column is the polynomial through the anchors at its current (barycentric form), row by
-row. The anchors, and the array's chains that are simulated, run at ``chip.frame.CONVERGED`` tolerances (reltol 1e-6, abstol 1e-12, ~1.25x
-the time of a deck): at the kit's tolerances each chain carries its own step-sequence error, the
-same for the columns of one chain and different from chain to chain (on the gradient of revB,
-2 x 50: +-0.17 mV primary, +-0.8 mV secondary signal around a smooth curve), which a polynomial
-through default-tolerance anchors would amplify. Checked in every frame: 2 real chains (those
-where the nodal polynomial, the factor of the interpolation error, is largest) are simulated as well, at
-the same tolerances, and every figure of theirs compared with its interpolated value; beyond
-``LIMIT_V`` (or an anchor or held-out deck that failed, or a figure an anchor could not measure)
-every chain of the array is simulated after all at the kit's tolerances, as ``interpolate=False``
-does (the converged runs are then not used: the array is as the exhaustive path gives it). ``Frame.interpolated`` says per array what was done and the held-out difference; the
-frame's table marks each cell ``spice`` or ``interpolated``.
+row. The anchors, and the array's chains that are simulated, run at ``chip.frame.CONVERGED``
+tolerances (reltol 1e-6, abstol 1e-12, ~1.25x the time of a deck): at the kit's tolerances each
+chain carries its own step-sequence error, the same for the columns of one chain and different
+from chain to chain (revB's gradient, 2 x 50: the exhaustive frame is up to 0.33 mV (primary)
+and 1.15 mV (secondary signal) from the converged one), which a polynomial through
+default-tolerance anchors would amplify. Checked in every frame: the 2 chains where the nodal
+polynomial (the factor of the interpolation error) is largest are simulated as well, at the
+same tolerances, and every figure of theirs compared with its interpolated value; beyond
+``LIMIT_V`` (or an anchor or held-out deck that failed, or a figure an anchor could not
+measure) every chain of the array is simulated after all at the kit's tolerances, as
+``interpolate=False`` does (the converged runs are then not used: the array is as the
+exhaustive path gives it). ``Frame.interpolated`` says per array what was done and the
+held-out difference; the frame's table marks each cell ``spice`` or ``interpolated``.
+On revB's 2 x 50 gradient the interpolated frame is within 0.030 mV of the frame simulated whole
+at converged tolerances on every figure (docs/arrays.md).
 
 ``LIMIT_V``: 0.1 mV, the limit the kit holds its frame splits to against the undivided deck
-(``tests/test_frame.py``) and below the kit's own chain-to-chain error at its default
+(``tests/test_frame.py``), below the exhaustive frame's own chain-to-chain error at the kit's
 tolerances (above): an interpolated figure is no further from the converged answer than a
 simulated one.
 """
 from __future__ import annotations
 
 import re
-from dataclasses import replace
 
 import numpy as np
 
