@@ -34,7 +34,8 @@ def main(argv) -> int:
     out = {"design": Path(a.design).name, "rows": a.rows, "cols": a.cols, "scene": a.scene, "runs": runs,
            "cpu_ratio": round(runs["interpolated"]["cpu_s"] / runs["exhaustive"]["cpu_s"], 3),
            "wall_ratio": round(runs["interpolated"]["wall_s"] / runs["exhaustive"]["wall_s"], 3),
-           "interpolated": fast.interpolated, "max_diff_mV": diffs,
+           "interpolated": [{k: v for k, v in r.items() if k != "columns"} for r in fast.interpolated],
+           "max_diff_mV": diffs,
            "nan_cells": {n: int(sum(np.isnan(getattr(f, "signal")[k]).sum() for k in ("primary", "secondary")))
                          for n, f in frames.items()}}
     if a.json:
