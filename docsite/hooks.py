@@ -101,12 +101,23 @@ def link_markdown(markdown: str, keys: set[str], where: str = "page", root: str 
 
 #: a quoted kit figure's marker (``docsite/figures.py``): the test reads it, the site does not show it
 FIGURE_MARK = re.compile(r"<!--fig [^>]*-->")
+#: a ``dated:COMMIT`` mark: a figure of a past run, not checked against the kit as it is now; the site
+#: shows its age beside it, so a reader never takes it for a figure the suite holds to the current kit
+DATED_MARK = re.compile(r"<!--fig dated:([0-9a-f]{7,40})-->")
+
+
+def show_dated(markdown: str) -> str:
+    """Each ``dated:COMMIT`` mark as a visible superscript naming the commit (its title says what it
+    means); every other mark removed."""
+    markdown = DATED_MARK.sub(lambda m: f'<sup class="dated" title="measured at {m[1][:7]}; not re-checked '
+                              f'against the kit as it is now">{m[1][:7]}</sup>', markdown)
+    return FIGURE_MARK.sub("", markdown)
 
 
 def on_page_markdown(markdown, page, config, files):
     src = page.file.src_uri
     docs = config["docs_dir"]
-    markdown = FIGURE_MARK.sub("", markdown)
+    markdown = show_dated(markdown)
     return link_markdown(markdown, bibliography_keys(docs), src, "../" * src.count("/"),
                          is_bibliography=src == "bibliography.md", titles=page_titles(docs))
 

@@ -85,6 +85,16 @@ def scan(text: str) -> list[tuple[int, str, str]]:
     return out
 
 
+DATED = re.compile(r"<!--fig dated:[0-9a-f]{7,40}-->")
+
+
+def dated(files=None) -> dict[str, int]:
+    """{page: how many of its figures are ``dated:`` (a past run's, shown with its commit on the site,
+    not checked against the kit as it is now)} of the pages that have any: marked, but not held."""
+    found = {p.name: len(DATED.findall(p.read_text())) for p in files or pages()}
+    return {k: v for k, v in found.items() if v}
+
+
 def gap(files=None) -> dict[str, list]:
     """{page: its unmarked numbers} of the pages that have any."""
     found = {p.name: scan(p.read_text()) for p in files or pages()}
@@ -98,8 +108,10 @@ if __name__ == "__main__":
             for lineno, num, line in scan(path.read_text()):
                 print(f"{name}:{lineno}: {num}    {line[:110]}")
     else:
-        g = gap()
-        for name, found in sorted(g.items(), key=lambda kv: -len(kv[1])):
-            print(f"{len(found):5d}  {name}")
+        g, d = gap(), dated()
+        print("unmarked  dated  page")
+        for name in sorted(set(g) | set(d), key=lambda n: (-len(g.get(n, ())), -d.get(n, 0), n)):
+            print(f"{len(g.get(name, ())):8d} {d.get(name, 0):6d}  {name}")
         print(f"{sum(map(len, g.values()))} unmarked number(s) with a unit on {len(g)} page(s); "
-              f"fully marked and held: {', '.join(MARKED)}")
+              f"{sum(d.values())} dated (a past commit's figure, its age shown on the site, not checked "
+              f"against the kit now) on {len(d)} page(s); fully marked and held: {', '.join(MARKED)}")

@@ -17,7 +17,7 @@ import yaml
 from conftest import ROOT
 
 sys.path.insert(0, str(ROOT))
-from docsite.hooks import link_html, link_markdown  # noqa: E402
+from docsite.hooks import link_html, link_markdown, show_dated  # noqa: E402
 
 
 def build(config, site, cwd=ROOT):
@@ -93,6 +93,13 @@ def test_citation_and_page_links():
     link = '<a href="../bibliography/#thesis2019">[Thesis2019]</a>'
     assert html == (f'<p>As {link} and [stack].</p><pre><code>[Thesis2019]</code></pre><h2>[Thesis2019]</h2>'
                     f'<a href="x">[Thesis2019]</a><br/>{link}')
+
+
+def test_a_dated_figure_shows_its_commit_on_the_site_and_other_marks_vanish():
+    """A ``dated:`` figure is not checked against the kit as it is now: the reader sees its commit."""
+    out = show_dated("C_FD 2.01<!--fig dated:ee34a3c9--> fF, CG 60<!--fig quick:cg::primary--> uV/e-")
+    assert out == ('C_FD 2.01<sup class="dated" title="measured at ee34a3c; not re-checked against the kit '
+                   'as it is now">ee34a3c</sup> fF, CG 60 uV/e-')
 
 
 @pytest.mark.parametrize("page, why", [
