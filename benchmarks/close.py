@@ -31,6 +31,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -132,7 +133,11 @@ def summary(r: dict, wall: float, cpu: float, code: int) -> dict:
 def against(src: Path, n: int, args, folder: Path) -> dict:
     """This kit's close and the base revision's, side by side in the same run."""
     d = design_file(src, n, args.grid, args.mc, args.max_iterations, folder)
-    (new, base) = closes(d, n, folder, base_tree(args.base))
+    tree = base_tree(args.base)
+    try:
+        (new, base) = closes(d, n, folder, tree)
+    finally:
+        shutil.rmtree(tree, ignore_errors=True)
     return {"knobs": n, "base": args.base, "close": summary(*new), "base_close": summary(*base)}
 
 
