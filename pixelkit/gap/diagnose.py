@@ -334,8 +334,10 @@ def verdict_text(best, explained, ambiguous, setup_flag=False, top="none"):
 def _params(name, fr):
     if name in COLUMN_EFFECTS:
         vals, kinds = fr["theta"][N_SETUP:], [spec[0].split("[")[0] for spec in fr["specs"]]
-        out = {f"{k}_rms": float(np.std(vals[[j == k for j in kinds]])) for k in dict.fromkeys(kinds)}
-        return out | {"n_columns": kinds.count(kinds[0])}
+        law = {spec[0]: float(v) for spec, v in zip(fr["specs"], vals) if spec[4] is None}   # the spatial law's
+        cols = [k for k in dict.fromkeys(kinds) if not any(n.startswith(k + "[") for n in law)]
+        out = {f"{k}_rms": float(np.std(vals[[j == k for j in kinds]])) for k in cols}
+        return out | law | {"n_columns": kinds.count(kinds[0])}
     return {spec[0]: iv for spec, iv in zip(fr["specs"], fr["intervals"])}
 
 

@@ -84,6 +84,14 @@ T_REF_K = 298.15           # the T laws' reference, 25 degC
 DIFF_SHARE = Param("diff_share", 0.0, 1.0, 0.1, 0.2)
 DEA = Param("dea_eV", -0.15, 0.25, 0.05, 0.0)
 BETA = Param("beta_per_V", 0.0, 1.5, 0.1, 0.0)
+# the source follower's small-signal gain A = gm / (gm + gmb + gds) (~0.85) off the model's, and its temperature
+# coefficient: a drawn L moves the body effect (short-channel charge sharing lowers the effective gamma) and the
+# output conductance (~ 1/L) with it, which the current factor (``sf_w``) and the gate capacitance (``c_fd``) do
+# not carry. gmb / gm ~ 0.15 - 0.2 and gds / gm ~ 0.01 - 0.03 here: L 0.6 - 2x the drawn moves A by a few per cent,
+# bound +-5 %; the coefficient (phi_F and the mobility's T law move gmb / gm and gds / gm): +-5 % per 100 K.
+# Development cases (``ood`` dev, ``sf_wl``): without them 2 of 4 named, 0 explained; with them 4 named, 3 explained.
+SF_GAIN = Param("sf_gain_rel", -0.05, 0.05, 1e-2, 0.0)
+SF_GAIN_TC = Param("sf_gain_tc_per_100K", -0.05, 0.05, 1e-2, 0.0)
 # the floating diffusion's capacitance off the design (F; the ``c_fd`` site's range)
 C_FD = Param("c_fd_F", -0.4e-15, 1.0e-15, 1e-16, 0.0)
 # the readout-light area's scan (fit._scan): 12 values a decade, both signs, over the bounds
@@ -134,7 +142,13 @@ def _charge_injection(X, p):  # clock coupling onto FD (RST) and onto the AFE's 
 def _sf_gain(X, p):        # a conductance loading the column during the read, to a pivot dv from the reset level
     # (the measured col_g site pivots at the reset level; the rest of its current, g (v_rst - V_pivot), is a
     # change of the column's pull-down current: the load site, relative to the bias current)
-    return {"col_g": p[0], "load": -p[0] * p[1] / X["i_bias"]}
+    # a short load's conductance and its mirror's current ratio each drift with temperature (channel-length
+    # modulation and DIBL; the ratio: the output's V_DS differs from the reference's): p[2] of g, p[3] of the
+    # current, per 100 K from 25 degC (bounds +-100 % and +-5 %: a short device's gds roughly doubles or halves
+    # over 100 K; the mirror's ratio moves by per cents). Development cases (``ood`` dev, ``load_gds``): with the
+    # SF's gain terms above and without these, 0 of 4 named sf_gain (the level's drift with T went to sf_strength)
+    g = p[0] * (1.0 + p[2] * X["dT"] / 100.0)
+    return {"col_g": g, "load": -g * p[1] / X["i_bias"] + p[3] * X["dT"] / 100.0}
 
 
 def _column_load(X, p):    # the column load's current, the same on every column
@@ -146,9 +160,11 @@ def _afe_gain(X, p):       # SC stage gain: C13 larger (extra eps), C11 (also th
 
 
 def _sf_strength(X, p):    # the source follower's size: current factor (W / L, mobility), gate capacitance on FD
-    # beyond the width's own, threshold (a level shift), and its temperature coefficient off the model's (the
-    # levels' measured temperature shift, scaled)
-    return {"sf_w": p[0], "c_fd": p[1], "dv_col": -p[2], "temp_scale": p[3]}
+    # beyond the width's own, threshold (a level shift), its temperature coefficient off the model's (the
+    # levels' measured temperature shift, scaled), and its small-signal gain (body effect and output conductance:
+    # ``SF_GAIN``) with that gain's temperature coefficient, on the signal (pivot at the reset level)
+    gain = p[4] + p[5] * X["dT"] / 100.0
+    return {"sf_w": p[0], "c_fd": p[1], "dv_col": -p[2], "temp_scale": p[3], "dv_pix": gain * X["signal"]}
 
 
 def _readout_light(X, p):  # junction photocurrent on the AFE's vm (area x irradiance) and the output stage
@@ -204,12 +220,14 @@ EFFECTS = {
                       Param("perimeter_dea_eV", -0.15, 0.25, 0.05, 0.0)), _dark_current),
     "charge_injection": ((Param("c_rst_fd_F", 0.0, 4.5e-16, 1e-17, 1e-17),
                           Param("c_p1_vm_F", -9e-15, 9e-15, 1e-15, 0.0), C_FD), _charge_injection),
-    "sf_gain": ((Param("g_col_S", 0.0, 2.5e-7, 1e-7, 5e-8), Param("pivot_dv_V", -1.5, 1.5, 0.1, 0.0)), _sf_gain),
+    "sf_gain": ((Param("g_col_S", 0.0, 2.5e-7, 1e-7, 5e-8), Param("pivot_dv_V", -1.5, 1.5, 0.1, 0.0),
+                 Param("g_tc_per_100K", -1.0, 1.0, 0.1, 0.0), Param("load_tc_per_100K", -0.05, 0.05, 1e-2, 0.0)),
+                _sf_gain),
     "column_load": ((Param("load_rel", -0.3, 0.3, 1e-2, 0.0),), _column_load),
     "afe_gain": ((Param("eps_extra", -0.05, 1.0, 1e-2, 0.0), Param("c11_rel", -0.075, 0.075, 1e-2, 0.0),
                   Param("opamp_gain_loss", 0.0, 45.0, 1.0, 0.0)), _afe_gain),
     "sf_strength": ((Param("sf_w_rel", -0.6, 0.9, 0.1, 0.0), C_FD, Param("dvt_V", -0.2, 0.2, 1e-2, 0.0),
-                     Param("tc_rel", -0.5, 0.5, 0.05, 0.0)), _sf_strength),
+                     Param("tc_rel", -0.5, 0.5, 0.05, 0.0), SF_GAIN, SF_GAIN_TC), _sf_strength),
     # the vm response has the op-amp clamp's steps in the current: the fit scans AREA_SCAN for its starts
     "readout_light": ((Param("a_junction_m2", -3e-9, 3e-9, 1e-11, 0.0, AREA_SCAN),
                        Param("out_V_per_A_m2", -1.0, 1.0, 1e-5, 0.0)), _readout_light),
@@ -235,8 +253,8 @@ CORE = {
     "fd_leakage": ((Param("i_fd_A", 0.0, 1e-11, 1e-14, 1e-15), DEA), lambda p: [p[0], 0.0, p[1], 0.0]),
     "dark_current": ((Param("i_d_A", 0.0, 1e-11, 1e-14, 1e-15), DEA), lambda p: [p[0], 1.0, 0.0, p[1], 0.0, 0.0, p[1]]),
     "lag": ((Param("lag", 0.0, 0.5, 1e-2, 1e-3),), lambda p: [p[0], 1e6]),
-    "sf_gain": ((Param("g_col_S", 0.0, 2.5e-7, 1e-7, 5e-8),), lambda p: [p[0], 0.0]),
-    "sf_strength": ((Param("sf_w_rel", -0.6, 0.9, 0.1, 0.0),), lambda p: [p[0], 0.0, 0.0, 0.0]),
+    "sf_gain": ((Param("g_col_S", 0.0, 2.5e-7, 1e-7, 5e-8),), lambda p: [p[0], 0.0, 0.0, 0.0]),
+    "sf_strength": ((Param("sf_w_rel", -0.6, 0.9, 0.1, 0.0),), lambda p: [p[0], 0.0, 0.0, 0.0, 0.0, 0.0]),
     "charge_injection": ((Param("c_rst_fd_F", 0.0, 4.5e-16, 1e-17, 1e-17), Param("c_p1_vm_F", -9e-15, 9e-15, 1e-15, 0.0)),
                          lambda p: [p[0], p[1], 0.0]),
 }

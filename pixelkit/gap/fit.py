@@ -96,13 +96,16 @@ def model_fn(name, nom, X, cols=None, uniform=False):
         if uniform:   # one value per array: the spread tested is the column-to-column one within an array
             idx, n = X["arr"].astype(int), 2
             specs = [(f"{p.name}[{a}]", p.lo, p.hi, p.scale, None) for p in params for a in ("primary", "secondary")]
-        else:
+        else:   # each column its own value (its mismatch, zero-mean prior) on the array's spatial law
             idx, n = np.searchsorted(cols, column_keys(X)), len(cols)
-            specs = [(f"{p.name}[{c}]", p.lo, p.hi, p.scale, p.prior) for p in params for c in cols]
+            specs = [(f"{p.name}[{c}]", p.lo, p.hi, p.scale, p.prior) for p in params for c in cols] + \
+                [(f"{p.name}_{t}[{a}]", p.lo, p.hi, p.scale, None) for p in params for t in SPATIAL
+                 for a in ("primary", "secondary")]
+        law = _spatial_law(X, len(params), 0 if uniform else len(params) * n)
 
         @_memo
         def g(p):
-            return predict(nom, X, fn(X, [p[j * n:(j + 1) * n][idx] for j in range(len(params))]))
+            return predict(nom, X, fn(X, [p[j * n:(j + 1) * n][idx] + law(p, j) for j in range(len(params))]))
 
         def f(theta):
             return _setup(theta, afe, g(theta[N_SETUP:]))
@@ -117,6 +120,26 @@ def model_fn(name, nom, X, cols=None, uniform=False):
         def f(theta):
             return _setup(theta, afe, g(theta[N_SETUP:]))
     return f, specs
+
+
+# a column pattern's spatial law across its array (process gradients, a bias or supply line's IR drop fed from one
+# end or both): a linear and a parabolic term of the column's position u (-1/2 .. 1/2), each array its own
+SPATIAL = ("slope", "bow")
+
+
+def _spatial_law(X, n_params, start):
+    """(p, j) -> the spatial law of column parameter ``j`` at each row: slope 2u + bow (4u^2 - 1/3) of the row's
+    array (zero-mean over a uniformly used array), read from ``p[start:]`` (none when ``start`` is 0: the uniform
+    counterpart has one value per array and no law)."""
+    if not start:
+        return lambda p, j: 0.0
+    u, a = X["col_pos"], X["arr"].astype(int)
+    shapes = (2.0 * u, 4.0 * u * u - 1.0 / 3.0)
+
+    def law(p, j):
+        k = start + j * 2 * len(SPATIAL)
+        return sum(p[k + 2 * t:k + 2 * t + 2][a] * sh for t, sh in enumerate(shapes))
+    return law
 
 
 def plain_effect(name):

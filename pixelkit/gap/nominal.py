@@ -469,6 +469,8 @@ def features(table, nom: Nominal, design) -> dict:
          "a_sub": np.where(arr == 0, design.primary.area, design.secondary.area),
          "f_read": f_read, "f_design": f_design, "t_hold": 1.0 / f_read, "t_float": t_float(design, f_read, arr),
          "vdd": vdd, "dvdd": vdd - design.tech.supply, "has_idle_light": nom.idle_light is not None}
+    n_cols = np.where(arr == 0, design.primary.cols, design.secondary.cols)
+    X["col_pos"] = X["col"] / np.maximum(n_cols - 1, 1) - 0.5     # across its array, -0.5 .. 0.5
     X["dT"] = X["T"] - nom.t_design_C
     q = i * X["t_int"] + nom.dark_q(X["arr"], X["T"], X["t_int"])
     X["q"] = q
