@@ -98,7 +98,7 @@ def test_second_heldout_set_score_as_measured(ref_design, reference_nominal):
     """The second held-out set (seeds 90000-90061, drawn after the first was seen; ~30 min of CPU: slow). Its first
     51 cases were scored blind once on the code of a2b0b0a: top-1 36 / 40, explained when right 30 / 36 (issue 46's
     90 % NOT met), every outside effect "not explained" (8 / 8, each with a visible gap), none on the three
-    effect-free chips. The whole 62-case set's blind score on 53a590a (e91d9f3 on main): docs/gap-diagnosis.md. Guards the level
+    effect-free chips. The whole 62-case set's blind score on 53a590a (f4b7be8 on main): docs/gap-diagnosis.md. Guards the level
     measured (never lowered)."""
     r = ood.run_set(ref_design, reference_nominal, "heldout2")
     assert r["top1_accuracy"] >= 36 / 40 - 1e-9, r["per_effect_top1"]
