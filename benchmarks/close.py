@@ -29,6 +29,7 @@ here. No verify baseline is run then.
 from __future__ import annotations
 
 import argparse
+import atexit
 import json
 import os
 import shutil
@@ -84,8 +85,21 @@ def timed(cmd: list, env: dict) -> tuple[subprocess.CompletedProcess, float, flo
     return p, time.perf_counter() - t0, child_cpu_s() - c0
 
 
+def scratch_cache(prefix: str) -> str:
+    """An empty simulation cache for one run, removed when the benchmark ends (a close's cache is GBs)."""
+    path = tempfile.mkdtemp(prefix=prefix)
+    atexit.register(shutil.rmtree, path, ignore_errors=True)
+    return path
+
+
 def base_tree(rev: str) -> Path:
-    """The kit at git revision ``rev``, unpacked into a temporary folder."""
+    """The kit at git revision ``rev``, unpacked into a temporary folder (exit 2 when ``rev`` is no commit)."""
+    found = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--verify", "--quiet", "--end-of-options",
+                            f"{rev}^{{commit}}"], capture_output=True, text=True)
+    if found.returncode != 0 or rev.startswith("-"):
+        print(f"error: --base {rev!r}: not a commit of this repository (a hash, tag or branch)", file=sys.stderr)
+        raise SystemExit(2)
+    rev = found.stdout.strip()
     out = Path(tempfile.mkdtemp(prefix="pk-bench-base-"))
     archive = subprocess.run(["git", "-C", str(ROOT), "archive", rev], capture_output=True, check=True).stdout
     subprocess.run(["tar", "-x", "-C", str(out)], input=archive, check=True)
@@ -98,7 +112,7 @@ def closes(d: Path, n: int, folder: Path, base: Path | None) -> list[tuple[dict,
     runs, as two processes run at once)."""
     runs = []
     for tag, root in [("", ROOT)] + ([("base_", base)] if base else []):
-        env = dict(os.environ, PIXELKIT_CACHE=tempfile.mkdtemp(prefix="pk-bench-close-"), PIXELKIT_PROGRESS="0",
+        env = dict(os.environ, PIXELKIT_CACHE=scratch_cache("pk-bench-close-"), PIXELKIT_PROGRESS="0",
                    PYTHONPATH=str(root))
         out = folder / f"{tag}closed_{n}.toml"
         design = root / d.relative_to(ROOT) if d.is_relative_to(ROOT) else d   # a kit's own design file
@@ -143,14 +157,14 @@ def against(src: Path, n: int, args, folder: Path) -> dict:
 
 def one(src: Path, n: int, args, folder: Path) -> dict:
     d = design_file(src, n, args.grid, args.mc, args.max_iterations, folder)
-    env = dict(os.environ, PIXELKIT_CACHE=tempfile.mkdtemp(prefix="pk-bench-verify-"), PIXELKIT_PROGRESS="0")
+    env = dict(os.environ, PIXELKIT_CACHE=scratch_cache("pk-bench-verify-"), PIXELKIT_PROGRESS="0")
     p, v_wall, v_cpu = timed([sys.executable, "-m", "pixelkit", "verify", str(d), "--mc", "0", "--json",
                               "--out", str(folder / f"verify_{n}")], env)
     if p.returncode not in (0, 1, 4, 5):
         raise SystemExit(f"verify exited {p.returncode}: {p.stderr[-2000:]}")
     v = json.loads(p.stdout)
     v_runs = sum(1 for _ in Path(env["PIXELKIT_CACHE"], "sim").rglob("*.entry"))
-    env = dict(os.environ, PIXELKIT_CACHE=tempfile.mkdtemp(prefix="pk-bench-close-"), PIXELKIT_PROGRESS="0")
+    env = dict(os.environ, PIXELKIT_CACHE=scratch_cache("pk-bench-close-"), PIXELKIT_PROGRESS="0")
     out = folder / f"closed_{n}.toml"
     p, c_wall, c_cpu = timed([sys.executable, "-m", "pixelkit", "close", str(d), "--out", str(out), "--json"], env)
     if p.returncode not in (0, 1, 5):

@@ -188,3 +188,5 @@ def test_gap_on_a_role_pixel_names_ktc_left_by_the_read_in_the_standard_deviatio
     r = gapnoise.diagnose(d4t, {**sub, **plain}, nominal[2:])
     assert r["run"] and r["best"] == "none" and r["explained"], r
     assert gapnoise.applies(d4t, table) is not None      # no n_avg: v_std_V weighs the means only
+    one = {k: v[2:3] for k, v in {**table, **kicked}.items()}   # one row: any standard deviation would fit
+    assert "at least two rows" in gapnoise.applies(d4t, one)

@@ -11,7 +11,8 @@ each swings the whole rail, so neither P device is ever half on), and an output 
 when it is low. The P devices on the rail sit in their own n-well, tied to ``vgate``.
 
 The sizes are fixed (W / L in m below): the N pair is 4 times as wide as the P pair it overpowers
-(at ss, -10 % supply and a 3.63 V rail the shifter still switches: tests/test_rowdriver.py);
+(at ss -20 degC, -10 % supply and the design's 3.6 V rail the shifter still switches:
+tests/test_rowdriver.py);
 the output inverter drives a small sign-off array's lines. The simulations' benches keep the
 ideal gate-level sources (docs/revisions.md says what that leaves out); this circuit is what the
 layout draws for the choice and what LVS compares it against.

@@ -192,7 +192,7 @@ def _strip_devs(lt, dev: Device, n: int, wf: int):
     return [Mos(dev.name, wf, lt.snap(dev.l * 1e9))] * n, _finger_nets(dev, n)
 
 
-class _Stack:
+class Stack:
     """Items placed bottom-up at the cell's left margin, and the terminals they leave."""
 
     def __init__(self, cv: Canvas, lt, x_left: int, y: int):
@@ -253,7 +253,7 @@ def afe_layout(design, lt, which: str, width: int, x_in: int, x_pass: int, name:
     w4 = lt.width("metal4")
     x_left = lt.snap_up(lt.space("nwell") // 2 + lt.nm("nwell.enclosure.pcomp"))
     x_left = max(x_left, lt.nm("mim_bottom.space") // 2 + lt.nm("mim_bottom.enclosure.mim_top"))
-    st = _Stack(cv, lt, x_left, 0)
+    st = Stack(cv, lt, x_left, 0)
     router_pitch = pad_side(lt, "metal4") + lt.space("metal4")
     # bottom edge: pins on metal4 (grid columns, so the router lands on them straight)
     half = max(lt.space(m) for m in ("metal2", "metal3", "metal4")) // 2
@@ -415,7 +415,7 @@ def _switch_plan(devs, fit, below: str | None, above: str | None) -> list:
     return best[1]
 
 
-def _n_group(st: _Stack, lt, plan, fit) -> None:
+def _n_group(st: Stack, lt, plan, fit) -> None:
     if not plan:
         return
     st.tap("p", "vss")
@@ -426,7 +426,7 @@ def _n_group(st: _Stack, lt, plan, fit) -> None:
         st.strip(d, n, wf, "n", flip)
 
 
-def _p_group(st: _Stack, lt, plan, fit) -> None:
+def _p_group(st: Stack, lt, plan, fit) -> None:
     if not plan:
         return
     st.prev = None

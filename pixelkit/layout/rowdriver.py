@@ -2,7 +2,7 @@
 ``ROWDRV``, one per driven gate line, the cells of a chip side by side in a bank above the array's
 left margin (:mod:`.chip`).
 
-A narrow, tall cell, stacked along y like the AFE (:mod:`.afe`'s ``_Stack``). From the bottom
+A narrow, tall cell, stacked along y like the AFE (:mod:`.afe`'s ``Stack``). From the bottom
 edge (facing the array) up:
 
 - the output ``out`` as a metal4 stub at the bottom edge (the chip's strap to the line lands on it);
@@ -18,7 +18,7 @@ Every net is then routed by :mod:`.gridroute` on metal2 - metal4, as in the AFE.
 """
 from __future__ import annotations
 
-from .afe import GROUP_GAP, STRIP_GAP, Device, _Stack
+from .afe import GROUP_GAP, STRIP_GAP, Device, Stack
 from .canvas import Canvas, box
 from .gridroute import GridRouter
 from .primitives import fold, pad_side, well
@@ -71,7 +71,7 @@ def _draw(design, lt, x_left: int) -> Canvas:
             raise RuleError("rowdriver_fit", f"{CELL} cell", f"{name} (W {d.w * 1e6:g} um) does not fold into "
                             f"fingers of at most {wmax / 1000:g} um", "pixel.gate_drive", design.pixel.gate_drive)
         fingers[name] = got
-    st = _Stack(cv, lt, x_left, 0)
+    st = Stack(cv, lt, x_left, 0)
     pitch = pad_side(lt, "metal4") + lt.space("metal4")
     half = max(lt.space(m) for m in ("metal2", "metal3", "metal4")) // 2
     g0 = half + pad_side(lt, "metal4") // 2

@@ -41,6 +41,9 @@ def applies(design, table: dict) -> str | None:
     """None when the noise column can be diagnosed, else why not (one sentence)."""
     if not hasattr(design, "fd_read"):
         return "the pixel has no closed form of FD's capacitance (a netlist pixel): kT/C is not a candidate"
+    if len(table.get("v_std_V", ())) < 2:
+        return ("one row: the share of kT/C is fitted with one degree of freedom, so any standard deviation "
+                "would fit it; kT/C needs at least two rows (two signal levels or temperatures)")
     n = table.get("n_avg")
     if n is None or not np.all(np.nan_to_num(n, nan=1.0) >= 2):
         return ("v_std_V is not a measured frame-to-frame standard deviation on every row (n_avg >= 2 frames): "
@@ -84,7 +87,7 @@ def diagnose(design, table: dict, v_nominal: np.ndarray, backend: str = "batch")
     p0 = float(chi2_sf(chi0, rows))
     fit = minimize_scalar(chi2, bounds=(0.0, S_MAX), method="bounded", options={"xatol": 1e-4})
     share, chi_fit = float(fit.x), float(fit.fun)
-    p_fit = float(chi2_sf(chi_fit, max(rows - 1, 1)))
+    p_fit = float(chi2_sf(chi_fit, rows - 1))
     if p0 >= P_EXPLAINED:
         verdict = "the nominal read's noise explains the standard deviations (true CDS: FD's kT/C cancelled)"
     elif p_fit >= P_EXPLAINED:

@@ -18,6 +18,7 @@ from ...circuits.column import column_cell, dual_pixel_column
 from ...circuits.dual_pixel import dual_pixel
 from ...circuits.pixel5t import pixel5t
 from ...circuits.readout import afe_cell, opamp_cell
+from ...circuits.rowdriver import boosted, row_driver
 
 VSS = "vss"
 
@@ -29,7 +30,6 @@ def circuits_of(design, top: str) -> list:
         from ...circuits.array import pixel_array
         from ...circuits.readout import chip as chip_circuit, readout_cells
         rows, cols, afe = chip
-        from ...circuits.rowdriver import boosted, row_driver
         ro = readout_cells(design) if afe else [column_cell(design, "primary"), column_cell(design, "secondary")]
         drv = [row_driver(design)] if boosted(design) else []
         return [*dual_pixel(design), pixel_array(design, rows, cols), *ro, *drv, chip_circuit(design, rows, cols, afe)]
@@ -40,13 +40,8 @@ def circuits_of(design, top: str) -> list:
              "DUALPIX_COL": [*pix, *col, dual_pixel_column(design)],
              "AFE_P": [opamp_cell(design), afe_cell(design, "primary")],
              "AFE_S": [opamp_cell(design), afe_cell(design, "secondary")],
-             "ROWDRV": [_row_driver(design)]}
+             "ROWDRV": [row_driver(design)]}
     return table[top]
-
-
-def _row_driver(design):
-    from ...circuits.rowdriver import row_driver
-    return row_driver(design)
 
 
 #: layout cell -> the kit's subcircuit of it
