@@ -124,6 +124,32 @@ def test_storage_light_is_the_fd_charge_through_the_readout(ref_design):
     assert st["signal_V"][1] > 1e-3                                # far above the solver's noise
 
 
+def test_halo_of_one_lit_pixel_on_its_neighbours_storage_nodes(modelled, responses):
+    """A bright source on one dual pixel (``layout.pex.halo``: Bloch solves over a 3 x 3 supercell): lit
+    everywhere, the supercell's nine cells add up to the periodic model's storage-node figure (a uniform scene:
+    the other path is the periodic solve, another matrix); each share is a probability (>= 0); blue light,
+    absorbed within a micron, stays on the lit pixel (>= 95 % of its FD's charge from its own cell at 450 nm),
+    near-infrared carriers born tens of microns deep spread over the neighbours (the lit cell's own share below
+    half at 1050 nm). The storage table's one-pixel-lit and worst-neighbour figures are then below the uniform
+    scene's, the neighbour's below the lit pixel's own."""
+    from pixelkit.camera.spicenoise import sf_gain
+    from pixelkit.chip.bright import storage_table
+    from pixelkit.layout.pex.halo import halo
+    from pixelkit.layout.pex.lightfigures import drawn
+    hal = halo(modelled, drawn(modelled))
+    r = responses["all"]
+    for fd, total in hal.periodic.items():
+        assert total == pytest.approx(r.eta[fd], rel=1e-4), fd
+        shares = np.array([e[fd] for e in hal.eta.values()]) / r.eta[fd]
+        assert np.all(shares >= -1e-5), fd
+        own = hal.at(0, 0)[fd] / r.eta[fd]
+        assert own[0] >= 0.95 and own[-1] < 0.5, (fd, own)
+    rows = storage_table(modelled, {"primary": 1.0, "secondary": 1.0}, sf_gain(modelled), r, (1e3,), hal)
+    for row in rows:
+        assert row["neighbour_fd_e"] < row["alone_fd_e"] <= row["modelled_fd_e"] * (1 + 1e-9), row
+        assert max(abs(i) for i in row["neighbour"]) == 1
+
+
 def test_gse_within_the_published_range_of_fd_storage_pixels(modelled):
     """The modelled charge GSE of the primary's storage node (a metal-shielded floating diffusion) under the
     scene's halogen light lies in the range published for such global shutters: [Thesis2019] quotes

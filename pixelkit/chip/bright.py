@@ -153,7 +153,7 @@ def storage_lights(design) -> dict:
     return out
 
 
-def storage_table(design, swing: dict, a_sf: float, response=None, factors=STORAGE_FACTORS) -> list[dict]:
+def storage_table(design, swing: dict, a_sf: float, response=None, factors=STORAGE_FACTORS, halo=None) -> list[dict]:
     """The storage node's light over a frame's readout, around a bright source: per array, light (the
     scene's halogen, a white LED, single wavelengths) and source (``factors`` x the background, as the
     sizing's background photocurrent), the charge FD collects while the last row waits
@@ -162,7 +162,12 @@ def storage_table(design, swing: dict, a_sf: float, response=None, factors=STORA
     ``pixel.gse``) and, given the collection model's ``response``, modelled (each light's effective
     opening and GSE, ``layout.pex.lightfigures``). Under the source the pixels' exposure saturates; the
     rows are what a source lit only while the frame is read leaves (an LED headlight's PWM off during
-    the exposure), and what the storage node adds to a pixel the exposure did not saturate."""
+    the exposure), and what the storage node adds to a pixel the exposure did not saturate.
+
+    Those figures are every pixel lit at the source's level (the model's periodic cell). Given also the
+    model's ``halo`` (``layout.pex.halo``), the source imaged on one dual pixel: its own storage node with
+    its neighbours dark (``alone_*``) and the storage node of its worst neighbour (``neighbour_*``: the
+    halo, carriers from the lit pixel; ``neighbour``: the offset in cells)."""
     from ..optimize.sizing import light
     from ..physics.fd import capacitances
     j_bg = light(design).j_bg
@@ -170,10 +175,13 @@ def storage_table(design, swing: dict, a_sf: float, response=None, factors=STORA
              "secondary": design.secondary.area if design.secondary.mask_opening is None else design.secondary.mask_opening}
     c_fd = {k: capacitances(design, k, a_sf)["c_fd_F"] for k in KINDS}
     lights = storage_lights(design)
-    figs = {}
+    figs, halos = {}, {}
     if response is not None:
         from ..layout.pex.lightfigures import figures
         figs = {name: figures(design, response, spec) for name, spec in lights.items()}
+        if halo is not None:
+            from ..layout.pex.halo import figures as halo_figures
+            halos = {name: halo_figures(design, response, halo, spec) for name, spec in lights.items()}
     rows = []
     for kind in KINDS:
         sub = getattr(design, kind)
@@ -181,19 +189,22 @@ def storage_table(design, swing: dict, a_sf: float, response=None, factors=STORA
         for name in lights:
             for f in factors:
                 row = {"array": kind, "light": name, "source_x_background": f, "wait_s": t}
-                for model in ("geometric", "modelled"):
-                    if model == "modelled" and name not in figs:
-                        continue
-                    if model == "geometric":
-                        area, gse = drawn[kind], design.pixel.gse
-                    else:
-                        fg = figs[name]
-                        area = fg["primary_area_m2"] if kind == "primary" else fg["effective_opening_m2"]
-                        gse = fg["gse_primary"] if kind == "primary" else fg["gse_secondary"]
+
+                def put(prefix, area, gse):
                     electrons = f * j_bg * area / gse * t / Q
                     v = a_sf * electrons * Q / c_fd[kind]
-                    row[f"{model}_gse"] = gse
-                    row[f"{model}_fd_e"] = electrons
-                    row[f"{model}_of_swing"] = min(v / swing[kind], 1.0)
+                    row[f"{prefix}_gse"] = gse
+                    row[f"{prefix}_fd_e"] = electrons
+                    row[f"{prefix}_of_swing"] = min(v / swing[kind], 1.0)
+                put("geometric", drawn[kind], design.pixel.gse)
+                if name in figs:
+                    fg = figs[name]
+                    area = fg["primary_area_m2"] if kind == "primary" else fg["effective_opening_m2"]
+                    put("modelled", area, fg["gse_primary"] if kind == "primary" else fg["gse_secondary"])
+                    if name in halos:
+                        hg = halos[name][kind]
+                        put("alone", area, hg["gse_alone"])
+                        put("neighbour", area, hg["gse_neighbour"])
+                        row["neighbour"] = hg["neighbour"]
                 rows.append(row)
     return rows

@@ -73,11 +73,16 @@ def build(ctx) -> Section:
         tables.append(Table("bright_storage", "Storage node around a bright source during the readout (last row; "
                             "% of the column swing, clipped at 100)",
                             ["array", "light", "source (x background)", "GSE geometric", "geometric (%)",
-                             "GSE modelled", "modelled (%)", "modelled FD charge (e-)"],
+                             "GSE modelled", "modelled (%)", "modelled FD charge (e-)",
+                             "modelled, one pixel lit (%)", "modelled, its worst neighbour (%)",
+                             "worst neighbour's FD charge (e-)"],
                             [[r["array"], r["light"], r["source_x_background"], r["geometric_gse"],
                               r["geometric_of_swing"] * 100, r.get("modelled_gse", "-"),
                               r["modelled_of_swing"] * 100 if "modelled_of_swing" in r else "-",
-                              r.get("modelled_fd_e", "-")] for r in srows]))
+                              r.get("modelled_fd_e", "-"),
+                              r["alone_of_swing"] * 100 if "alone_of_swing" in r else "-",
+                              r["neighbour_of_swing"] * 100 if "neighbour_of_swing" in r else "-",
+                              r.get("neighbour_fd_e", "-")] for r in srows]))
         text.append(note)
         data["storage"] = srows
     return Section(TITLE, text=text, checked=checked, tables=tables, data=data)
@@ -93,11 +98,13 @@ def _storage(ctx):
     from ...chip.bright import storage_table
     exp = ctx.experiment()
     swing = {k: exp[k]["swing_V"] for k in ("primary", "secondary")}
-    resp = None
+    resp = hal = None
     if d.tech.collection is not None and (not ctx.quick or d.light.model == "modelled"):
         from ...layout.pex.collection import response
+        from ...layout.pex.halo import halo
         resp = response(d)
-    rows = storage_table(d, swing, sf_gain(d), resp)
+        hal = halo(d)
+    rows = storage_table(d, swing, sf_gain(d), resp, halo=hal)
     worst = {k: max(r["geometric_of_swing"] for r in rows if r["array"] == k and r["source_x_background"] == 1e3)
              for k in ("primary", "secondary")}
     note = (f"The storage node around a bright source: a source 1e3 - 1e5 x the background lit while the frame is "
@@ -106,5 +113,8 @@ def _storage(ctx):
             f"{worst['secondary'] * 100:.2g} % (secondary) of the swing at 1e3 x with geometric light. By light: the "
             "scene's halogen, a white LED, single wavelengths; modelled: each light's GSE and the secondary's "
             "effective opening from the collection model (docs/light-collection.md). The sign-off's "
-            "storage_light_* figures measure the same in SPICE (docs/verify.md).")
+            "storage_light_* figures measure the same in SPICE (docs/verify.md). Those are every pixel lit at the "
+            "source's level; with the model, a source imaged on one dual pixel also: its own storage node with its "
+            "neighbours dark, and the halo on its worst neighbour's (carriers diffusing from the lit pixel: Bloch "
+            "solves of the pixel over a 3 x 3 supercell, layout.pex.halo).")
     return rows, note
