@@ -67,6 +67,25 @@ def show(d, f, title):
               f"  {by['effective_opening_m2'][i] * 1e12:9.3g}  {by['gse_primary'][i]:6.0f}  {by['gse_secondary'][i]:6.0f}")
 
 
+def show_halo(d, resp, hal):
+    """The halo's figures: GSE-like ratios of one lit pixel's own storage node and its neighbours', and the shares
+    of the uniform scene's storage-node charge by offset and wavelength."""
+    from pixelkit.layout.pex.halo import figures as halo_figures
+    from pixelkit.layout.pex.lightfigures import scene_spectrum
+    from pixelkit.physics.photo import Spectrum
+    for name, spec in (("halogen", scene_spectrum(d)), ("white LED", Spectrum.white_led())):
+        for kind, f in halo_figures(d, resp, hal, spec).items():
+            print(f"  halo, {name}, {kind}: GSE one pixel lit {f['gse_alone']:.0f}, worst neighbour {f['neighbour']} "
+                  f"{f['gse_neighbour']:.0f}, eight neighbours together {f['gse_all_neighbours']:.0f}")
+    print("  share of the uniform scene's storage-node charge, by the lit pixel's offset (p.fd / s0.fd)")
+    print("  nm    own          left         right        below        above")
+    for i in range(0, len(hal.wavelength_m), 4):
+        cols = []
+        for dd in ("0,0", "-1,0", "1,0", "0,-1", "0,1"):
+            cols.append("/".join(f"{hal.eta[dd][n][i] / hal.periodic[n][i]:.3f}" for n in ("p.fd", "s0.fd")))
+        print(f"  {hal.wavelength_m[i] * 1e9:4.0f}  " + "  ".join(cols))
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--design", default=str(ROOT / "designs" / "dual_pixel_revA.toml"))
@@ -94,16 +113,27 @@ def main():
     t = _clock()
     cl.response(d, cl.pixel_geometry(d))
     c = _since(t)
+    from pixelkit.layout.pex import halo as hm
+    t = _clock()
+    hal = hm.halo(d, geo)
+    hc = _since(t)
+    t = _clock()
+    hm.halo(d, geo)
+    hcc = _since(t)
     total = (g[0] + m[0] + r[0], g[1] + m[1] + r[1])
     n = len(cl.wavelengths(d))
     print(f"grid {sil.grid.nx} x {sil.grid.ny} x {sil.grid.nz} ({sil.grid.nx * sil.grid.ny * sil.grid.nz} voxels), "
           f"{len(sil.nets)} collection maps, {n} wavelengths")
     for label, (w, cpu) in (("draw + extract the dual pixel", g), ("collection maps (cold)", m),
                             (f"light field + collection, {n} wavelengths (cold)", r),
-                            ("the model, empty cache (sum)", total), ("the model again, from the cache", c)):
+                            ("the model, empty cache (sum)", total), ("the model again, from the cache", c),
+                            (f"the halo, {hal.cells[0]} x {hal.cells[1]} Bloch solves (cold)", hc),
+                            ("the model and its neighbours' halo (sum)", (total[0] + hc[0], total[1] + hc[1])),
+                            ("the halo again, from the cache", hcc)):
         print(f"  {label:<52} {w:7.1f} s wall {cpu:7.1f} s CPU  {w / spice[0]:7.1f} x baseline")
     f = figures(d)
     show(d, f, "figures (default grid)")
+    show_halo(d, f["response"], hal)
     if a.convergence:
         fine = dataclasses.replace(d, light=dataclasses.replace(d.light, grid=0.2e-6, wavelength_step=12.5e-9))
         show(fine, figures(fine), "the same at a 0.2 um grid, 12.5 nm steps")
