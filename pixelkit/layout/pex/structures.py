@@ -312,9 +312,28 @@ def _holdout7(tech) -> list:
             _plate("u_plate_m1_sub", "metal1", 9, 14, "ups")]
 
 
+def _holdout8(tech) -> list:
+    """A ninth held-out set, drawn and solved by FastCap2 at the start of session 6, before any change to
+    the model that session (pad stacks' stacked sections, off-axis crossings, an upper line beside a line
+    one metal lower, metal5 plates over metal4): the families holdout6 / 7 missed and some they held, at
+    geometries no set had."""
+    return [_pads(tech, "w_via_stack_m3_far", "metal3", 1.5, 2.0, "wv"),
+            _pads(tech, "w_via_stack_m4_close", "metal4", 0.8, 0.6, "ww"),
+            _pads(tech, "w_via_stack_m5_wide", "metal5", 2.0, 1.2, "wx"),
+            _cross("w_cross_m1m3_60", "metal1", 0.5, "metal3", 0.8, 60, "wc1"),
+            _cross("w_cross_m2m3_120_wide", "metal2", 1.0, "metal3", 0.6, 120, "wc2"),
+            _cross("w_cross_m3m5_45", "metal3", 0.8, "metal5", 1.2, 45, "wc3"),
+            _parallel("w_parallel_m3m4_close", "metal3", 0.6, "metal4", 0.8, 0.7, "wp"),
+            _parallel("w_parallel_m4m5_far", "metal4", 0.5, "metal5", 1.5, 2.8, "wq"),
+            _plates("w_plate_m5_m4_big", "metal4", 16, "metal5", 3, "wr"),
+            _cross("w_cross_m2m3_mid", "metal2", 0.7, "metal3", 0.5, 90, "wc4"),
+            _pair("w_lat_m4_close", "metal4", 0.6, 0.6, 0.5, 30, "wa1")]
+
+
 SETS = {"first": _first, "development": _development, "validation": _validation, "holdout": _holdout,
         "holdout2": _holdout2, "holdout3": _holdout3,
-        "holdout4": _holdout4, "holdout5": _holdout5, "holdout6": _holdout6, "holdout7": _holdout7}
+        "holdout4": _holdout4, "holdout5": _holdout5, "holdout6": _holdout6, "holdout7": _holdout7,
+        "holdout8": _holdout8}
 
 
 def _bounds(shape):
@@ -429,7 +448,8 @@ REFERENCE = {"first": "extraction_structures.json", "development": "extraction_s
              "holdout4": "extraction_structures_holdout4.json",
              "holdout5": "extraction_structures_holdout5.json",
              "holdout6": "extraction_structures_holdout6.json",
-             "holdout7": "extraction_structures_holdout7.json"}
+             "holdout7": "extraction_structures_holdout7.json",
+             "holdout8": "extraction_structures_holdout8.json"}
 
 
 if __name__ == "__main__":      # python -m pixelkit.layout.pex.structures SET OUT.json: the FastCap2 reference
