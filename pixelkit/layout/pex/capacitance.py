@@ -57,6 +57,8 @@ from __future__ import annotations
 from collections import defaultdict
 
 from . import section
+from . import farfield
+from .beside import beside
 from .cornerfield import corner_couplings
 from .farfield import far_couplings
 from .fringe import fringe, landing, wide, width_of
@@ -225,9 +227,27 @@ def _fringe_band(cpl, net, band, below, above, stack, t, z, edge_len, band_area,
 def capacitances(geo, stack) -> Couplings:
     """Every wiring capacitance of ``geo`` (a ``nets.NetGeometry``) with ``stack``'s numbers."""
     cpl = Couplings()
+    spent = defaultdict(float)          # (layer, net) -> fringe length (m) the corner field took
+    polygons = sum(r.count() for nets in geo.wires.values() for r in nets.values())
+    first_order = beside(farfield.first_order, polygons, geo, stack)     # the far field, meanwhile
+    try:
+        _near_terms(cpl, geo, stack, spent)
+    except BaseException:
+        first_order.cancel()
+        raise
+    for a, b, c in far_couplings(geo, stack, cpl, first_order()):
+        cpl.add(a, b, c)
+        for n in (a, b):                  # to first order each net's total stays: taken from its ground
+            key = (GROUND, n) if GROUND < n else (n, GROUND)
+            cpl.c[key] = max(0.0, cpl.c.get(key, 0.0) - c)
+    float_out(cpl)
+    return cpl
+
+
+def _near_terms(cpl, geo, stack, spent) -> None:
+    """The 2.5D terms of every conductor layer (``capacitances``), bottom to top, into ``cpl``."""
     dbu = geo.dbu
     halo = int(round(stack.halo / dbu))
-    spent = defaultdict(float)          # (layer, net) -> fringe length (m) the corner field took
     for i, cond in enumerate(stack.conductors):
         nets = geo.wires.get(cond.name, {})
         if not nets:
@@ -288,13 +308,6 @@ def capacitances(geo, stack) -> Couplings:
             strips = _strips(reg, wb, dbu) if STRIPS else None
             _fringe_band(cpl, net, band, below, above, stack, t, z, length, band.area(), cond.device_below, strips,
                          cond.name, _widen(reg, covers, t, z, dbu))
-    for a, b, c in far_couplings(geo, stack, cpl):
-        cpl.add(a, b, c)
-        for n in (a, b):                  # to first order each net's total stays: taken from its ground
-            key = (GROUND, n) if GROUND < n else (n, GROUND)
-            cpl.c[key] = max(0.0, cpl.c.get(key, 0.0) - c)
-    float_out(cpl)
-    return cpl
 
 
 def _covers(above, below):

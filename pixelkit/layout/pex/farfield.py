@@ -387,10 +387,20 @@ def _top_interface(stack, eps):
     return (stack.dielectrics[-2].top, (k - kt) / (k + kt))
 
 
-def far_couplings(geo, stack, cpl) -> list:
+def far_couplings(geo, stack, cpl, fo=None) -> list:
     """[(net a, net b, C)] the far field adds between the conductors of every two layers of ``geo``, over the
     2.5D terms of ``cpl`` (a ``Couplings``: its ``near`` record between them, and every net's couplings, by
-    which the far field is screened)."""
+    which the far field is screened). ``fo``: ``first_order(geo, stack)`` when already computed (it does not
+    depend on ``cpl``: ``capacitance.capacitances`` computes it beside the 2.5D terms)."""
+    if fo is None:
+        fo = first_order(geo, stack)
+    return _combined(fo, cpl)
+
+
+def first_order(geo, stack) -> dict:
+    """The first-order far-field sums {(lower layer, upper layer, lower net, upper net, view, zone): F} of
+    ``geo``: each layer's pieces in every other layer's field (``far_couplings`` weighs them against the 2.5D
+    terms)."""
     import numpy as np
     from scipy.ndimage import distance_transform_edt
     from .fringe import fringe
@@ -399,7 +409,7 @@ def far_couplings(geo, stack, cpl) -> list:
     dbu = geo.dbu
     conds = [c for c in stack.conductors if geo.wires.get(c.name) and not c.device_below]
     if len(conds) < 2:
-        return []
+        return {}
     names = sorted({n for c in stack.conductors for n in geo.wires.get(c.name, {})})
     index = {n: k for k, n in enumerate(names)}
     boxes = [r.bbox() for c in stack.conductors for r in geo.wires.get(c.name, {}).values()]
@@ -487,6 +497,11 @@ def far_couplings(geo, stack, cpl) -> list:
                             if sel.any():
                                 key = (ca.name, cb.name, lower, upper, view, zone)
                                 fo[key] = fo.get(key, 0.0) + float(c[sel].sum())
+    return fo
+
+
+def _combined(fo, cpl) -> list:
+    """``far_couplings``' pairs from the first-order sums ``fo`` and the 2.5D terms ``cpl``."""
     total = {}
     for (x, y), v in cpl.c.items():
         total[x] = total.get(x, 0.0) + v
