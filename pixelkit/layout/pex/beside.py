@@ -5,7 +5,9 @@ caller computes meanwhile: on the 2 x 2 chip with its AFEs each is about half of
 (``benchmarks/layout.py``). A fork shares the geometry (KLayout regions, which do not pickle) without
 copying it; only the result (a dict of floats) comes back through a pipe. Where there is one core, the
 geometry is small (the fork's cost is then a fair part of the work) or the child fails (killed, out of
-memory), the same function runs in the caller's process: the result is the same either way.
+memory) or the caller has other threads (a fork copies only the calling thread: a lock another one holds
+would stay held in the child), the same function runs in the caller's process: the result is the same
+either way.
 """
 from __future__ import annotations
 
@@ -18,7 +20,9 @@ def beside(fn, size: int, *args):
     """Start ``fn(*args)`` in a forked child when there is a core to spare and ``size`` (polygons) is at least
     MIN_POLYGONS; a function returning its result (from the child, or computed here when there was none)."""
     import multiprocessing as mp
-    if (os.cpu_count() or 1) < 2 or size < MIN_POLYGONS or "fork" not in mp.get_all_start_methods():
+    import threading
+    if ((os.cpu_count() or 1) < 2 or size < MIN_POLYGONS or "fork" not in mp.get_all_start_methods()
+            or threading.active_count() > 1):       # a fork of a threaded process may inherit a held lock
         return _Here(fn, args)
     ctx = mp.get_context("fork")
     recv, send = ctx.Pipe(duplex=False)
