@@ -45,3 +45,21 @@ def test_a_child_that_dies_leaves_the_answer_to_the_caller(monkeypatch):
     r = B.beside(work, 1, 21)
     assert isinstance(r, B._Result)
     assert r() == {"x": 42}
+
+
+def test_no_fork_beside_a_thread_but_beside_a_deck_waiter(monkeypatch):
+    """A thread that may hold a lock: computed in the caller; the sign-off's deck waiter (blocked in waitpid):
+    forked."""
+    import threading
+    monkeypatch.setattr(B, "MIN_POLYGONS", 0)
+    for name, forks in (("some-worker", False), ("pixelkit-wait-deck", True)):
+        stop = threading.Event()
+        t = threading.Thread(target=stop.wait, name=name, daemon=True)
+        t.start()
+        try:
+            r = B.beside(lambda: 7, 1)
+            assert isinstance(r, B._Result) == forks, name
+            assert r() == 7
+        finally:
+            stop.set()
+            t.join()

@@ -5,8 +5,8 @@ caller computes meanwhile: on the 2 x 2 chip with its AFEs each is about half of
 (``benchmarks/layout.py``). A fork shares the geometry (KLayout regions, which do not pickle) without
 copying it; only the result (a dict of floats) comes back through a pipe. Where there is one core, the
 geometry is small (the fork's cost is then a fair part of the work) or the child fails (killed, out of
-memory) or the caller has other threads (a fork copies only the calling thread: a lock another one holds
-would stay held in the child), the same function runs in the caller's process: the result is the same
+memory) or the caller has other threads than the sign-off's deck waiters (a fork copies only the calling
+thread: a lock another one holds would stay held in the child), the same function runs in the caller's process: the result is the same
 either way.
 """
 from __future__ import annotations
@@ -14,6 +14,9 @@ from __future__ import annotations
 import os
 
 MIN_POLYGONS = 400      # below this the extraction takes ~0.1 s: not worth a process
+#: threads that only wait on a child process (``signoff.foundry.Job``: blocked in waitpid, holding nothing
+#: the fork's child uses): a fork beside them is safe
+WAITERS = "pixelkit-wait"
 
 
 def beside(fn, size: int, *args):
@@ -22,7 +25,8 @@ def beside(fn, size: int, *args):
     import multiprocessing as mp
     import threading
     if ((os.cpu_count() or 1) < 2 or size < MIN_POLYGONS or "fork" not in mp.get_all_start_methods()
-            or threading.active_count() > 1):       # a fork of a threaded process may inherit a held lock
+            or any(t is not threading.current_thread() and not t.name.startswith(WAITERS)
+                   for t in threading.enumerate())):     # a fork of a threaded process may inherit a held lock
         return _Here(fn, args)
     ctx = mp.get_context("fork")
     recv, send = ctx.Pipe(duplex=False)

@@ -81,7 +81,7 @@ class Job:
                                    stdout=self._log, stderr=subprocess.STDOUT, cwd=self.folder)
         self.t_end = None
         import threading
-        self._waiter = threading.Thread(target=self._wait, daemon=True)
+        self._waiter = threading.Thread(target=self._wait, daemon=True, name="pixelkit-wait-deck")  # pex.beside.WAITERS
         self._waiter.start()
 
     def _wait(self):
