@@ -95,14 +95,15 @@ def test_heldout_set_score_as_measured(ref_design, reference_nominal):
 
 @pytest.mark.slow
 def test_second_heldout_set_score_as_measured(ref_design, reference_nominal):
-    """The second held-out set (seeds 90000-90061, drawn after the first was seen; ~30 min of CPU: slow). Its first
-    51 cases were scored blind once on the code of a2b0b0a: top-1 36 / 40, explained when right 30 / 36 (issue 46's
-    90 % NOT met), every outside effect "not explained" (8 / 8, each with a visible gap), none on the three
-    effect-free chips. The whole 62-case set's blind score on 53a590a (f4b7be8 on main): docs/gap-diagnosis.md. Guards the level
-    measured (never lowered)."""
+    """The second held-out set (62 cases, seeds 90000-90061, drawn after the first was seen; slow: 20 min of two
+    processes at a load of 14-26). Scored blind once on 53a590a (f4b7be8 on main): top-1 44 / 48, explained when
+    right 40 / 44, every outside effect "not explained" (8 / 8, each with a visible gap), none on the six effect-free
+    chips (docs/gap-diagnosis.md; its first 51 cases on a2b0b0a: 36 / 40, 30 / 36). Held at issue 46's targets:
+    top-1 and explained when right >= 90 %, no outside effect explained."""
     r = ood.run_set(ref_design, reference_nominal, "heldout2")
-    assert r["top1_accuracy"] >= 36 / 40 - 1e-9, r["per_effect_top1"]
-    assert r["explained_when_right"] >= 30 / 36 - 1e-9, r["per_kind_explained"]
+    assert r["n_effect_cases"] == 48
+    assert r["top1_accuracy"] >= 0.9, r["per_effect_top1"]
+    assert r["explained_when_right"] >= 0.9, r["per_kind_explained"]
     assert r["not_explained_on_out_of_library"] == 1.0 and r["none_on_clean"] == 1.0
 
 
