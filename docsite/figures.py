@@ -8,7 +8,8 @@ on the site, where the hook removes it, and on a repository host):
 ``quick:`` is the quick report of the reference design (``pixelkit report
 designs/dual_pixel_revA.toml --quick``): ``TABLE::ROW::COLUMN`` a cell of its ``tables.json``
 (the row by its first cell, the column by its heading), or ``checked::NAME`` a checked figure of
-its ``summary.json``, or ``verdict::FIELD`` a number of its verdict (``passing``, ``specs``). A key may end with ``*SCALE`` (``*1e3``: V quoted in mV). The quoted
+its ``summary.json``, ``data_SECTION.json::DOTTED`` a number of a section's data file
+(``data_noise.json::spice.primary.fd_reset_V2``), or ``verdict::FIELD`` a number of its verdict (``passing``, ``specs``). A key may end with ``*SCALE`` (``*1e3``: V quoted in mV). The quoted
 number must be the current value as printed to the same digits (401.9 stands for 401.85 -
 401.95); ``~2%`` after the key allows a band instead (a figure that scatters).
 
@@ -87,6 +88,11 @@ def quick_source(report: Path):
             return float(checked[parts[1]]["value"])
         if parts[0] == "verdict":
             return float(verdict[parts[1]])
+        if parts[0].startswith("data_") and parts[0].endswith(".json"):   # the report's section data
+            data = json.loads((Path(report) / parts[0]).read_text())
+            for part in parts[1].split("."):
+                data = data[int(part)] if isinstance(data, list) else data[part]
+            return float(data)
         table, row, col = parts
         t = tables[table]
         r = next(r for r in t["rows"] if str(r[0]) == row)
@@ -309,8 +315,9 @@ LOCAL = ("block", "record", "file", "calc", "input", "cite", "default", "schema"
 #: ``pl`` (the GF180 dual pixel's schematic and post-layout views, ``VIEW.ARRAY.FIGURE``: C_FD, C_PD,node, the
 #: column line, CG_out(0) model and SPICE charge step; tests/test_post_layout.py); ``xs`` (the extraction's
 #: term of a test structure, ``SET.NAME`` in F: docs/post-layout.md's structure tables;
-#: tests/test_extraction_structures.py)
-OTHER_SOURCES = ("p4t", "pl", "xs")
+#: tests/test_extraction_structures.py); ``afen`` (the AFE noise's closed forms over SPICE's - 1 in %, ``CASE``:
+#: docs/noise-camera.md; tests/test_afe_noise.py)
+OTHER_SOURCES = ("p4t", "pl", "xs", "afen")
 
 
 def _digits(text: str) -> float:
