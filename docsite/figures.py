@@ -316,8 +316,10 @@ LOCAL = ("block", "record", "file", "calc", "input", "cite", "default", "schema"
 #: column line, CG_out(0) model and SPICE charge step; tests/test_post_layout.py); ``xs`` (the extraction's
 #: term of a test structure, ``SET.NAME`` in F: docs/post-layout.md's structure tables;
 #: tests/test_extraction_structures.py); ``afen`` (the AFE noise's closed forms over SPICE's - 1 in %, ``CASE``:
-#: docs/noise-camera.md; tests/test_afe_noise.py)
-OTHER_SOURCES = ("p4t", "pl", "xs", "afen")
+#: docs/noise-camera.md; tests/test_afe_noise.py); ``afeg`` (the AFE gain error measured and predicted per op-amp
+#: gain: docs/pixel-model.md, docs/verify.md; tests/test_afe.py); ``stl`` (settling at ss 85 degC -10 %: the
+#: 9-row bright cycle and verify's 2-row figure, docs/verify.md; tests/test_settling.py)
+OTHER_SOURCES = ("p4t", "pl", "xs", "afen", "afeg", "stl")
 
 
 def _digits(text: str) -> float:

@@ -13,6 +13,8 @@ from pixelkit.measure.afe import afe_output, eps, finite_gain_output, ideal_outp
 from pixelkit.spice import simulate_many
 
 PAIRS = [(1.9 - dv, 1.9) for dv in np.linspace(0.0, 1.2, 7)]  # full pixel swing at the column
+#: the gain error (%) measured in SPICE and predicted (eps / (1 + eps)) per op-amp gain, for the page check
+GAIN_ERROR: dict = {}
 
 
 def _outputs(designs):
@@ -31,6 +33,8 @@ def test_residual_is_the_finite_gain_error(ref_design):
     for g, out in zip(gains, _outputs(designs)):
         slope, offset = np.polyfit(dv, out, 1)
         predicted = -(a.c11 / a.c13) / (1 + eps(a.c11, a.c13, g))
+        GAIN_ERROR[f"measured/{g:g}"] = 100 * (1 - slope / -(a.c11 / a.c13))
+        GAIN_ERROR[f"predicted/{g:g}"] = 100 * (1 - predicted / -(a.c11 / a.c13))
         # the gain error (1 + slope) is the predicted eps/(1+eps) within 5 % of itself
         assert 1 + slope == pytest.approx(1 + predicted, rel=0.05), g
         # the finite-gain model explains >= 95 % of the signal-dependent residual; what is
@@ -39,6 +43,23 @@ def test_residual_is_the_finite_gain_error(ref_design):
         left = out - finite_gain_output(a.vref, a.c11, a.c13, g, dv)
         assert np.ptp(left) < 0.05 * np.ptp(explained) + 0.3e-3, g
         assert abs(np.mean(left)) < 0.03
+
+
+def test_pixel_model_page_quotes_the_current_gain_errors(ref_design):
+    """docs/pixel-model.md and docs/verify.md quote the gain errors measured and predicted above
+    (``afeg:measured/A``, ``afeg:predicted/A`` in %): a change that moves one fails here, naming the line
+    (``PIXELKIT_DOCS_REWRITE=1`` rewrites). Run after the test above it reuses its runs."""
+    import os
+    from docsite import figures
+    if not GAIN_ERROR:
+        test_residual_is_the_finite_gain_error(ref_design)
+    getters = {"afeg": GAIN_ERROR.__getitem__}
+    pages = [ROOT / "docs" / "pixel-model.md", ROOT / "docs" / "verify.md"]
+    if os.environ.get("PIXELKIT_DOCS_REWRITE"):
+        figures.update(None, pages, getters=getters)
+    bad, n = figures.check(None, pages, getters=getters)
+    assert n >= 7 and not bad, "\n".join(f"{b['page']}:{b['line']}: {b['key']}: quoted {b['quoted']}, now "
+                                       f"{b.get('now') or b.get('why')}" for b in bad)
 
 
 def test_eq_3_1_over_the_full_input_range(ref_design):
