@@ -318,8 +318,10 @@ LOCAL = ("block", "record", "file", "calc", "input", "cite", "default", "schema"
 #: tests/test_extraction_structures.py); ``afen`` (the AFE noise's closed forms over SPICE's - 1 in %, ``CASE``:
 #: docs/noise-camera.md; tests/test_afe_noise.py); ``afeg`` (the AFE gain error measured and predicted per op-amp
 #: gain: docs/pixel-model.md, docs/verify.md; tests/test_afe.py); ``stl`` (settling at ss 85 degC -10 %: the
-#: 9-row bright cycle and verify's 2-row figure, docs/verify.md; tests/test_settling.py)
-OTHER_SOURCES = ("p4t", "pl", "xs", "afen", "afeg", "stl")
+#: 9-row bright cycle and verify's 2-row figure, docs/verify.md; tests/test_settling.py); ``nzf`` (the column 1/f
+#: model below ngspice's at 400 nA and at the design's load, docs/noise-camera.md, timing-and-settling.md;
+#: tests/test_noise.py)
+OTHER_SOURCES = ("p4t", "pl", "xs", "afen", "afeg", "stl", "nzf")
 
 
 def _digits(text: str) -> float:
