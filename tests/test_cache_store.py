@@ -266,11 +266,11 @@ def test_a_copied_checkout_keys_report_sections_alike_and_an_edit_does_not(tmp_p
     the same key, so the sections one copy built serve the other; an edited model file (not kit code:
     only the model files' fingerprint sees it) or an edited design file gives another key."""
     import shutil
-    code = ("from pixelkit.design import load_design; from pixelkit.report.cache import section_key; "
-            "print(section_key('signoff', load_design('designs/dual_pixel_revB.toml'), {'quick': False}))")
+    code = ("import sys; from pixelkit.design import load_design; from pixelkit.report.cache import section_key; "
+            "print(section_key('signoff', load_design(sys.argv[1]), {'quick': False}))")
 
-    def key(root):
-        p = subprocess.run([sys.executable, "-c", code], cwd=root, capture_output=True, text=True, timeout=120,
+    def key(root, design="designs/dual_pixel_revB.toml"):
+        p = subprocess.run([sys.executable, "-c", code, str(design)], cwd=root, capture_output=True, text=True, timeout=120,
                            env={**os.environ, "PYTHONPATH": str(root)})
         assert p.returncode == 0, p.stderr[-2000:]
         return p.stdout.strip()
@@ -281,6 +281,7 @@ def test_a_copied_checkout_keys_report_sections_alike_and_an_edit_does_not(tmp_p
         shutil.copy(os.path.join(ROOT, "designs", "dual_pixel_revB.toml"), r / "designs")
     first = key(roots[0])
     assert key(roots[1]) == first, "the same content in another folder must key the section alike"
+    assert key(roots[1], roots[1] / "designs" / "dual_pixel_revB.toml") == first, "an absolute path keys alike"
     model = roots[1] / "pixelkit" / "tech" / "models" / "gf180mcu" / "design.ngspice"
     model.write_text(model.read_text() + "\n* edited\n")
     edited_model = key(roots[1])

@@ -5,6 +5,7 @@ import click
 
 from .common import design_arg, emit, json_opt, load, main, out_opt, output_path, scheduler_address, spice_opts, post_layout_opt
 from .types import FiniteRange
+from ..chip.interp import LIMIT_V
 
 
 @main.command("array")
@@ -33,7 +34,7 @@ from .types import FiniteRange
 @click.option("--interpolate/--exhaustive", default=True, show_default=True,
               help="with --afe, the column chains of an array whose columns each see one photocurrent in every row "
                    "(the default gradient) are interpolated in photocurrent from a few simulated ones and checked "
-                   "against held-out chains simulated too (all simulated when beyond 0.05 mV); --exhaustive "
+                   f"against held-out chains simulated too (all simulated when beyond {LIMIT_V * 1e3:g} mV); --exhaustive "
                    "simulates every chain. See pixelkit.chip.interp")
 @click.option("--seed", type=click.IntRange(0, 2**31 - 1), default=None, help="Monte Carlo mismatch draw (GF180 statistical models)")
 @click.option("--t-exp", "t_exp", type=FiniteRange(0.0, 10.0, min_open=True), default=None,

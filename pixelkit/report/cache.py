@@ -49,8 +49,9 @@ def design_hash(design) -> str:
     """Content hash of a loaded design: every field, its technology and the content of its model
     files, not where they lie: two checkouts (or two machines) of the same design, kit and models
     key a section alike and share the section cache, as the simulation cache does
-    (``spice.cache``). The design's path stays as it was spelled (the reproducibility section
-    prints it in its rebuild command), its file's bytes are hashed too; the technology file and
+    (``spice.cache``). The design file goes by its name and its bytes, however its path is spelled
+    (the reproducibility section, which prints the path in its rebuild command, keys on it through its
+    ``inputs``); the technology file and
     the model folders go by their names, their content being in the fields (the technology), in
     :func:`source_hash` (the kit's own files) and in the model files' fingerprint, taken over
     every corner's includes (the sign-off simulates the other corners too)."""
@@ -58,6 +59,9 @@ def design_hash(design) -> str:
     lib = design.tech.models
     incs = [*(i for corner in lib.corners.values() for i in corner), *lib.mim.values()]
     text = repr(design)
+    src = getattr(design, "source", None)
+    if src:        # the file by its name (its bytes are hashed below), however its path is spelled
+        text = text.replace(f"source={src!r}", f"source={Path(src).name!r}")
     tech_source = getattr(design.tech, "source", None)
     names = {str(lib.folder): "<models>", **{str(i.folder): "<models>" for i in incs}}
     if tech_source:
@@ -66,7 +70,6 @@ def design_hash(design) -> str:
         text = text.replace(path, names[path])
     h = hashlib.sha256(text.encode())
     h.update(content_fingerprint(tuple(sorted({str(i.file) for i in incs}))).encode() if incs else b"")
-    src = getattr(design, "source", None)
     if src and is_regular(Path(src)):
         h.update(read_bytes(Path(src), "design", "design"))
     return h.hexdigest()[:16]

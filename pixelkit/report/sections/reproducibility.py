@@ -34,8 +34,9 @@ def _git() -> str:
 
 def inputs(ctx) -> dict:
     """What the section shows besides the design and the kit's code (the report's section cache keys
-    on it): the checkout's git commit, which a commit that changes no code still moves."""
-    return {"git": _git()}
+    on it): the checkout's git commit, which a commit that changes no code still moves, and the design's
+    path as spelled, which its rebuild command prints (the design's key has its file's name only)."""
+    return {"git": _git(), "source": str(getattr(ctx.design, "source", None))}
 
 
 def build(ctx) -> Section:
