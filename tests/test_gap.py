@@ -233,6 +233,20 @@ def test_undecodable_gap_files_are_one_line(tmp_path, cli, content, needle):
     assert code == 2 and "Traceback" not in err and needle in err and len(err.strip().splitlines()) == 1
 
 
+def test_selftest_draws_every_parameter_of_each_effect():
+    """The self-test's drawn parameter vector of each library effect is as long as the effect's parameter list
+    (an effect that gained a parameter and a draw that did not crashed `gap selftest --kind surrogate`)."""
+    import numpy as np
+
+    from pixelkit.gap.effects import EFFECTS
+    from pixelkit.gap.selftest import RANGES
+    g = np.random.default_rng(1)
+    for name, draw in RANGES.items():
+        if draw is None or EFFECTS[name][1] is None:       # scaled to the campaign / per-column terms
+            continue
+        assert len(draw(g)) == len(EFFECTS[name][0]), name
+
+
 def test_surrogate_selftest_command_contract(cli):
     """`gap selftest --kind surrogate` (the fitter on its own library: arithmetic only) reports its kind and counts."""
     code, out, err = cli("gap", "selftest", "--json", "--kind", "surrogate", "--per-effect", 1, "--clean", 2,

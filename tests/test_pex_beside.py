@@ -11,6 +11,16 @@ from pixelkit.layout.pex import cell_geometry
 from pixelkit.layout.pex.capacitance import capacitances
 
 
+@pytest.fixture(autouse=True)
+def own_threads(monkeypatch):
+    """``beside`` forks only where the caller has no other thread than the deck waiters: threads other tests
+    of the session left behind (a progress bar's monitor, a server's) are hidden from it; the threads a test
+    starts itself stay visible."""
+    import threading
+    before, real = set(threading.enumerate()) - {threading.current_thread()}, threading.enumerate
+    monkeypatch.setattr(threading, "enumerate", lambda: [t for t in real() if t not in before])
+
+
 def test_far_field_beside_gives_the_couplings_of_one_process(monkeypatch):
     """The dual pixel's cell with the far field in a child and
     in the caller: every coupling equal to 1e-12 relative (the sums are not bit-for-bit in order)."""

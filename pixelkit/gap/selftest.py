@@ -38,10 +38,12 @@ RANGES = {
         [_u(g, 2e-16, 2e-15), _u(g, 0.0, 1.0), _u(g, 0.0, 0.6), _u(g, -0.05, 0.1), _u(g, 0.0, 0.4)]),
     "charge_injection": lambda g: [_u(g, 3e-18, 3e-17), g.choice([-1, 1]) * _u(g, 0.3e-15, 3e-15),
                                    _u(g, 0.0, 0.3e-15)],                      # RST-FD, p1-vm, the switch on FD
-    "sf_gain": lambda g: [1.0 / _u(g, 6e6, 2.5e7), _u(g, -0.3, 0.3)],         # 3 - 10 % chain gain loss
+    # (the drifts with temperature the fit may use, sf_gain's p[2:4] and sf_strength's small-signal gain
+    # p[4:6], are drawn at their textbook 0: the library's edit as it was when these ranges were set)
+    "sf_gain": lambda g: [1.0 / _u(g, 6e6, 2.5e7), _u(g, -0.3, 0.3), 0.0, 0.0],   # 3 - 10 % chain gain loss
     "column_load": lambda g: [g.choice([-1, 1]) * _u(g, 0.05, 0.2)],          # load current 5 - 20 % off
     "sf_strength": lambda g: [float(np.exp(_u(g, np.log(0.6), np.log(1.6)))) - 1, _u(g, -0.3e-15, 0.8e-15),
-                              _u(g, -0.03, 0.03), _u(g, -0.2, 0.2)],          # SF W x 0.6 - 1.6, L
+                              _u(g, -0.03, 0.03), _u(g, -0.2, 0.2), 0.0, 0.0],  # SF W x 0.6 - 1.6, L
     "afe_gain": lambda g: [_u(g, 0.01, 0.05), 0.0, 0.0],                      # C13 larger
     "readout_light": None,                                                   # scaled to the campaign (below)
     "crosstalk": lambda g: [_u(g, 0.003, 0.03)],
