@@ -428,8 +428,9 @@ def readme_sentence(res: dict) -> str:
     """The README's words on the first command's time (between README_BEGIN and README_END)."""
     c = res["parts"]["report"]["current"]
     return (f"From an empty cache the report took {c['wall_s'] / 60:.0f} min wall and {c['cpu_s'] / 60:.1f} min of CPU "
-            f"({c['spice_runs']} SPICE runs; at {(res.get('code') or {}).get('report', res['head'])}, on {res['cores']} cores shared with other work at a load "
-            f"of {c['load_before']:.0f} - {c['load_after']:.0f}): on two idle cores that work needs at least "
+            f"({c['spice_runs']} SPICE runs; at {(res.get('code') or {}).get('report', res['head'])}, on {res['cores']} cores "
+            f"{'otherwise idle' if max(c['load_before'], c['load_after']) <= res['jobs'] + 0.5 else 'shared with other work'} "
+            f"at a load of {c['load_before']:.0f} - {c['load_after']:.0f}): on two idle cores that work needs at least "
             f"{c['cpu_s'] / res['jobs'] / 60:.1f} min (its CPU over {res['jobs']} workers), the set-up's own time on "
             "top ([docs/benchmarks.md](docs/benchmarks.md)).")
 
