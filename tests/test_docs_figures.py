@@ -42,11 +42,12 @@ def test_prose_marks_of_blocks_records_and_derived_figures_fail_when_stale(tmp_p
     names page, line, the quoted and the current value, and ``--update`` rewrites it."""
     rec = tmp_path / "rec.json"
     page = tmp_path / "p.md"
+    runs = json.loads((ROOT / "benchmarks" / "results" / "main_job.json").read_text())["parts"]["report"]["current"]["spice_runs"]
     page.write_text("```text\n  C_PD,node (fF)   44.86   45.53\n```\n\n"
                     "grew 0.67<!--fig calc:{block:C_PD,node (fF)#2}-{block:C_PD,node (fF)}--> fF to "
                     "45.5<!--fig block:C_PD,node (fF)#2--> fF\n"
                     "stale 44.00<!--fig block:C_PD,node (fF)--> and -3<!--fig calc:{block:C_PD,node (fF)}*2--> fF\n"
-                    "1467<!--fig record:benchmarks/results/main_job.json::parts.report.current.spice_runs--> runs, "
+                    f"{runs}<!--fig record:benchmarks/results/main_job.json::parts.report.current.spice_runs--> runs, "
                     f"1<!--fig record:{rec}::x-->\n"
                     "2<!--fig calc:__import__('os')--> 3<!--fig block:no such line-->\n")
     rec.write_text('{"x": 1}')
