@@ -320,8 +320,10 @@ LOCAL = ("block", "record", "file", "calc", "input", "cite", "default", "schema"
 #: gain: docs/pixel-model.md, docs/verify.md; tests/test_afe.py); ``stl`` (settling at ss 85 degC -10 %: the
 #: 9-row bright cycle and verify's 2-row figure, docs/verify.md; tests/test_settling.py); ``nzf`` (the column 1/f
 #: model below ngspice's at 400 nA and at the design's load, docs/noise-camera.md, timing-and-settling.md;
-#: tests/test_noise.py)
-OTHER_SOURCES = ("p4t", "pl", "xs", "afen", "afeg", "stl", "nzf")
+#: tests/test_noise.py); ``sf`` (the source follower's EKV gain against SPICE's, its column noise: docs/source-follower.md;
+#: tests/test_sf.py); ``wdr`` (the WDR pixel's noise floor by part, from the model's and from SPICE's dark current:
+#: docs/dark-current.md; tests/test_wdr.py)
+OTHER_SOURCES = ("p4t", "pl", "xs", "afen", "afeg", "stl", "nzf", "sf", "wdr")
 
 
 def _digits(text: str) -> float:

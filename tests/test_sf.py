@@ -8,12 +8,19 @@ white noise of ``.noise`` at the column.
 """
 import math
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
 
+from pixelkit.constants import K_B
 from pixelkit.physics import sf
 from pixelkit.techfit.ekv import fit, models_for
+
+#: the figures docs/source-follower.md quotes (``sf:KEY`` marks, dotted keys): filled by the tests below from
+#: their own runs, read by the page check at the end of the file
+MEASURED: dict = {"gain_ekv_minus_spice_pct": {}}
+BIASES = [100e-9, 400e-9, 1e-6, 1.6e-6, 4e-6]
 
 
 def test_ekv_fits_the_model_librarys_follower(ref_design):
@@ -23,14 +30,17 @@ def test_ekv_fits_the_model_librarys_follower(ref_design):
     assert 0.3 < model.gamma < 1.2 and 0.4 < model.phi < 1.2
 
 
-@pytest.mark.parametrize("i_bias", [100e-9, 400e-9, 1.6e-6, 4e-6])
+@pytest.mark.parametrize("i_bias", BIASES)
 def test_follower_gain_against_spice_over_the_bias_range(ref_design, i_bias):
     """EKV gain vs ngspice's two-point gain of the read chain, 0.1 - 4 uA and FD 1.3 - 2.4 V: within 5 %
-    (measured 3.3 % at worst, at 4 uA where the load's output conductance starts to count)."""
+    (worst at 4 uA, where the load's output conductance starts to count: docs/source-follower.md's table)."""
     from pixelkit.camera.spicenoise import sf_gain
     d = replace(ref_design, pixel=replace(ref_design.pixel, sf_bias=i_bias))
+    row = MEASURED["gain_ekv_minus_spice_pct"].setdefault(f"{i_bias * 1e6:g}uA", {})
     for v_fd in (1.3, 1.7, 2.0, 2.4):
-        assert sf.follower_gain(d, models_for(d), v_fd) == pytest.approx(sf_gain(d, v_fd, dv=0.05), rel=0.05), v_fd
+        ekv, spice = sf.follower_gain(d, models_for(d), v_fd), sf_gain(d, v_fd, dv=0.05)
+        row[f"{v_fd:g}V"] = 100 * (ekv / spice - 1)
+        assert ekv == pytest.approx(spice, rel=0.05), v_fd
 
 
 def test_the_follower_is_in_moderate_inversion(ref_design):
@@ -42,9 +52,9 @@ def test_the_follower_is_in_moderate_inversion(ref_design):
 
 def test_column_white_noise_against_spice(ref_design):
     """ngspice .noise of the read chain at 1 - 5 MHz against the EKV white level (follower, load and its
-    mirror, row switch) plus the 1/f model, both low-passed by the column pole: within 10 % (measured
-    5 - 9 % below ngspice: BSIM4's channel noise is not EKV's gamma_n); the weak-inversion closed form
-    (kT / C_col per sample) was 1.5 x below."""
+    mirror, row switch) plus the 1/f model, both low-passed by the column pole: within 10 % (BSIM4's channel
+    noise is not EKV's gamma_n; the band and the weak-inversion closed form kT / C_col per sample, below it:
+    docs/source-follower.md)."""
     from pixelkit.camera.spicenoise import run_noise, sf_gain
     from pixelkit.circuits.noisebench import read_deck
     from pixelkit.physics.noise import column_capacitance, column_flicker_psd
@@ -55,4 +65,38 @@ def test_column_white_noise_against_spice(ref_design):
     band = (r["f"] >= 1e6) & (r["f"] <= 5e6)
     model = (ct["white_psd_V2_per_Hz"] + column_flicker_psd(ref_design, sf_gain(ref_design), r["f"][band], models_for(ref_design))) \
         / (1 + (r["f"][band] / f_col) ** 2)
+    dev = 100 * (model / r["psd"][band] - 1)
+    MEASURED["noise_model_vs_spice_pct_1_5MHz"] = [float(dev.min()), float(dev.max())]
+    MEASURED["column_thermal"] = {"variance_V2": ct["variance_V2"], "parts_V2": ct["parts_V2"], "r_rs_ohm": ct["r_rs_ohm"],
+                                  "kT_over_C_col_V2": K_B * ref_design.temperature / c_col}
     assert np.all(np.abs(r["psd"][band] / model - 1) < 0.10)
+
+
+def test_source_follower_page_quotes_the_current_figures(ref_design):
+    """docs/source-follower.md quotes the figures measured above (``sf:KEY`` marks: the EKV-minus-SPICE gain
+    table, the column noise's parts and its band against ngspice) and the EKV gain against SPICE's at revA's
+    own bias and reset level: a change that moves a quoted figure fails here, naming the line
+    (``PIXELKIT_DOCS_REWRITE=1`` rewrites them; then read the sentences around them). It reuses the runs of
+    the tests above; alone (``-k page``) it repeats them."""
+    import os
+    from docsite import figures
+    from pixelkit.camera.spicenoise import sf_gain
+    for i in BIASES:
+        if f"{i * 1e6:g}uA" not in MEASURED["gain_ekv_minus_spice_pct"]:
+            test_follower_gain_against_spice_over_the_bias_range(ref_design, i)
+    if "column_thermal" not in MEASURED:
+        test_column_white_noise_against_spice(ref_design)
+    MEASURED["reset_level_ekv_minus_spice_pct"] = 100 * (
+        sf.follower_gain(ref_design, models_for(ref_design), ref_design.pixel.v_pd_reset) / sf_gain(ref_design) - 1)
+
+    def value(key):
+        data = MEASURED
+        for part in figures._parts(key):
+            data = data[int(part)] if isinstance(data, list) else data[part]
+        return float(data)
+    page = Path(__file__).resolve().parents[1] / "docs" / "source-follower.md"
+    if os.environ.get("PIXELKIT_DOCS_REWRITE"):
+        figures.update(None, [page], getters={"sf": value})
+    bad, n = figures.check(None, [page], getters={"sf": value})
+    assert n > 20 and not bad, "\n".join(f"source-follower.md:{b['line']}: {b['key']}: quoted {b['quoted']}, now "
+                                         f"{b.get('now') or b.get('why')}" for b in bad)

@@ -125,3 +125,34 @@ def test_node_dark_current_and_noise_floor_are_derived(result, design):
     n_dark = spice[2.0] * 2 ** design.coding.steps * design.coding.t_unit / Q
     v2 = kt / c + kt / design.pixel.c_int + n_dark * (Q / c) ** 2 + design.noise.v_read ** 2
     assert result["v_noise_V"] == pytest.approx(v2 ** 0.5, rel=0.02)
+
+
+def test_dark_current_page_quotes_the_current_noise_floor(result, design):
+    """docs/dark-current.md's noise-floor table and the sentence under it quote the model's parts
+    (``wdr:model.KEY``: ``families.wdr.model.noise`` and ``dark_current``), the dark shot noise again from
+    SPICE's node current at 2 V (``wdr:spice.KEY``, as the test above derives it) and the simulation's own
+    figures (``wdr:sim.KEY``: the experiment's output, as ``pixelkit simulate --json`` prints it): a change
+    that moves one fails here, naming the line (``PIXELKIT_DOCS_REWRITE=1`` rewrites them)."""
+    import os
+    from docsite import figures
+    from pixelkit.constants import Q
+    from pixelkit.families.wdr.model import dark_current, node_capacitance, noise
+    n = noise(design)
+    model = {**{k[:-1]: v ** 0.5 for k, v in n.items() if k.endswith("_V2")}, "dark_e": n["dark_e"],
+             "total_V": n["total_V"], "dark_current_A": dark_current(design)}
+    i_spice = {r["v_V"]: r["i_dark_A"] for r in result["dark_current_vs_voltage"]}[2.0]
+    n_spice = i_spice * 2 ** design.coding.steps * design.coding.t_unit / Q
+    spice = {"dark_e": n_spice, "dark_shot_V": Q * n_spice ** 0.5 / node_capacitance(design, design.pixel.v_reset)}
+    figs = {"model": model, "spice": spice, "sim": result}
+
+    def value(key):
+        data = figs
+        for part in figures._parts(key):
+            data = data[int(part)] if isinstance(data, list) else data[part]
+        return float(data)
+    page = ROOT / "docs" / "dark-current.md"
+    if os.environ.get("PIXELKIT_DOCS_REWRITE"):
+        figures.update(None, [page], getters={"wdr": value})
+    bad, n_marks = figures.check(None, [page], getters={"wdr": value})
+    assert not bad, "\n".join(f"dark-current.md:{b['line']}: {b['key']}: quoted {b['quoted']}, now "
+                               f"{b.get('now') or b.get('why')}" for b in bad)
