@@ -169,13 +169,13 @@ def test_chains_interpolated_in_photocurrent_match_simulated_ones(ref_design, mo
     interpolated in photocurrent through anchor chains, checked on held-out chains (both at converged
     tolerances). Independent path: the same frame with every chain simulated at converged tolerances;
     every figure of the interpolated columns (signal, reset level, AFE output, settling error) within
-    ``LIMIT_V`` of it. The check must be able to refuse: 3 anchors (a parabola) over the primary's
-    whole gradient miss its held-out chains by more than the limit, and the array is then simulated as
-    the exhaustive path simulates it (every chain at the kit's tolerances)."""
+    ``LIMIT_V`` of it. The check must be able to refuse: 3 anchor currents (a parabola) over the
+    primary's whole gradient miss its held-out chains by more than the limit, and the array is then
+    simulated as the exhaustive path simulates it (every chain at the kit's tolerances)."""
     from pixelkit.chip import interp
     from pixelkit.chip.frame import CONVERGED
     from pixelkit.chip.report import frame_table
-    # 6 chains: 3 anchors, 2 held out, 4 interpolated
+    # 6 chains: 1 anchor chain (its 3 places at the 3 currents), 2 held out, 4 interpolated
     monkeypatch.setattr(interp, "ANCHORS", {"primary": 3, "secondary": 3})
     d = ref_design
     kw = dict(with_afe=True, kinds=("secondary",), jobs=2, settling=True)
@@ -185,7 +185,8 @@ def test_chains_interpolated_in_photocurrent_match_simulated_ones(ref_design, mo
                           **kw)
     [rec] = fast.interpolated
     assert rec["used"] and rec["chains"] == 4 and rec["max_diff_V"] <= interp.LIMIT_V, rec
-    assert (fast.decks, conv.decks) == (20, 24) and not fast.failures and not conv.failures and not conv.interpolated
+    assert (rec["anchors"], rec["currents"], rec["places_shared"]) == (1, 3, True), rec
+    assert (fast.decks, conv.decks) == (12, 24) and not fast.failures and not conv.failures and not conv.interpolated
     cols, n = rec["columns"], d.secondary_per_pixel
     held = [j for c in (1, 4) for j in range(n * c, n * c + n)]    # where the nodal polynomial is largest
     assert cols == [j for j in range(6 * n) if j not in held]
@@ -201,6 +202,33 @@ def test_chains_interpolated_in_photocurrent_match_simulated_ones(ref_design, mo
     exact = simulate_frame(d, wide.iph_p, wide.iph_s, compression=wide.compression, interpolate=False, **kw)
     [rec] = refused.interpolated
     assert not rec["used"] and rec["max_diff_V"] > interp.LIMIT_V and rec["why"].startswith("held-out"), rec
-    assert refused.decks == 3 + 2 + 6 and "from" not in frame_table(refused).splitlines()[0]
+    assert refused.decks == 1 + 2 + 6 and "from" not in frame_table(refused).splitlines()[0]
     for name in ("signal", "reset_level", "afe"):      # the array as the exhaustive path gives it
         assert np.array_equal(getattr(refused, name)["primary"], getattr(exact, name)["primary"]), name
+
+
+def test_interpolation_shares_anchor_currents_only_between_places_that_are_the_same_circuit(ref_design, monkeypatch):
+    """``chip.interp.plan``: the anchor currents are spread over a chain's places only when its first
+    deck is the same once its columns are renamed one place on; a deck where one place has an element
+    of its own (as a post-layout line per place would) gives every place its own anchors. Both decks
+    are the kit's own, the second with one element added at the middle place (no simulation)."""
+    from pixelkit.chip import interp
+    from pixelkit.chip.frame import CONVERGED, _first_deck, renamed, tiles
+    monkeypatch.setattr(interp, "ANCHORS", {"primary": 3, "secondary": 3})
+    d, n = ref_design, ref_design.secondary_per_pixel
+    ph = photocurrents(d, 2, 18, np.tile(np.linspace(0.1, 0.6, 18 * n), (2, 1)), "fs")
+    tasks = [(d, ph.iph_p, ph.iph_s, t, d.experiment.t_window, True, None, 5e-7, "batch", None, 2, f"c{t.cols[0]}",
+              False, ph.compression) for t in tiles(2, 18, "columns", True, ("primary",))]
+
+    def deck(task, mine, to):
+        return renamed(_first_deck(task), mine, to)
+
+    def odd(task, mine, to):     # the middle place's column line carries a capacitor of its own
+        return renamed(_first_deck(task) + f"Cextra col_p_{task[3].cols[1]} 0 1f\n", mine, to)
+    for fn, shared, chains in ((deck, True, 1), (odd, False, 3)):
+        [p] = interp.plan(tasks, ("primary",), d, d.experiment.t_window, fn, CONVERGED).values()
+        assert (p["shared"], len(p["anchors"]), len(p["held_out"]), len(p["rest"])) == (shared, chains, 2, 4)
+        # one polynomial through 3 currents over the places, or one per place through 3 currents each
+        assert [len(x) for x in p["x"]] == ([3] if shared else [3, 3, 3])
+        cur = np.array([a[1][0, list(p["anchor_cols"])] for a in p["anchors"]])
+        assert np.array_equal(np.sort(cur.ravel()), np.sort(np.concatenate(p["x"])))

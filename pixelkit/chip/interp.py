@@ -46,25 +46,31 @@ import re
 
 import numpy as np
 
-#: Simulated currents per place in a chain (Chebyshev-Lobatto: both ends of the range included), per
-#: array. On revB's gradient (2 x 50, against every column simulated at converged tolerances) the
+#: Simulated currents per interpolating polynomial (Chebyshev-Lobatto: both ends of the range included),
+#: per array. On revB's gradient (2 x 50, against every column simulated at converged tolerances) the
 #: largest error of any figure: primary 0.17 mV with 6, 0.069 with 7, 0.025 with 8 (its signal bends
 #: towards the top of the range); secondary 0.030 with 5, 0.017 with 6, flat beyond (the converged
-#: decks' own scatter).
-ANCHORS = {"primary": 8, "secondary": 6}
+#: decks' own scatter). Where the places of a chain are the same circuit (``_interchangeable``) the
+#: currents are spread over the places of ceil(ANCHORS / places) anchor chains (9: 3 chains of 3
+#: primary columns, 6: 2 chains of 3 secondary columns), else every place has its own ANCHORS chains.
+ANCHORS = {"primary": 9, "secondary": 6}
 #: Largest difference (V) of any figure of a held-out chain from its interpolated value.
 LIMIT_V = 1e-4
 #: A column is interpolated only below this fraction of the current that clips it (``scene.i_floor``).
 CLIP_MARGIN = 0.9
 _CURRENT = re.compile(r"\b(iph\w*)=\S+")
+#: Column numbers a chain's columns are renamed to when its places are compared (no row's or other
+#: element's number is this large, so a renaming touches the columns only).
+_FAR = 10 ** 7
 
 
 def plan(tasks: list, kinds, design, t_exp: float, deck, converged) -> dict:
     """Which chains of ``tasks`` (``chip.frame._chain`` tasks) to interpolate, per array:
-    {kind: {"anchors": [task], "x": places x ANCHORS currents, "held_out": [index], "rest": [index],
-    "cols": {index: columns}, ...}}; an array left out is simulated whole. ``deck(task, mine, to)``:
-    the text of a chain's first deck, its columns ``mine`` renamed to ``to``; ``converged``: the
-    simulator options the anchors and held-out chains run at, over the chain's own."""
+    {kind: {"anchors": [task], "x": [currents of each polynomial], "group": polynomial of each place,
+    "slot": per anchor and place the current's index in its polynomial, "held_out": [index],
+    "rest": [index], "cols": {index: columns}, ...}}; an array left out is simulated whole.
+    ``deck(task, mine, to)``: the text of a chain's first deck, its columns ``mine`` renamed to ``to``;
+    ``converged``: the simulator options the anchors and held-out chains run at, over the chain's own."""
     from .scene import i_floor
     out = {}
     n = design.secondary_per_pixel
@@ -78,34 +84,77 @@ def plan(tasks: list, kinds, design, t_exp: float, deck, converged) -> dict:
         cols = {i: tasks[i][3].columns(kind, n) for i in idx}
         ok = [i for i in idx if len(cols[i]) == width
               and all(np.all(cur[:, j] == cur[0, j]) and 0 <= cur[0, j] < hi for j in cols[i])]
-        K = ANCHORS[kind]
-        if len(ok) <= K + 2:
+        if len(ok) <= 3:
             continue
-        lo_p = [min(cur[0, cols[i][p]] for i in ok) for p in range(width)]
-        hi_p = [max(cur[0, cols[i][p]] for i in ok) for p in range(width)]
-        if any(b <= a for a, b in zip(lo_p, hi_p)):
+        probe = next((i for i in ok if 0 not in cols[i]), ok[0])
+        shared = _interchangeable(lambda to: deck(tasks[probe], cols[probe], to), width)
+        # the polynomials: one for every place, or one per place; their currents and the anchors'
+        group = [0] * width if shared else list(range(width))
+        places = [[q for q in range(width) if group[q] == g] for g in range(max(group) + 1)]
+        K = ANCHORS[kind]
+        chains = -(-K // width) if shared else K
+        K = chains * width if shared else K
+        slot = [[q * chains + a if shared else a for q in range(width)] for a in range(chains)]
+        if len(ok) <= chains + 2:
+            continue
+        lo = [min(cur[0, cols[i][q]] for i in ok for q in qs) for qs in places]
+        top = [max(cur[0, cols[i][q]] for i in ok for q in qs) for qs in places]
+        if any(b <= a for a, b in zip(lo, top)):
             continue
         k = np.arange(K)
-        x = np.array([(a + b) / 2 - (b - a) / 2 * np.cos(np.pi * k / (K - 1)) for a, b in zip(lo_p, hi_p)])
+        x = [(a + b) / 2 - (b - a) / 2 * np.cos(np.pi * k / (K - 1)) for a, b in zip(lo, top)]
         base = tasks[ok[0]]
-        anchors = [_tight(_anchor(base, kind, cols[ok[0]], x[:, a], a), converged) for a in range(K)]
+        anchors = [_tight(_anchor(base, kind, cols[ok[0]], [x[group[q]][slot[a][q]] for q in range(width)], a),
+                          converged) for a in range(chains)]
         ref = _masked(deck(anchors[0], cols[ok[0]], cols[ok[0]]))
         ok = [i for i in ok if _masked(deck(tasks[i], cols[i], cols[ok[0]])) == ref]
-        if len(ok) <= K + 2:
+        if len(ok) <= chains + 2:
             continue
         # held out: the two chains where an interpolation error is likeliest largest
-        held = sorted(ok, key=lambda i: _nodal(cur[0], cols[i], x, lo_p, hi_p))[-2:]
-        out[kind] = {"anchors": anchors, "x": x, "held_out": held, "rest": [i for i in ok if i not in held],
+        held = sorted(ok, key=lambda i: _nodal(cur[0], cols[i], x, group, lo, top))[-2:]
+        out[kind] = {"anchors": anchors, "x": x, "group": group, "slot": slot, "shared": shared,
+                     "held_out": held, "rest": [i for i in ok if i not in held],
                      # the array's chains simulated: at the anchors' tolerances, so that the array is of one accuracy
                      "tight": {i: _tight(tasks[i], converged) for i in idx if i in held or i not in ok},
                      "cols": cols, "anchor_cols": cols[ok[0]], "current": cur[0]}
     return out
 
 
-def _nodal(cur, cols, x, lo, hi) -> float:
+def _interchangeable(text, width: int) -> bool:
+    """Whether the places of a chain are the same circuit under other names, so that one polynomial
+    serves them all: ``text(to)``, the chain's first deck with its columns renamed to ``to``, the same
+    (photocurrents masked, top-level elements in any order) when every column is renamed one place on.
+    (A place-dependent element - a line whose couplings differ per place, as a post-layout secondary
+    can have - differs there, and every place then has its own polynomial.)"""
+    if width < 2:
+        return True
+    a = text([_FAR + q for q in range(width)])
+    b = text([_FAR + (q + 1) % width for q in range(width)])
+    return _elements(_masked(a)) == _elements(_masked(b))
+
+
+def _elements(text: str) -> tuple:
+    """A deck's logical lines (continuations joined): subcircuit definitions and dot lines in order,
+    the top-level elements sorted (their order does not change the circuit)."""
+    lines = []
+    for line in text.splitlines():
+        if line.startswith("+") and lines:
+            lines[-1] += " " + line[1:].strip()
+        elif line.strip() and not line.startswith("*"):
+            lines.append(line.strip())
+    kept, top, depth = [], [], 0
+    for line in lines:
+        low = line.lower()
+        depth += low.startswith(".subckt")
+        (kept if depth or line.startswith(".") else top).append(line)
+        depth -= low.startswith(".ends")
+    return tuple(kept), tuple(sorted(top))
+
+
+def _nodal(cur, cols, x, group, lo, hi) -> float:
     """The largest nodal polynomial |prod_k (i - x_k)| over a chain's places (currents scaled to the
     range): the factor of the error of polynomial interpolation that depends on where ``i`` lies."""
-    return max(abs(float(np.prod((cur[j] - x[q]) / (hi[q] - lo[q])))) for q, j in enumerate(cols))
+    return max(abs(float(np.prod((cur[j] - x[group[q]]) / (hi[group[q]] - lo[group[q]])))) for q, j in enumerate(cols))
 
 
 def _tight(task, converged) -> tuple:
@@ -138,8 +187,9 @@ def resolve(p: dict, kind: str, outs: dict, anchor_outs: list) -> tuple[dict | N
     """The interpolated outs of ``p["rest"]`` ({index: out}, None when the check refuses them) and the
     array's record for ``Frame.interpolated``."""
     from scipy.interpolate import BarycentricInterpolator
-    rec = {"array": kind, "anchors": len(anchor_outs), "held_out": len(p["held_out"]), "limit_V": LIMIT_V,
-           "chains": len(p["rest"]), "max_diff_V": None, "used": False}
+    rec = {"array": kind, "anchors": len(anchor_outs), "currents": len(p["x"][0]), "places_shared": p["shared"],
+           "held_out": len(p["held_out"]), "limit_V": LIMIT_V, "chains": len(p["rest"]), "max_diff_V": None,
+           "used": False}
     bad = [o for o in anchor_outs + [outs[i] for i in p["held_out"]] if o["failures"]]
     if bad:
         rec["why"] = "an anchor or held-out chain failed"
@@ -147,17 +197,19 @@ def resolve(p: dict, kind: str, outs: dict, anchor_outs: list) -> tuple[dict | N
     ac = p["anchor_cols"]
     rows = sorted({r for (_k, r, _j) in anchor_outs[0]["values"]})
     fields = _fields(anchor_outs[0])
-    # per place: ANCHORS x rows x figures
-    data = np.array([[[_figures(o, (kind, r, ac[q]), fields) for r in rows] for o in anchor_outs]
-                     for q in range(len(ac))], float)
-    if not np.all(np.isfinite(data)):
+    # per polynomial: its currents x rows x figures, from the anchors' places
+    data = [np.full((len(x), len(rows), 2 + sum(fields) + 2 * fields[1]), np.nan) for x in p["x"]]
+    for a, o in enumerate(anchor_outs):
+        for q, j in enumerate(ac):
+            data[p["group"][q]][p["slot"][a][q]] = [_figures(o, (kind, r, j), fields) for r in rows]
+    if not all(np.all(np.isfinite(d)) for d in data):
         rec["why"] = "an anchor figure was not measured"
         return None, rec
-    poly = [BarycentricInterpolator(p["x"][q], data[q]) for q in range(len(ac))]
+    poly = [BarycentricInterpolator(x, d) for x, d in zip(p["x"], data)]
 
     def cells(i):
         return {(kind, r, j): vals[ri] for q, j in enumerate(p["cols"][i])
-                for vals in [poly[q](p["current"][j])] for ri, r in enumerate(rows)}
+                for vals in [poly[p["group"][q]](p["current"][j])] for ri, r in enumerate(rows)}
     worst = 0.0
     for i in p["held_out"]:
         for key, v in cells(i).items():

@@ -114,8 +114,10 @@ def interpolated_lines(recs) -> list[str]:
         check = (f"held-out chains {', '.join(r['held_out_chains'])} simulated too: largest difference {diff} "
                  f"(limit {r['limit_V'] * 1e3:g} mV)")
         if r["used"]:
+            at = (f"{r['currents']} currents spread over their places" if r.get("places_shared")
+                  else f"{r['currents']} currents per place")
             out.append(f"{r['array']}: {r['chains']} column chain(s) interpolated in photocurrent from {r['anchors']} "
-                       f"simulated anchor chains; {check}")
+                       f"simulated anchor chains ({at}); {check}")
         else:
             out.append(f"{r['array']}: every column chain simulated ({r['why']}; {check})")
     return out
