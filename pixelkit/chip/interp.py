@@ -53,7 +53,7 @@ import numpy as np
 #: decks' own scatter). Where the places of a chain are the same circuit (``_interchangeable``) the
 #: currents are spread over the places of ceil(ANCHORS / places) anchor chains (9: 3 chains of 3
 #: primary columns, 6: 2 chains of 3 secondary columns), else every place has its own ANCHORS chains.
-ANCHORS = {"primary": 9, "secondary": 6}
+ANCHORS = {"primary": 12, "secondary": 6}
 #: Largest difference (V) of any figure of a held-out chain from its interpolated value.
 LIMIT_V = 1e-4
 #: A column is interpolated only below this fraction of the current that clips it (``scene.i_floor``).
@@ -82,8 +82,8 @@ def plan(tasks: list, kinds, design, t_exp: float, deck, converged) -> dict:
         hi = CLIP_MARGIN * i_floor(design, kind, t_exp)
         width = max(len(tasks[i][3].columns(kind, n)) for i in idx)
         cols = {i: tasks[i][3].columns(kind, n) for i in idx}
-        ok = [i for i in idx if len(cols[i]) == width
-              and all(np.all(cur[:, j] == cur[0, j]) and 0 <= cur[0, j] < hi for j in cols[i])]
+        flat = [i for i in idx if all(np.all(cur[:, j] == cur[0, j]) and 0 <= cur[0, j] < hi for j in cols[i])]
+        ok = [i for i in flat if len(cols[i]) == width]
         if len(ok) <= 3:
             continue
         probe = next((i for i in ok if 0 not in cols[i]), ok[0])
@@ -97,26 +97,30 @@ def plan(tasks: list, kinds, design, t_exp: float, deck, converged) -> dict:
         slot = [[q * chains + a if shared else a for q in range(width)] for a in range(chains)]
         if len(ok) <= chains + 2:
             continue
-        lo = [min(cur[0, cols[i][q]] for i in ok for q in qs) for qs in places]
-        top = [max(cur[0, cols[i][q]] for i in ok for q in qs) for qs in places]
+        lo = [min(cur[0, cols[i][q]] for i in flat for q in qs if q < len(cols[i])) for qs in places]
+        top = [max(cur[0, cols[i][q]] for i in flat for q in qs if q < len(cols[i])) for qs in places]
         if any(b <= a for a, b in zip(lo, top)):
             continue
         k = np.arange(K)
         x = [(a + b) / 2 - (b - a) / 2 * np.cos(np.pi * k / (K - 1)) for a, b in zip(lo, top)]
-        base = tasks[ok[0]]
-        anchors = [_tight(_anchor(base, kind, cols[ok[0]], [x[group[q]][slot[a][q]] for q in range(width)], a),
+        ac = cols[ok[0]]     # the anchors' columns
+        anchors = [_tight(_anchor(tasks[ok[0]], kind, ac, [x[group[q]][slot[a][q]] for q in range(width)], a),
                           converged) for a in range(chains)]
-        ref = _masked(deck(anchors[0], cols[ok[0]], cols[ok[0]]))
-        ok = [i for i in ok if _masked(deck(tasks[i], cols[i], cols[ok[0]])) == ref]
+        ref = _masked(deck(anchors[0], ac, ac))
+        ok = [i for i in ok if _masked(deck(tasks[i], cols[i], ac)) == ref]
         if len(ok) <= chains + 2:
             continue
+        # a narrower chain (the array's last, when its columns do not fill a chain): its places are the
+        # anchors' first ones when its deck is the anchor chain's cut to as many columns
+        narrow = [i for i in flat if len(cols[i]) < width
+                  and _masked(deck(tasks[i], cols[i], ac[:len(cols[i])])) == _narrow_ref(anchors[0], kind, n, cols[i], deck)]
         # held out: the two chains where an interpolation error is likeliest largest
         held = sorted(ok, key=lambda i: _nodal(cur[0], cols[i], x, group, lo, top))[-2:]
         out[kind] = {"anchors": anchors, "x": x, "group": group, "slot": slot, "shared": shared,
-                     "held_out": held, "rest": [i for i in ok if i not in held],
+                     "held_out": held, "rest": [i for i in ok + narrow if i not in held],
                      # the array's chains simulated: at the anchors' tolerances, so that the array is of one accuracy
-                     "tight": {i: _tight(tasks[i], converged) for i in idx if i in held or i not in ok},
-                     "cols": cols, "anchor_cols": cols[ok[0]], "current": cur[0]}
+                     "tight": {i: _tight(tasks[i], converged) for i in idx if i in held or i not in ok + narrow},
+                     "cols": cols, "anchor_cols": ac, "current": cur[0]}
     return out
 
 
@@ -149,6 +153,21 @@ def _elements(text: str) -> tuple:
         (kept if depth or line.startswith(".") else top).append(line)
         depth -= low.startswith(".ends")
     return tuple(kept), tuple(sorted(top))
+
+
+def _narrow_ref(anchor, kind: str, n: int, cols, deck) -> str | None:
+    """The masked first deck of ``anchor``'s chain cut to its first dual-pixel columns, as many of
+    ``kind``'s columns as ``cols`` holds (None when no cut holds as many)."""
+    from dataclasses import replace
+    tile = anchor[3]
+    for m in range(1, len(tile.cols)):
+        cut = replace(tile, cols=tile.cols[:m])
+        mine = cut.columns(kind, n)
+        if len(mine) == len(cols):
+            t = list(anchor)
+            t[3] = cut
+            return _masked(deck(tuple(t), mine, mine))
+    return None
 
 
 def _nodal(cur, cols, x, group, lo, hi) -> float:
