@@ -232,3 +232,13 @@ def test_interpolation_shares_anchor_currents_only_between_places_that_are_the_s
         assert [len(x) for x in p["x"]] == ([3] if shared else [3, 3, 3])
         cur = np.array([a[1][0, list(p["anchor_cols"])] for a in p["anchors"]])
         assert np.array_equal(np.sort(cur.ravel()), np.sort(np.concatenate(p["x"])))
+    # 17 columns: the last chain holds 2; interpolated when its deck is the anchor chain's cut to 2 columns
+    tasks = [(*t[:3], tile, *t[4:]) for t, tile in zip(tasks, tiles(2, 17, "columns", True, ("primary",)))]
+
+    def narrow_odd(task, mine, to):    # the narrow chain only has an element of its own
+        extra = f"Cextra col_p_{task[3].cols[0]} 0 1f\n" if len(task[3].cols) < 3 and "anchor" not in task[11] else ""
+        return renamed(_first_deck(task) + extra, mine, to)
+    for fn, interpolated in ((deck, True), (narrow_odd, False)):
+        [p] = interp.plan(tasks, ("primary",), d, d.experiment.t_window, fn, CONVERGED).values()
+        assert (5 in p["rest"], 5 in p["tight"], len(p["rest"])) == (interpolated, not interpolated, 3 + interpolated)
+        assert max(p["x"][0]) == pytest.approx(max(ph.iph_p[0, :17]), rel=1e-12)    # the range reaches it
