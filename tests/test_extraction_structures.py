@@ -130,6 +130,19 @@ def test_post_layout_page_quotes_the_current_structure_terms(signed, other_sets)
                                          f"{b.get('now') or b.get('why')}" for b in bad)
 
 
+def test_post_layout_page_s_generated_structure_tables_are_the_kit_s(gf, other_sets):
+    """docs/post-layout.md's generated structure tables (``docsite/tables.py``: the holdout8 set) are what
+    the model gives now on FastCap2's windows against the stored reference, row by row (the terms as
+    structures.py draws them): a change of the model that moves a figure fails here."""
+    from docsite import tables
+    from pixelkit.layout.pex.structures import structures
+    for which in ("holdout8",):
+        data = {"terms": [(st.name, st.term) for st in structures(gf, which)], "kit": other_sets[which],
+                "fastcap": REFS[which]}
+        bad = tables.hold(which, data)
+        assert not bad, bad
+
+
 def test_the_stack_gives_the_pdks_area_coefficients(gf):
     """The GF180MCU open PDK's extraction coefficients (Magic's tech file, as klayout-pex 0.6 carries them):
     metal1 over the substrate 29.304 aF/um2, metal2 over metal1 59.027, metal1 over poly 51.434. The layered

@@ -8,6 +8,8 @@ extraction's own totals for the bookkeeping of where each capacitance is placed.
 import re
 import subprocess
 
+import sys
+
 import pytest
 
 from conftest import ROOT, run_cli
@@ -215,6 +217,12 @@ def test_report_section_post_layout_vs_schematic(tmp_path):
     sec = {r[2]: r[6] for r in frame if r[0] == "secondary" and r[1] == 0 and r[2] < d.secondary_per_pixel}
     for k in range(d.secondary_per_pixel):
         assert sec[k] == pytest.approx(rep[k], abs=3.0), (k, sec[k], rep[k])
+    # docs/post-layout.md's section table is this section's (docsite/tables.py)
+    sys.path.insert(0, str(ROOT))
+    from docsite import tables
+    bad = tables.hold("report-post-layout", {"rows": s.tables[0].rows, "frame": frame,
+                                             "resistance": s.tables[2].rows})
+    assert not bad, bad
     ref = section.build(Context(load_design(ROOT / "designs" / "dual_pixel_revA.toml"), tmp_path, quick=True))
     assert not ref.available and "[stack]" in ref.needs and "no process stack" in ref.why
 
@@ -250,6 +258,10 @@ def test_post_layout_page_quotes_the_current_views(views):
                                   "cg_out_V_per_e": r["cg_out_V_per_e"], "cg_out_spice_V_per_e": spice[w],
                                   "model_vs_spice": r["cg_out_V_per_e"] / spice[w] - 1,
                                   "line_cap_F": line_cap(v, "col_p0" if w == "primary" else "col_s0")}
+            if v.post_layout is not None:        # the extracted couplings of FD the page quotes
+                cpl = {frozenset((a, b)): c for a, b, c in v.post_layout.cells[f"pix5t_{w}"]}
+                now[f"{name}.{w}"].update({f"c_fd_{n}_F": cpl.get(frozenset(("fd", n)), 0.0)
+                                          for n in ("rs", "rst", "tg", "vdd", "pd", "ec", "vrst")})
 
     def value(key):
         view, w, fig = key.split(".")

@@ -37,17 +37,40 @@ def _spice_stages(d):
     return out
 
 
-@pytest.mark.parametrize("view", ["schematic", "post-layout"])
-def test_each_stage_against_spice(view):
-    d = load_design(GF)
-    d = post_layout_view(d) if view == "post-layout" else d
-    a = sf_gain(d)
-    sp = _spice_stages(d)
-    for w in ("primary", "secondary"):
-        m = fd.transfer(d, w, a, models_for(d))
-        assert m["cg_transfer_V_per_e"] == pytest.approx(sp[w]["transfer"], rel=0.01, abs=0), (w, "transfer")
-        assert m["cg_store_V_per_e"] == pytest.approx(sp[w]["store"], rel=0.02, abs=0), (w, "TG turn-off")
-        assert m["cg_fd_V_per_e"] == pytest.approx(sp[w]["read"], rel=0.02, abs=0), (w, "RS turn-on")
+#: the rows of docs/post-layout.md's stage table: (design file, post-layout view)
+VIEWS = {"dual_pixel_gf180": (GF, False), "dual_pixel_gf180, post-layout": (GF, True),
+         "dual_pixel_revA": (ROOT / "designs" / "dual_pixel_revA.toml", False)}
+
+
+@pytest.fixture(scope="module")
+def stages():
+    """{view: {subpixel: (the model's stages, SPICE's stages, the former single-capacitance CG)}}."""
+    out = {}
+    for view, (path, post) in VIEWS.items():
+        d = load_design(path)
+        d = post_layout_view(d) if post else d
+        a = sf_gain(d)
+        sp = _spice_stages(d)
+        out[view] = {w: (fd.transfer(d, w, a, models_for(d)), sp[w], Q / fd.capacitances(d, w, a)["c_total_F"])
+                     for w in ("primary", "secondary")}
+    return out
+
+
+@pytest.mark.parametrize("view", VIEWS)
+def test_each_stage_against_spice(stages, view):
+    for w, (m, sp, old) in stages[view].items():
+        assert m["cg_transfer_V_per_e"] == pytest.approx(sp["transfer"], rel=0.01, abs=0), (w, "transfer")
+        assert m["cg_store_V_per_e"] == pytest.approx(sp["store"], rel=0.02, abs=0), (w, "TG turn-off")
+        assert m["cg_fd_V_per_e"] == pytest.approx(sp["read"], rel=0.02, abs=0), (w, "RS turn-on")
         # the former model: right at the read only by cancellation, wrong at the transfer
-        old = Q / fd.capacitances(d, w, a)["c_total_F"]
-        assert abs(old / sp[w]["transfer"] - 1) > 0.03, w
+        assert abs(old / sp["transfer"] - 1) > 0.03, w
+
+
+def test_post_layout_page_s_stage_table_is_the_kit_s(stages):
+    """docs/post-layout.md's stage-by-stage table (``docsite/tables.py``) is the model and SPICE as above."""
+    from docsite import tables
+    key = {"transfer": "cg_transfer_V_per_e", "store": "cg_store_V_per_e", "read": "cg_fd_V_per_e"}
+    data = {view: {w: {s: (m[k], sp[s]) for s, k in key.items()} for w, (m, sp, _) in by.items()}
+            for view, by in stages.items()}
+    bad = tables.hold("transfer-stages", data)
+    assert not bad, bad
