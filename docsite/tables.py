@@ -145,9 +145,12 @@ def _region(text: str, name: str) -> tuple[int, int]:
     return m.end() + 1, end
 
 
+FENCED = re.compile(r"^```.*?^```", re.S | re.M)
+
+
 def regions(text: str) -> list[tuple[str, str]]:
-    """[(NAME, the test it names)] of the generated tables on a page's text."""
-    return [(m["name"], m["test"]) for m in START.finditer(text)]
+    """[(NAME, the test it names)] of the generated tables on a page's text (not the examples in its blocks)."""
+    return [(m["name"], m["test"]) for m in START.finditer(FENCED.sub("", text))]
 
 
 def hold(name: str, data) -> str:
