@@ -42,8 +42,10 @@ def structure_set(data: dict) -> str:
 
 
 def transfer_stages(data: dict) -> str:
-    """The stage-by-stage table: ``data`` = {view: {subpixel: {stage: (model, spice) V/e-}}}."""
-    rows = ["| design | subpixel | transfer | after TG opens | at the read |", "|---|---|---|---|---|"]
+    """The stage-by-stage table: ``data`` = {view: {subpixel: {stage: (model, spice) V/e-, "former": V/e-}}}
+    (the former single-capacitance model q / (C_PD,node + C_FD,read) against SPICE at the transfer and the read)."""
+    rows = ["| design | subpixel | transfer | after TG opens | at the read | former model vs SPICE, transfer / read |",
+            "|---|---|---|---|---|---|"]
     for view, by_sub in data.items():
         for sub, stages in by_sub.items():
             cells = []
@@ -51,6 +53,8 @@ def transfer_stages(data: dict) -> str:
                 m, s = (v * 1e6 for v in stages[stage])
                 digits = 4 - len(str(int(abs(m))))
                 cells.append(f"{m:.{digits}f} / {s:.{digits}f} ({_pct(m / s - 1)})")
+            old = stages["former"]
+            cells.append(f"{_pct(old / stages['transfer'][1] - 1)} / {_pct(old / stages['read'][1] - 1)}")
             rows.append(f"| {view} | {sub} | " + " | ".join(cells) + " |")
     return "\n".join(rows)
 
