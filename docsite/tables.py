@@ -105,7 +105,7 @@ def lightmap(data: dict) -> str:
 
 
 #: the records a record-made table reads (its data: {key: the record}); held by tests/test_docs_figures.py
-RECORD_TABLES = {"lightmap": {"geometric": "gf180_lightmap_geometric"}}
+RECORD_TABLES = {"lightmap": {"geometric": "gf180_lightmap_geometric", "modelled": "gf180_lightmap_modelled"}}
 
 
 def record_data(name: str) -> dict:
