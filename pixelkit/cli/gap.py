@@ -9,8 +9,21 @@ import numpy as np
 from .common import design_arg, emit, json_opt, load, main, out_opt, output_path, spice_opts, post_layout_opt
 from .types import FilePath, FiniteRange
 
-#: The chip the gap module's virtual silicon and committed cases are of: the read of [Thesis2019] (docs/gap-diagnosis.md).
+#: The chip the kit's committed SPICE cases (``pixelkit/gap/silicon_cases``) are of: the read of [Thesis2019]
+#: (docs/gap-diagnosis.md). ``gap selftest`` and ``gap silicon`` use it only when no DESIGN is given; a DESIGN
+#: given is the one diagnosed, and data of another design are refused, never diagnosed against it.
 THESIS_READ = "designs/dual_pixel_revA_thesis_read.toml"
+CASES_OF = "dual_pixel_revA_thesis_read"
+
+
+def _committed_cases_of(d, what: str, option: str) -> None:
+    """Refuse the kit's committed SPICE cases for a design they are not of (exit 2, naming ``option``)."""
+    if d.name != CASES_OF:
+        from ..errors import ConfigError
+        raise ConfigError(what, option, "the kit's pixelkit/gap/silicon_cases",
+                          f"SPICE cases of {d.name}: the kit's are of {CASES_OF} ({THESIS_READ}); make this design's "
+                          f"with `pixelkit gap silicon DESIGN --out FOLDER` and pass --spice-cases FOLDER, or run "
+                          f"--kind surrogate")
 
 
 @main.group()
@@ -246,7 +259,7 @@ def plan(design, measured, top, gain_tol, offset_tol, gain_sd, offset_sd, backen
 
 
 @gap.command()
-@click.argument("design", type=FilePath(dir_okay=False), required=False, default=THESIS_READ)
+@click.argument("design", type=FilePath(dir_okay=False), required=False, default=None)
 @click.option("--per-effect", type=click.IntRange(1, 1000), default=10, show_default=True)
 @click.option("--clean", type=click.IntRange(0, 10000), default=20, show_default=True)
 @click.option("--rows", type=click.IntRange(40, 100000), default=240, show_default=True,
@@ -256,14 +269,14 @@ def plan(design, measured, top, gain_tol, offset_tol, gain_sd, offset_sd, backen
               help="folder of committed SPICE cases (default: the kit's pixelkit/gap/silicon_cases)")
 @click.option("--kind", type=click.Choice(["both", "surrogate", "spice"]), default="both", show_default=True)
 @click.option("--ood", type=click.Choice(["dev", "heldout", "heldout2", "both"]), default=None,
-              help="instead: the out-of-distribution virtual silicon (tests/data/gap_ood, of the reference design, "
-                   "which it diagnoses whatever DESIGN is): "
+              help="instead: the out-of-distribution virtual silicon (tests/data/gap_ood, of the reference design "
+                   "dual_pixel_revA: DESIGN, when given, must be it): "
                    "its development set, its first held-out set (seen), its second (seeds 90000-) or dev + heldout")
 @spice_opts
 @json_opt
 def selftest(design, per_effect, clean, rows, seed, spice_cases, kind, ood, backend, jobs, as_json):
-    """Blind diagnosis: surrogate-generated cases and SPICE-generated cases, reported separately; or (--ood) the
-    out-of-distribution virtual silicon."""
+    """Blind diagnosis of DESIGN (default: the thesis read, whose SPICE cases the kit commits): surrogate-generated
+    cases and SPICE-generated cases, reported separately; or (--ood) the out-of-distribution virtual silicon."""
     from ..gap import silicon
     from ..gap.store import load_nominal
     from ..gap.selftest import run
@@ -274,13 +287,21 @@ def selftest(design, per_effect, clean, rows, seed, spice_cases, kind, ood, back
         for s in sets:
             if not (ood_mod.OOD_DIR / s / "truth.json").is_file():
                 raise click.UsageError(f"--ood {ood}: the {s} set is not in {ood_mod.OOD_DIR} (not generated yet)")
-        d = load(ood_mod.DESIGN)   # the sets are of the reference design, whatever DESIGN says
+        d = load(design or ood_mod.DESIGN)
+        ref = load(ood_mod.DESIGN) if design else d
+        if d.name != ref.name:   # the sets are lab data of the reference design: never diagnosed against another
+            from ..errors import ConfigError
+            raise ConfigError("gap selftest", "DESIGN", str(design),
+                              f"the reference design {ref.name} with --ood (its sets are that design's data), or "
+                              f"no DESIGN")
         with step("loading the SPICE-calibrated surrogate"):
             nom = load_nominal(d, backend=backend)
         r = {f"ood_{s}": ood_mod.run_set(d, nom, s) for s in sets}
         emit(r, as_json, lambda x: "\n".join(_selftest_text(k, v) for k, v in x.items()))
         return
-    d = load(design)
+    d = load(design or THESIS_READ)
+    if kind in ("both", "spice") and spice_cases is None:
+        _committed_cases_of(d, "gap selftest", "--spice-cases")
     with step("building the SPICE-calibrated surrogate (first run only)"):
         nom = load_nominal(d, backend=backend)
     r = {}
@@ -315,16 +336,20 @@ def _selftest_text(kind, x):
 
 
 @gap.command()
-@click.argument("design", type=FilePath(dir_okay=False), required=False, default=THESIS_READ)
-@out_opt("folder for cases.csv and truth.json (default: the kit's pixelkit/gap/silicon_cases)", folder=True)
+@click.argument("design", type=FilePath(dir_okay=False), required=False, default=None)
+@out_opt("folder for cases.csv and truth.json (default: the kit's pixelkit/gap/silicon_cases for the thesis read, "
+         "whose cases the kit commits; reports/<design>/silicon_cases for any other design)", folder=True)
 @spice_opts
 @json_opt
 def silicon(design, out, backend, jobs, as_json):
-    """Make the virtual-silicon SPICE cases (effects inserted as circuit elements); slow: ~1000 decks."""
+    """Make DESIGN's virtual-silicon SPICE cases (effects inserted as circuit elements; default DESIGN: the thesis
+    read); slow: ~1000 decks."""
     from ..gap import silicon as si
     from ..gap.store import load_nominal
     from ..progress import progress, step
-    d = load(design)
+    d = load(design or THESIS_READ)
+    if out is None and d.name != CASES_OF:   # never over the kit's committed cases of another design
+        out = output_path(None, d, "silicon_cases")
     with step("building the SPICE-calibrated surrogate (first run only)"):
         nom = load_nominal(d, backend=backend)
     plan_ = si.plan_cases()
@@ -336,12 +361,12 @@ def silicon(design, out, backend, jobs, as_json):
 
 
 @gap.command()
-@click.argument("design", type=FilePath(dir_okay=False), required=False, default=THESIS_READ)
+@design_arg
 @out_opt("surrogate file (default: the kit's pixelkit/gap/surrogates/<design>.json)")
 @spice_opts
 @json_opt
 def surrogate(design, out, backend, jobs, as_json):
-    """Build the design's SPICE-calibrated surrogate from SPICE (~260 decks) and store it with its decks' key."""
+    """Build the design's SPICE-calibrated surrogate from SPICE (a few hundred decks) and store it with its decks' key."""
     from ..gap import store
     from ..gap.nominal import build_nominal
     from ..progress import step
