@@ -170,14 +170,17 @@ def _write_role(conditions, out, v) -> None:
 
 def _role_text(r) -> str:
     lines = [f"verdict: {r['verdict']}",
-             f"{r['n_rows']} rows; noise {r['noise_rms_V'] * 1e3:.3g} mV rms; gap {r['gap_before_rms_V'] * 1e3:.3g} mV rms "
+             f"{r['n_rows']} rows: fitted on {r['n_train']}, judged on the held-out rows "
+             f"{', '.join(map(str, r['heldout_rows']))}",
+             f"held-out rows: noise {r['noise_rms_V'] * 1e3:.3g} mV rms; gap {r['gap_before_rms_V'] * 1e3:.3g} mV rms "
              f"against the nominal read, {r['gap_after_rms_V'] * 1e3:.3g} mV with {r['best']}",
-             "candidates (least chi-square first):"]
+             "candidates (least held-out chi-square first):"]
     for k in r["ranking"]:
         f = r["fits"][k]
         lines.append(f"  {k:<18} {f['value']:.4g} {f['unit']}{' (at its bound)' if f['at_bound'] else ''}  "
-                     f"chi2 {f['chi2']:.4g} over {r['n_rows']} rows, p = {f['p_value']:.3g}")
-    lines.append(f"  {'none':<18} chi2 {r['nominal_chi2']:.4g}, p = {r['nominal_p_value']:.3g}")
+                     f"held-out chi2 {f['heldout_chi2']:.4g} over {r['n_heldout']} rows, p = {f['p_value']:.3g}"
+                     f"{'' if f['beats_nominal'] else ' (does not beat the nominal there)'}")
+    lines.append(f"  {'none':<18} held-out chi2 {r['nominal_chi2']:.4g}, p = {r['nominal_p_value']:.3g}")
     su = r.get("setup")
     if su and su["stated"]:
         lines.append(f"set-up (stated calibration): gain {su['gain']:.4f}, offset {su['offset_V'] * 1e3:+.3f} mV "

@@ -24,9 +24,11 @@ refined in SPICE (a bounded scalar search, each point simulated) between the sca
 best: a transfer barrier's onset is a few tens of mV wide, which no interpolation between scan values
 follows.
 
-**Verdict** (``gap.diagnose.verdict_text``'s words): the nominal read explains the data when its
-chi-square over the rows' noise is likely (p >= ``gap.diagnose.P_EXPLAINED``); else the effect of least
-chi-square explains them when its fit is likely; effects within ``AMBIGUOUS_DCHI2`` of it are named as
+**Verdict** (``gap.diagnose.verdict_text``'s words), on held-out rows as the dual pixel's: every parameter is
+fitted on 70 % of the rows (``gap.diagnose.split``) and the other rows decide (``diagnose``). The nominal read
+explains the data when their chi-square over the rows' noise is likely (p >= ``gap.diagnose.P_EXPLAINED``);
+else the effect of least held-out chi-square that beats the nominal there is named, and explains them when
+that chi-square is likely; effects within ``AMBIGUOUS_DCHI2`` of it are named as
 indistinguishable. No test set-up gain or offset is fitted (the CDS output is the pixel's own
 difference; a set-up offset would look like FD leakage at one temperature): the data are taken as
 calibrated, and docs/gap-diagnosis.md says so. A stated calibration (``Setup``: ``--gain-sd`` /
@@ -114,6 +116,9 @@ def read(path, design, measured: bool) -> dict:
         problems += temperature_problem(i, out["temp_C"][i])
         if "n_avg" in out and math.isfinite(out["n_avg"][i]) and (out["n_avg"][i] < 1 or out["n_avg"][i] != int(out["n_avg"][i])):
             problems.append(f"row {i + 1}, column 'n_avg': {out['n_avg'][i]:g} (allowed: a whole number >= 1)")
+    if measured and len(rows) < 2:
+        problems.append(f"{len(rows)} row: the diagnosis needs at least 2 (its effects are fitted on 70 % of the rows "
+                        "and judged on the others)")
     if measured and not problems and np.all(out["v_std_V"] == 0):
         problems.append("column 'v_std_V': every row 0 (the diagnosis weighs rows by their noise)")
     if problems:
@@ -220,8 +225,9 @@ def setup_fit(pred, y, sigma, setup: Setup | None):
     return chi2, g, o
 
 
-def _refine(design, table, effect: Effect, coarse: dict, y, sigma, backend, jobs, setup=None) -> dict:
-    """``coarse``'s fit searched again between the scan values beside it, every point simulated."""
+def _refine(design, table, effect: Effect, coarse: dict, y, sigma, train, backend, jobs, setup=None) -> dict:
+    """``coarse``'s fit searched again between the scan values beside it, every point simulated (the
+    chi-square of the fit rows ``train`` only)."""
     from scipy.optimize import minimize_scalar
     xs = np.array(effect.scan)
     k = int(np.clip(np.searchsorted(xs, coarse["value"]), 0, len(xs) - 1))
@@ -231,68 +237,97 @@ def _refine(design, table, effect: Effect, coarse: dict, y, sigma, backend, jobs
     def chi2(x):
         v = simulate(design, table, effect, float(x), backend, jobs)
         seen[float(x)] = v
-        return float(setup_fit(v, y, sigma, setup)[0][0])
+        return float(setup_fit(v[train], y[train], sigma[train], setup)[0][0])
     r = minimize_scalar(chi2, bounds=(lo, hi), method="bounded",
                         options={"xatol": (hi - lo) / 200, "maxiter": REFINE_RUNS})
     if r.fun >= coarse["chi2"]:
         return coarse
     v = seen[float(r.x)]
-    c, g, o = setup_fit(v, y, sigma, setup)
+    c, g, o = setup_fit(v[train], y[train], sigma[train], setup)
     return {"value": float(r.x), "chi2": float(c[0]), "at_bound": coarse["at_bound"] and r.x in (xs[0], xs[-1]),
-            "resid_rms_V": float(np.sqrt(np.mean((y - g[0] * v - o[0]) ** 2))), "gain": float(g[0]),
-            "offset_V": float(o[0]), "refined": True}
+            "gain": float(g[0]), "offset_V": float(o[0]), "refined": True, "pred": v}
 
 
-def _fit(effect: Effect, preds: np.ndarray, y, sigma, setup=None) -> dict:
-    """The parameter of least chi-square (with the stated set-up's gain and offset fitted at each), the
-    prediction interpolated linearly between the scan's values."""
+def _fit(effect: Effect, preds: np.ndarray, y, sigma, train, setup=None) -> dict:
+    """The parameter of least chi-square on the fit rows ``train`` (with the stated set-up's gain and offset
+    fitted at each), the prediction interpolated linearly between the scan's values; ``pred``: every row's
+    prediction at it."""
     xs = np.array(effect.scan)
     grid = np.unique(np.concatenate([np.linspace(a, b, 64) for a, b in zip(xs[:-1], xs[1:])]))
     j = np.clip(np.searchsorted(xs, grid, side="right") - 1, 0, len(xs) - 2)
     w = ((grid - xs[j]) / (xs[j + 1] - xs[j]))[:, None]
     pred = (1 - w) * preds[j] + w * preds[j + 1]           # grid x rows
-    chi2, g, o = setup_fit(pred, y, sigma, setup)
+    chi2, g, o = setup_fit(pred[:, train], y[train], sigma[train], setup)
     k = int(np.argmin(chi2))
     return {"value": float(grid[k]), "chi2": float(chi2[k]), "at_bound": k in (0, len(grid) - 1),
-            "resid_rms_V": float(np.sqrt(np.mean((y - g[k] * pred[k] - o[k]) ** 2))), "gain": float(g[k]),
-            "offset_V": float(o[k])}
+            "gain": float(g[k]), "offset_V": float(o[k]), "pred": pred[k]}
+
+
+def _judged(fr: dict, y, sigma, test, setup) -> dict:
+    """``fr`` (its set-up gain and offset fitted on the fit rows with its parameter) on the held-out rows
+    ``test``: their chi-square, plus how far the fitted set-up sits from its stated calibration (the terms
+    ``setup_fit`` adds), and the rms residual there."""
+    r = y[test] - fr["gain"] * fr["pred"][test] - fr["offset_V"]
+    cal = ((fr["gain"] - 1.0) / setup.gain_sd) ** 2 if setup is not None and setup.gain_sd is not None else 0.0
+    cal += (fr["offset_V"] / setup.offset_V) ** 2 if setup is not None and setup.offset_V is not None else 0.0
+    out = {k: v for k, v in fr.items() if k != "pred"}
+    return {**out, "heldout_chi2": float(np.sum((r / sigma[test]) ** 2) + cal),
+            "resid_rms_V": float(np.sqrt(np.mean(r ** 2)))}
 
 
 def diagnose(design, table: dict, backend: str = "batch", jobs=None, setup: Setup | None = None) -> dict:
-    from ..gap.diagnose import AMBIGUOUS_DCHI2, P_EXPLAINED, verdict_text
-    from ..gap.pvalue import chi2_sf
+    """The verdict on held-out rows, as the dual pixel's (``gap.diagnose``): every parameter (the effect's,
+    the stated set-up's gain and offset) is fitted on 70 % of the rows (``gap.diagnose.split``, seeded), and
+    the other rows decide: the nominal read explains the data when their chi-square is likely; else an
+    effect is named only when it lowers their chi-square by more than a fitted parameter can on rows it did
+    not see (``chi2_isf(P_BEAT, 1)``), the one of least held-out chi-square, and it explains the gap when
+    that chi-square is likely (p >= ``P_EXPLAINED``); effects within ``AMBIGUOUS_DCHI2`` of it there are
+    indistinguishable. An effect that fits the fit rows and misses the held-out ones is not explained."""
+    from ..gap.diagnose import AMBIGUOUS_DCHI2, P_BEAT, P_EXPLAINED, split, verdict_text
+    from ..gap.pvalue import chi2_isf, chi2_sf
     y = table["v_V"]
-    n_avg = table.get("n_avg", np.ones(len(y)))
-    sigma = np.maximum(table["v_std_V"] / np.sqrt(np.nan_to_num(n_avg, nan=1.0)), 1e-7)
-    nominal = simulate(design, table, backend=backend, jobs=jobs)
     n = len(y)
-    c0, g0, o0 = setup_fit(nominal, y, sigma, setup)
-    chi0 = float(c0[0])
-    p0 = float(chi2_sf(chi0, n))
+    n_avg = table.get("n_avg", np.ones(n))
+    sigma = np.maximum(table["v_std_V"] / np.sqrt(np.nan_to_num(n_avg, nan=1.0)), 1e-7)
+    train, test = split(n)
+    n_cal = 0 if setup is None else (setup.gain_sd is not None) + (setup.offset_V is not None)
+    dof = int(test.sum()) + n_cal
+    nominal = simulate(design, table, backend=backend, jobs=jobs)
+    c0, g0, o0 = setup_fit(nominal[train], y[train], sigma[train], setup)
+    none = _judged({"value": 0.0, "chi2": float(c0[0]), "gain": float(g0[0]), "offset_V": float(o0[0]),
+                    "pred": nominal}, y, sigma, test, setup)
+    p0 = float(chi2_sf(none["heldout_chi2"], dof))
     fits = {}
     for e in candidates(design):
         preds = np.array([nominal if v == 0.0 else simulate(design, table, e, v, backend, jobs) for v in e.scan])
-        fits[e.name] = _fit(e, preds, y, sigma, setup)
+        fits[e.name] = _fit(e, preds, y, sigma, train, setup)
     for k in (sorted(fits, key=lambda k: fits[k]["chi2"])[:REFINE] if p0 < P_EXPLAINED else ()):
-        fits[k] = _refine(design, table, BY_NAME[k], fits[k], y, sigma, backend, jobs, setup)
-    ranking = sorted(fits, key=lambda k: fits[k]["chi2"])
-    for k in ranking:
-        fits[k]["p_value"] = float(chi2_sf(fits[k]["chi2"], max(n - 1, 1)))
-    if p0 >= P_EXPLAINED or not ranking:
-        best, explained, ambiguous = "none", p0 >= P_EXPLAINED, []
+        fits[k] = _refine(design, table, BY_NAME[k], fits[k], y, sigma, train, backend, jobs, setup)
+    fits = {k: _judged(f, y, sigma, test, setup) for k, f in fits.items()}
+    beat = chi2_isf(P_BEAT, 1)
+    for f in fits.values():
+        f["p_value"] = float(chi2_sf(f["heldout_chi2"], dof))
+        f["heldout_dchi2_vs_nominal"] = none["heldout_chi2"] - f["heldout_chi2"]
+        f["beats_nominal"] = bool(f["heldout_dchi2_vs_nominal"] > beat)
+    ranking = sorted(fits, key=lambda k: fits[k]["heldout_chi2"])
+    winners = [k for k in ranking if fits[k]["beats_nominal"]]
+    ambiguous = []
+    if p0 >= P_EXPLAINED or not winners:
+        best, explained = "none", p0 >= P_EXPLAINED
     else:
-        best = ranking[0]
+        best = winners[0]
         explained = fits[best]["p_value"] >= P_EXPLAINED
-        ambiguous = [k for k in ranking[1:] if fits[k]["chi2"] - fits[best]["chi2"] < AMBIGUOUS_DCHI2]
-    after = (fits[best]["resid_rms_V"] if best != "none" else
-             float(np.sqrt(np.mean((y - g0[0] * nominal - o0[0]) ** 2))))
-    chosen = fits[best] if best != "none" else {"gain": float(g0[0]), "offset_V": float(o0[0])}
+        ambiguous = [k for k in winners[1:] if fits[k]["heldout_chi2"] - fits[best]["heldout_chi2"] < AMBIGUOUS_DCHI2]
+    chosen = fits[best] if best != "none" else none
     from .gapnoise import diagnose as noise_diagnosis    # kT/C where CDS leaves it: the v_std_V column
     noise = noise_diagnosis(design, table, nominal, backend)
-    return {"design": design.name, "n_rows": n, "candidates": [e.name for e in candidates(design)],
-            "noise_rms_V": float(np.sqrt(np.mean(sigma ** 2))),
-            "gap_before_rms_V": float(np.sqrt(np.mean((y - nominal) ** 2))), "gap_after_rms_V": after,
-            "nominal_chi2": chi0, "nominal_p_value": p0, "best": best, "explained": bool(explained),
+    return {"design": design.name, "n_rows": n, "n_train": int(train.sum()), "n_heldout": int(test.sum()),
+            "heldout_rows": [int(i) + 1 for i in np.flatnonzero(test)],
+            "candidates": [e.name for e in candidates(design)],
+            "noise_rms_V": float(np.sqrt(np.mean(sigma[test] ** 2))),
+            "gap_before_rms_V": none["resid_rms_V"], "gap_after_rms_V": chosen["resid_rms_V"],
+            "nominal_chi2": none["heldout_chi2"], "nominal_fit_chi2": none["chi2"], "nominal_p_value": p0,
+            "best": best, "explained": bool(explained),
             "indistinguishable": ambiguous, "confident": not ambiguous,
             "fits": {k: {**fits[k], "unit": BY_NAME[k].unit, "what": BY_NAME[k].what} for k in ranking},
             "ranking": ranking,
