@@ -323,7 +323,7 @@ LOCAL = ("block", "record", "file", "calc", "input", "cite", "default", "schema"
 #: tests/test_noise.py); ``sf`` (the source follower's EKV gain against SPICE's, its column noise: docs/source-follower.md;
 #: tests/test_sf.py); ``wdr`` (the WDR pixel's noise floor by part, from the model's and from SPICE's dark current:
 #: docs/dark-current.md; tests/test_wdr.py)
-OTHER_SOURCES = ("p4t", "pl", "xs", "afen", "afeg", "stl", "nzf", "sf", "wdr")
+OTHER_SOURCES = ("p4t", "pl", "xs", "stk", "afen", "afeg", "stl", "nzf", "sf", "wdr")
 
 
 def _digits(text: str) -> float:

@@ -163,7 +163,13 @@ def test_the_stack_gives_the_pdks_area_coefficients(gf):
     # over the field, below the poly's top, so metal1 over poly is 3.0 % under the PDK's (49.88 aF/um2)
     assert m1_poly == pytest.approx(51.434 * (0.66 / 4 + 0.05 / 7) / (0.71 / 4), rel=1e-3, abs=0)
     uniform = replace(st, dielectrics=())
-    assert uniform.eps_gap(0, c("metal1").z) / c("metal1").z * 1e6 == pytest.approx(28.79, rel=1e-3, abs=0)
+    m1_sub_uniform = uniform.eps_gap(0, c("metal1").z) / c("metal1").z * 1e6
+    assert m1_sub_uniform == pytest.approx(28.79, rel=1e-3, abs=0)
+    # docs/post-layout.md quotes these (``stk:NAME`` marks, aF/um2)
+    from docsite import figures
+    now = {"m1_sub": m1_sub, "m2_m1": m2_m1, "m1_poly": m1_poly, "m1_sub_uniform": m1_sub_uniform}
+    bad, n = figures.check(None, [ROOT / "docs" / "post-layout.md"], getters={"stk": now.__getitem__})
+    assert n >= 4 and not bad, [(b["line"], b["key"], b["quoted"], b.get("now") or b.get("why")) for b in bad]
 
 
 def _parallel_plate_only(mp):
