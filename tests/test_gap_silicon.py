@@ -9,6 +9,7 @@ reproduce the committed file: the data are demonstrably SPICE-made.
 """
 import numpy as np
 import pytest
+from conftest import ROOT
 
 from pixelkit.gap import silicon
 
@@ -154,7 +155,45 @@ def test_spice_sample_names_every_effect_family(sample_run):
     assert not weak, weak
 
 
-# measured on the sample (98 cases, 84 in-library): top-1 0.942 +- 0.031, explained when right 0.942 +- 0.033
+def test_gap_diagnosis_page_quotes_the_sample_as_diagnosed_now(sample_run):
+    """docs/gap-diagnosis.md's paragraph on the default suite's sample quotes its size and its rates as the
+    diagnosis gives them now (``gss:KEY`` marks: ``n_cases``, ``n_in_library``, ``top1.rate``,
+    ``top1.half_width``, ``top1.half_width_worst``, the same of ``explained``, ``family.EFFECT.right`` /
+    ``.n``; and ``edge_ns``, the gap decks' largest time step on the reference design): a change of the diagnosis that moves one fails here, naming the line, and
+    ``PIXELKIT_DOCS_REWRITE=1`` rewrites them (then read the sentence)."""
+    import os
+    from docsite import figures
+    from pixelkit.gap.selftest import stratified_rate
+    r, truths = sample_run
+    pop = _population(truths)
+    lib = [c for c in r["cases"] if c["truth"] not in ("none", "out_of_library")]
+    right = [c for c in lib if _right(c)]
+    family = {}
+    for c in lib:
+        f = family.setdefault(c["truth"], {"right": 0, "n": 0})
+        f["right"], f["n"] = f["right"] + _right(c), f["n"] + 1
+    from pixelkit.design import load_design
+    from pixelkit.gap.chains import timings
+    ref = load_design(ROOT / "designs" / "dual_pixel_revA.toml")
+    edge = min(t.edge for t in timings(ref, ref.experiment.t_window).values())    # chains.edge_resolved's step
+    figs = {"n_cases": len(r["cases"]), "n_in_library": len(lib), "family": family, "edge_ns": edge * 1e9,
+            "top1": stratified_rate(lib, pop, _right),
+            "explained": stratified_rate(right, _right_population(lib, pop), lambda c: c["explained"] is True)}
+
+    def value(key):
+        data = figs
+        for part in figures._parts(key):
+            data = data[part]
+        return float(data)
+    page = ROOT / "docs" / "gap-diagnosis.md"
+    if os.environ.get("PIXELKIT_DOCS_REWRITE"):
+        figures.update(None, [page], getters={"gss": value})
+    bad, n = figures.check(None, [page], getters={"gss": value})
+    assert not bad, "\n".join(f"gap-diagnosis.md:{b['line']}: {b['key']}: quoted {b['quoted']}, now "
+                               f"{b.get('now') or b.get('why')}" for b in bad)
+
+
+# the sample's rates as measured: docs/gap-diagnosis.md (held by the test above)
 TOP1_SAMPLE = 0.85
 EXPLAINED_SAMPLE = 0.85
 
