@@ -323,8 +323,9 @@ LOCAL = ("block", "record", "file", "calc", "input", "cite", "default", "schema"
 #: tests/test_noise.py); ``sf`` (the source follower's EKV gain against SPICE's, its column noise: docs/source-follower.md;
 #: tests/test_sf.py); ``wdr`` (the WDR pixel's noise floor by part, from the model's and from SPICE's dark current:
 #: docs/dark-current.md; tests/test_wdr.py); ``gss`` (the gap diagnosis's stratified sample of the committed SPICE
-#: cases as the default suite diagnoses it: docs/gap-diagnosis.md; tests/test_gap_silicon.py)
-OTHER_SOURCES = ("p4t", "pl", "xs", "stk", "afen", "afeg", "stl", "nzf", "sf", "wdr", "gss")
+#: cases as the default suite diagnoses it: docs/gap-diagnosis.md; tests/test_gap_silicon.py); ``lim`` (the spec limits'
+#: derivations on ngspice's device charges: docs/revisions.md; tests/test_spec_limits.py)
+OTHER_SOURCES = ("p4t", "pl", "xs", "stk", "afen", "afeg", "stl", "nzf", "sf", "wdr", "gss", "lim")
 
 
 def _digits(text: str) -> float:

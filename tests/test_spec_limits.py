@@ -27,6 +27,8 @@ from pixelkit.spice.netlist import Element, Pwl, Tran
 
 DESIGNS = {"revA": REF, "thesis_read": ROOT / "designs" / "dual_pixel_revA_thesis_read.toml"}
 RAMP_T, RAMP_DV = 1e-6, 0.05
+#: the derivations' figures (``NAME.WHICH.KEY``), filled by the tests below, quoted by docs/revisions.md (``lim:``)
+MEASURED: dict = {}
 
 
 def _ramped_capacitance(design, elements, v: float, title: str) -> float:
@@ -85,6 +87,7 @@ def test_pd_conversion_gain_limits_are_the_node_at_its_reset(name, which):
     assert s["min"] == pytest.approx(0.9 * s["typ"], rel=0.002) and s["max"] == pytest.approx(1.1 * s["typ"], rel=0.002)
     # the thesis's table value (the bare junction at 2.5 V) lies outside the node's window
     bare = _ramped_capacitance(d, _pd_node(d, which)[:1], 2.5, f"lim_bare_{which[0]}")
+    MEASURED.setdefault(name, {}).setdefault(which, {}).update({"pd_cg_uV_per_e": Q / c * 1e6, "bare_cg_uV_per_e": Q / bare * 1e6})
     assert Q / bare == pytest.approx({"primary": 6.03e-6, "secondary": 21.7e-6}[which], rel=0.01)
     assert 1.0 / bare > s["max"] or which == "primary"
 
@@ -105,6 +108,9 @@ def test_full_well_limits_are_the_column_swing_over_the_output_gain(name, which)
     v_col, a_sf = float(mid["v(col)"][0]), float((hi["v(col)"][0] - lo["v(col)"][0]) / 0.1)
     c_total = _ramped_capacitance(d, _shared_node(d, which), v_fd, f"lim_shared_{which[0]}")
     full_well = v_col * c_total / a_sf        # C: the swing over CG_out(0) = A_sf q / C_total, in charge
+    MEASURED.setdefault(name, {}).setdefault(which, {}).update({"v_fd_V": v_fd, "v_col_V": v_col, "a_sf": a_sf,
+                                                               "cg_out_uV_per_e": a_sf * Q / c_total * 1e6,
+                                                               "full_well_ke": full_well / Q * 1e-3})
     s = _specs(DESIGNS[name])[f"full_well_{which}"]
     assert s["typ"] == pytest.approx(full_well, rel=0.03)
     assert s["min"] == pytest.approx(0.9 * s["typ"], rel=0.005)
@@ -127,3 +133,29 @@ def test_revisions_keep_their_revision_a_specs():
         assert limits == {n: {k: v for k, v in s.items() if k != "note"} for n, s in sb["spec"].items()}, b
         if b.startswith("dual"):   # the 4T's revision B is its revision A made to pass as drawn (no Monte Carlo)
             assert sb["verify"]["min_yield"] == "95 %" and "min_yield" not in sa["verify"]
+
+
+def test_revisions_page_quotes_the_derivations():
+    """docs/revisions.md quotes the derivations above (``lim:NAME.WHICH.KEY`` marks: the dark FD level, the column
+    level, CG_out(0), the full well at the column, the PD node's and the bare junction's conversion gains): a change of
+    the devices, the bench or the design that moves one fails here, naming the line (``PIXELKIT_DOCS_REWRITE=1``
+    rewrites them). It reuses the runs above; alone it repeats revA's."""
+    import os
+    from docsite import figures
+    for which in ("primary", "secondary"):
+        if "full_well_ke" not in MEASURED.get("revA", {}).get(which, {}):
+            test_full_well_limits_are_the_column_swing_over_the_output_gain("revA", which)
+        if "pd_cg_uV_per_e" not in MEASURED.get("revA", {}).get(which, {}):
+            test_pd_conversion_gain_limits_are_the_node_at_its_reset("revA", which)
+
+    def value(key):
+        data = MEASURED
+        for part in key.split("."):
+            data = data[part]
+        return float(data)
+    page = ROOT / "docs" / "revisions.md"
+    if os.environ.get("PIXELKIT_DOCS_REWRITE"):
+        figures.update(None, [page], getters={"lim": value})
+    bad, n = figures.check(None, [page], getters={"lim": value})
+    assert not bad, "\n".join(f"revisions.md:{b['line']}: {b['key']}: quoted {b['quoted']}, now "
+                               f"{b.get('now') or b.get('why')}" for b in bad)
