@@ -221,7 +221,7 @@ def stop_server(proc):
 #: what a clone carries: the pages' inputs, and every file a docs mark reads (record: / file: / input:,
 #: held by tests/test_docs_figures.py::test_every_file_a_mark_reads_is_in_the_docs_clone)
 CLONE_FOLDERS = ("designs", "examples", "tests/data", "docsite", "docs", "benchmarks/results",
-                 "pixelkit/gap/silicon_cases", "pixelkit/tech/builtin")
+                 "pixelkit/gap/silicon_cases", "pixelkit/gap/surrogates", "pixelkit/tech/builtin")
 
 
 @pytest.fixture
