@@ -186,3 +186,16 @@ def test_tables_made_from_records_are_the_records():
     for name in ("lightmap",):
         bad = tables.hold(name, tables.record_data(name))
         assert not bad, bad
+def test_a_tests_own_source_is_held_and_rewritten(tmp_path, monkeypatch):
+    """``figures.hold``: the page check of a test that computes its source's figures (``sf:``, ``wdr:``, ``gss:``,
+    ``lim:``) names a stale figure's page and line, leaves other sources' marks alone, and rewrites under
+    ``PIXELKIT_DOCS_REWRITE``."""
+    page = tmp_path / "p.md"
+    page.write_text("gain +3.05<!--fig xx:gain.4uA.1--> %, band 2.5<!--fig xx:band.0*-1--> %, other 1.0<!--fig afen:a-->\n")
+    data = {"gain": {"4uA": [0.0, 3.049]}, "band": [-2.46]}
+    monkeypatch.delenv("PIXELKIT_DOCS_REWRITE", raising=False)
+    assert figures.hold([page], "xx", data) == []
+    data["gain"]["4uA"][1] = 3.12
+    assert figures.hold([page], "xx", data) == ["p.md:1: xx:gain.4uA.1: quoted +3.05, now +3.12"]
+    monkeypatch.setenv("PIXELKIT_DOCS_REWRITE", "1")
+    assert figures.hold([page], "xx", data) == [] and page.read_text().startswith("gain +3.12<!--fig")
