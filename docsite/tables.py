@@ -16,6 +16,7 @@ call ``hold`` for it, so a region cannot escape the counter without a check.
 """
 from __future__ import annotations
 
+import json
 import os
 import re
 
@@ -83,7 +84,6 @@ def report_post_layout(data: dict) -> str:
 
 
 def _record(name: str) -> dict:
-    import json
     return json.loads((ROOT / "docs" / "records" / f"{name}.json").read_text())
 
 
@@ -94,7 +94,6 @@ def lightmap(data: dict) -> str:
            "/ read noise | lit from the first row on (uV) | read noise there (mV) | verdict |",
            "|---|---|---|---|---|---|---|---|---|"]
     for light, rec in data.items():
-        import json
         o = json.loads(rec["output"])
         for col, c in o["columns"].items():
             out.append(f"| {light} | {rec['commit']}, {rec['date'][:10]} | {o['readout_area_m2'] * 1e12:.1f} | {col} | "
