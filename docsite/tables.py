@@ -43,10 +43,12 @@ def structure_set(data: dict) -> str:
 
 
 def transfer_stages(data: dict) -> str:
-    """The stage-by-stage table: ``data`` = {view: {subpixel: {stage: (model, spice) V/e-, "former": V/e-}}}
+    """The stage-by-stage table: ``data`` = {view: {subpixel: {stage: (model, spice) V/e-, "former": V/e-,
+    "c_ch_F": TG's channel, "eta": the body factor at the node}}}
     (the former single-capacitance model q / (C_PD,node + C_FD,read) against SPICE at the transfer and the read)."""
-    rows = ["| design | subpixel | transfer | after TG opens | at the read | former model vs SPICE, transfer / read |",
-            "|---|---|---|---|---|---|"]
+    rows = ["| design | subpixel | transfer | after TG opens | at the read | former model vs SPICE, transfer / read "
+            "| TG turn-off, model / SPICE | RS turn-on, model / SPICE | C_ch (fF), eta |",
+            "|---|---|---|---|---|---|---|---|---|"]
     for view, by_sub in data.items():
         for sub, stages in by_sub.items():
             cells = []
@@ -56,6 +58,10 @@ def transfer_stages(data: dict) -> str:
                 cells.append(f"{m:.{digits}f} / {s:.{digits}f} ({_pct(m / s - 1)})")
             old = stages["former"]
             cells.append(f"{_pct(old / stages['transfer'][1] - 1)} / {_pct(old / stages['read'][1] - 1)}")
+            (mt, st), (ms, ss), (mr, sr) = (stages[s] for s in ("transfer", "store", "read"))
+            cells.append(f"{ms / mt:.3f} / {ss / st:.3f}")
+            cells.append(f"{mr / ms:.3f} / {sr / ss:.3f}")
+            cells.append(f"{stages['c_ch_F'] * 1e15:.2f}, {stages['eta']:.2f}")
             rows.append(f"| {view} | {sub} | " + " | ".join(cells) + " |")
     return "\n".join(rows)
 

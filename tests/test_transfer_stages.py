@@ -70,7 +70,8 @@ def test_post_layout_page_s_stage_table_is_the_kit_s(stages):
     """docs/post-layout.md's stage-by-stage table (``docsite/tables.py``) is the model and SPICE as above."""
     from docsite import tables
     key = {"transfer": "cg_transfer_V_per_e", "store": "cg_store_V_per_e", "read": "cg_fd_V_per_e"}
-    data = {view: {w: {**{s: (m[k], sp[s]) for s, k in key.items()}, "former": old} for w, (m, sp, old) in by.items()}
+    data = {view: {w: {**{s: (m[k], sp[s]) for s, k in key.items()}, "former": old, "c_ch_F": m["c_channel_F"],
+                       "eta": m["eta"]} for w, (m, sp, old) in by.items()}
             for view, by in stages.items()}
     bad = tables.hold("transfer-stages", data)
     assert not bad, bad
