@@ -96,7 +96,7 @@ def _record(name: str) -> dict:
 def lightmap(data: dict) -> str:
     """The light map's verdict per column from stored ``pixelkit lightmap --json`` records: ``data`` =
     {light: the record} (``docs/records/gf180_lightmap_LIGHT.json``)."""
-    out = ["| light | record (commit, date) | readout junctions open (um2) | column | AFE output error (uV) | "
+    out = ["| light | record (commit, date) | readout junction area in the map (um2) | column | AFE output error (uV) | "
            "/ read noise | lit from the first row on (uV) | read noise there (mV) | verdict |",
            "|---|---|---|---|---|---|---|---|---|"]
     for light, rec in data.items():
