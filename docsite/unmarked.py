@@ -26,7 +26,7 @@ from docsite.figures import NUMBER, ROOT, SPAN, pages
 UNITS = (r"[afpnu]F|[munk]?V(?:/e-)?|uV/e-|mV/s|[kM]?e-(?:/s)?|%|[mun]?W|dB|[munp]?s|min|h|K|[munpf]A|"
          r"[nu]m2?|um\^2|mm2?|DN(?:/e-)?|LSB|[kMG]?Hz|k?ohm|x|SPICE runs|runs|decks|conditions|tests|"
          r"candidates|iterations|evaluations|violations|shapes|devices|lines")
-FOUND = re.compile(r"(?<![\w.,#/-])(?P<num>" + NUMBER + r")\s?(?P<unit>" + UNITS + r")(?![\w^]|\s\d)")
+FOUND = re.compile(r"(?<![\w.,#/-])(?P<num>" + NUMBER + r")\s?(?P<unit>" + UNITS + r")(?![\w^']|\s\d)")
 #: an estimate, written as one: not a quoted figure
 ESTIMATE = re.compile(r"(?:~|\babout|\baround|\broughly|\bapprox(?:imately|\.)?|\bsome|\bnearly|\balmost)\s*$", re.I)
 #: a grid condition (corner, temperature, supply: an input, not a figure): "ss 85 degC -10 %"
