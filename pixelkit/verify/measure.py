@@ -59,6 +59,37 @@ def recording():
         _RECORD.reset(token)
 
 
+#: While ``asking()`` is active: the figure names a task measures (``verify.run``: its specs'); a group
+#: leaves out the decks that only feed figures outside it. None: every figure of the group.
+_ASKED: contextvars.ContextVar = contextvars.ContextVar("pixelkit_verify_asked", default=None)
+
+
+@contextlib.contextmanager
+def asking(names):
+    """Measure only what the figures ``names`` need (None: everything) inside."""
+    token = _ASKED.set(None if names is None else frozenset(names))
+    try:
+        yield
+    finally:
+        _ASKED.reset(token)
+
+
+def _asked(name: str) -> bool:
+    names = _ASKED.get()
+    return names is None or name in names
+
+
+def one_column(design, draw=None):
+    """The design whose dual pixel has one secondary column, when its N secondary columns are copies of
+    each other: the schematic (no extracted parasitics, which differ line to line) with nominal devices
+    (no Monte Carlo draw). Each column of an array bench has its own bias generator and shares only
+    ideal supplies and row lines with the others (``circuits.array``), so column 0 simulates as it does
+    beside its copies and a bench of the copies costs N times one column (settling, power). Else None."""
+    if draw is not None or getattr(design, "post_layout", None) is not None or design.secondary_per_pixel == 1:
+        return None
+    return replace(design, secondary_per_pixel=1)
+
+
 def _mark(r, node: str, t: float, what: str) -> None:
     rec = _RECORD.get()
     if rec is not None:
@@ -223,6 +254,11 @@ def storage(design, draw=None, backend="batch") -> dict:
     j_bg = light(design).j_bg
     out = {"signal_V": [], "fd_current_A": [], "hold_s": []}
     for i, kind in enumerate(("primary", "secondary")):
+        if not _asked(f"storage_light_{kind}"):   # its two decks feed that figure only
+            out["signal_V"].append(float("nan"))
+            out["fd_current_A"].append(float("nan"))
+            out["hold_s"].append(float("nan"))
+            continue
         sub = getattr(design, kind)
         tm = timings(design, b.tw, t_store=(sub.rows - 1) / sub.f_read, ec_hold=True)
         t0, t1 = tm[kind].t_tx + 2 * EDGE, tm[kind].t_read
@@ -303,9 +339,13 @@ def settling(design, draw=None, backend="batch") -> dict:
     default reltol 1e-5 the difference of the two reads carries the integration error of each, 0.1 -
     0.6 mV on the reference's revision B and the GF180 port (0.568 mV at tt -20 degC +10 % on the
     GF180 port's revision B, 0.016 mV converged), as large as the 0.5 mV limit: the figure would
-    measure the solver, not the read. Converged costs ~30 % more on these decks."""
+    measure the solver, not the read. Converged costs ~30 % more on these decks.
+
+    The secondary chain simulates one of the N identical secondary columns (``one_column``): the
+    worst of N copies is that of one."""
     from ..chip.frame import CONVERGED, simulate_frame
     from ..chip.scene import default_stimulus
+    design = one_column(design) or design
     n = design.secondary_per_pixel
     stim = default_stimulus(design, design.experiment.t_window)
     ip, is_ = np.full((2, 1), stim["iph_p"]), np.full((2, n), stim["iph_s"])

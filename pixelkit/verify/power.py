@@ -117,14 +117,16 @@ def _energies(r, net, design, kind: str) -> dict:
 def measure(design, draw=None, backend: str = "batch") -> dict:
     """Per-block power of each array's column and the chip at the design's frame rate (W)."""
     from ..spice import simulate_many
-    nets = {k: _bench(design, k, draw) for k in ("primary", "secondary")}
+    from .measure import one_column
+    single = one_column(design, draw)   # the N secondary columns are copies: one is simulated
+    nets = {"primary": _bench(design, "primary", draw), "secondary": _bench(single or design, "secondary", draw)}
     res = dict(zip(nets, simulate_many(list(nets.values()), backend=backend, jobs=1)))
     t_frame = frame_period(design)
     n = design.secondary_per_pixel
     per_col, chip = {}, {b: 0.0 for b in BLOCKS}
     for kind, net in nets.items():
         sub = getattr(design, kind)
-        cols_in_bench = 1 if kind == "primary" else n
+        cols_in_bench = 1 if kind == "primary" or single else n
         e = _energies(res[kind], net, design, kind)
         per_col[kind] = {b: (x["static_W"] + sub.rows * (x["events_J"] + x["read_J"]) / t_frame) / cols_in_bench
                          for b, x in e.items()}

@@ -40,16 +40,18 @@ def _task(task):
     """The groups of one condition (and draw), in one worker: groups that share decks (the
     pixel, lag and gse groups start from the same dark / small / saturated decks) find them
     in the cache instead of simulating them twice at once. A group whose simulation fails is
-    kept with ngspice's message; the others still run."""
-    design, cond, groups, draw, backend = task
+    kept with ngspice's message; the others still run. A sixth item, the figure names the task is
+    run for, lets a group leave out the decks of figures nobody asked (``measure.asking``)."""
+    design, cond, groups, draw, backend = task[:5]
     su = suite(design)
     d = su.at(design, cond)
     out = {}
-    for group in groups:
-        try:
-            out[group] = {"ok": True, "raw": su.run_group(group, d, draw, backend)}
-        except SimulationError as exc:
-            out[group] = {"ok": False, "error": f"{exc.what or exc.deck}: {exc.message}"}
+    with measure.asking(task[5] if len(task) > 5 else None):
+        for group in groups:
+            try:
+                out[group] = {"ok": True, "raw": su.run_group(group, d, draw, backend)}
+            except SimulationError as exc:
+                out[group] = {"ok": False, "error": f"{exc.what or exc.deck}: {exc.message}"}
     return out
 
 
@@ -80,18 +82,22 @@ def post_layout_view(design):
 
 
 def plan(design, grid: list, mc: int) -> tuple[list, list]:
-    """([(condition, its groups)], Monte Carlo specs): which groups run where. The Monte Carlo runs at the
-    nominal condition, so it serves the specs that hold there and whose figure mismatch moves."""
+    """([(condition, its groups, the figures asked there)], Monte Carlo specs): which groups run where. The
+    Monte Carlo runs at the nominal condition, so it serves the specs that hold there and whose figure
+    mismatch moves."""
     su = suite(design)
     need: dict = {}
+    asked: dict = {}
     for s in design.spec:
         for c in conditions.spec_conditions(s, grid):
+            asked.setdefault(c, set()).add(s.fig.name)
             for g in su.groups_for([s.fig.name]):
                 need.setdefault(c, set()).add(g)
     nominal = [conditions.nominal(design)]
     mc_specs = [s for s in design.spec if mc and s.mc and s.fig.mc and conditions.spec_conditions(s, nominal)]
     order = list(su.GROUPS)
-    return [(c, tuple(sorted(gs, key=order.index))) for c, gs in sorted(need.items())], mc_specs
+    return [(c, tuple(sorted(gs, key=order.index)), tuple(sorted(asked[c]))) for c, gs in sorted(need.items())], \
+        mc_specs
 
 
 class _Sequential:
@@ -152,7 +158,7 @@ class _Sequential:
 
 def _label(task) -> str:
     """What a task simulates, for the progress line."""
-    _d, c, groups, draw, _b = task
+    _d, c, groups, draw, _b = task[:5]
     return f"Monte Carlo sample {draw.sample + 1}" if draw is not None else f"{c.label} {'+'.join(groups)}"
 
 
@@ -187,13 +193,14 @@ def verify(design, corners=None, temperatures=None, supplies=None, mc: int | Non
         src = mismatch.source(design)
         mc_groups = sorted(su.groups_for([s.fig.name for s in mc_specs]), key=list(su.GROUPS).index)
     seq = _Sequential(design, mc_specs, mc, mc_full,
-                      lambda i: (design, nominal, tuple(mc_groups), mismatch.Draw(seed, i, src), backend))
-    tasks = [*seq.first(), *((design, c, gs, None, backend) for c, gs in cond_tasks)]
+                      lambda i: (design, nominal, tuple(mc_groups), mismatch.Draw(seed, i, src), backend,
+                                 tuple(sorted({s.fig.name for s in mc_specs}))))
+    tasks = [*seq.first(), *((design, c, gs, None, backend, names) for c, gs, names in cond_tasks)]
     raw_cond: dict = {}
     errors = []
 
     def take(task, outcome):
-        _d, c, _gs, draw, _b = task
+        _d, c, _gs, draw, _b = task[:5]
         if draw is not None:
             seq.done(draw.sample, outcome)
         where = raw_cond.setdefault(c, {}) if draw is None else {}
