@@ -33,6 +33,7 @@ import numpy as np
 
 from ..constants import Q
 from . import mismatch
+from .copies import one_column
 
 #: The small-signal point: this fraction of the current that takes the PD to 0.5 V.
 SMALL = 1.0 / 40
@@ -77,17 +78,6 @@ def asking(names):
 def _asked(name: str) -> bool:
     names = _ASKED.get()
     return names is None or name in names
-
-
-def one_column(design, draw=None):
-    """The design whose dual pixel has one secondary column, when its N secondary columns are copies of
-    each other: the schematic (no extracted parasitics, which differ line to line) with nominal devices
-    (no Monte Carlo draw). Each column of an array bench has its own bias generator and shares only
-    ideal supplies and row lines with the others (``circuits.array``), so column 0 simulates as it does
-    beside its copies and a bench of the copies costs N times one column (settling, power). Else None."""
-    if draw is not None or getattr(design, "post_layout", None) is not None or design.secondary_per_pixel == 1:
-        return None
-    return replace(design, secondary_per_pixel=1)
 
 
 def _mark(r, node: str, t: float, what: str) -> None:

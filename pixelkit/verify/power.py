@@ -117,7 +117,7 @@ def _energies(r, net, design, kind: str) -> dict:
 def measure(design, draw=None, backend: str = "batch") -> dict:
     """Per-block power of each array's column and the chip at the design's frame rate (W)."""
     from ..spice import simulate_many
-    from .measure import one_column
+    from .copies import one_column
     single = one_column(design, draw)   # the N secondary columns are copies: one is simulated
     nets = {"primary": _bench(design, "primary", draw), "secondary": _bench(single or design, "secondary", draw)}
     res = dict(zip(nets, simulate_many(list(nets.values()), backend=backend, jobs=1)))
