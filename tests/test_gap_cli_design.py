@@ -1,5 +1,5 @@
 """Every ``pixelkit gap`` command works on the design it is given: none falls back to a fixed design, and data
-made of another design (the kit's committed SPICE cases of the thesis read, the OOD sets of the reference) are
+made of another design (the kit's committed SPICE cases of the thesis read [Thesis2019], the OOD sets of the reference) are
 refused by name, never diagnosed against the given design. Cheap: the refusals come before any surrogate or
 SPICE run (~3 s each); the ``silicon`` folder test runs the command in-process with its SPICE replaced.
 """
