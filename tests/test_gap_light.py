@@ -108,3 +108,25 @@ def test_clamp_departure_is_the_charge_put_on_x(former_read):
     assert departure < -lin                                    # the response changes sign
     want = -(a.c11 + a.c12 + a.c13) * dqx / (a.c12 * a.c13) + a.c11 / a.c13 * (dv["sig"] - dv["in"])
     assert departure == pytest.approx(want, rel=0.03)
+
+
+def test_table_interpolation_error_is_a_quadratics_midpoint_error():
+    """The readout-light table's stated interpolation error (``nominal.table_interp_error`` x
+    ``INTERP_AT_SPACING``) against its derivation: on a table of x^2 + 3 y^2 (spacings h and k), a node's
+    leave-one-out error along x is h^2 and along y 3 k^2, and a bilinear table's largest error in a cell is at
+    its middle: (h / 2)^2 along x, 3 (k / 2)^2 along y; the edges (no neighbour on one side) carry the other
+    axis's only; a linear table has none. Where the response steps between two nodes the error is the step's
+    half at both nodes."""
+    from pixelkit.gap.nominal import INTERP_AT_SPACING, table_interp_error
+    h, k = 0.1, 0.5
+    x, y = np.arange(6) * h, np.arange(5) * k
+    err = table_interp_error(x, y, x[:, None] ** 2 + 3 * y[None, :] ** 2) * INTERP_AT_SPACING
+    mid_x = (h / 2) ** 2     # x^2: the straight line over a cell misses it by (h / 2)^2 at the middle
+    mid_y = 3 * (k / 2) ** 2
+    assert err[1:-1, 1:-1] == pytest.approx(np.full((4, 3), max(mid_x, mid_y)), rel=1e-9)
+    assert err[0, 1:-1] == pytest.approx(np.full(3, mid_y), rel=1e-9)
+    assert err[1:-1, 0] == pytest.approx(np.full(4, mid_x), rel=1e-9)
+    assert err[0, 0] == 0.0
+    assert np.max(table_interp_error(x, y, 2 * x[:, None] - y[None, :])) < 1e-12
+    step = np.where(x >= 0.25, 1.0, 0.0)[:, None] * np.ones(y.size)
+    assert table_interp_error(x, y, step)[2:4, :] == pytest.approx(np.full((2, 5), 0.5), rel=1e-9)

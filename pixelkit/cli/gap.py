@@ -284,6 +284,7 @@ def selftest(design, per_effect, clean, rows, seed, spice_cases, kind, ood, back
     from ..gap.store import load_nominal
     from ..gap.selftest import run
     from ..progress import step
+    from ..spice.engine import default_jobs
     if ood:
         from ..gap import ood as ood_mod
         sets = ("dev", "heldout") if ood == "both" else (ood,)
@@ -311,7 +312,8 @@ def selftest(design, per_effect, clean, rows, seed, spice_cases, kind, ood, back
     if kind in ("both", "surrogate"):
         r["surrogate"] = run(d, nom, per_effect, clean, seed, rows)
     if kind in ("both", "spice"):
-        r["spice"] = silicon.run_committed(d, nom, Path(spice_cases) if spice_cases else silicon.CASES_DIR)
+        r["spice"] = silicon.run_committed(d, nom, Path(spice_cases) if spice_cases else silicon.CASES_DIR,
+                                           jobs=jobs or default_jobs())
     emit(r, as_json, lambda x: "\n".join(_selftest_text(k, v) for k, v in x.items()))
 
 

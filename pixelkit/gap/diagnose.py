@@ -43,7 +43,7 @@ import numpy as np
 
 from .data import check_degenerate
 from .effects import COLUMN_EFFECTS, CORE, CORE_SUFFIX, applicable
-from .fit import N_SETUP, SetupBounds, calibration_terms, column_keys, evaluate, fit
+from .fit import N_SETUP, SetupBounds, calibration_terms, column_keys, evaluate, fit, prediction_sd
 from .nominal import features
 from .pvalue import chi2_isf, chi2_sf
 from .where import breakdown
@@ -165,7 +165,7 @@ def analyse(design, table, nom, seed: int = 0, candidates=None, setup: SetupBoun
     dof = n_te + len(cal)
     model, also, pair_tests = best, None, []
     if known and best != "none" and best not in COLUMN_EFFECTS and \
-            chi2_sf(fits[best]["heldout_chi2"], dof) < P_EXPLAINED:
+            chi2_sf(_fit_chi2(best, nom, Xte, fits[best], resid_te[best], w[test]), dof) < P_EXPLAINED:
         also, pair_tests = _second_effect(best, names, fits, nom, Xtr, Xte, y[train], y[test], w[train], w[test],
                                           cols, setup, cal)
         if also:
@@ -177,12 +177,12 @@ def analyse(design, table, nom, seed: int = 0, candidates=None, setup: SetupBoun
     for o, _ in confused:
         if o not in ambiguous:
             ambiguous.append(o)
-    chi2 = fits[model]["heldout_chi2"]
+    resid_te.setdefault(model, evaluate(model, nom, Xte, fits[model], cols) - y[test])
+    chi2 = _fit_chi2(model, nom, Xte, fits[model], resid_te[model], w[test]) if known else fits[model]["heldout_chi2"]
     p_fit = float(chi2_sf(chi2, dof)) if known else None
     explained = None if not known else bool(p_fit >= P_EXPLAINED)
     resid_none = y - evaluate("none", nom, X, none)
     resid_best = y - evaluate(model, nom, X, fits[model], cols)
-    resid_te.setdefault(model, evaluate(model, nom, Xte, fits[model], cols) - y[test])
     before, after = none["heldout_rms_V"], fits[model]["heldout_rms_V"]
     setup_flag = fits[model]["setup_at_bound"]
     result = {
@@ -222,6 +222,15 @@ def analyse(design, table, nom, seed: int = 0, candidates=None, setup: SetupBoun
            "within the set-up's tolerances cannot be told from the set-up's own" if model == "none" and not cal else ""),
     }
     return result, X, resid_none
+
+
+def _fit_chi2(name, nom, Xte, fr, resid, w):
+    """The held-out chi-square of the named model against what its prediction can claim: the rows' noise (the
+    measurement's and the nominal surrogate's) and the model's own tabulated responses' interpolation error
+    (``fit.prediction_sd``), plus its calibration terms. The ranking above uses the noise alone (one yardstick
+    for every candidate); this decides whether the named model explains the rows within its stated accuracy."""
+    u = prediction_sd(name, nom, Xte, fr)
+    return float(np.sum(resid ** 2 / (w ** 2 + u ** 2))) + fr["calibration_chi2"]
 
 
 # the row quantities each effect's terms scale with (beyond the signal itself): two effects whose lists
@@ -276,7 +285,7 @@ def _second_effect(best, names, fits, nom, Xtr, Xte, ytr, yte, wtr, wte, cols, s
         gain = fits[best]["heldout_chi2"] - fr["heldout_chi2"]
         ok = bool(gain > chi2_isf(P_BEAT, fr["k"] - fits[best]["k"])
                   and fits[best]["bic"] - fr["bic"] > BIC_MARGIN
-                  and chi2_sf(fr["heldout_chi2"], len(yte) + len(cal)) >= P_EXPLAINED)
+                  and chi2_sf(_fit_chi2(name, nom, Xte, fr, r, wte), len(yte) + len(cal)) >= P_EXPLAINED)
         tests.append({"effects": [best, c], "heldout_dchi2_vs_single": gain,
                       "dbic_vs_single": fits[best]["bic"] - fr["bic"],
                       "significant": ok, "params": _params(name, fr), "setup": fr["setup"]})

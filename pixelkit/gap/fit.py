@@ -33,7 +33,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from .effects import COLUMN_EFFECTS, effect
-from .nominal import predict
+from .nominal import predict, predict_sd
 
 
 @dataclass(frozen=True)
@@ -270,6 +270,17 @@ def _intervals(res, scales, n, k, lo, hi, theta):
                     "identifiable": bool(np.isfinite(cond) and cond < 1e14 and half < abs(theta[i]) and not at_bound),
                     "at_bound": at_bound})
     return out
+
+
+def prediction_sd(name, nom, X, fitres) -> np.ndarray:
+    """Each row's standard uncertainty of the fitted model's effect terms (``nominal.predict_sd``: the
+    tabulated responses' own interpolation error) through the set-up's gain; zero for ``none`` and the
+    per-column effects."""
+    if name == "none" or name in COLUMN_EFFECTS:
+        return np.zeros(len(X["afe"]))
+    theta = fitres["theta"]
+    sd = predict_sd(nom, X, plain_effect(fitres.get("model", name))[1](X, theta[N_SETUP:]))
+    return sd * np.abs(np.where(X["afe"], theta[3], theta[1]))
 
 
 def evaluate(name, nom, X, fitres, cols=None):

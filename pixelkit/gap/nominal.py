@@ -228,6 +228,20 @@ class Nominal:
             afe[m] += _bilinear(sg, ig, ta, signal[m], i_vm[m])
         return pix, afe
 
+    def vm_light_sd(self, arr_idx, signal, i_vm):
+        """(pixel-probe, AFE) uncertainty of ``vm_light``'s tabulated part at each row: the table's own
+        interpolation error at its spacing (``table_interp_error`` x ``INTERP_AT_SPACING``), the largest of the
+        row's cell's four corners."""
+        pix, afe = np.zeros_like(signal), np.zeros_like(signal)
+        if not self.light:
+            return pix, afe
+        for k, a in enumerate(ARRAYS):
+            m = arr_idx == k
+            sg, ig, tp, ta = self.light[a]
+            pix[m] = _cell_max(sg, ig, table_interp_error(sg, ig, tp), signal[m], i_vm[m]) * INTERP_AT_SPACING
+            afe[m] = _cell_max(sg, ig, table_interp_error(sg, ig, ta), signal[m], i_vm[m]) * INTERP_AT_SPACING
+        return pix, afe
+
     def afe(self, arr_idx, signal, eps_extra=0.0):
         e = self.eps_afe + eps_extra
         out = self.vref - self.gain_afe * signal / (1 + e)
@@ -246,6 +260,39 @@ def _bilinear(sg, ig, table, s, i):
     def at(row):
         return table[row, k] * (1 - wi) + table[row, k + 1] * wi
     return at(j) * (1 - ws) + at(j + 1) * ws
+
+
+#: a node's leave-one-out error is the table's interpolation error at twice its spacing; at its own spacing a
+#: smooth (locally quadratic) response's largest error, at a cell's middle, is a quarter of that
+INTERP_AT_SPACING = 0.25
+
+
+def table_interp_error(x0, x1, table):
+    """Per node of a table over two grids: how far the node's value sits from the straight line through its
+    two neighbours, the larger along either axis (a leave-one-out interpolation at twice the spacing; zero
+    where a node has no neighbour on both sides along an axis). Between nodes the table is interpolated at
+    the grid's own spacing: for a smooth response the largest error in a cell is a quarter of this one
+    (``INTERP_AT_SPACING``: a quadratic's midpoint error scales with the spacing squared); at a step the
+    response takes between two nodes (the readout light's op-amp clamp) it is larger (up to the step, twice
+    this one), so the quarter errs towards "not explained"."""
+    t = np.asarray(table, float)
+    err = np.zeros_like(t)
+    for axis, x in ((0, np.asarray(x0, float)), (1, np.asarray(x1, float))):
+        v = np.moveaxis(t, axis, 0)
+        w = (x[1:-1] - x[:-2]) / (x[2:] - x[:-2])
+        w = w.reshape((-1,) + (1,) * (v.ndim - 1))
+        loo = np.abs(v[1:-1] - (v[:-2] * (1 - w) + v[2:] * w))
+        e = np.moveaxis(err, axis, 0)
+        e[1:-1] = np.maximum(e[1:-1], loo)
+    return err
+
+
+def _cell_max(sg, ig, err, s, i):
+    """The largest of ``err`` at the four corners of the (signal, current) cell each row falls in (rows
+    beyond a grid's end: its end cell)."""
+    k = np.clip(np.searchsorted(ig, i) - 1, 0, len(ig) - 2)
+    j = np.clip(np.searchsorted(sg, np.clip(s, sg[0], sg[-1])) - 1, 0, len(sg) - 2)
+    return np.max([err[j, k], err[j, k + 1], err[j + 1, k], err[j + 1, k + 1]], axis=0)
 
 
 def t_float(design, f_read, arr):
@@ -484,6 +531,19 @@ def features(table, nom: Nominal, design) -> dict:
 
 
 LEVEL_SITES = ("col_g", "load", "rst_fd", "p1_vm", "sf_w", "c11", "a_ol", "c_fd")
+
+
+def predict_sd(nom: Nominal, X: dict, terms: dict | None = None) -> np.ndarray:
+    """The standard uncertainty of ``predict``'s effect terms at each row beyond the nominal surrogate's own
+    (``Nominal.error``): the readout-light table's interpolation error where ``terms`` put a current on vm."""
+    t = terms or {}
+    out = np.zeros(np.shape(X["q"]))
+    if "i_vm" in t:
+        q = X["q"] + t.get("dq", 0.0)
+        signal = nom.vrst_of(X["arr"], q) - nom.vsig_of(X["arr"], q) + t.get("dv_pix", 0.0)
+        lp, la = nom.vm_light_sd(X["arr"], signal, np.broadcast_to(t["i_vm"], signal.shape).astype(float))
+        out = np.where(X["afe"], la, lp)
+    return out
 
 
 def predict(nom: Nominal, X: dict, terms: dict | None = None) -> np.ndarray:

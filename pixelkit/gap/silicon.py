@@ -559,20 +559,43 @@ def stated_setup(truth: dict):
     return SetupBounds(gain_sd=BENCH_GAIN_SD, offset_sd_V=BENCH_OFFSET_SD_V)
 
 
-def run_committed(design, nom, folder: Path = CASES_DIR, only=None, only_ids=None) -> dict:
+def run_committed(design, nom, folder: Path = CASES_DIR, only=None, only_ids=None, jobs: int = 1) -> dict:
     """Diagnose every committed SPICE case (blind; ``only``: these kinds, ``only_ids``: these cases), each with
     the set-up its bench states (``stated_setup``), against the surrogate's levels at the design temperature
-    (the decks' own, ``simulate_case``); score."""
-    from .diagnose import diagnose
-    from .selftest import bench, score
+    (the decks' own, ``simulate_case``); score. ``jobs`` > 1: the cases shared out over that many processes
+    (each case's diagnosis is independent of the others'; the answers are the same as in one)."""
+    from .selftest import score
     cases, truths = load_cases(folder)
     nom = nom.at_design_temperature()      # the committed decks ran at the design temperature
+    ids = [cid for cid in cases if not (only and truths[cid]["effect"] not in only)
+           and not (only_ids is not None and cid not in only_ids)]
+    if jobs > 1 and len(ids) > 1:
+        import multiprocessing as mp
+        from concurrent.futures import ProcessPoolExecutor
+        with ProcessPoolExecutor(max_workers=jobs, mp_context=mp.get_context("spawn")) as pool:
+            parts = list(pool.map(_diagnose_committed, [(design, nom, folder, ids[k::jobs]) for k in range(jobs)]))
+        order = {cid: i for i, cid in enumerate(ids)}
+        out = sorted((c for part in parts for c in part), key=lambda c: order[c["case"]])
+    else:
+        out = _diagnose_committed((design, nom, folder, ids), (cases, truths))
+    r = score(out)
+    r.update({"kind": "SPICE-generated", "noise_V": NOISE_V, "n_avg": N_AVG, "cases": out,
+              "seeds": [min(c["seed"] for c in out), max(c["seed"] for c in out)] if out else None,
+              **by_class(out)})
+    return r
+
+
+def _diagnose_committed(job, loaded=None) -> list:
+    """The answers to the committed cases ``ids`` of ``folder`` (``job``: design, nominal at the design
+    temperature, folder, ids), one dict each."""
+    from .diagnose import diagnose
+    from .selftest import bench
+    design, nom, folder, ids = job
+    cases, truths = loaded or load_cases(folder)
     out = []
-    for cid, rows in cases.items():
+    for cid in ids:
         t = truths[cid]
-        if (only and t["effect"] not in only) or (only_ids is not None and cid not in only_ids):
-            continue
-        d = diagnose(design, table_of(design, rows, f"{folder}/cases.csv#{cid}"), nom, setup=stated_setup(t))
+        d = diagnose(design, table_of(design, cases[cid], f"{folder}/cases.csv#{cid}"), nom, setup=stated_setup(t))
         out.append({"case": cid, "truth": t["effect"], "circuit": t["circuit"],
                     "accept": t.get("accept", [t["effect"]]),
                     "found": "+".join(sorted(d["effects"])), "explained": d["explained"],
@@ -580,11 +603,7 @@ def run_committed(design, nom, folder: Path = CASES_DIR, only=None, only_ids=Non
                     "before_V": d["gap_before_rms_V"], "after_V": d["gap_after_rms_V"], "seed": t["seed"],
                     "campaign": t.get("campaign", "lab"), "bench": bench(t),
                     "gap_visible": _gap_visible(d)})
-    r = score(out)
-    r.update({"kind": "SPICE-generated", "noise_V": NOISE_V, "n_avg": N_AVG, "cases": out,
-              "seeds": [min(c["seed"] for c in out), max(c["seed"] for c in out)] if out else None,
-              **by_class(out)})
-    return r
+    return out
 
 
 def _gap_visible(d) -> bool:
