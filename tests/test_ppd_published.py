@@ -124,13 +124,14 @@ def test_the_dark_full_well_trend_is_the_fixed_pinning_voltage_one(d4t):
 
 
 def test_docs_quote_the_dark_full_wells_of_this_sizing(d4t):
-    """docs/pixel4t.md's "-20 to 85 degC: A to B e-" is the model's, to the electron."""
-    import re
+    """docs/pixel4t.md's "-20 to 85 degC: A to B e-" is the model's, to the electron (``ppw:`` marks)."""
     from pixelkit.constants import Q
-    page = (ROOT / "docs" / "pixel4t.md").read_text()
-    m = re.search(r"-20 to 85 degC: (\d+) to (\d+) e-", page)
-    assert m, "docs/pixel4t.md no longer quotes the dark full well from -20 to 85 degC"
-    assert [int(m[1]), int(m[2])] == [round(_ppd(d4t, c).full_well() / Q) for c in (-20.0, 85.0)]
+    from docsite import figures
+    page = ROOT / "docs" / "pixel4t.md"
+    assert "ppw:fw_cold_e" in page.read_text() and "ppw:fw_hot_e" in page.read_text(), \
+        "docs/pixel4t.md no longer quotes the dark full well from -20 to 85 degC (ppw: marks)"
+    figs = {"fw_cold_e": _ppd(d4t, -20.0).full_well() / Q, "fw_hot_e": _ppd(d4t, 85.0).full_well() / Q}
+    assert figures.hold([page], "ppw", figs) == []
 
 
 def test_with_v_bi_the_pinning_voltage_follows_the_built_in_potential_and_the_dark_full_well_rises(d4t):
@@ -172,8 +173,8 @@ def test_a_measured_transfer_barrier_in_the_kits_transfer_law(d4t):
     height phi = V_pin - phi_B leaves, after a transfer of t from a full PPD, -Q_T ln(1 - e^(-t/tau)) with
     tau = Q_T e^(phi/U_T) / I_spec (about C_PPD (phi - U_T ln(I_spec t / Q_T)) when tau >> t). Inverted here for a
     48 mV left shift at the 4T's 1 us transfer, written out, and held against ``Ppd.residual`` (the law the SPICE
-    elements follow, tests/test_pixel4t.py); docs/pixel4t.md quotes the offset and the barrier to the mV."""
-    import re
+    elements follow, tests/test_pixel4t.py); docs/pixel4t.md quotes the offset and the barrier
+    (``ppd:`` marks, held here by ``figures.hold``)."""
     from dataclasses import replace
     p = _ppd(d4t, 27.0)
     v_tg, t = d4t.levels.tg_high, d4t.timing.t_tg
@@ -188,9 +189,10 @@ def test_a_measured_transfer_barrier_in_the_kits_transfer_law(d4t):
     left = b.residual(b.full_well() / 2, t, v_tg)
     assert left / b.c == pytest.approx(h, rel=1e-3)
     assert phi - offset == pytest.approx(h, abs=0.1 * h)                 # the tau >> t reading is 10 % off here
-    page = (ROOT / "docs" / "pixel4t.md").read_text()
-    m = re.search(r"U_T ln\(I_spec t / Q_T\) = (\d+) mV\) when tau >> t, at this TG \(I_spec (\d+) nA, Q_T ([\d.]+) fC\)"
-                  r".*?a barrier of (\d+) mV", page, re.S)
-    assert m, "docs/pixel4t.md no longer quotes the transfer law's offset and the barrier it gives [Cao2016]'s 48 mV"
-    assert [int(m[1]), int(m[2]), float(m[3]), int(m[4])] == [round(offset * 1e3), round(i_s * 1e9),
-                                                              round(p.q_t * 1e15, 3), round(phi * 1e3)]
+    from docsite import figures
+    page = ROOT / "docs" / "pixel4t.md"
+    assert "ppd:barrier_mV" in page.read_text(), \
+        "docs/pixel4t.md no longer quotes the barrier the kit's law gives [Cao2016]'s 48 mV (ppd: marks)"
+    figs = {"offset_mV": offset * 1e3, "i_spec_nA": i_s * 1e9, "q_t_fC": p.q_t * 1e15, "barrier_mV": phi * 1e3,
+            "barrier_V": phi}
+    assert figures.hold([page], "ppd", figs) == []
