@@ -219,3 +219,23 @@ def test_lightmap_verdict_judges_the_error_against_its_limit():
     for bad in ("0x", "-1x", "x", "3 uA", "1e9 V", "nan x"):
         with pytest.raises(ConfigError, match="--max-error"):
             judge(cols, bad)
+
+
+def test_a_drc_result_names_its_deck_by_the_decks_folder_not_this_machine(monkeypatch, tmp_path):
+    """`pixelkit signoff --json` and its signoff.json printed the DRC deck as /root/.cache/...: the deck
+    in the decks' folder is named by that folder as the user sets it; a deck kept elsewhere (a
+    technology file's own path) as configured."""
+    from pixelkit.layout.signoff.drc import DrcResult
+
+    def deck(path):
+        return DrcResult(str(path), "TOP", {}, 1.0, "KLayout 0.28.5").as_dict()["deck"]
+    monkeypatch.setenv("PIXELKIT_DECKS", str(tmp_path / "d"))
+    assert deck(tmp_path / "d" / "gf180mcu.drc") == "$PIXELKIT_DECKS/gf180mcu.drc"
+    monkeypatch.delenv("PIXELKIT_DECKS")
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "x"))
+    assert deck(tmp_path / "x" / "pixelkit" / "decks" / "a.drc") == "$XDG_CACHE_HOME/pixelkit/decks/a.drc"
+    monkeypatch.delenv("XDG_CACHE_HOME")
+    monkeypatch.setenv("HOME", str(tmp_path / "h"))
+    assert deck(tmp_path / "h" / ".cache" / "pixelkit" / "decks" / "a.drc") == "~/.cache/pixelkit/decks/a.drc"
+    assert deck(tmp_path / "decks2" / "a.drc") == str(tmp_path / "decks2" / "a.drc")   # not the decks' folder
+    assert deck(tmp_path / "h" / ".cache" / "pixelkit" / "decksX" / "a.drc").startswith(str(tmp_path))

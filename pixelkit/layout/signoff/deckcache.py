@@ -20,6 +20,22 @@ def deck_dir() -> Path:
     return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "pixelkit" / "decks"
 
 
+def deck_label(path) -> str:
+    """``path`` as an output names it: a deck in the decks' folder by that folder as the user sets it
+    (``$PIXELKIT_DECKS/...``, ``$XDG_CACHE_HOME/pixelkit/decks/...`` or ``~/.cache/pixelkit/decks/...``),
+    never by this machine's absolute path (a report or a sign-off record is sent to others)."""
+    text, folder = str(path), str(deck_dir())
+    if not text.startswith(folder + os.sep):
+        return text
+    if os.environ.get("PIXELKIT_DECKS"):
+        name = "$PIXELKIT_DECKS"
+    elif os.environ.get("XDG_CACHE_HOME"):
+        name = "$XDG_CACHE_HOME/pixelkit/decks"
+    else:
+        name = "~/.cache/pixelkit/decks"
+    return name + text[len(folder):]
+
+
 def sha256(path: Path) -> str:
     h = hashlib.sha256()
     with open(path, "rb") as f:

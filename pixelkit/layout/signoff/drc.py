@@ -39,6 +39,7 @@ from functools import lru_cache
 from pathlib import Path
 
 from ...errors import PixelkitError
+from .deckcache import deck_label
 from .decks import drc_deck
 
 RUNNER = Path(__file__).with_name("deck_runner.drc")
@@ -87,7 +88,7 @@ class DrcResult:
         return out
 
     def as_dict(self) -> dict:
-        return {"clean": self.clean, "total": self.total, "by_rule": self.by_rule(), "deck": self.deck,
+        return {"clean": self.clean, "total": self.total, "by_rule": self.by_rule(), "deck": deck_label(self.deck),
                 "top": self.top, "options": self.options, "seconds": round(self.seconds, 2),
                 "klayout": self.klayout, "report": self.report,
                 "violations": [v.__dict__ for v in self.violations], **({"cached": True} if self.cached else {})}
