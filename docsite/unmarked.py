@@ -23,7 +23,7 @@ import sys
 from docsite.figures import NUMBER, ROOT, SPAN, pages
 
 #: units (and counted things) a kit figure is quoted in
-UNITS = (r"[afpnu]F|[munk]?V(?:/e-)?|uV/e-|mV/s|[kM]?e-(?:/s)?|%|[mun]?W|dB|[munp]?s|min|h|K|[munpf]A|"
+UNITS = (r"[afpnu]F|[afp]C|[munk]?V(?:/e-)?|uV/e-|mV/s|[kM]?e-(?:/s)?|%|[mun]?W|dB|[munp]?s|min|h|K|[munpf]A|"
          r"[nu]m2?|um\^2|mm2?|DN(?:/e-)?|LSB|[kMG]?Hz|k?ohm|x|SPICE runs|runs|decks|conditions|tests|"
          r"candidates|iterations|evaluations|violations|shapes|devices|lines")
 FOUND = re.compile(r"(?<![\w.,#/-])(?P<num>" + NUMBER + r")\s?(?P<unit>" + UNITS + r")(?![\w^']|\s\d)")
