@@ -51,7 +51,7 @@ MARKED = ("README.md", "bibliography.md", "cli-conventions.md", "dark-current.md
           "families.md", "frame-models.md", "gap-diagnosis.md", "howto-docs-figures.md", "howto-emva1288.md",
           "howto-measurements.md", "howto-new-technology.md", "howto-sweeps-dask.md", "input-files.md",
           "interrupts.md", "layout-readout.md", "layout-signoff.md", "monte-carlo.md", "netlist-benches.md",
-          "noise-camera.md", "pixel-netlist.md", "pixel4t.md", "report-figures.md", "report.md", "revisions.md",
+          "noise-camera.md", "pixel-netlist.md", "pixel4t.md", "post-layout.md", "report-figures.md", "report.md", "revisions.md",
           "security.md", "setup.md",
           "sizing.md", "source-follower.md", "technologies.md", "timing-and-settling.md", "validation.md",
           "verify.md")
