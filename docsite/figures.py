@@ -325,7 +325,7 @@ LOCAL = ("block", "record", "file", "calc", "input", "cite", "default", "schema"
 #: docs/dark-current.md; tests/test_wdr.py); ``gss`` (the gap diagnosis's stratified sample of the committed SPICE
 #: cases as the default suite diagnoses it: docs/gap-diagnosis.md; tests/test_gap_silicon.py); ``lim`` (the spec limits'
 #: derivations on ngspice's device charges: docs/revisions.md; tests/test_spec_limits.py)
-OTHER_SOURCES = ("p4t", "pl", "xs", "stk", "afen", "afeg", "stl", "nzf", "sf", "wdr", "gss", "lim", "ppw", "ppd")
+OTHER_SOURCES = ("p4t", "pl", "xs", "stk", "afen", "afeg", "stl", "nzf", "sf", "wdr", "gss", "lim", "ppw", "ppd", "ppv")
 
 
 def _digits(text: str) -> float:

@@ -162,6 +162,11 @@ def test_with_v_bi_the_pinning_voltage_follows_the_built_in_potential_and_the_da
     assert (hot.v_pin - cold.v_pin) * hot.c / cold.full_well() == pytest.approx(0.13, abs=0.02)
     assert hot.full_well() > cold.full_well()            # rising, as published (+0.4 %: the fixed V_pin's -11 %
     assert _ppd(d4t, 85.0).full_well() < _ppd(d4t, -20.0).full_well()   # and V_pin's +13 %); without v_bi: falls
+    from docsite import figures        # docs/pixel4t.md's figures of this derivation (ppv: marks)
+    fixed = _ppd(d4t, 85.0).full_well() / _ppd(d4t, -20.0).full_well() - 1
+    figs = {"slope_mV_per_K": -got * 1e3, "fixed_pct": 100 * fixed,
+            "with_v_bi_pct": 100 * (hot.full_well() / cold.full_well() - 1)}
+    assert figures.hold([ROOT / "docs" / "pixel4t.md"], "ppv", figs) == []
     q0 = hot.full_well() + 3 * hot.q_t
     (r,) = simulate_many([_deck("ppd_vbi_hot", hot, 85.0, 0.0, 50.0 * hot.q_t / hot.i_dif, q0=q0)])
     assert -r["v(q)"][-1] * hot.c == pytest.approx(hot.full_well(), rel=2e-3)
