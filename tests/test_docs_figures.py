@@ -201,3 +201,28 @@ def test_a_tests_own_source_is_held_and_rewritten(tmp_path, monkeypatch):
     assert figures.hold([page], "xx", data) == ["p.md:1: xx:gain.4uA.1: quoted +3.05, now +3.12"]
     monkeypatch.setenv("PIXELKIT_DOCS_REWRITE", "1")
     assert figures.hold([page], "xx", data) == [] and page.read_text().startswith("gain +3.12<!--fig")
+
+
+#: the pages each test holding a source of its own (``figures.OTHER_SOURCES``) checks: the general check skips
+#: those marks (``_elsewhere``), so a mark of one on a page its test does not read would be checked by nobody
+HELD_ON = {"p4t": "*", "pl": ("post-layout.md",), "xs": ("post-layout.md",), "stk": ("post-layout.md",),
+           "afen": ("noise-camera.md",), "afeg": ("pixel-model.md", "verify.md"), "stl": ("verify.md",),
+           "nzf": ("noise-camera.md", "timing-and-settling.md"), "sf": ("source-follower.md",),
+           "wdr": ("dark-current.md",), "gss": ("gap-diagnosis.md",), "lim": ("revisions.md",),
+           "ppw": ("pixel4t.md",), "ppd": ("pixel4t.md",), "ppv": ("pixel4t.md",)}
+
+
+def test_every_mark_of_a_source_a_test_holds_stands_on_a_page_that_test_reads():
+    """A ``sf:`` (``p4t:``, ...) mark is checked only by its test, on the pages that test names (``HELD_ON``;
+    ``p4t:`` on every page with a ``<!--fig p4t:`` mark, tests/test_pixel4t.py); one on another page, or inside a
+    calc on a page without such a mark, would pass unchecked. A new source names its pages here."""
+    assert set(HELD_ON) == set(figures.OTHER_SOURCES)
+    stray = []
+    for page in figures.pages():
+        text = page.read_text()
+        used = {m["src"] for m in figures.MARK.finditer(text)} | {s for s, _ in figures.REF.findall(text)}
+        for src in used & set(HELD_ON):
+            ok = "<!--fig p4t:" in text if HELD_ON[src] == "*" else page.name in HELD_ON[src]
+            if not ok:
+                stray.append(f"{page.name}: {src}:")
+    assert not stray, stray
