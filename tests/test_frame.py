@@ -242,3 +242,18 @@ def test_interpolation_shares_anchor_currents_only_between_places_that_are_the_s
         [p] = interp.plan(tasks, ("primary",), d, d.experiment.t_window, fn, CONVERGED).values()
         assert (5 in p["rest"], 5 in p["tight"], len(p["rest"])) == (interpolated, not interpolated, 3 + interpolated)
         assert max(p["x"][0]) == pytest.approx(max(ph.iph_p[0, :17]), rel=1e-12)    # the range reaches it
+    # places coupled to their neighbour (a post-layout line coupling per place pair): no shared places,
+    # and the narrow chain - its cut drops the coupling its place 1 has in the anchors - is simulated
+    ph = photocurrents(d, 2, 20, np.tile(np.linspace(0.1, 0.6, 20 * n), (2, 1)), "fs")
+    tasks = [(d, ph.iph_p, ph.iph_s, t, *tasks[0][4:11], f"c{t.cols[0]}", *tasks[0][12:])
+             for t in tiles(2, 20, "columns", True, ("primary",))]
+
+    def coupled(task, mine, to):
+        c = task[3].cols
+        extra = f"Ccc col_p_{c[1]} col_p_{c[2]} 1f\n" if len(c) >= 3 else ""
+        return renamed(_first_deck(task) + extra, mine, to)
+    [p] = interp.plan(tasks, ("primary",), d, d.experiment.t_window, coupled, CONVERGED).values()
+    last = len(tasks) - 1
+    assert len(tasks[last][3].cols) == 2 and not p["shared"]
+    assert last not in p["rest"] and last in p["tight"]
+

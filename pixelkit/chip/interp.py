@@ -108,11 +108,13 @@ def plan(tasks: list, kinds, design, t_exp: float, deck, converged) -> dict:
                           converged) for a in range(chains)]
         ref = _masked(deck(anchors[0], ac, ac))
         ok = [i for i in ok if _masked(deck(tasks[i], cols[i], ac)) == ref]
-        if len(ok) <= chains + 2:
+        if len(ok) <= chains + 2 or probe not in ok:   # the places were judged on a chain the anchors are not
             continue
         # a narrower chain (the array's last, when its columns do not fill a chain): its places are the
-        # anchors' first ones when its deck is the anchor chain's cut to as many columns
-        narrow = [i for i in flat if len(cols[i]) < width
+        # anchors' first ones when its deck is the anchor chain's cut to as many columns and the places are
+        # one circuit (else the cut's edge place - a coupling to the next place dropped - is not the
+        # anchors' place, and a narrow chain is never held out to show it)
+        narrow = [i for i in flat if shared and len(cols[i]) < width
                   and _masked(deck(tasks[i], cols[i], ac[:len(cols[i])])) == _narrow_ref(anchors[0], kind, n, cols[i], deck)]
         # held out: the two chains where an interpolation error is likeliest largest
         held = sorted(ok, key=lambda i: _nodal(cur[0], cols[i], x, group, lo, top))[-2:]
