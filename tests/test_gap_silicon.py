@@ -120,7 +120,7 @@ def test_spice_set_names_every_effect_family(full_run):
 def test_gap_diagnosis_page_quotes_the_set_as_diagnosed_now(full_run):
     """docs/gap-diagnosis.md quotes the default suite's run of the whole set as the diagnosis gives it now
     (``gss:KEY`` marks: ``n_cases``, ``n_in_library``, ``n_right``, ``n_explained``, ``top1``, ``explained``,
-    ``family.EFFECT.right`` / ``.n``; and ``edge_ns``, the gap decks' largest time step on the reference
+    ``family.EFFECT.right`` / ``.n``, ``median_shrink``, ``cls.CLASS.right`` / ``.n`` (the table's classes); and ``edge_ns``, the gap decks' largest time step on the reference
     design): a change of the diagnosis that moves one fails here, naming the line, and
     ``PIXELKIT_DOCS_REWRITE=1`` rewrites them (then read the sentence)."""
     from docsite import figures
@@ -135,9 +135,17 @@ def test_gap_diagnosis_page_quotes_the_set_as_diagnosed_now(full_run):
     from pixelkit.gap.chains import timings
     ref = load_design(ROOT / "designs" / "dual_pixel_revA.toml")
     edge = min(t.edge for t in timings(ref, ref.experiment.t_window).values())    # chains.edge_resolved's step
+    clean = [c for c in r["cases"] if c["truth"] == "none"]
+    ool = [c for c in r["cases"] if c["truth"] == "out_of_library"]
+    cls = {k: {"right": round(r[k]["rate"] * r[k]["n"]), "n": r[k]["n"]}
+           for k in ("uniform_named_uniform", "uniform_named_right", "uniform_visible_named_right", "mc_named_per_column",
+                     "two_effects_both_named", "dark_current_hot_named", "none_on_clean_calibrated")}
+    cls["none_on_clean"] = {"right": sum(c["found"] == "none" for c in clean), "n": len(clean)}
+    cls["ool_not_explained"] = {"right": sum(c["explained"] is False for c in ool), "n": len(ool)}
     figs = {"n_cases": len(r["cases"]), "n_in_library": len(lib), "family": family, "edge_ns": edge * 1e9,
             "n_right": len(right), "n_explained": sum(c["explained"] is True for c in right),
-            "top1": r["top1_accuracy"], "explained": r["explained_when_right"]}
+            "top1": r["top1_accuracy"], "explained": r["explained_when_right"], "median_shrink": r["median_shrink"],
+            "cls": cls}
     stale = figures.hold([ROOT / "docs" / "gap-diagnosis.md"], "gss", figs)
     assert not stale, "\n".join(stale)
 
