@@ -50,7 +50,7 @@ LINK_TARGET = re.compile(r"\]\([^)]*\)")
 MARKED = ("README.md", "arrays.md", "bibliography.md", "cli-conventions.md", "dark-current.md", "engine.md",
           "families.md", "frame-models.md", "gap-diagnosis.md", "howto-docs-figures.md", "howto-emva1288.md",
           "howto-measurements.md", "howto-new-technology.md", "howto-sweeps-dask.md", "input-files.md",
-          "interrupts.md", "layout-readout.md", "layout-signoff.md", "monte-carlo.md", "netlist-benches.md",
+          "interrupts.md", "layout-readout.md", "layout-signoff-any.md", "layout-signoff.md", "monte-carlo.md", "netlist-benches.md",
           "noise-camera.md", "pixel-netlist.md", "pixel4t.md", "post-layout.md", "report-figures.md", "report.md", "revisions.md",
           "security.md", "setup.md",
           "sizing.md", "source-follower.md", "technologies.md", "timing-and-settling.md", "validation.md",
