@@ -42,17 +42,16 @@ REFS = {w: _ref(w) for w in ("development", "validation", "holdout", "holdout2",
 #: written there (kit / FastCap2 - 1)
 KNOWN_MISSES = {
     "development": {"d_cross_m1m2_45": 0.196},
-    "validation": {"v_via_stack_m3": 0.273},
-    "holdout": {"h_cross_m1m3_wide": 0.106, "h_cross_m2m3_30": 0.157, "h_parallel_m3m5": 0.172, "h_via_stack_m2": 0.119},
-    "holdout2": {"k_cross_m1m2_45_wide": 0.234, "k_via_stack_m4": 0.128},
+    "validation": {"v_via_stack_m3": 0.155},
+    "holdout": {"h_cross_m1m3_wide": 0.106, "h_cross_m2m3_30": 0.157, "h_parallel_m3m5": 0.172, "h_via_stack_m2": 0.112},
+    "holdout2": {"k_cross_m1m2_45_wide": 0.234},
     "holdout3": {"q_cross_m2m3_45": 0.122},
     "holdout4": {},
-    "holdout5": {"s_cross_m2m4_narrow": 0.104, "s_cross_m2m3_135": 0.160, "s_parallel_m4m5": 0.129,
-                 "s_via_stack_m5": 0.147},
+    "holdout5": {"s_cross_m2m4_narrow": 0.104, "s_cross_m2m3_135": 0.160, "s_parallel_m4m5": 0.129},
     "holdout6": {"t_cross_m1m2_135_wide": 0.179, "t_parallel_m3m5_close": 0.126, "t_parallel_m2m3_far": 0.112,
-                 "t_via_stack_m2_far": 0.138, "t_plate_m5_m4": -0.100},
+                 "t_plate_m5_m4": -0.100},
     "holdout7": {},
-    "holdout8": {"w_via_stack_m3_far": 0.274, "w_via_stack_m4_close": -0.155, "w_via_stack_m5_wide": 0.290,
+    "holdout8": {"w_via_stack_m3_far": 0.155, "w_via_stack_m4_close": -0.110, "w_via_stack_m5_wide": 0.156,
                  "w_cross_m2m3_120_wide": 0.152, "w_cross_m3m5_45": 0.172, "w_parallel_m4m5_far": 0.182},
 }
 HELD = list(REF)
@@ -254,3 +253,31 @@ def test_the_stored_fastcap_reference_is_fastcaps(gf, tmp_path):
     from pixelkit.layout.pex.structures import fastcap_reference
     again = fastcap_reference(gf, tmp_path)
     assert all(again[n] == pytest.approx(REF[n], rel=0.01, abs=0) for n in REF), again
+
+
+def test_pad_stacks_are_found_flush_and_an_overhang_is_not(gf, tmp_path, monkeypatch):
+    """``stacks.Stacking`` on two metal1 - metal3 pad stacks (1 um, 1 um apart): each face's net continues
+    flush on the layers under / over it (metal2's faces: one each way; their lateral section screened by the
+    grouped 2D solve, < 1); a metal2 pad 0.5 um wider than the metal1 / metal3 under and over it is not
+    flush (its faces stand alone: no screening, as before stacks were looked at)."""
+    import numpy as np
+    from pixelkit.layout.pex import structures as S
+    from pixelkit.layout.pex.stacks import Stacking, screened
+
+    def sets(tech):
+        wide = [s for s in S._vias(tech, 10, 0, "ob", "metal3", 1.0) if s[0] != "metal2"]
+        return [S._pads(tech, "p", "metal3", 1.0, 1.0, "p"),
+                S.Structure("o", ("oa", "ob"), "overhang", tuple(
+                    S._vias(tech, 7.5, 0, "oa", "metal3", 1.0) + wide + [("metal2", 9.5, -0.5, 11.5, 1.5, "ob")]))]
+    monkeypatch.setitem(S.SETS, "stacks", sets)
+    geo = S.geometry(gf, tmp_path, "stacks")
+    st = Stacking(geo, gf.stack)
+    m2 = next(k for k, c in enumerate(gf.stack.conductors) if c.name == "metal2")
+    um = 1e-6 / geo.dbu
+    mids = np.array([[1.0, 0.5], [2.0, 0.5], [88.5, 0.5], [89.5, 0.5]]) * um   # pa's, pb's, oa's, ob's faces (set pitch 80)
+    normals = np.array([[1.0, 0], [-1.0, 0], [1.0, 0], [-1.0, 0]])
+    down, up = st.runs(m2, ["pa", "pb", "oa", "ob"], mids, normals)
+    assert down.tolist() == [1, 1, 1, 0] and up.tolist() == [1, 1, 1, 0]
+    f = screened(gf.stack, m2, 1e-6, 1e-6, 1e-6, 1, 1)
+    assert 0.5 < f < 0.9
+    assert screened(gf.stack, m2, 1e-6, 1e-6, 1e-6, 0, 0) == 1.0

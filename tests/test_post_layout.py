@@ -147,8 +147,10 @@ def _frame_replica(d) -> list:
     """Post-layout minus schematic double-sampled signal (mV) of each secondary of the dual-pixel bench
     (one dual pixel, its ``dualpix`` couplings, one row) read as the report's 2 x 2 frame reads dual
     pixel 0 in row 0: through the frame's S1 / S2 samplers into its AFEs, the frame's timing (EC
-    holds the PDs in reset from the end of the transfer), the frame's photocurrents."""
+    holds the PDs in reset from the end of the transfer), the frame's photocurrents. At
+    ``chip.frame.CONVERGED`` tolerances, as the report's frame."""
     from dataclasses import replace
+    from pixelkit.chip.frame import CONVERGED
     from pixelkit.circuits.array import frame_timings
     from pixelkit.circuits.testbench import dual_pixel_bench
     from pixelkit.measure.pixel import double_sampled
@@ -165,7 +167,7 @@ def _frame_replica(d) -> list:
         nets.append(dual_pixel_bench(v, float(ph.iph_p[0][0]), tuple(float(ph.iph_s[0][k]) for k in range(n)),
                                      with_afe=True, tm=tm, title=f"frame_replica_{len(nets)}"))
         tms.append(tm["secondary"])
-    a, b = simulate_many(nets)
+    a, b = simulate_many(nets, options=CONVERGED)
     return [1e3 * (double_sampled(b, f"col_s{k}", tms[1]) - double_sampled(a, f"col_s{k}", tms[0])) for k in range(n)]
 
 
@@ -177,17 +179,24 @@ def test_report_section_post_layout_vs_schematic(tmp_path):
     The 2 x 2 frame's shift post-layout vs schematic (dual pixel 0's three secondaries, row 0) is
     held to the same shift of the dual-pixel bench read the way the frame reads (``_frame_replica``:
     the frame's S1 / S2 samplers and AFEs on its columns, its timing with EC holding the PDs in
-    reset from the end of the transfer, its row-0 photocurrents), within 3 mV (measured 1.8 - 1.9
-    mV apart). Not against the report's pedestal bench (no AFE, EC off through the read; its
-    secondary's pedestal moves by -87.1 mV, the frame's dim secondaries by -78.8 / -77.1): the two
-    read differently, measured on the bench (docs/post-layout.md, the 2 x 2 frame): EC's rise kicks
+    reset from the end of the transfer, its row-0 photocurrents), within 0.1 mV, both at
+    ``chip.frame.CONVERGED`` tolerances (measured 0.02 - 0.04 mV apart, with and without the pad stacks'
+    screening, i.e. two step sequences; a 1e-3 change of the column lines' capacitance moved neither
+    deck by 0.01 mV at CONVERGED). The bound sits between that and what it must catch (below).
+    It was 3 mV at the default tolerances, where the frame deck itself is 0.5 - 3.9 mV off its converged
+    value (a 1e-3 change of the column lines' capacitance moved it 2.3 mV) and the pad stacks' screening
+    took it 3.86 mV from the replica (2.75 before) while both moved alike, -2.27 mV, at CONVERGED.
+    Not against the report's pedestal bench (no AFE, EC off through the read; its secondary's
+    pedestal moves by -87.1 mV, the frame's dim secondaries by -78.8 / -77.1): the two read differently,
+    measured on the bench (docs/post-layout.md, the 2 x 2 frame): EC's rise kicks
     FD post-layout only, through C(fd, ec) x 3.3 V and C(fd, pd) x the PD's step to vpdr, +5.0 mV
     before the signal sample (-3.7 mV on the column); the AFE samplers +8.8 mV (the AFE's p1 opens
     20 ns before S1 and kicks the column at the signal sample, +8.1 mV on the schematic and +2.4
     post-layout in the frame, where the AFE's wiring differs); the photocurrents +1.2 mV. Row 1 is
     not held to the replica (one row): it differs from row 0 by the column's history, 1.7 - 3.4 mV.
     The check fails when the frame's column lines miss the couplings the bench's ``dualpix`` gives
-    them (``column.row_share``; without it 4.1 mV apart)."""
+    them (``column.row_share``; without it 0.17 / 0.17 / 0.05 mV apart at CONVERGED: secondaries 0
+    and 1 caught)."""
     from pixelkit.report.sections import Context
     from pixelkit.report.sections import post_layout as section
     d = load_design(GF)
@@ -216,7 +225,7 @@ def test_report_section_post_layout_vs_schematic(tmp_path):
     rep = _frame_replica(d)
     sec = {r[2]: r[6] for r in frame if r[0] == "secondary" and r[1] == 0 and r[2] < d.secondary_per_pixel}
     for k in range(d.secondary_per_pixel):
-        assert sec[k] == pytest.approx(rep[k], abs=3.0), (k, sec[k], rep[k])
+        assert sec[k] == pytest.approx(rep[k], abs=0.1), (k, sec[k], rep[k])
     # docs/post-layout.md's section table is this section's (docsite/tables.py)
     sys.path.insert(0, str(ROOT))
     from docsite import tables
@@ -245,7 +254,8 @@ def test_the_afes_floating_nodes_are_shielded_from_the_nodes_that_move(views):
 def test_post_layout_page_quotes_the_current_views(views):
     """docs/post-layout.md marks the figures of its post-layout-view table (``pl:VIEW.ARRAY.FIGURE``,
     docsite/figures.py): each is the current schematic / post-layout figure at the digits quoted (the
-    SPICE charge steps are the first test's decks, served from the session's cache)."""
+    SPICE charge steps are the first test's decks, served from the session's cache;
+    ``PIXELKIT_DOCS_REWRITE=1`` rewrites them)."""
     import sys
     sys.path.insert(0, str(ROOT))
     from docsite import figures
@@ -266,6 +276,9 @@ def test_post_layout_page_quotes_the_current_views(views):
     def value(key):
         view, w, fig = key.split(".")
         return now[f"{view}.{w}"][fig]
+    import os
+    if os.environ.get("PIXELKIT_DOCS_REWRITE"):
+        figures.update(None, [ROOT / "docs" / "post-layout.md"], getters={"pl": value})
     bad, n = figures.check(None, [ROOT / "docs" / "post-layout.md"], getters={"pl": value})
     assert n >= 24, n
     assert not bad, "; ".join(f"{b['page']}:{b['line']} {b['key']} quoted {b['quoted']} now "

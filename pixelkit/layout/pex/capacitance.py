@@ -64,6 +64,7 @@ from .farfield import far_couplings
 from .fringe import fringe, landing, wide, width_of
 from .nets import GROUND
 from .plane import Plane
+from .stacks import Stacking, screened
 from .topface import covered_top, eps_fringe
 from .wedge import wedge_couplings
 
@@ -231,7 +232,7 @@ def capacitances(geo, stack) -> Couplings:
     polygons = sum(r.count() for nets in geo.wires.values() for r in nets.values())
     first_order = beside(farfield.first_order, polygons, geo, stack)     # the far field, meanwhile
     try:
-        _near_terms(cpl, geo, stack, spent)
+        _near_terms(cpl, geo, stack, spent, Stacking(geo, stack))
     except BaseException:
         first_order.cancel()
         raise
@@ -244,7 +245,7 @@ def capacitances(geo, stack) -> Couplings:
     return cpl
 
 
-def _near_terms(cpl, geo, stack, spent) -> None:
+def _near_terms(cpl, geo, stack, spent, stacking) -> None:
     """The 2.5D terms of every conductor layer (``capacitances``), bottom to top, into ``cpl``."""
     dbu = geo.dbu
     halo = int(round(stack.halo / dbu))
@@ -274,19 +275,21 @@ def _near_terms(cpl, geo, stack, spent) -> None:
             section.prepare([(wa, wb, t, ep.distance() * dbu, h_d, h_u)
                              for ep, (a_net, wa), (b_net, wb), (h_d, h_u) in zip(pairs, owners[0::2], owners[1::2], gaps)
                              if a_net is not None and b_net is not None and a_net != b_net and ep.distance() > 0])
-            for ep, (a_net, wa), (b_net, wb), (h_d, h_u) in zip(pairs, owners[0::2], owners[1::2], gaps):
+            runs = _stacked_pairs(stacking, i, pairs, owners)
+            for ep, (a_net, wa), (b_net, wb), (h_d, h_u), (down, up, da, db) in zip(pairs, owners[0::2], owners[1::2], gaps, runs):
                 if a_net is None or b_net is None or a_net == b_net:
                     continue
                 s = ep.distance() * dbu
                 la, lb = ep.first.length() * dbu, ep.second.length() * dbu
                 if s <= 0 or min(la, lb) <= 0:
                     continue
-                cpl.add(a_net, b_net, eps * section.pair(wa, wb, t, s, h_d, h_u)[0] * (la + lb) / 2)
+                cpl.add(a_net, b_net, eps * section.pair(wa, wb, t, s, h_d, h_u)[0] * (la + lb) / 2
+                        * screened(stack, i, da, db, s, down, up))
                 keep_a, keep_b = section.kept(wa, wb, t, s, h_d, h_u)
                 shielded[a_net] += (1 - keep_a) * la
                 shielded[b_net] += (1 - keep_b) * lb
         corner_couplings(cpl, geo, stack, i, spent)
-        wedge_couplings(cpl, geo, stack, i, spent)
+        wedge_couplings(cpl, geo, stack, i, spent, stacking)
         # fringe downwards, less what neighbours, the corner field and covers over its top face take (a
         # capacitor's top plate has none: its bottom plate, which encloses it, takes its sidewalls' field)
         made = {}
@@ -400,6 +403,34 @@ def _facing(polys, labels, halo: int) -> list:
             seen.add(canon)
             out.append(ep)
     return out
+
+
+def _stacked_pairs(stacking, i, pairs, owners) -> list:
+    """[(down, up, depth a, depth b)] of each facing pair: how many routing layers both nets' faces continue on,
+    flush, under and over conductor ``i`` (``stacks.Stacking.runs``: the layers both run on, contiguous), and
+    how deep (m) each face's conductor reaches back from it (``stacks.Stacking.depth``, at most 2 um)."""
+    import numpy as np
+    if not pairs:
+        return []
+    e = [(ep.first, ep.second) for ep in pairs]
+    ma = np.array([((a.p1.x + a.p2.x) / 2, (a.p1.y + a.p2.y) / 2) for a, _b in e], dtype=float)
+    mb = np.array([((b.p1.x + b.p2.x) / 2, (b.p1.y + b.p2.y) / 2) for _a, b in e], dtype=float)
+
+    def normal(edges, towards, mids):
+        d = np.array([(x.p2.x - x.p1.x, x.p2.y - x.p1.y) for x in edges], dtype=float)
+        n = np.stack([-d[:, 1], d[:, 0]], axis=1) / np.maximum(np.hypot(d[:, 0], d[:, 1]), 1e-30)[:, None]
+        return n * np.where(((towards - mids) * n).sum(axis=1) >= 0, 1.0, -1.0)[:, None]
+    gap = np.array([ep.distance() for ep in pairs], dtype=float) / 2
+    na, nb = [o[0] for o in owners[0::2]], [o[0] for o in owners[1::2]]
+    nrm_a, nrm_b = normal([a for a, _ in e], mb, ma), normal([b for _, b in e], ma, mb)
+    da, ua = stacking.runs(i, na, ma, nrm_a, gap)
+    db, ub = stacking.runs(i, nb, mb, nrm_b, gap)
+    cap = 2e-6 / stacking.geo.dbu        # the pair's widths' cap (``_nets_of``)
+    wa, wb = np.array([o[1] for o in owners[0::2]]), np.array([o[1] for o in owners[1::2]])
+    deep_a = np.minimum(stacking.depth(i, na, ma, nrm_a), cap) * stacking.geo.dbu
+    deep_b = np.minimum(stacking.depth(i, nb, mb, nrm_b), cap) * stacking.geo.dbu
+    deep_a, deep_b = np.where(deep_a > 0, deep_a, wa), np.where(deep_b > 0, deep_b, wb)   # none found: the width
+    return list(zip(np.minimum(da, db).tolist(), np.minimum(ua, ub).tolist(), deep_a.tolist(), deep_b.tolist()))
 
 
 def _canon(e):

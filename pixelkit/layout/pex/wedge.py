@@ -94,13 +94,15 @@ def right_wedges(eps, t, r0, r1, q0, q1, pair, blocks):
     return eps * free / math.pi * t
 
 
-def wedge_couplings(cpl, geo, stack, i, spent) -> None:
+def wedge_couplings(cpl, geo, stack, i, spent, stacking=None) -> None:
     """Add the field of layer ``i``'s sidewalls of different nets that face no other sidewall in
     projection (so have no lateral term) but see each other round a corner, to ``cpl``, and the fringe
     length (m) it takes from each edge to ``spent[(layer, net)]``: perpendicular faces (an end face
     beside another net's side face, a corner beside a corner; quarter circles about their corner line)
     and flush side faces of two shapes end to end across a gap s (half circles about the gap's middle,
-    each face from s / 2 out)."""
+    each face from s / 2 out). ``stacking`` (``stacks.Stacking``): flush faces whose nets both continue, flush,
+    on the routing layer over / under are taller by half the gap to it (a pad stack's faces are one face);
+    the faces round a corner are not (no FastCap2 structure checks them)."""
     import klayout.db as kdb
     import numpy as np
     cond = stack.conductors[i]
@@ -120,6 +122,7 @@ def wedge_couplings(cpl, geo, stack, i, spent) -> None:
     if not rows:
         return
     a = np.array(rows, dtype=float)
+    lo_ext, hi_ext = _stacked(stacking, i, a, names)
     reach, dbu = cond.z / geo.dbu, geo.dbu
     boxes_of_layer = rects(layer)
     boxes, owner = _labelled({k: nets[name] for k, name in enumerate(names)})
@@ -127,8 +130,9 @@ def wedge_couplings(cpl, geo, stack, i, spent) -> None:
     found = []                     # (net index, net index, coupling) arrays
 
     for axis in (0, 1):            # 0: vertical edges against horizontal ones; 1: the same turned by 90 degrees
-        v = a[a[:, 4] != 0] if axis == 0 else a[a[:, 5] != 0]
-        h = a[a[:, 5] != 0] if axis == 0 else a[a[:, 4] != 0]
+        sv, sh = (a[:, 4] != 0, a[:, 5] != 0) if axis == 0 else (a[:, 5] != 0, a[:, 4] != 0)
+        v, h = a[sv], a[sh]
+        vlo, vhi = lo_ext[sv], hi_ext[sv]
         # (u, w): coordinates across / along v's edges; v's outward normal is along u
         vu, vw0, vw1, vn = (v[:, 0], np.minimum(v[:, 1], v[:, 3]), np.maximum(v[:, 1], v[:, 3]), v[:, 4]) if axis == 0 \
             else (v[:, 1], np.minimum(v[:, 0], v[:, 2]), np.maximum(v[:, 0], v[:, 2]), v[:, 5])
@@ -178,7 +182,8 @@ def wedge_couplings(cpl, geo, stack, i, spent) -> None:
         keep = (hi > lo) & (area > 0)
         covered = covered_area(boxes_of_layer, np.stack([x0[keep], y0[keep], x1[keep], y1[keep]], axis=1))
         area = area[keep]
-        c = wedge(stack.eps_band(cond.z, cond.top), cond.thickness, math.pi, lo[keep] * dbu, hi[keep] * dbu) * (1 - covered / area)
+        c = wedge(stack.eps_band(cond.z, cond.top), cond.thickness, math.pi, lo[keep] * dbu, hi[keep] * dbu) * (1 - covered / area) \
+            * _taller(cond.thickness, vlo[kk[keep]], vlo[jj[keep]], vhi[kk[keep]], vhi[jj[keep]])
         found.append((v[kk[keep], 6], v[jj[keep], 6], c))
 
     a_net, b_net, c = (np.concatenate(x) for x in zip(*found))
@@ -186,6 +191,25 @@ def wedge_couplings(cpl, geo, stack, i, spent) -> None:
     total = np.bincount(pairs[c > 0], weights=c[c > 0], minlength=len(names) ** 2)
     for key in np.nonzero(total)[0]:
         _couple(cpl, spent, stack, cond, names[key // len(names)], names[key % len(names)], total[key])
+
+
+def _stacked(stacking, i, a, names):
+    """The height (m) each face (rows of ``a``: x1, y1, x2, y2, outward normal, net index) gains under and over
+    it where its net continues flush on the routing layer there (``stacks.Stacking``): two arrays."""
+    import numpy as np
+    if stacking is None:
+        return np.zeros(len(a)), np.zeros(len(a))
+    mids = np.stack([(a[:, 0] + a[:, 2]) / 2, (a[:, 1] + a[:, 3]) / 2], axis=1)
+    down, up = stacking.runs(i, [names[int(k)] for k in a[:, 6]], mids, a[:, 4:6])
+    z = np.zeros(len(a))
+    return stacking.extension(i, down, z), stacking.extension(i, z, up)
+
+
+def _taller(t, lo_a, lo_b, hi_a, hi_b):
+    """A pair of faces' height over the layer's thickness: both faces' nets stacked under (over) them add the
+    smaller of their gains there."""
+    import numpy as np
+    return (t + np.minimum(lo_a, lo_b) + np.minimum(hi_a, hi_b)) / t
 
 
 def _couple(cpl, spent, stack, cond, a_net, b_net, c):

@@ -49,9 +49,10 @@ def _plot(ctx, r, tm, n):
                              "phases shaded (S1 signal sample, RST pulse, S2 reset sample), cf. [Thesis2019] fig. 3.13")
 
 
-def frame(d, backend="batch", jobs=None, title=f"report_array_{ROWS}x{COLS}"):
+def frame(d, backend="batch", jobs=None, title=f"report_array_{ROWS}x{COLS}", options=None):
     """(SPICE result, frame timings, photocurrents) of the ``ROWS`` x ``COLS`` frame with the AFE under a
-    left-to-right gradient, one deck (fig. 3.13 of [Thesis2019]); ``d`` may be a post-layout view."""
+    left-to-right gradient, one deck (fig. 3.13 of [Thesis2019]); ``d`` may be a post-layout view;
+    ``options``: simulator options over the defaults (``chip.frame.CONVERGED``)."""
     m, unit = default_map(ROWS, d.secondary_per_pixel * COLS, "gradient")
     ph = photocurrents(d, ROWS, COLS, m, unit)
     t_exp = d.experiment.t_window
@@ -59,7 +60,7 @@ def frame(d, backend="batch", jobs=None, title=f"report_array_{ROWS}x{COLS}"):
     step = min(t.t_row for t in tm.values()) / STEPS_PER_ROW
     net = array_bench(d, ph.iph_p, ph.iph_s, None, t_exp, True, None, step, title=title,
                       compression=ph.compression)
-    (r,) = simulate_many([net], backend=backend, jobs=jobs)
+    (r,) = simulate_many([net], backend=backend, jobs=jobs, options=options)
     return r, tm, ph
 
 
