@@ -59,14 +59,32 @@ def signoff(gds, netlist, tech, out: Path, top: str | None = None, skip: tuple =
                   "cells": lay.cells}
         jobs = _start_decks(lay.path, top, tech, out, asked, spice_text(view, f"{Path(netlist).name}, {top}"))
         try:
-            if "lvs" in asked or "pex" in asked:
+            kit_lvs = None
+            if "lvs" in asked or "pex" in asked:     # the kit's LVS in a forked child beside the extraction
+                from .pex.beside import MIN_POLYGONS, beside
                 from .signoff.lvs import compare_view
-                lvs = compare_view(lay.path, top, tech, view, tmp)
+                kit_lvs = beside(compare_view, MIN_POLYGONS, lay.path, top, tech, view, tmp)   # any cell: forked
+            extracted = None
+            if "pex" in asked or "lightmap" in asked:
+                try:
+                    extracted = _extraction_or_error(lay.path, top, tech, view, nl, tmp, asked)
+                except BaseException:
+                    if kit_lvs is not None:
+                        kit_lvs.cancel()
+                    raise
+            if kit_lvs is not None:
+                lvs = kit_lvs()
                 result["lvs"] = lvs.as_dict()
                 if lvs.report:
                     result["lvs"]["report"] = str(write_atomic(out / f"{top}.lvsdb", Path(lvs.report).read_bytes()))
-            if "pex" in asked or "lightmap" in asked:
-                result.update(_extraction(lay.path, top, tech, view, nl, out, result.get("lvs"), asked))
+            if extracted is not None:
+                if result.get("lvs") is not None and not result["lvs"]["match"]:
+                    extracted = _extraction(lay.path, top, tech, view, nl, out, result["lvs"], asked)   # why not run
+                elif isinstance(extracted, Exception):
+                    raise extracted
+                else:
+                    extracted = _moved_out(extracted, tmp, out)
+                result.update(extracted)
             if design is not None:
                 result["design"] = _design_products(lay.path, top, design, out, asked)
         finally:
@@ -187,6 +205,25 @@ def _extraction(gds: Path, top: str, tech, view, nl, out: Path, lvs: dict | None
         res["lightmap"] = {"run": True, "open_m2": sum(j.area_m2 for j in js),
                            "junctions": [{"net": j.net, "kind": KINDS[j.kind], "area_m2": j.area_m2} for j in js],
                            "table": str(write_atomic(out / f"{top}.lightmap.csv", "\n".join(rows) + "\n"))}
+    return res
+
+
+def _extraction_or_error(gds: Path, top: str, tech, view, nl, tmp: Path, asked: list):
+    """``_extraction`` into the private folder ``tmp`` (the kit's LVS, beside it, decides whether its
+    files are kept), or the PixelkitError it raised (a layout its netlist does not match)."""
+    try:
+        return _extraction(gds, top, tech, view, nl, tmp, None, asked)
+    except PixelkitError as e:
+        return e
+
+
+def _moved_out(res: dict, tmp: Path, out: Path) -> dict:
+    """``res`` with the files it wrote into ``tmp`` renamed into ``out`` (write_atomic: no link followed)."""
+    for part in res.values():
+        for key in ("table", "post_layout_netlist"):
+            if isinstance(part, dict) and part.get(key):
+                src = Path(part[key])
+                part[key] = str(write_atomic(out / src.name, src.read_bytes()))
     return res
 
 

@@ -13,7 +13,9 @@ from __future__ import annotations
 
 import os
 
-MIN_POLYGONS = 400      # below this the extraction takes ~0.1 s: not worth a process
+#: below this the far field takes < ~0.2 s of CPU: not worth a process (DUALPIX, 157 polygons: 0.23 s of its
+#: 1.0 s extraction; DUALPIX_COL, 377: 0.61 of 2.1 s, off the sign-off's critical path since session 7)
+MIN_POLYGONS = 150
 #: threads that only wait on a child process (``signoff.foundry.Job``: blocked in waitpid, holding nothing
 #: the fork's child uses): a fork beside them is safe
 WAITERS = "pixelkit-wait"
