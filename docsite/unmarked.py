@@ -53,7 +53,7 @@ MARKED = ("README.md", "arrays.md", "bibliography.md", "cli-conventions.md", "da
           "interrupts.md", "layout-readout.md", "layout-signoff-any.md", "layout-signoff.md", "monte-carlo.md", "netlist-benches.md",
           "noise-camera.md", "pixel-netlist.md", "pixel4t.md", "post-layout.md", "report-figures.md", "report.md", "revisions.md",
           "security.md", "setup.md",
-          "sizing.md", "source-follower.md", "technologies.md", "timing-and-settling.md", "validation.md",
+          "sizing.md", "source-follower.md", "technologies.md", "timing-and-settling.md", "tutorial.md", "validation.md",
           "verify.md")
 
 
