@@ -393,7 +393,8 @@ def docs_block(res: dict) -> str:
                      f"{c['cpu_s'] / res['jobs']:.0f} | {TARGETS.get(name, '-')} | {c['max_rss_MB']:.0f} | "
                      f"{c['spice_runs']} | {c['exit']} | {c['load_before']:.1f} - {c['load_after']:.1f} |")
     dropped = res.get("baseline_design_dropped")
-    lines += ["", f"Against the baseline ({res['baseline']}) and against raw `ngspice -b` replaying the same decks "
+    against = f"Against the baseline ({res['baseline']}) and against" if res['baseline'] else "Against no baseline (none was run) and against"
+    lines += ["", f"{against} raw `ngspice -b` replaying the same decks "
               f"on {res['jobs']} workers (ratios below 1: the current code is faster)"
               + (" (the baseline ran the design without " + ", ".join(f"`{x}`" for x in dropped)
                  + ", which its code does not know)" if dropped else "") + ":", "",
